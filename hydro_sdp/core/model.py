@@ -1,0 +1,273 @@
+"""
+The joint model: the model file of interfaces.md section 1 as a frozen object.
+
+A :class:`JointModel` is a static map (the ``kind``), a pure delay, optional end
+stops and input limits, and a tuple of effects. It is built from and turned
+back into the plain mapping stored in YAML; reading and writing the file itself
+is :mod:`hydro_sdp.files`.
+
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+import math
+from typing import Any, Mapping
+
+import numpy as np
+
+from hydro_sdp.core._typing import FloatArray
+from hydro_sdp.core._validate import require_float, require_ordered_pair
+from hydro_sdp.core.effects import (
+    Effect, EFFECT_TYPES, effect_from_mapping, effect_to_mapping)
+from hydro_sdp.core.errors import ConfigurationError, ModelFileError
+from hydro_sdp.core.static_maps import MAP_KINDS, SdpMap, StaticMap
+
+MODEL_FORMAT = 'hydro_sdp/model/v1'
+
+_COMMON_KEYS = ('format', 'joint', 'kind', 'delay', 'angle_limits', 'input_limits')
+_ALL_MAP_KEYS = tuple(dict.fromkeys(key for cls in MAP_KINDS.values() for key in cls.keys))
+
+
+def delay_samples(delay: float, dt: float) -> int:
+    """
+    Convert a delay in seconds to whole samples at period ``dt`` (nearest, ties up).
+
+    Parameters
+    ----------
+    delay : float
+        Pure time delay, s.
+    dt : float
+        Sample period, s.
+
+    Returns
+    -------
+    int
+        Delay in samples.
+
+    """
+    check_sample_period(dt)
+    # The small tolerance keeps 0.15 / 0.05 = 2.9999999999999996 at 3.
+    return int(math.floor(delay / dt + 0.5 + 1e-9))
+
+
+def check_sample_period(dt: float) -> float:
+    """
+    Return ``dt`` if it is a usable sample period, else raise :class:`ConfigurationError`.
+
+    Parameters
+    ----------
+    dt : float
+        Sample period, s.
+
+    Returns
+    -------
+    float
+        The same period.
+
+    """
+    if not (isinstance(dt, (int, float)) and math.isfinite(dt) and dt > 0.0):
+        raise ConfigurationError(f'sample period must be a positive number of seconds, got {dt!r}')
+    return float(dt)
+
+
+@dataclass(frozen=True)
+class JointModel:
+    """
+    One hydraulic joint: static map, pure delay, end stops and effects.
+
+    Parameters
+    ----------
+    joint : str
+        Joint name as it appears in ``JointState.name``.
+    static_map : StaticMap
+        Command-to-velocity map; its ``kind`` is the model's kind.
+    delay : float
+        Pure time delay between command and motion, s.
+    angle_limits : tuple[float, float] | None
+        Hardware end stops, degrees, or ``None``.
+    input_limits : tuple[float, float] | None
+        Command range accepted by the valve interface, input units, or ``None``.
+    effects : tuple[Effect, ...]
+        Effects beyond the static map, at most one of each kind.
+
+    """
+
+    joint: str
+    static_map: StaticMap
+    delay: float
+    angle_limits: tuple[float, float] | None = None
+    input_limits: tuple[float, float] | None = None
+    effects: tuple[Effect, ...] = field(default=())
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.joint, str) or not self.joint.strip():
+            raise ModelFileError(f"key 'joint': expected a non-empty name, got {self.joint!r}")
+        if not (math.isfinite(self.delay) and self.delay >= 0.0):
+            raise ModelFileError(f"key 'delay': must be a finite number >= 0 s, got {self.delay}")
+        names = [effect.name for effect in self.effects]
+        if len(set(names)) != len(names):
+            raise ModelFileError(f"key 'effects': an effect appears twice in {names}")
+        # Keep effects in the canonical order so that equal models compare equal.
+        order = list(EFFECT_TYPES)
+        object.__setattr__(self, 'effects',
+                           tuple(sorted(self.effects, key=lambda e: order.index(e.name))))
+        dead_zone = getattr(self.static_map, 'dead_zone', None)
+        if dead_zone is not None and self.input_limits is not None:
+            low, high = self.input_limits
+            if dead_zone[0] < low or dead_zone[1] > high:
+                raise ModelFileError(
+                    f"key 'dead_zone': {list(dead_zone)} lies outside input_limits [{low}, {high}]")
+
+    @property
+    def kind(self) -> str:
+        """Model kind: the static map's family (``sdp``, ``sdp_dz`` or ``linear``)."""
+        return self.static_map.kind
+
+    @property
+    def dead_zone(self) -> tuple[float, float] | None:
+        """Dead-zone edges in input units, or ``None`` for a map without one."""
+        return self.static_map.dead_zone
+
+    def rate(self, v: FloatArray | float) -> FloatArray:
+        """
+        Steady angular velocity (deg/s) for commands ``v``.
+
+        Parameters
+        ----------
+        v : FloatArray or float
+            Commands in input units.
+
+        Returns
+        -------
+        FloatArray
+            Velocities in deg/s.
+
+        """
+        return self.static_map.rate(np.asarray(v, dtype=np.float64))
+
+    def alpha(self, dt: float) -> tuple[float, float, float, float, float, float]:
+        """
+        The first paper's ``alpha_1..alpha_6`` at sample period ``dt`` (kind ``sdp`` only).
+
+        Parameters
+        ----------
+        dt : float
+            Sample period, s.
+
+        Returns
+        -------
+        tuple of six floats
+            ``(a1, a2, a3, a4, a5, a6)`` with ``a1``, ``a4`` in deg per sample.
+
+        """
+        if not isinstance(self.static_map, SdpMap):
+            raise ConfigurationError(f'alpha is defined for kind sdp only, not {self.kind}')
+        return self.static_map.alpha(check_sample_period(dt))
+
+    def delay_samples(self, dt: float) -> int:
+        """Pure delay in whole samples at sample period ``dt``."""
+        return delay_samples(self.delay, dt)
+
+    def effect(self, name: str) -> Effect | None:
+        """Return the effect called ``name``, or ``None`` if the model has none."""
+        for effect in self.effects:
+            if effect.name == name:
+                return effect
+        return None
+
+    def with_effect(self, effect: Effect) -> JointModel:
+        """Return a copy with ``effect`` added, replacing one of the same name."""
+        kept = tuple(e for e in self.effects if e.name != effect.name)
+        return replace(self, effects=kept + (effect,))
+
+    def without_effect(self, name: str) -> JointModel:
+        """Return a copy without the effect called ``name``."""
+        return replace(self, effects=tuple(e for e in self.effects if e.name != name))
+
+    def to_mapping(self) -> dict[str, Any]:
+        """
+        Return the model as the plain mapping stored in a model file.
+
+        Returns
+        -------
+        dict[str, Any]
+            Keys in the order of interfaces.md section 1.
+
+        """
+        data: dict[str, Any] = {
+            'format': MODEL_FORMAT,
+            'joint': self.joint,
+            'kind': self.kind,
+            'delay': self.delay,
+            'angle_limits': None if self.angle_limits is None else list(self.angle_limits),
+            'input_limits': None if self.input_limits is None else list(self.input_limits),
+        }
+        data.update(self.static_map.to_mapping())
+        data['effects'] = {effect.name: effect_to_mapping(effect) for effect in self.effects}
+        return data
+
+    @classmethod
+    def from_mapping(cls, data: Any) -> JointModel:
+        """
+        Validate a mapping read from a model file and build the model.
+
+        Parameters
+        ----------
+        data : Any
+            The parsed YAML document.
+
+        Returns
+        -------
+        JointModel
+            The validated model.
+
+        Raises
+        ------
+        ModelFileError
+            Naming the key and the reason when anything is missing, unknown or invalid.
+
+        """
+        if not isinstance(data, Mapping):
+            raise ModelFileError(
+                f'a model file must be a mapping of keys, got {type(data).__name__}')
+        for key in data:
+            if not isinstance(key, str) or key not in _COMMON_KEYS + _ALL_MAP_KEYS + ('effects',):
+                raise ModelFileError(f'unknown key {key!r}')
+        for key in ('format', 'joint', 'kind', 'delay'):
+            if key not in data:
+                raise ModelFileError(f'missing required key {key!r}')
+        if data['format'] != MODEL_FORMAT:
+            raise ModelFileError(
+                f"key 'format': expected {MODEL_FORMAT!r}, got {data['format']!r}")
+        kind = data['kind']
+        if kind not in MAP_KINDS:
+            raise ModelFileError(
+                f"key 'kind': expected one of {', '.join(MAP_KINDS)}, got {kind!r}")
+        map_cls = MAP_KINDS[kind]
+        for key in _ALL_MAP_KEYS:
+            if key in data and key not in map_cls.keys:
+                raise ModelFileError(f'key {key!r} does not apply to kind {kind!r}')
+        for key in map_cls.keys:
+            if key not in data:
+                raise ModelFileError(f'missing required key {key!r} for kind {kind!r}')
+        effects = data.get('effects') or {}
+        if not isinstance(effects, Mapping):
+            raise ModelFileError("key 'effects': expected a mapping of effect name to parameters")
+        joint = data['joint']
+        if not isinstance(joint, str):
+            raise ModelFileError(f"key 'joint': expected a name, got {joint!r}")
+        return cls(
+            joint=joint,
+            static_map=map_cls.from_mapping(data),
+            delay=require_float(data['delay'], 'delay'),
+            angle_limits=_optional_limits(data, 'angle_limits'),
+            input_limits=_optional_limits(data, 'input_limits'),
+            effects=tuple(effect_from_mapping(str(name), params)
+                          for name, params in effects.items()),
+        )
+
+
+def _optional_limits(data: Mapping[str, Any], key: str) -> tuple[float, float] | None:
+    value = data.get(key)
+    return None if value is None else require_ordered_pair(value, key)

@@ -1,0 +1,278 @@
+"""
+Simulation of a joint model at any sample period.
+
+``y_k = clamp(y_{k-1} + dt * w_k, y_min, y_max)`` with ``w_k = rate(v_{k-tau})``
+(eqs. (3)-(4) of West et al., methods.md 3.1-3.2) plus the model's effects.
+:func:`simulate` processes a whole command sequence with numpy; the end-stop
+clamp, a recursion, is solved exactly by reflecting the cumulative sum at one
+stop at a time (:func:`bounded_cumsum`). :class:`JointSimulator` steps the same
+equations one sample at a time for closed loops and the plant node; both give
+the same trajectory.
+
+"""
+
+from __future__ import annotations
+
+from collections import deque
+import math
+
+import numpy as np
+from scipy.signal import lfilter
+
+from hydro_sdp.core._typing import FloatArray
+from hydro_sdp.core.effects import (
+    AngleDependentVelocity, Backlash, DirectionDependentDelay, ValveLag)
+from hydro_sdp.core.errors import DataError
+from hydro_sdp.core.model import check_sample_period, delay_samples, JointModel
+
+# Samples handled per reflection pass; bounds the cost of each switch between stops.
+_CHUNK = 8192
+
+
+def bounded_cumsum(x0: float, increments: FloatArray, low: float, high: float) -> FloatArray:
+    """
+    Solve ``x_k = min(max(x_{k-1} + d_k, low), high)`` for a whole sequence.
+
+    Between switches from one bound to the other, the two-sided recursion equals
+    a one-sided reflection, which has the closed form
+    ``x = s - max(0, running_max(s - high))`` (Skorokhod/Lindley) of the plain
+    cumulative sum ``s``. The sequence is processed in chunks, restarting from
+    the last value, so each switch costs at most one chunk.
+
+    Parameters
+    ----------
+    x0 : float
+        Value before the first increment (clamped into the bounds).
+    increments : FloatArray
+        Increments ``d_1..d_n``.
+    low : float
+        Lower bound (may be ``-inf``).
+    high : float
+        Upper bound (may be ``inf``).
+
+    Returns
+    -------
+    FloatArray
+        ``x_0..x_n`` (length ``n + 1``).
+
+    """
+    increments = np.asarray(increments, dtype=np.float64)
+    n = increments.size
+    out = np.empty(n + 1)
+    x = min(max(float(x0), low), high)
+    out[0] = x
+    if math.isinf(low) and math.isinf(high):
+        out[1:] = x + np.cumsum(increments)
+        return out
+    reflect_high = True
+    start = 0
+    while start < n:
+        stop = min(start + _CHUNK, n)
+        path = x + np.cumsum(increments[start:stop])
+        if reflect_high:
+            path -= np.maximum(np.maximum.accumulate(path - high), 0.0)
+            crossed = np.flatnonzero(path < low)
+        else:
+            path += np.maximum(np.maximum.accumulate(low - path), 0.0)
+            crossed = np.flatnonzero(path > high)
+        if crossed.size:
+            j = int(crossed[0])
+            out[start + 1:start + 1 + j] = path[:j]
+            x = low if reflect_high else high
+            out[start + 1 + j] = x
+            start += j + 1
+            reflect_high = not reflect_high
+        else:
+            out[start + 1:stop + 1] = path
+            x = float(path[-1])
+            start = stop
+    # Rounding in the reflection may step a hair past a bound.
+    return np.clip(out, low, high, out=out)
+
+
+def _limits(model: JointModel) -> tuple[float, float]:
+    if model.angle_limits is None:
+        return -math.inf, math.inf
+    return model.angle_limits
+
+
+def _delayed(values: FloatArray, tau: int, before: float) -> FloatArray:
+    if tau == 0:
+        return values.copy()
+    out = np.empty_like(values)
+    out[:tau] = before
+    out[tau:] = values[:values.size - tau] if tau < values.size else values[:0]
+    return out[:values.size]
+
+
+def _check_commands(v: FloatArray) -> FloatArray:
+    v = np.asarray(v, dtype=np.float64)
+    if v.ndim != 1:
+        raise DataError(f'commands must be a 1-D sequence, got shape {v.shape}')
+    bad = np.flatnonzero(~np.isfinite(v))
+    if bad.size:
+        raise DataError(f'{bad.size} commands are not finite (first at sample {bad[0]})')
+    return v
+
+
+def simulate(model: JointModel, v: FloatArray, dt: float, y0: float,
+             *, v_before: float = 0.0) -> FloatArray:
+    """
+    Simulate the joint's angle for a command sequence.
+
+    Parameters
+    ----------
+    model : JointModel
+        The joint.
+    v : FloatArray
+        Command at each sample (held over the sample period), input units.
+    dt : float
+        Sample period, s.
+    y0 : float
+        Angle at the first sample, degrees (clamped into the end stops).
+    v_before : float
+        Command assumed before the first sample (fills the delay line).
+
+    Returns
+    -------
+    FloatArray
+        Angle at each sample, degrees; ``y[0]`` is ``y0``.
+
+    """
+    dt = check_sample_period(dt)
+    v = _check_commands(v)
+    if v.size == 0:
+        return np.empty(0)
+    rates = model.rate(v)
+    rate_before = float(model.rate(np.array([v_before]))[0])
+    split = model.effect(DirectionDependentDelay.name)
+    if isinstance(split, DirectionDependentDelay):
+        speed = (_delayed(np.maximum(rates, 0.0), delay_samples(split.positive, dt),
+                          max(rate_before, 0.0))
+                 + _delayed(np.minimum(rates, 0.0), delay_samples(split.negative, dt),
+                            min(rate_before, 0.0)))
+    else:
+        speed = _delayed(rates, model.delay_samples(dt), rate_before)
+    lag = model.effect(ValveLag.name)
+    if isinstance(lag, ValveLag):
+        p = math.exp(-dt / lag.time_constant)
+        speed, _ = lfilter([1.0 - p], [1.0, -p], speed, zi=[p * rate_before])
+    low, high = _limits(model)
+    gravity = model.effect(AngleDependentVelocity.name)
+    if isinstance(gravity, AngleDependentVelocity):
+        y = _integrate_angle_dependent(speed, dt, y0, low, high, gravity)
+    else:
+        y = bounded_cumsum(y0, dt * speed[1:], low, high)
+    play = model.effect(Backlash.name)
+    if isinstance(play, Backlash) and play.play > 0.0:
+        half = 0.5 * play.play
+        # The sensor lags the actuator by e in [-b, b]: e_k = clamp(e_{k-1} - dy_k).
+        offset = bounded_cumsum(0.0, -np.diff(y), -half, half)
+        y = np.clip(y + offset, low, high)
+    return y
+
+
+def _integrate_angle_dependent(speed: FloatArray, dt: float, y0: float, low: float,
+                               high: float, effect: AngleDependentVelocity) -> FloatArray:
+    # The speed depends on the angle just reached, so this recursion is inherently serial.
+    y = np.empty(speed.size)
+    current = min(max(float(y0), low), high)
+    y[0] = current
+    amplitude = effect.amplitude
+    phase = math.radians(effect.phase)
+    for k, w in enumerate(speed[1:].tolist(), start=1):
+        current += dt * (w + amplitude * abs(w) * math.cos(math.radians(current) + phase))
+        current = min(max(current, low), high)
+        y[k] = current
+    return y
+
+
+class JointSimulator:
+    """
+    Step a joint model one sample at a time, as :func:`simulate` does for a sequence.
+
+    ``[sim.step(v) for v in commands]`` equals ``simulate(model, commands, dt, y0)``.
+
+    Parameters
+    ----------
+    model : JointModel
+        The joint.
+    dt : float
+        Sample period, s.
+    y0 : float
+        Angle at the first sample, degrees.
+    v_before : float
+        Command assumed before the first sample.
+
+    """
+
+    def __init__(self, model: JointModel, dt: float, y0: float, *,
+                 v_before: float = 0.0) -> None:
+        self.model = model
+        self.dt = check_sample_period(dt)
+        self._low, self._high = _limits(model)
+        split = model.effect(DirectionDependentDelay.name)
+        if isinstance(split, DirectionDependentDelay):
+            self._tau_pos = delay_samples(split.positive, self.dt)
+            self._tau_neg = delay_samples(split.negative, self.dt)
+        else:
+            self._tau_pos = self._tau_neg = model.delay_samples(self.dt)
+        rate_before = float(model.rate(np.array([v_before]))[0])
+        depth = max(self._tau_pos, self._tau_neg) + 1
+        # Past speeds from the static map, newest last; index -1-tau is rate(v_{k-tau}).
+        self._rates: deque[float] = deque([rate_before] * depth, maxlen=depth)
+        lag = model.effect(ValveLag.name)
+        self._lag_p = math.exp(-self.dt / lag.time_constant) if isinstance(lag, ValveLag) else None
+        self._lag_state = rate_before
+        gravity = model.effect(AngleDependentVelocity.name)
+        self._gravity = gravity if isinstance(gravity, AngleDependentVelocity) else None
+        play = model.effect(Backlash.name)
+        self._half_play = 0.5 * play.play if isinstance(play, Backlash) else 0.0
+        self._actuator = min(max(float(y0), self._low), self._high)
+        self._offset = 0.0
+        self.samples = 0
+
+    @property
+    def angle(self) -> float:
+        """The angle the sensor reads now, degrees."""
+        return min(max(self._actuator + self._offset, self._low), self._high)
+
+    def step(self, v: float) -> float:
+        """
+        Apply command ``v`` at this sample and return the angle at this sample.
+
+        Parameters
+        ----------
+        v : float
+            Command in input units (must be finite).
+
+        Returns
+        -------
+        float
+            Angle in degrees.
+
+        """
+        if not math.isfinite(v):
+            raise DataError(f'command must be finite, got {v}')
+        self._rates.append(float(self.model.rate(np.array([v]))[0]))
+        if self._tau_pos == self._tau_neg:
+            speed = self._rates[-1 - self._tau_pos]
+        else:
+            speed = (max(self._rates[-1 - self._tau_pos], 0.0)
+                     + min(self._rates[-1 - self._tau_neg], 0.0))
+        if self._lag_p is not None:
+            # Same arithmetic as lfilter's transposed direct form, so results agree exactly.
+            self._lag_state = (1.0 - self._lag_p) * speed + self._lag_p * self._lag_state
+            speed = self._lag_state
+        if self.samples > 0:
+            previous = self._actuator
+            if self._gravity is not None:
+                phase = math.radians(self._gravity.phase)
+                speed += self._gravity.amplitude * abs(speed) * math.cos(
+                    math.radians(previous) + phase)
+            self._actuator = min(max(previous + self.dt * speed, self._low), self._high)
+            if self._half_play > 0.0:
+                moved = self._actuator - previous
+                self._offset = min(max(self._offset - moved, -self._half_play), self._half_play)
+        self.samples += 1
+        return self.angle

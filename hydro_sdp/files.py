@@ -1,0 +1,228 @@
+"""
+Files written whole or not at all, and the YAML model file.
+
+Every file hydro_sdp writes goes through :func:`atomic_write_bytes` or
+:func:`atomic_directory`: the content is produced beside the target under a
+temporary name and renamed into place only when complete, so an interrupted
+run never leaves a partial model, bag or figure behind.
+
+"""
+
+from __future__ import annotations
+
+from contextlib import contextmanager
+import os
+from pathlib import Path
+import shutil
+import tempfile
+from typing import Any, Iterator
+
+import yaml
+
+from hydro_sdp.core.errors import ModelFileError
+from hydro_sdp.core.model import JointModel
+
+
+def atomic_write_bytes(path: str | os.PathLike[str], data: bytes) -> Path:
+    """
+    Write ``data`` to ``path`` so that the file appears whole or not at all.
+
+    Parameters
+    ----------
+    path : str or PathLike
+        Target file; its folder is created if missing.
+    data : bytes
+        Content.
+
+    Returns
+    -------
+    Path
+        The target path.
+
+    """
+    target = Path(path)
+    if target.is_dir():
+        raise IsADirectoryError(f'{target} is a directory')
+    target.parent.mkdir(parents=True, exist_ok=True)
+    handle, temporary = tempfile.mkstemp(prefix=f'.{target.name}.', suffix='.tmp',
+                                         dir=target.parent)
+    try:
+        with os.fdopen(handle, 'wb') as stream:
+            stream.write(data)
+            stream.flush()
+            os.fsync(stream.fileno())
+        os.replace(temporary, target)
+    except BaseException:
+        Path(temporary).unlink(missing_ok=True)
+        raise
+    return target
+
+
+def atomic_write_text(path: str | os.PathLike[str], text: str) -> Path:
+    """Write UTF-8 ``text`` to ``path`` whole or not at all (see :func:`atomic_write_bytes`)."""
+    return atomic_write_bytes(path, text.encode('utf-8'))
+
+
+@contextmanager
+def atomic_directory(path: str | os.PathLike[str]) -> Iterator[Path]:
+    """
+    Build a directory under a temporary name and move it to ``path`` when done.
+
+    The yielded path does not exist yet (rosbag2 writers create their folder).
+    An existing ``path`` is replaced only after the new one is complete; if the
+    block raises, nothing at ``path`` changes.
+
+    Parameters
+    ----------
+    path : str or PathLike
+        Final directory.
+
+    Yields
+    ------
+    Path
+        Where to build the directory.
+
+    """
+    target = Path(path)
+    if target.exists() and not target.is_dir():
+        raise FileExistsError(f'{target} exists and is not a directory')
+    target.parent.mkdir(parents=True, exist_ok=True)
+    work = Path(tempfile.mkdtemp(prefix=f'.{target.name}.', suffix='.tmp', dir=target.parent))
+    building = work / target.name
+    try:
+        yield building
+        if not building.exists():
+            building.mkdir()
+        if target.exists():
+            old = work / 'replaced'
+            os.replace(target, old)
+        os.replace(building, target)
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
+
+
+def load_yaml(path: str | os.PathLike[str]) -> Any:
+    """
+    Read a YAML document with safe loading.
+
+    Parameters
+    ----------
+    path : str or PathLike
+        File to read.
+
+    Returns
+    -------
+    Any
+        The parsed document.
+
+    Raises
+    ------
+    ModelFileError
+        If the file is missing, a directory, empty or not YAML.
+
+    """
+    source = Path(path)
+    if source.is_dir():
+        raise ModelFileError(f'{source} is a directory, not a file')
+    try:
+        text = source.read_text(encoding='utf-8')
+    except FileNotFoundError:
+        raise ModelFileError(f'{source}: no such file') from None
+    except (OSError, UnicodeDecodeError) as error:
+        raise ModelFileError(f'{source}: cannot read: {error}') from None
+    if not text.strip():
+        raise ModelFileError(f'{source}: file is empty')
+    try:
+        return yaml.safe_load(text)
+    except yaml.YAMLError as error:
+        mark = getattr(error, 'problem_mark', None)
+        where = f' at line {mark.line + 1}' if mark is not None else ''
+        raise ModelFileError(f'{source}: not valid YAML{where}') from None
+
+
+def load_model(path: str | os.PathLike[str]) -> JointModel:
+    """
+    Load and validate a model file (interfaces.md section 1).
+
+    Parameters
+    ----------
+    path : str or PathLike
+        Model file.
+
+    Returns
+    -------
+    JointModel
+        The validated model.
+
+    Raises
+    ------
+    ModelFileError
+        With the file name, the key and the reason.
+
+    """
+    data = load_yaml(path)
+    try:
+        return JointModel.from_mapping(data)
+    except ModelFileError as error:
+        raise ModelFileError(f'{path}: {error}') from None
+
+
+def dump_model(model: JointModel) -> str:
+    """Return the YAML text of a model file."""
+    return yaml.safe_dump(model.to_mapping(), sort_keys=False, default_flow_style=None)
+
+
+def save_model(model: JointModel, path: str | os.PathLike[str]) -> Path:
+    """
+    Write a model file whole or not at all.
+
+    Parameters
+    ----------
+    model : JointModel
+        The model.
+    path : str or PathLike
+        Target file.
+
+    Returns
+    -------
+    Path
+        The target path.
+
+    """
+    return atomic_write_text(path, dump_model(model))
+
+
+def shipped_config(name: str) -> Path:
+    """
+    Path of a file shipped in the package's ``config`` folder.
+
+    Looks in the installed share folder (``ros2 run`` installs) first, then in
+    the source tree (virtual environment installs).
+
+    Parameters
+    ----------
+    name : str
+        File name, e.g. ``brokk_j2.yaml``.
+
+    Returns
+    -------
+    Path
+        The file.
+
+    """
+    candidates = [Path(__file__).resolve().parent.parent / 'config' / name]
+    try:
+        from ament_index_python.packages import get_package_share_directory
+        candidates.insert(0, Path(get_package_share_directory('hydro_sdp')) / 'config' / name)
+    except Exception:  # noqa: B902 - no ament index (plain venv): use the source tree
+        pass
+    for candidate in candidates:
+        if candidate.is_file():
+            return candidate
+    raise FileNotFoundError(f'shipped file {name} not found (looked in '
+                            f"{', '.join(str(c) for c in candidates)})")
+
+
+def default_model_path() -> Path:
+    """Path of the shipped BROKK J2 model file."""
+    return shipped_config('brokk_j2.yaml')
