@@ -25,7 +25,7 @@ setup(
     extras_require={'test': ['pytest', 'hypothesis']},
     entry_points={
         'console_scripts': [
-            'hydro-sdp = hydro_sdp.cli.main:main',
+            'hydro-sdp = hydro_sdp.cli.main:entry_point',
         ],
     },
 )

@@ -23,15 +23,14 @@ import os
 from pathlib import Path
 from typing import Callable, Iterable, Mapping, Sequence
 
-import numpy as np
-
-from hydro_sdp.cdr import decode_float64, decode_joint_states, encode_float64, \
-    encode_joint_states
-from hydro_sdp.core._typing import FloatArray
-from hydro_sdp.core.errors import BagError, BagFormatError, BagNotFoundError, BagReadError, \
-    DataError, JointNotFoundError, TopicNotFoundError
+from hydro_sdp.cdr import decode_float64, decode_joint_states, encode_float64, encode_joint_states
+from hydro_sdp.core.arrays import FloatArray
+from hydro_sdp.core.errors import (
+    BagError, BagFormatError, BagNotFoundError, BagReadError, DataError, JointNotFoundError,
+    TopicNotFoundError)
 from hydro_sdp.core.records import Record
 from hydro_sdp.files import atomic_directory
+import numpy as np
 
 JOINT_STATE = 'sensor_msgs/msg/JointState'
 FLOAT64 = 'std_msgs/msg/Float64'
@@ -283,8 +282,9 @@ class BagData:
 
         """
         if joint not in self.names:
-            raise JointNotFoundError(f"{self.path}: joint {joint!r} is not in {self.state_topic} "
-                                     f"(joints: {', '.join(self.names)})")
+            joints = ', '.join(self.names)
+            raise JointNotFoundError(f'{self.path}: joint {joint!r} is not in {self.state_topic} '
+                                     f'(joints: {joints})')
         column = self.names.index(joint)
         mask = self.present[:, column]
         return self.t[mask], np.degrees(self.positions[mask, column])
@@ -412,8 +412,9 @@ def read_bag(path: str | os.PathLike[str], *, state_topic: str | None = None,
         if len(state_topics) > 1:
             preferred = [t for t in state_topics if t.rstrip('/').endswith('joint_states')]
             if len(preferred) != 1:
-                raise TopicNotFoundError(f"{bag}: several JointState topics "
-                                         f"({', '.join(state_topics)}); choose one")
+                listed = ', '.join(state_topics)
+                raise TopicNotFoundError(f'{bag}: several JointState topics ({listed}); '
+                                         'choose one')
             state_topics = preferred
         state_topic = state_topics[0]
     elif state_topic not in state_topics:
@@ -488,7 +489,7 @@ def write_bag(path: str | os.PathLike[str], records: Sequence[Record], *,
 
     """
     from rosbags.rosbag2 import StoragePlugin, Writer
-    from rosbags.typesys import get_typestore, Stores
+    from rosbags.typesys import Stores, get_typestore
 
     if storage not in STORAGES:
         raise ValueError(f"storage must be one of {', '.join(STORAGES)}, got {storage!r}")

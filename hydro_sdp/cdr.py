@@ -17,10 +17,9 @@ from dataclasses import dataclass
 import struct
 from typing import Sequence
 
-import numpy as np
-
-from hydro_sdp.core._typing import FloatArray
+from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import BagFormatError
+import numpy as np
 
 _LITTLE_ENDIAN_HEADERS = (b'\x00\x01', b'\x00\x03')
 _BIG_ENDIAN_HEADERS = (b'\x00\x00', b'\x00\x02')

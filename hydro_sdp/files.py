@@ -17,10 +17,9 @@ import shutil
 import tempfile
 from typing import Any, Iterator
 
-import yaml
-
 from hydro_sdp.core.errors import ModelFileError
 from hydro_sdp.core.model import JointModel
+import yaml
 
 
 def atomic_write_bytes(path: str | os.PathLike[str], data: bytes) -> Path:

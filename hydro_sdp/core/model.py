@@ -14,14 +14,12 @@ from dataclasses import dataclass, field, replace
 import math
 from typing import Any, Mapping
 
-import numpy as np
-
-from hydro_sdp.core._typing import FloatArray
 from hydro_sdp.core._validate import require_float, require_ordered_pair
-from hydro_sdp.core.effects import (
-    Effect, EFFECT_TYPES, effect_from_mapping, effect_to_mapping)
+from hydro_sdp.core.arrays import FloatArray
+from hydro_sdp.core.effects import Effect, effect_from_mapping, effect_to_mapping, EFFECT_TYPES
 from hydro_sdp.core.errors import ConfigurationError, ModelFileError
 from hydro_sdp.core.static_maps import MAP_KINDS, SdpMap, StaticMap
+import numpy as np
 
 MODEL_FORMAT = 'hydro_sdp/model/v1'
 
@@ -116,8 +114,8 @@ class JointModel:
         if dead_zone is not None and self.input_limits is not None:
             low, high = self.input_limits
             if dead_zone[0] < low or dead_zone[1] > high:
-                raise ModelFileError(
-                    f"key 'dead_zone': {list(dead_zone)} lies outside input_limits [{low}, {high}]")
+                raise ModelFileError(f"key 'dead_zone': {list(dead_zone)} lies outside "
+                                     f'input_limits [{low}, {high}]')
 
     @property
     def kind(self) -> str:
@@ -148,7 +146,7 @@ class JointModel:
 
     def alpha(self, dt: float) -> tuple[float, float, float, float, float, float]:
         """
-        The first paper's ``alpha_1..alpha_6`` at sample period ``dt`` (kind ``sdp`` only).
+        Return the first paper's ``alpha_1..alpha_6`` at sample period ``dt`` (kind ``sdp``).
 
         Parameters
         ----------

@@ -15,12 +15,11 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
-
-from hydro_sdp.core._typing import FloatArray
+from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import ConfigurationError
 from hydro_sdp.core.model import check_sample_period, JointModel
 from hydro_sdp.core.static_maps import SdpDzMap, SdpMap
+import numpy as np
 
 # Fraction of the end-stop range a program may use around its centre.
 _USABLE_RANGE = 0.8
@@ -111,7 +110,7 @@ def _rate(model: JointModel, v: float) -> float:
 def step_program(model: JointModel, dt: float, *, steps: int = 40, hold: float = 2.0,
                  rest: float = 1.0, y0: float = 0.0) -> FloatArray:
     """
-    Steps from rest of increasing size, alternating in sign, separated by rests.
+    Make steps from rest of increasing size, alternating in sign, separated by rests.
 
     Parameters
     ----------
@@ -176,7 +175,7 @@ def _level(positive: bool, fraction: float, small_neg: float, large_neg: float,
 def random_program(model: JointModel, dt: float, duration: float, *, seed: int = 0,
                    y0: float = 0.0, hold_range: tuple[float, float] = (0.5, 3.0)) -> FloatArray:
     """
-    Random command levels held for random times (evaluation runs).
+    Make random command levels held for random times (evaluation runs).
 
     Each level's size is uniform over the model's command span (dead-zone
     included); its sign is drawn with a probability that pulls the joint back
@@ -236,3 +235,23 @@ def random_program(model: JointModel, dt: float, duration: float, *, seed: int =
         filled += samples
         y += speed * samples * dt
     return levels
+
+
+def start_angle(model: JointModel) -> float:
+    """
+    Angle at which programs start by default: mid-travel, or 0 without end stops.
+
+    Parameters
+    ----------
+    model : JointModel
+        The joint.
+
+    Returns
+    -------
+    float
+        Angle in degrees.
+
+    """
+    if model.angle_limits is None:
+        return 0.0
+    return 0.5 * (model.angle_limits[0] + model.angle_limits[1])

@@ -11,10 +11,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import numpy as np
-
-from hydro_sdp.core._typing import FloatArray
+from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import DataError
+import numpy as np
 
 
 @dataclass(frozen=True, eq=False)
@@ -88,7 +87,7 @@ class Record:
         """Time from the first to the last sample, s."""
         return float(self.t[-1] - self.t[0]) if self.t.size else 0.0
 
-    def slice(self, start: int, stop: int) -> Record:
+    def window(self, start: int, stop: int) -> Record:
         """Return samples ``start:stop`` as a new record."""
         return Record(self.t[start:stop], self.v[start:stop], self.y[start:stop],
                       self.joint, self.source)

@@ -9,6 +9,11 @@ stop at a time (:func:`bounded_cumsum`). :class:`JointSimulator` steps the same
 equations one sample at a time for closed loops and the plant node; both give
 the same trajectory.
 
+``v_k`` is the command in force over the sample interval that ends at ``t_k``
+(the last command received at or before ``t_k``). With that reading the
+delay in samples is ``delay / dt`` at every sample period and simulations at
+0.01 s and 0.05 s agree exactly for commands held over 0.05 s (methods.md 3.2).
+
 """
 
 from __future__ import annotations
@@ -16,14 +21,13 @@ from __future__ import annotations
 from collections import deque
 import math
 
-import numpy as np
-from scipy.signal import lfilter
-
-from hydro_sdp.core._typing import FloatArray
+from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.effects import (
     AngleDependentVelocity, Backlash, DirectionDependentDelay, ValveLag)
 from hydro_sdp.core.errors import DataError
 from hydro_sdp.core.model import check_sample_period, delay_samples, JointModel
+import numpy as np
+from scipy.signal import lfilter
 
 # Samples handled per reflection pass; bounds the cost of each switch between stops.
 _CHUNK = 8192
@@ -33,11 +37,11 @@ def bounded_cumsum(x0: float, increments: FloatArray, low: float, high: float) -
     """
     Solve ``x_k = min(max(x_{k-1} + d_k, low), high)`` for a whole sequence.
 
-    Between switches from one bound to the other, the two-sided recursion equals
-    a one-sided reflection, which has the closed form
-    ``x = s - max(0, running_max(s - high))`` (Skorokhod/Lindley) of the plain
-    cumulative sum ``s``. The sequence is processed in chunks, restarting from
-    the last value, so each switch costs at most one chunk.
+    Hydraulic commands are mostly held levels, so the increments come in runs
+    of equal values; inside a run the path is monotone and meets at most one
+    bound, so each run is solved in closed form and only the run boundaries
+    are visited in Python. Increments that change at nearly every sample are
+    handled by reflection instead (:func:`_reflected_cumsum`).
 
     Parameters
     ----------
@@ -58,22 +62,47 @@ def bounded_cumsum(x0: float, increments: FloatArray, low: float, high: float) -
     """
     increments = np.asarray(increments, dtype=np.float64)
     n = increments.size
-    out = np.empty(n + 1)
     x = min(max(float(x0), low), high)
-    out[0] = x
     if math.isinf(low) and math.isinf(high):
-        out[1:] = x + np.cumsum(increments)
-        return out
+        return np.r_[x, x + np.cumsum(increments)]
+    starts = np.flatnonzero(np.diff(increments)) + 1
+    if 8 * (starts.size + 1) > n:
+        return _reflected_cumsum(x, increments, low, high)
+    starts = np.r_[0, starts]
+    lengths = np.diff(np.r_[starts, n])
+    values = increments[starts]
+    run_start = np.empty(starts.size)
+    for i, (step, length) in enumerate(zip(values.tolist(), lengths.tolist())):
+        run_start[i] = x
+        x = min(max(x + step * length, low), high)
+    steps_into_run = np.arange(1, n + 1) - np.repeat(starts, lengths)
+    path = np.repeat(run_start, lengths) + np.repeat(values, lengths) * steps_into_run
+    return np.r_[min(max(float(x0), low), high), np.clip(path, low, high)]
+
+
+def _reflected_cumsum(x: float, increments: FloatArray, low: float, high: float) -> FloatArray:
+    """
+    Two-sided clamped cumulative sum by one-sided reflections.
+
+    Between switches from one bound to the other, the recursion equals a
+    one-sided reflection, which has the closed form
+    ``x = s - max(0, running_max(s - high))`` (Skorokhod/Lindley) of the plain
+    cumulative sum ``s``. The sequence is processed in chunks, restarting from
+    the last value, so each switch costs at most one chunk.
+    """
+    n = increments.size
+    out = np.empty(n + 1)
+    out[0] = x
     reflect_high = True
     start = 0
     while start < n:
         stop = min(start + _CHUNK, n)
         path = x + np.cumsum(increments[start:stop])
         if reflect_high:
-            path -= np.maximum(np.maximum.accumulate(path - high), 0.0)
+            path = _reflect(path, path - high, high, -1.0)
             crossed = np.flatnonzero(path < low)
         else:
-            path += np.maximum(np.maximum.accumulate(low - path), 0.0)
+            path = _reflect(path, low - path, low, 1.0)
             crossed = np.flatnonzero(path > high)
         if crossed.size:
             j = int(crossed[0])
@@ -88,6 +117,24 @@ def bounded_cumsum(x0: float, increments: FloatArray, low: float, high: float) -
             start = stop
     # Rounding in the reflection may step a hair past a bound.
     return np.clip(out, low, high, out=out)
+
+
+def _reflect(path: FloatArray, excess: FloatArray, bound: float, sign: float) -> FloatArray:
+    """Reflect ``path`` at ``bound`` given how far it overshoots it (``excess``)."""
+    pushed = np.maximum.accumulate(excess)
+    reflected = path + sign * np.maximum(pushed, 0.0)
+    # Where the overshoot peaks the joint is at the stop; say so exactly, not up to rounding.
+    reflected[(excess >= pushed) & (pushed > 0.0)] = bound
+    return reflected
+
+
+def _rate_of_levels(model: JointModel, v: FloatArray) -> FloatArray:
+    """Evaluate the static map once per held level rather than once per sample."""
+    starts = np.flatnonzero(np.diff(v)) + 1
+    if 2 * (starts.size + 1) > v.size:
+        return model.rate(v)
+    starts = np.r_[0, starts]
+    return np.repeat(model.rate(v[starts]), np.diff(np.r_[starts, v.size]))
 
 
 def _limits(model: JointModel) -> tuple[float, float]:
@@ -143,7 +190,7 @@ def simulate(model: JointModel, v: FloatArray, dt: float, y0: float,
     v = _check_commands(v)
     if v.size == 0:
         return np.empty(0)
-    rates = model.rate(v)
+    rates = _rate_of_levels(model, v)
     rate_before = float(model.rate(np.array([v_before]))[0])
     split = model.effect(DirectionDependentDelay.name)
     if isinstance(split, DirectionDependentDelay):
@@ -234,7 +281,7 @@ class JointSimulator:
 
     @property
     def angle(self) -> float:
-        """The angle the sensor reads now, degrees."""
+        """Return the angle the sensor reads now, degrees."""
         return min(max(self._actuator + self._offset, self._low), self._high)
 
     def step(self, v: float) -> float:

@@ -15,11 +15,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, ClassVar, Mapping, Union
 
-import numpy as np
-
-from hydro_sdp.core._typing import FloatArray
 from hydro_sdp.core._validate import require_float, require_ordered_pair, require_pair
+from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import ModelFileError
+import numpy as np
 
 
 @dataclass(frozen=True)
@@ -220,7 +219,7 @@ class LinearMap:
 
     @property
     def dead_zone(self) -> None:
-        """A linear map has no dead-zone."""
+        """Return None: a linear map has no dead-zone."""
         return None
 
     def rate(self, v: FloatArray) -> FloatArray:

@@ -1,0 +1,1 @@
+"""The ``hydro-sdp`` command line."""

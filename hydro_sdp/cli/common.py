@@ -1,0 +1,112 @@
+"""
+What every ``hydro-sdp`` command shares: options, output and exit codes.
+
+Commands return a :class:`Outcome`; :func:`hydro_sdp.cli.main.main` prints it
+as one JSON object (``--json``) or as text, and turns errors into the exit
+codes of interfaces.md section 4: 0 success, 2 bad input with a one-line
+``error: ...`` on stderr, 1 internal failure.
+
+"""
+
+from __future__ import annotations
+
+import argparse
+from dataclasses import dataclass, field
+import math
+from typing import Any
+
+import numpy as np
+
+
+@dataclass
+class Outcome:
+    """
+    Result of one command.
+
+    Parameters
+    ----------
+    payload : dict
+        The ``--json`` object.
+    lines : list of str
+        Human-readable report, one entry per line.
+
+    """
+
+    payload: dict[str, Any]
+    lines: list[str] = field(default_factory=list)
+
+
+def positive_float(text: str) -> float:
+    """Argparse type: a finite number > 0."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f'expected a number, got {text!r}') from None
+    if not (math.isfinite(value) and value > 0.0):
+        raise argparse.ArgumentTypeError(f'must be a positive number, got {text!r}')
+    return value
+
+
+def non_negative_float(text: str) -> float:
+    """Argparse type: a finite number >= 0."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f'expected a number, got {text!r}') from None
+    if not (math.isfinite(value) and value >= 0.0):
+        raise argparse.ArgumentTypeError(f'must be a number >= 0, got {text!r}')
+    return value
+
+
+def finite_float(text: str) -> float:
+    """Argparse type: any finite number."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f'expected a number, got {text!r}') from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f'must be finite, got {text!r}')
+    return value
+
+
+def to_json(value: Any) -> Any:
+    """Convert numpy scalars, arrays, tuples and paths into JSON-ready values."""
+    if isinstance(value, dict):
+        return {str(key): to_json(item) for key, item in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [to_json(item) for item in value]
+    if isinstance(value, np.ndarray):
+        return [to_json(item) for item in value.tolist()]
+    if isinstance(value, (np.floating, float)):
+        number = float(value)
+        return number if math.isfinite(number) else None
+    if isinstance(value, (np.integer,)):
+        return int(value)
+    if isinstance(value, (str, int, bool)) or value is None:
+        return value
+    return str(value)
+
+
+def table(rows: list[list[str]], header: list[str]) -> list[str]:
+    """
+    Format rows as a plain-text table with aligned columns.
+
+    Parameters
+    ----------
+    rows : list of list of str
+        Cells.
+    header : list of str
+        Column titles.
+
+    Returns
+    -------
+    list of str
+        Lines of the table.
+
+    """
+    widths = [max(len(str(row[i])) for row in [header] + rows) for i in range(len(header))]
+    lines = ['  '.join(str(cell).ljust(width) for cell, width in zip(header, widths)).rstrip(),
+             '  '.join('-' * width for width in widths)]
+    lines += ['  '.join(str(cell).ljust(width) for cell, width in zip(row, widths)).rstrip()
+              for row in rows]
+    return lines

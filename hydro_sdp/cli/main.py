@@ -1,0 +1,111 @@
+"""
+Entry point of the ``hydro-sdp`` command line.
+
+Exit codes (interfaces.md section 4): 0 success; 2 bad input, with one line
+``error: ...`` on stderr and no traceback; 1 internal failure; 130 when
+interrupted (nothing half-written is left behind: files are written atomically).
+
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import traceback
+
+from hydro_sdp import __version__
+from hydro_sdp.cli import demo, simulate
+from hydro_sdp.cli.common import to_json
+from hydro_sdp.core.errors import HydroSdpError
+
+COMMANDS = (simulate, demo)
+
+DESCRIPTION = """\
+Identify, control and diagnose hydraulic manipulator joints with state-dependent
+parameter (SDP) models.
+
+Every command takes --json (one JSON object on stdout), exits 0 on success, 2 on
+bad input (with a one-line `error: ...`), 1 on an internal failure. Angles are in
+degrees, time in seconds, commands in the valve's own units.
+
+start with:
+  hydro-sdp demo --out demo_output
+"""
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """
+    Build the argument parser with every command.
+
+    Returns
+    -------
+    argparse.ArgumentParser
+        The parser.
+
+    """
+    parser = argparse.ArgumentParser(
+        prog='hydro-sdp', description=DESCRIPTION,
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument('--version', action='version', version=f'hydro-sdp {__version__}')
+    common = argparse.ArgumentParser(add_help=False)
+    common.add_argument('--json', action='store_true',
+                        help='print one JSON object on stdout and nothing else there')
+    subparsers = parser.add_subparsers(dest='command', metavar='COMMAND', required=True)
+    original = subparsers.add_parser
+
+    def add_parser(name: str, **kwargs):
+        kwargs.setdefault('parents', [common])
+        return original(name, **kwargs)
+
+    subparsers.add_parser = add_parser  # every command gets --json
+    for command in COMMANDS:
+        command.register(subparsers)
+    return parser
+
+
+def _fail(message: str, code: int) -> int:
+    sys.stderr.write(f'error: {message}\n')
+    return code
+
+
+def main(argv: list[str] | None = None) -> int:
+    """
+    Run one ``hydro-sdp`` command.
+
+    Parameters
+    ----------
+    argv : list of str or None
+        Arguments without the program name; default ``sys.argv[1:]``.
+
+    Returns
+    -------
+    int
+        Exit code.
+
+    """
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        outcome = args.run(args)
+    except KeyboardInterrupt:
+        return _fail('interrupted; nothing partial was written', 130)
+    except (HydroSdpError, OSError) as error:
+        return _fail(str(error).replace('\n', ' '), 2)
+    except Exception as error:  # noqa: B902 - the last line of defence: no traceback
+        if os.environ.get('HYDRO_SDP_DEBUG'):
+            traceback.print_exc()
+        return _fail(f'internal failure ({type(error).__name__}: {error}); '
+                     'set HYDRO_SDP_DEBUG=1 for a traceback', 1)
+    if args.json:
+        sys.stdout.write(json.dumps(to_json(outcome.payload)) + '\n')
+    else:
+        for line in outcome.lines:
+            sys.stdout.write(line + '\n')
+    return 0
+
+
+def entry_point() -> None:
+    """Console-script wrapper: exit with :func:`main`'s code."""
+    sys.exit(main())

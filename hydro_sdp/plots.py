@@ -1,0 +1,185 @@
+"""
+Figures in the style of West et al. (2018), drawn with matplotlib's object API.
+
+Figures are built on :class:`matplotlib.figure.Figure` directly (no pyplot
+global state), so they can be made from any thread and in tests, and saved
+whole or not at all with :func:`save_figure`.
+
+"""
+
+from __future__ import annotations
+
+import io
+import os
+from pathlib import Path
+from typing import Sequence
+
+from hydro_sdp.core.model import JointModel
+from hydro_sdp.core.records import Record
+from hydro_sdp.files import atomic_write_bytes
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+import numpy as np
+
+#: Colours used throughout: measured data, model, limits.
+MEASURED = '#1f4e79'
+MODEL = '#d95f02'
+LIMIT = '#7f7f7f'
+
+
+def new_figure(rows: int = 1, *, height: float = 2.6, width: float = 9.0,
+               sharex: bool = True) -> tuple[Figure, Sequence]:
+    """
+    Create a figure with ``rows`` stacked axes sharing the time axis.
+
+    Parameters
+    ----------
+    rows : int
+        Number of stacked subplots.
+    height : float
+        Height of each subplot, inches.
+    width : float
+        Figure width, inches.
+    sharex : bool
+        Whether the subplots share their x axis.
+
+    Returns
+    -------
+    tuple
+        The figure and a list of its axes.
+
+    """
+    figure = Figure(figsize=(width, height * rows + 0.6), layout='constrained')
+    FigureCanvasAgg(figure)
+    axes = figure.subplots(rows, 1, sharex=sharex, squeeze=False)[:, 0]
+    for ax in axes:
+        ax.grid(True, color='#dddddd', linewidth=0.6)
+        ax.set_axisbelow(True)
+    return figure, list(axes)
+
+
+def save_figure(figure: Figure, path: str | os.PathLike[str], *, dpi: int = 130) -> Path:
+    """
+    Save a figure as PNG, whole or not at all.
+
+    Parameters
+    ----------
+    figure : Figure
+        The figure.
+    path : str or PathLike
+        Target PNG file.
+    dpi : int
+        Resolution.
+
+    Returns
+    -------
+    Path
+        The target path.
+
+    """
+    buffer = io.BytesIO()
+    figure.savefig(buffer, format='png', dpi=dpi)
+    return atomic_write_bytes(path, buffer.getvalue())
+
+
+def _mark_limits(ax, limits: tuple[float, float] | None, label: str) -> None:
+    if limits is None:
+        return
+    for value in limits:
+        ax.axhline(value, color=LIMIT, linestyle='--', linewidth=0.9)
+    ax.text(1.0, limits[1], f' {label}', transform=ax.get_yaxis_transform(),
+            color=LIMIT, fontsize=8, va='center', ha='left', clip_on=False)
+
+
+def plot_record(record: Record, model: JointModel | None = None, *,
+                simulated: np.ndarray | None = None, title: str = '',
+                command_unit: str = 'V') -> Figure:
+    """
+    Angle (upper) and command (lower) against time, as the paper's Fig. 4.
+
+    Parameters
+    ----------
+    record : Record
+        Measured (or simulated) data.
+    model : JointModel or None
+        Marks end stops and the dead-zone when given.
+    simulated : numpy.ndarray or None
+        Model response to overlay on the angle, degrees.
+    title : str
+        Figure title.
+    command_unit : str
+        Unit of the command, for the axis label.
+
+    Returns
+    -------
+    Figure
+        The figure.
+
+    """
+    figure, (angle_ax, command_ax) = new_figure(2)
+    time = record.t - record.t[0]
+    angle_ax.plot(time, record.y, color=MEASURED, linewidth=1.6 if simulated is not None else 1.0,
+                  label='measured')
+    if simulated is not None:
+        angle_ax.plot(time, simulated, color=MODEL, linewidth=0.9, label='model')
+        angle_ax.legend(loc='upper right', fontsize=8, frameon=False)
+    angle_ax.set_ylabel('joint angle y (deg)')
+    command_ax.step(time, record.v, where='post', color=MEASURED, linewidth=0.9)
+    command_ax.set_ylabel(f'command v ({command_unit})')
+    command_ax.set_xlabel('time (s)')
+    if model is not None:
+        _mark_limits(angle_ax, model.angle_limits, 'end stops')
+        if model.dead_zone is not None:
+            command_ax.axhspan(*model.dead_zone, color=LIMIT, alpha=0.15, linewidth=0)
+            command_ax.text(1.0, model.dead_zone[1], ' dead-zone',
+                            transform=command_ax.get_yaxis_transform(), color=LIMIT,
+                            fontsize=8, va='bottom', ha='left', clip_on=False)
+    figure.suptitle(title or f'joint {record.joint}', fontsize=11)
+    return figure
+
+
+def plot_velocity_map(model: JointModel, *, v_range: tuple[float, float] | None = None,
+                      title: str = '', command_unit: str = 'V',
+                      points: tuple[np.ndarray, np.ndarray] | None = None) -> Figure:
+    """
+    Angular velocity against steady command, as the paper's Fig. 3.
+
+    Parameters
+    ----------
+    model : JointModel
+        The joint; its map is drawn, with dead-zone and saturation marked.
+    v_range : tuple[float, float] or None
+        Command range; default: the input limits, or +-5 units.
+    title : str
+        Figure title.
+    command_unit : str
+        Unit of the command.
+    points : tuple of numpy.ndarray or None
+        Per-experiment ``(v, velocity)`` estimates to show as circles.
+
+    Returns
+    -------
+    Figure
+        The figure.
+
+    """
+    figure, (ax,) = new_figure(1, height=4.0, width=7.0)
+    low, high = v_range or model.input_limits or (-5.0, 5.0)
+    v = np.linspace(low, high, 801)
+    ax.plot(v, model.rate(v), color=MODEL, linewidth=1.8, label=f'{model.kind} map')
+    if points is not None:
+        ax.plot(points[0], points[1], 'o', color=MEASURED, markersize=4,
+                markerfacecolor='none', label='experiments')
+    if model.dead_zone is not None:
+        for edge in model.dead_zone:
+            ax.axvline(edge, color=LIMIT, linestyle='--', linewidth=0.9)
+        ax.axvspan(*model.dead_zone, color=LIMIT, alpha=0.12, linewidth=0, label='dead-zone')
+    saturation = getattr(model.static_map, 'saturation_velocity', None)
+    if saturation is not None:
+        for speed in saturation:
+            ax.axhline(speed, color=LIMIT, linestyle=':', linewidth=0.9)
+    ax.set_xlabel(f'steady command v ({command_unit})')
+    ax.set_ylabel('angular velocity (deg/s)')
+    ax.legend(loc='upper left', fontsize=8, frameon=False)
+    figure.suptitle(title or f'velocity map of joint {model.joint}', fontsize=11)
+    return figure

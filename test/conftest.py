@@ -1,0 +1,22 @@
+"""Shared fixtures of the hydro_sdp test suite."""
+
+from pathlib import Path
+
+from hydro_sdp.files import default_model_path, load_model
+import numpy as np
+import pytest
+
+REPO = Path(__file__).resolve().parent.parent
+FIXTURES = REPO.parent / 'shared' / 'data' / 'rosbag2_fixtures'
+
+
+@pytest.fixture
+def rng():
+    """Return a seeded random generator, one per test."""
+    return np.random.default_rng(20260101)
+
+
+@pytest.fixture(scope='session')
+def j2():
+    """Load the shipped BROKK J2 model."""
+    return load_model(default_model_path())
