@@ -16,19 +16,15 @@ one run on this machine:
 import argparse
 import math
 from pathlib import Path
-import sys
 import tempfile
 import time
 
+from hydro_sdp.bags import read_bag, write_bag
+from hydro_sdp.core.programs import random_program
+from hydro_sdp.core.records import Record
+from hydro_sdp.core.simulation import JointSimulator, simulate
+from hydro_sdp.files import default_model_path, load_model
 import numpy as np
-
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
-
-from hydro_sdp.bags import read_bag, write_bag  # noqa: E402
-from hydro_sdp.core.programs import random_program  # noqa: E402
-from hydro_sdp.core.records import Record  # noqa: E402
-from hydro_sdp.core.simulation import JointSimulator, simulate  # noqa: E402
-from hydro_sdp.files import default_model_path, load_model  # noqa: E402
 
 
 def python_loop(alpha, tau, v, y0, y_min, y_max):
