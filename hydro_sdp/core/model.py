@@ -31,6 +31,10 @@ def delay_samples(delay: float, dt: float) -> int:
     """
     Convert a delay in seconds to whole samples at period ``dt`` (nearest, ties up).
 
+    The papers count the delay from issuing a command to the first sample that
+    shows its motion, so it is at least one sample: a command issued at ``t_k``
+    can move the joint in the interval ending at ``t_{k+1}`` at the earliest.
+
     Parameters
     ----------
     delay : float
@@ -46,7 +50,7 @@ def delay_samples(delay: float, dt: float) -> int:
     """
     check_sample_period(dt)
     # The small tolerance keeps 0.15 / 0.05 = 2.9999999999999996 at 3.
-    return int(math.floor(delay / dt + 0.5 + 1e-9))
+    return max(1, int(math.floor(delay / dt + 0.5 + 1e-9)))
 
 
 def check_sample_period(dt: float) -> float:

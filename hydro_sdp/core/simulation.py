@@ -9,10 +9,10 @@ stop at a time (:func:`bounded_cumsum`). :class:`JointSimulator` steps the same
 equations one sample at a time for closed loops and the plant node; both give
 the same trajectory.
 
-``v_k`` is the command in force over the sample interval that ends at ``t_k``
-(the last command received at or before ``t_k``). With that reading the
-delay in samples is ``delay / dt`` at every sample period and simulations at
-0.01 s and 0.05 s agree exactly for commands held over 0.05 s (methods.md 3.2).
+``v_k`` is the command issued at ``t_k`` (in a bag: the last command received
+at or before ``t_k``). It first shows in the angle at ``t_{k+tau}``, so the
+delay counts from issuing a command to the first sample that shows its motion,
+as in the papers (tau = 15 at 0.01 s and 3 at 0.05 s for J2's 0.15 s).
 
 """
 
@@ -236,9 +236,11 @@ def _integrate_angle_dependent(speed: FloatArray, dt: float, y0: float, low: flo
 
 class JointSimulator:
     """
-    Step a joint model one sample at a time, as :func:`simulate` does for a sequence.
+    Step a joint model one sample at a time: apply a command, get the next angle.
 
-    ``[sim.step(v) for v in commands]`` equals ``simulate(model, commands, dt, y0)``.
+    ``[y0] + [sim.step(v) for v in commands[:-1]]`` equals
+    ``simulate(model, commands, dt, y0)``. Closed loops and the plant node use
+    it: the command computed from the angle at ``t_k`` is the one issued at ``t_k``.
 
     Parameters
     ----------
@@ -265,8 +267,8 @@ class JointSimulator:
         else:
             self._tau_pos = self._tau_neg = model.delay_samples(self.dt)
         rate_before = float(model.rate(np.array([v_before]))[0])
-        depth = max(self._tau_pos, self._tau_neg) + 1
-        # Past speeds from the static map, newest last; index -1-tau is rate(v_{k-tau}).
+        depth = max(self._tau_pos, self._tau_neg)
+        # Speeds of the commands issued so far, newest last: index -tau is rate(v_{k+1-tau}).
         self._rates: deque[float] = deque([rate_before] * depth, maxlen=depth)
         lag = model.effect(ValveLag.name)
         self._lag_p = math.exp(-self.dt / lag.time_constant) if isinstance(lag, ValveLag) else None
@@ -286,7 +288,7 @@ class JointSimulator:
 
     def step(self, v: float) -> float:
         """
-        Apply command ``v`` at this sample and return the angle at this sample.
+        Issue command ``v`` now and advance one sample.
 
         Parameters
         ----------
@@ -296,30 +298,29 @@ class JointSimulator:
         Returns
         -------
         float
-            Angle in degrees.
+            Angle at the next sample, degrees.
 
         """
         if not math.isfinite(v):
             raise DataError(f'command must be finite, got {v}')
         self._rates.append(float(self.model.rate(np.array([v]))[0]))
         if self._tau_pos == self._tau_neg:
-            speed = self._rates[-1 - self._tau_pos]
+            speed = self._rates[-self._tau_pos]
         else:
-            speed = (max(self._rates[-1 - self._tau_pos], 0.0)
-                     + min(self._rates[-1 - self._tau_neg], 0.0))
+            speed = (max(self._rates[-self._tau_pos], 0.0)
+                     + min(self._rates[-self._tau_neg], 0.0))
         if self._lag_p is not None:
             # Same arithmetic as lfilter's transposed direct form, so results agree exactly.
             self._lag_state = (1.0 - self._lag_p) * speed + self._lag_p * self._lag_state
             speed = self._lag_state
-        if self.samples > 0:
-            previous = self._actuator
-            if self._gravity is not None:
-                phase = math.radians(self._gravity.phase)
-                speed += self._gravity.amplitude * abs(speed) * math.cos(
-                    math.radians(previous) + phase)
-            self._actuator = min(max(previous + self.dt * speed, self._low), self._high)
-            if self._half_play > 0.0:
-                moved = self._actuator - previous
-                self._offset = min(max(self._offset - moved, -self._half_play), self._half_play)
+        previous = self._actuator
+        if self._gravity is not None:
+            phase = math.radians(self._gravity.phase)
+            speed += self._gravity.amplitude * abs(speed) * math.cos(
+                math.radians(previous) + phase)
+        self._actuator = min(max(previous + self.dt * speed, self._low), self._high)
+        if self._half_play > 0.0:
+            moved = self._actuator - previous
+            self._offset = min(max(self._offset - moved, -self._half_play), self._half_play)
         self.samples += 1
         return self.angle

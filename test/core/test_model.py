@@ -48,9 +48,15 @@ def test_alpha_needs_kind_sdp(j2):
         dz.alpha(0.01)
 
 
-@pytest.mark.parametrize(('dt', 'samples'), [(0.01, 15), (0.05, 3), (0.1, 2), (0.15, 1)])
+@pytest.mark.parametrize(('dt', 'samples'), [(0.01, 15), (0.05, 3), (0.1, 2), (0.15, 1), (1.0, 1)])
 def test_delay_in_samples(j2, dt, samples):
     assert j2.delay_samples(dt) == samples
+
+
+def test_delay_is_at_least_one_sample():
+    # A command issued at t_k moves the joint in the interval ending at t_{k+1} at the earliest.
+    assert delay_samples(0.0, 0.01) == 1
+    assert delay_samples(0.004, 0.01) == 1
 
 
 def test_delay_rejects_bad_period():

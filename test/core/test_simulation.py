@@ -62,8 +62,8 @@ def test_dead_zone_does_not_move(j2):
 
 
 def test_same_angles_at_any_sample_period(j2, rng):
-    # v_k is the command in force over the interval that ends at t_k, so a coarse
-    # sample k covers the fine samples 5k-4..5k.
+    # Rates scale with dt and the delay in samples with 1/dt: fine samples 5k-4..5k
+    # carrying coarse command k give the coarse trajectory at every fifth sample.
     coarse = np.repeat(rng.uniform(-5.0, 5.0, 60), 10)      # 0.05 s
     fine = np.r_[coarse[0], np.repeat(coarse[1:], 5)]       # 0.01 s, same commands
     y_fine = simulate(j2, fine, 0.01, 25.0, v_before=coarse[0])
@@ -89,7 +89,7 @@ def test_stepper_equals_vector_simulation(j2, rng, effects):
     v = np.repeat(rng.uniform(-5.0, 5.0, 120), 40)
     y = simulate(model, v, 0.01, 20.0, v_before=0.5)
     sim = JointSimulator(model, 0.01, 20.0, v_before=0.5)
-    stepped = np.array([sim.step(x) for x in v])
+    stepped = np.array([sim.angle] + [sim.step(x) for x in v[:-1]])
     np.testing.assert_allclose(stepped, y, atol=1e-9, rtol=0)
 
 
@@ -112,14 +112,14 @@ def test_backlash_holds_the_angle_after_a_reversal():
     model = JointModel('j', LinearMap(10.0), 0.0, effects=(Backlash(2.0),))
     v = np.r_[np.full(100, 1.0), np.full(100, -1.0)]
     y = simulate(model, v, 0.01, 0.0)
-    plain = simulate(JointModel('j', LinearMap(10.0), 0.0), v, 0.01, 0.0)
-    # 10 deg/s: the 2 deg play takes 0.2 s (20 samples) to cross after the reversal.
-    assert np.all(y[100:120] == y[99])
-    assert y[121] < y[99]
-    # Before the first reversal the sensor trails by half the play... in the motion's
-    # direction it leads from the centred start, then stays 1 deg behind the actuator.
-    assert y[99] == pytest.approx(plain[99] - 1.0)
-    assert y[-1] == pytest.approx(plain[-1] + 1.0)
+    actuator = simulate(JointModel('j', LinearMap(10.0), 0.0), v, 0.01, 0.0)
+    # The actuator turns at sample 101; at 10 deg/s the 2 deg play takes 20 samples.
+    assert actuator[100] > actuator[101]
+    assert np.all(y[100:121] == y[100])
+    assert y[122] < y[121]
+    # Moving up the sensor trails the actuator by half the play, moving down it leads.
+    assert y[100] == pytest.approx(actuator[100] - 1.0)
+    assert y[-1] == pytest.approx(actuator[-1] + 1.0)
 
 
 def test_angle_dependent_velocity_scales_by_direction():
