@@ -342,10 +342,11 @@ class BagData:
 
     def record(self, joint: str | None = None, command_topic: str | None = None) -> Record:
         """
-        One joint's angle with the command applied at each angle sample.
+        One joint's angle with the command in force before each angle sample.
 
-        The command is held from each message until the next (zero-order
-        hold); angle samples before the first command are dropped.
+        ``v_k`` is the last command received before ``t_k`` (zero-order hold):
+        the one a plant applies over the interval ending at ``t_k``. Angle
+        samples without an earlier command are dropped.
 
         Parameters
         ----------
@@ -368,7 +369,7 @@ class BagData:
             raise DataError(f'{self.path}: command topic {topic} has no messages')
         order = np.argsort(series.t, kind='stable')
         command_t, command = series.t[order], series.data[order]
-        index = np.searchsorted(command_t, t, side='right') - 1
+        index = np.searchsorted(command_t, t, side='left') - 1
         keep = index >= 0
         if not keep.any():
             raise DataError(f'{self.path}: no {topic} message arrives before the last '
@@ -468,7 +469,10 @@ def write_bag(path: str | os.PathLike[str], records: Sequence[Record], *,
 
     All records must share their time stamps: each sample becomes one
     ``/joint_states`` message holding every joint (radians) and one
-    ``/<joint>/valve_command`` message per joint, both at the sample time.
+    ``/<joint>/valve_command`` message per joint. A record's ``v_k`` is the
+    command in force over the interval ending at ``t_k``, so it is written at
+    ``t_{k-1}``, when a controller reading ``y_{k-1}`` would have sent it;
+    :meth:`BagData.record` reads it back as ``v_k``.
 
     Parameters
     ----------
@@ -504,6 +508,12 @@ def write_bag(path: str | os.PathLike[str], records: Sequence[Record], *,
         raise DataError(f'records need distinct, non-empty joint names, got {names}')
     typestore = get_typestore(Stores.ROS2_JAZZY)
     stamps = np.round(t * 1e9).astype(np.int64)
+    if stamps.size < 2:
+        raise DataError('a bag needs at least two samples')
+    command_stamps = np.r_[2 * stamps[0] - stamps[1], stamps[:-1]]
+    if command_stamps[0] < 0:
+        raise DataError(f'records must start at least one sample period after t = 0 '
+                        f'(first sample at {t[0]} s)')
     template = _joint_state_template(typestore, names)
     positions = np.radians(np.column_stack([record.y for record in records]))
     messages = [('/joint_states', JOINT_STATE, encode_joint_states(template, stamps, positions))]
@@ -518,12 +528,13 @@ def write_bag(path: str | os.PathLike[str], records: Sequence[Record], *,
     with atomic_directory(path) as building:
         # Metadata version 8 is what rosbag2 on Jazzy writes and reads.
         with Writer(building, version=8, storage_plugin=plugin) as writer:
-            connections = [(writer.add_connection(topic, msgtype, typestore=typestore), raws)
-                           for topic, msgtype, raws in messages]
-            stamp_list = stamps.tolist()
-            for k, stamp in enumerate(stamp_list):
-                for connection, raws in connections:
-                    writer.write(connection, stamp, raws[k])
+            connections = [
+                (writer.add_connection(topic, msgtype, typestore=typestore), raws,
+                 command_stamps.tolist() if topic.endswith('/valve_command') else stamps.tolist())
+                for topic, msgtype, raws in messages]
+            for k in range(stamps.size):
+                for connection, raws, times in connections:
+                    writer.write(connection, times[k], raws[k])
     return Path(path)
 
 

@@ -78,22 +78,23 @@ def _float(value):
 
 
 def test_commands_are_held_between_messages(tmp_path):
-    # Commands at 0.05 s, angles at 0.01 s; angles before the first command are dropped.
+    # Commands every 0.05 s, angles every 0.01 s: v_k is the last command sent before t_k,
+    # and angles with no earlier command are dropped.
     messages = [('/joint_states', 'sensor_msgs/msg/JointState', k * 10**7,
                  _joint_state(k * 10**7, ['j2'], [0.001 * k])) for k in range(20)]
     messages += [('/j2/valve_command', 'std_msgs/msg/Float64', (2 + 5 * k) * 10**7,
                   _float(k + 1.0)) for k in range(4)]
     bag = _write_raw(tmp_path / 'bag', messages)
     record = read_record(bag)
-    np.testing.assert_allclose(record.t, np.arange(2, 20) * 0.01)
-    np.testing.assert_array_equal(record.v, [1.0] * 5 + [2.0] * 5 + [3.0] * 5 + [4.0] * 3)
-    np.testing.assert_allclose(record.y, np.degrees(0.001 * np.arange(2, 20)))
+    np.testing.assert_allclose(record.t, np.arange(3, 20) * 0.01)
+    np.testing.assert_array_equal(record.v, [1.0] * 5 + [2.0] * 5 + [3.0] * 5 + [4.0] * 2)
+    np.testing.assert_allclose(record.y, np.degrees(0.001 * np.arange(3, 20)))
 
 
 def test_receive_time_is_used_when_stamps_are_unset(tmp_path):
     messages = [('/joint_states', 'sensor_msgs/msg/JointState', 10**9 + k * 10**7,
                  _joint_state(0, ['j2'], [0.0])) for k in range(5)]
-    messages += [('/j2/valve_command', 'std_msgs/msg/Float64', 10**9, _float(1.0))]
+    messages += [('/j2/valve_command', 'std_msgs/msg/Float64', 10**9 - 1, _float(1.0))]
     record = read_record(_write_raw(tmp_path / 'bag', messages))
     np.testing.assert_allclose(record.t, 1.0 + np.arange(5) * 0.01)
 

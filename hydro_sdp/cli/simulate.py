@@ -77,7 +77,7 @@ def experiment_record(model: JointModel, program: str, *, dt: float = 0.01, seed
     Returns
     -------
     Record
-        The noisy record, ``t`` starting at 0.
+        The noisy record, ``t`` starting at ``dt``.
 
     """
     start = start_angle(model) if y0 is None else y0
@@ -90,7 +90,8 @@ def experiment_record(model: JointModel, program: str, *, dt: float = 0.01, seed
     y = simulate(model, v, dt, start)
     rng = np.random.default_rng([seed, 1])
     measured = y + rng.normal(0.0, noise, y.size) if noise > 0.0 else y
-    return Record(np.arange(v.size) * dt, v, measured, joint=model.joint)
+    # Time starts one period in, so that v_0 has a (non-negative) time to be sent at.
+    return Record(np.arange(1, v.size + 1) * dt, v, measured, joint=model.joint)
 
 
 def run(args: argparse.Namespace) -> Outcome:

@@ -9,10 +9,11 @@ stop at a time (:func:`bounded_cumsum`). :class:`JointSimulator` steps the same
 equations one sample at a time for closed loops and the plant node; both give
 the same trajectory.
 
-``v_k`` is the command issued at ``t_k`` (in a bag: the last command received
-at or before ``t_k``). It first shows in the angle at ``t_{k+tau}``, so the
-delay counts from issuing a command to the first sample that shows its motion,
-as in the papers (tau = 15 at 0.01 s and 3 at 0.05 s for J2's 0.15 s).
+``v_k`` is the command in force over the sample interval that ends at ``t_k``:
+the one issued during ``[t_{k-1}, t_k)`` (in a bag, the last command received
+before ``t_k``). A controller that reads ``y_k`` therefore issues ``v_{k+1}``.
+This is the timing of the verified closed loops of methods.md 4.6 and of the
+ROS nodes, and ``tau = delay / dt`` (15 at 0.01 s, 3 at 0.05 s for J2).
 
 """
 
@@ -236,11 +237,12 @@ def _integrate_angle_dependent(speed: FloatArray, dt: float, y0: float, low: flo
 
 class JointSimulator:
     """
-    Step a joint model one sample at a time: apply a command, get the next angle.
+    Step a joint model one sample at a time: issue a command, get the next angle.
 
-    ``[y0] + [sim.step(v) for v in commands[:-1]]`` equals
-    ``simulate(model, commands, dt, y0)``. Closed loops and the plant node use
-    it: the command computed from the angle at ``t_k`` is the one issued at ``t_k``.
+    The command given to :meth:`step` is the one in force over the next sample
+    (``v_{k+1}``), so ``[y0] + [sim.step(v) for v in commands[1:]]`` equals
+    ``simulate(model, commands, dt, y0, v_before=commands[0])``. Closed loops and
+    the plant node use it: the command computed from ``y_k`` is ``v_{k+1}``.
 
     Parameters
     ----------
@@ -251,7 +253,7 @@ class JointSimulator:
     y0 : float
         Angle at the first sample, degrees.
     v_before : float
-        Command assumed before the first sample.
+        Command in force up to and including the first sample.
 
     """
 
@@ -267,8 +269,8 @@ class JointSimulator:
         else:
             self._tau_pos = self._tau_neg = model.delay_samples(self.dt)
         rate_before = float(model.rate(np.array([v_before]))[0])
-        depth = max(self._tau_pos, self._tau_neg)
-        # Speeds of the commands issued so far, newest last: index -tau is rate(v_{k+1-tau}).
+        depth = max(self._tau_pos, self._tau_neg) + 1
+        # Speeds of v_{k+1}, v_k, ... newest last: index -1-tau is rate(v_{k+1-tau}).
         self._rates: deque[float] = deque([rate_before] * depth, maxlen=depth)
         lag = model.effect(ValveLag.name)
         self._lag_p = math.exp(-self.dt / lag.time_constant) if isinstance(lag, ValveLag) else None
@@ -293,7 +295,7 @@ class JointSimulator:
         Parameters
         ----------
         v : float
-            Command in input units (must be finite).
+            Command in force over the next sample, input units (must be finite).
 
         Returns
         -------
@@ -305,10 +307,10 @@ class JointSimulator:
             raise DataError(f'command must be finite, got {v}')
         self._rates.append(float(self.model.rate(np.array([v]))[0]))
         if self._tau_pos == self._tau_neg:
-            speed = self._rates[-self._tau_pos]
+            speed = self._rates[-1 - self._tau_pos]
         else:
-            speed = (max(self._rates[-self._tau_pos], 0.0)
-                     + min(self._rates[-self._tau_neg], 0.0))
+            speed = (max(self._rates[-1 - self._tau_pos], 0.0)
+                     + min(self._rates[-1 - self._tau_neg], 0.0))
         if self._lag_p is not None:
             # Same arithmetic as lfilter's transposed direct form, so results agree exactly.
             self._lag_state = (1.0 - self._lag_p) * speed + self._lag_p * self._lag_state

@@ -1,0 +1,142 @@
+"""
+Inverse dead-zone (IDZ) compensation, eq. (7) of West et al. (2018).
+
+The linear controller's output ``u`` is a desired angle increment per control
+sample. The IDZ turns it into a valve command ``v`` by inverting the chord
+model ``q_lin(v) = s_n (v - a3)`` below the dead-zone and ``s_p (v - a6)``
+above it, so that the loop sees ``y_k = y_{k-1} + u_{k-tau}``. Near ``u = 0``
+a pure inverse would flip between the two edges at every sample; three modes
+avoid that (methods.md 5.2): a zero band (the paper's, ``v = rest`` while
+``|u| <= beta``), a smooth blend of the two branches over ``beta``, and a
+hysteresis (Schmitt) band that switches branch only when ``u`` crosses ``+-beta``.
+
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+import math
+
+from hydro_sdp.core.errors import ConfigurationError
+
+IDZ_MODES = ('zero', 'smooth', 'hysteresis')
+
+
+@dataclass(frozen=True)
+class InverseDeadZone:
+    """
+    Inverse of a dead-zone chord model.
+
+    Parameters
+    ----------
+    dead_zone : tuple[float, float]
+        Edges ``(a3, a6)``, input units.
+    slopes : tuple[float, float]
+        ``(s_n, s_p)``: angle per control sample per input unit beyond each edge.
+    beta : float
+        Chatter band, angle per control sample (>= 0).
+    mode : str
+        ``zero``, ``smooth`` or ``hysteresis``.
+    rest : float
+        Command that holds the valve closed (inside the dead-zone).
+
+    """
+
+    dead_zone: tuple[float, float]
+    slopes: tuple[float, float]
+    beta: float = 0.05
+    mode: str = 'zero'
+    rest: float = 0.0
+
+    def __post_init__(self) -> None:
+        low, high = (float(x) for x in self.dead_zone)
+        s_n, s_p = (float(x) for x in self.slopes)
+        values = (low, high, s_n, s_p, float(self.beta), float(self.rest))
+        if not all(math.isfinite(x) for x in values):
+            raise ConfigurationError('IDZ parameters must be finite')
+        if low > high:
+            raise ConfigurationError(f'IDZ dead-zone edges reversed: [{low}, {high}]')
+        if s_n <= 0.0 or s_p <= 0.0:
+            raise ConfigurationError(f'IDZ slopes must be > 0, got [{s_n}, {s_p}]')
+        if self.beta < 0.0:
+            raise ConfigurationError(f'IDZ chatter band beta must be >= 0, got {self.beta}')
+        if self.mode not in IDZ_MODES:
+            raise ConfigurationError(f"IDZ mode must be one of {', '.join(IDZ_MODES)}, "
+                                     f'got {self.mode!r}')
+        if not low <= self.rest <= high:
+            raise ConfigurationError(f'IDZ rest command {self.rest} lies outside the dead-zone '
+                                     f'[{low}, {high}]')
+        object.__setattr__(self, 'dead_zone', (low, high))
+        object.__setattr__(self, 'slopes', (s_n, s_p))
+
+    def _negative(self, u: float) -> float:
+        return u / self.slopes[0] + self.dead_zone[0]
+
+    def _positive(self, u: float) -> float:
+        return u / self.slopes[1] + self.dead_zone[1]
+
+    def command(self, u: float, branch: int = 0) -> tuple[float, int]:
+        """
+        Valve command for the desired increment ``u``.
+
+        Parameters
+        ----------
+        u : float
+            Desired increment, angle per control sample.
+        branch : int
+            Branch used last time (-1, 0 or +1); only the hysteresis mode uses it.
+
+        Returns
+        -------
+        tuple[float, int]
+            The command and the branch now in use.
+
+        """
+        beta = self.beta
+        if self.mode == 'smooth':
+            if beta == 0.0:
+                return self.command_zero_band(u)
+            # Zhou, Wen & Zhang (2006): weights e^{u/eps} / (e^{u/eps} + e^{-u/eps}).
+            weight = 0.5 * (1.0 + math.tanh(u / beta))
+            return weight * self._positive(u) + (1.0 - weight) * self._negative(u), 0
+        if self.mode == 'hysteresis':
+            if u > beta:
+                branch = 1
+            elif u < -beta:
+                branch = -1
+            if branch > 0:
+                return max(self._positive(u), self.dead_zone[0]), branch
+            if branch < 0:
+                return min(self._negative(u), self.dead_zone[1]), branch
+            return self.rest, 0
+        return self.command_zero_band(u)
+
+    def command_zero_band(self, u: float) -> tuple[float, int]:
+        """Apply the paper's eq. (7): ``rest`` inside ``|u| <= beta``, the inverse outside."""
+        if u > self.beta:
+            return self._positive(u), 1
+        if u < -self.beta:
+            return self._negative(u), -1
+        return self.rest, 0
+
+    def increment(self, v: float) -> float:
+        """
+        Increment the chord model predicts for command ``v`` (the inverse of the IDZ).
+
+        Parameters
+        ----------
+        v : float
+            Valve command, input units.
+
+        Returns
+        -------
+        float
+            ``q_lin(v)``, angle per control sample.
+
+        """
+        low, high = self.dead_zone
+        if v < low:
+            return self.slopes[0] * (v - low)
+        if v > high:
+            return self.slopes[1] * (v - high)
+        return 0.0

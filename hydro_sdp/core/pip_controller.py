@@ -1,0 +1,191 @@
+"""
+The runtime PIP-IDZ controller: one object used offline and inside the ROS node.
+
+Each call of :meth:`PipIdzController.step` is one control sample of the
+incremental PIP law (eq. (8) of West et al. 2018, generalised in methods.md 4.2)
+
+``u_k = u_{k-1} - sum_j g_j (u_{k-j} - u_{k-j-1}) - sum_i f_i (y_{k-i} - y_{k-i-1})
++ k_I (d_k - y_k)``
+
+followed by the clamp of ``u`` to its limits, the inverse dead-zone and the
+clamp of the valve command to the valve's range. The history keeps the ``u``
+that was really applied: the clamped value, or, when the valve range cut the
+command, the increment that the cut command produces (back-calculation). The
+integral action lives only in that history, so it cannot wind up (methods.md 6).
+
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+import math
+
+from hydro_sdp.core.errors import ConfigurationError, DataError
+from hydro_sdp.core.idz import InverseDeadZone
+from hydro_sdp.core.pip_design import PipGains
+
+
+def _check_limits(limits: tuple[float, float] | None, name: str) -> tuple[float, float] | None:
+    if limits is None:
+        return None
+    low, high = (float(x) for x in limits)
+    if not (math.isfinite(low) and math.isfinite(high) and low < high):
+        raise ConfigurationError(f'{name} must be two finite numbers, low < high; '
+                                 f'got {list(limits)}')
+    return low, high
+
+
+@dataclass(frozen=True)
+class ControllerSettings:
+    """
+    Everything a PIP-IDZ controller needs at run time.
+
+    Parameters
+    ----------
+    gains : PipGains
+        PIP gains.
+    idz : InverseDeadZone or None
+        Inverse dead-zone; ``None`` sends ``u`` to the valve unchanged.
+    u_limits : tuple[float, float] or None
+        Limits of the linear controller's output (angle per control sample).
+    v_limits : tuple[float, float] or None
+        Range of the valve command (input units).
+
+    """
+
+    gains: PipGains
+    idz: InverseDeadZone | None = None
+    u_limits: tuple[float, float] | None = None
+    v_limits: tuple[float, float] | None = None
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, 'u_limits', _check_limits(self.u_limits, 'u_limits'))
+        object.__setattr__(self, 'v_limits', _check_limits(self.v_limits, 'v_limits'))
+        if self.v_limits is not None and self.idz is not None:
+            low, high = self.v_limits
+            if not low <= self.idz.rest <= high:
+                raise ConfigurationError(f'the IDZ rest command {self.idz.rest} lies outside '
+                                         f'the valve range {list(self.v_limits)}')
+
+
+class PipIdzController:
+    """
+    Incremental PIP controller with inverse dead-zone, limits and anti-windup.
+
+    Parameters
+    ----------
+    settings : ControllerSettings
+        Gains, IDZ and limits.
+
+    """
+
+    def __init__(self, settings: ControllerSettings) -> None:
+        self.settings = settings
+        self._n = len(settings.gains.f)
+        self._m = len(settings.gains.g) + 1
+        self._y: list[float] = []       # y_k, y_{k-1}, ..., newest first (n + 1 values)
+        self._u: list[float] = []       # u_{k-1}, u_{k-2}, ..., newest first (m values)
+        self._branch = 0
+        self.last_u = 0.0
+        self.last_v = settings.idz.rest if settings.idz is not None else 0.0
+        self.steps = 0
+
+    def reset(self, y: float | None = None, u: float = 0.0) -> None:
+        """
+        Forget the history; the next step starts bumplessly from ``y`` and ``u``.
+
+        Parameters
+        ----------
+        y : float or None
+            Angle to assume as the past output; ``None`` takes the next measurement.
+        u : float
+            Increment to assume as the past input (0: valve at rest).
+
+        """
+        self._y = [] if y is None else [float(y)] * (self._n + 1)
+        self._u = [float(u)] * self._m
+        self._branch = 0
+        self.last_u = float(u)
+
+    def step(self, setpoint: float, y: float) -> tuple[float, float]:
+        """
+        Compute one control sample.
+
+        Parameters
+        ----------
+        setpoint : float
+            Desired angle ``d_k``, degrees.
+        y : float
+            Measured angle ``y_k``, degrees.
+
+        Returns
+        -------
+        tuple[float, float]
+            ``(u, v)``: the increment applied (angle per control sample) and the
+            valve command (input units), always finite and inside their limits.
+
+        Raises
+        ------
+        DataError
+            If ``setpoint`` or ``y`` is not finite; the state is left unchanged.
+
+        """
+        if not (math.isfinite(setpoint) and math.isfinite(y)):
+            raise DataError(f'set-point and angle must be finite, got {setpoint} and {y}')
+        settings = self.settings
+        gains = settings.gains
+        ys = [float(y)] + (self._y[:self._n] if self._y else [float(y)] * self._n)
+        us = self._u if self._u else [0.0] * self._m
+        u = us[0] + gains.k_i * (setpoint - y)
+        for j, g_j in enumerate(gains.g, start=1):
+            u -= g_j * (us[j - 1] - us[j])
+        for i, f_i in enumerate(gains.f):
+            u -= f_i * (ys[i] - ys[i + 1])
+        if not math.isfinite(u):
+            raise DataError('the controller output is not finite (gains or inputs too large)')
+        if settings.u_limits is not None:
+            u = min(max(u, settings.u_limits[0]), settings.u_limits[1])
+        if settings.idz is not None:
+            v, branch = settings.idz.command(u, self._branch)
+        else:
+            v, branch = u, 0
+        if settings.v_limits is not None:
+            limited = min(max(v, settings.v_limits[0]), settings.v_limits[1])
+            if limited != v:
+                # Store the increment the valve can really give, not the one asked for.
+                u = settings.idz.increment(limited) if settings.idz is not None else limited
+                v = limited
+        self._branch = branch
+        self._y = ys[:self._n + 1]
+        self._u = [u] + us[:self._m - 1]
+        self.last_u, self.last_v = u, v
+        self.steps += 1
+        return u, v
+
+    def update_idz(self, idz: InverseDeadZone) -> None:
+        """
+        Change the IDZ at run time without a jump in the valve command.
+
+        The stored increments are re-expressed in the new chord model, so that
+        the command the valve receives stays where it was until the control law
+        moves it; inside the chatter band nothing needs to change.
+
+        Parameters
+        ----------
+        idz : InverseDeadZone
+            The new inverse dead-zone.
+
+        """
+        settings = replace(self.settings, idz=idz)  # validates against the valve range
+        old = self.settings.idz
+        if old is not None and self._u and self._branch != 0:
+            self._u = [idz.increment(old.command(u, self._branch)[0]) for u in self._u]
+            self.last_u = self._u[0]
+        self.settings = settings
+
+    def update_gains(self, gains: PipGains) -> None:
+        """Change the PIP gains (same orders); the incremental form makes this bumpless."""
+        if len(gains.f) != self._n or len(gains.g) != self._m - 1:
+            raise ConfigurationError(f'new gains must keep {self._n} f and {self._m - 1} g '
+                                     'coefficients')
+        self.settings = replace(self.settings, gains=gains)
