@@ -17,6 +17,7 @@ import shutil
 import tempfile
 from typing import Any, Iterator
 
+from hydro_sdp.core.controller_spec import ControllerSpec
 from hydro_sdp.core.errors import ModelFileError
 from hydro_sdp.core.model import JointModel
 import yaml
@@ -225,3 +226,46 @@ def shipped_config(name: str) -> Path:
 def default_model_path() -> Path:
     """Path of the shipped BROKK J2 model file."""
     return shipped_config('brokk_j2.yaml')
+
+
+def load_controller(path: str | os.PathLike[str]) -> ControllerSpec:
+    """
+    Load and validate a controller file written by ``hydro-sdp design``.
+
+    Parameters
+    ----------
+    path : str or PathLike
+        Controller file.
+
+    Returns
+    -------
+    ControllerSpec
+        The controller; its closed loop is checked to be stable.
+
+    """
+    data = load_yaml(path)
+    try:
+        return ControllerSpec.from_mapping(data)
+    except ModelFileError as error:
+        raise ModelFileError(f'{path}: {error}') from None
+
+
+def save_controller(spec: ControllerSpec, path: str | os.PathLike[str]) -> Path:
+    """
+    Write a controller file whole or not at all.
+
+    Parameters
+    ----------
+    spec : ControllerSpec
+        The controller.
+    path : str or PathLike
+        Target file.
+
+    Returns
+    -------
+    Path
+        The target path.
+
+    """
+    text = yaml.safe_dump(spec.to_mapping(), sort_keys=False, default_flow_style=None)
+    return atomic_write_text(path, text)

@@ -183,3 +183,106 @@ def plot_velocity_map(model: JointModel, *, v_range: tuple[float, float] | None 
     ax.legend(loc='upper left', fontsize=8, frameon=False)
     figure.suptitle(title or f'velocity map of joint {model.joint}', fontsize=11)
     return figure
+
+
+def plot_idz(model: JointModel, idz, control_period: float, *,
+             u_limits: tuple[float, float] | None = None,
+             v_range: tuple[float, float] | None = None, command_unit: str = 'V') -> Figure:
+    """
+    IDZ approximation, as the paper's Fig. 6.
+
+    The model's increment per control sample against the steady command, the
+    chords the IDZ inverts, the dead-zone edges and the limits of ``u``.
+
+    Parameters
+    ----------
+    model : JointModel
+        The joint.
+    idz : InverseDeadZone
+        The inverse dead-zone of the controller.
+    control_period : float
+        Control period, s.
+    u_limits : tuple[float, float] or None
+        Limits of the controller's ``u``, drawn as dotted lines.
+    v_range : tuple[float, float] or None
+        Command range to draw; default: to where the model saturates (99 %).
+    command_unit : str
+        Unit of the command.
+
+    Returns
+    -------
+    Figure
+        The figure.
+
+    """
+    figure, (ax,) = new_figure(1, height=4.2, width=7.5)
+    low, high = idz.dead_zone
+    if v_range is None:
+        curvature = getattr(model.static_map, 'curvature', None)
+        if curvature is not None:
+            v_range = (low - np.log(100.0) / curvature[0], high + np.log(100.0) / curvature[1])
+        else:
+            width = max(high - low, 0.1 * max(abs(low), abs(high), 1.0))
+            v_range = (low - 2.0 * width, high + 2.0 * width)
+        if model.input_limits is not None:
+            v_range = (max(v_range[0], model.input_limits[0]),
+                       min(v_range[1], model.input_limits[1]))
+    v = np.linspace(v_range[0], v_range[1], 801)
+    ax.plot(v, model.rate(v) * control_period, color=MODEL, linewidth=1.2,
+            label=f'{model.kind} model')
+    chord = np.array([idz.increment(x) for x in v])
+    ax.plot(v, chord, color=MEASURED, linewidth=2.2, label='linearised (the IDZ inverts this)')
+    for edge in (low, high):
+        ax.axvline(edge, color=LIMIT, linestyle='--', linewidth=0.9)
+    ax.axvspan(low, high, color=LIMIT, alpha=0.12, linewidth=0, label='dead-zone')
+    if u_limits is not None:
+        for value in u_limits:
+            ax.axhline(value, color=LIMIT, linestyle=':', linewidth=1.0)
+        ax.text(1.0, u_limits[1], ' u limit', transform=ax.get_yaxis_transform(),
+                color=LIMIT, fontsize=8, va='center', ha='left', clip_on=False)
+    ax.axhline(0.0, color='black', linewidth=0.6)
+    ax.set_xlabel(f'steady command v ({command_unit})')
+    ax.set_ylabel(f'increment q (deg per {control_period:g} s sample)')
+    ax.legend(loc='upper left', fontsize=8, frameon=False)
+    figure.suptitle(f'IDZ approximation of joint {model.joint} '
+                    f'(slopes {idz.slopes[0]:.4g}, {idz.slopes[1]:.4g}; beta {idz.beta:g})',
+                    fontsize=11)
+    return figure
+
+
+def plot_closed_loop(traces: Sequence, *, title: str = '', command_unit: str = 'V') -> Figure:
+    """
+    Closed-loop response, as the paper's Fig. 7: angle, u and v against time.
+
+    Parameters
+    ----------
+    traces : sequence of LoopTrace
+        One or more joints' traces.
+    title : str
+        Figure title.
+    command_unit : str
+        Unit of the valve command.
+
+    Returns
+    -------
+    Figure
+        The figure.
+
+    """
+    figure, (angle_ax, u_ax, v_ax) = new_figure(3, height=2.2)
+    colours = [MEASURED, MODEL, '#1b9e77', '#7570b3']
+    for index, trace in enumerate(traces):
+        colour = colours[index % len(colours)]
+        label = trace.joint
+        angle_ax.plot(trace.t, trace.setpoint, color=colour, linestyle='--', linewidth=1.0)
+        angle_ax.plot(trace.t, trace.y, color=colour, linewidth=1.4, label=label)
+        u_ax.plot(trace.t, trace.u, color=colour, linewidth=1.0, drawstyle='steps-pre')
+        v_ax.plot(trace.t, trace.v, color=colour, linewidth=1.0, drawstyle='steps-pre')
+    angle_ax.set_ylabel('angle y (deg)')
+    angle_ax.legend(loc='lower right', fontsize=8, frameon=False,
+                    title='dashed: set-point', title_fontsize=8)
+    u_ax.set_ylabel('PIP input u\n(deg/sample)')
+    v_ax.set_ylabel(f'valve v ({command_unit})')
+    v_ax.set_xlabel('time (s)')
+    figure.suptitle(title or 'PIP-IDZ closed loop', fontsize=11)
+    return figure

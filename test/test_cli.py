@@ -6,7 +6,7 @@ import shutil
 import subprocess
 import sys
 
-from hydro_sdp.bags import read_record
+from hydro_sdp.bags import read_bag, read_record
 from hydro_sdp.cli.main import main
 from hydro_sdp.files import default_model_path, load_model
 import numpy as np
@@ -136,3 +136,54 @@ def test_console_script_runs_without_a_traceback(tmp_path):
                             capture_output=True, text=True, timeout=60)
     assert result.returncode == 2
     assert result.stderr == f'error: {tmp_path / "absent.yaml"}: no such file\n'
+
+
+def test_design_writes_a_controller_the_loop_loads(tmp_path, capsys):
+    controller = tmp_path / 'controller.yaml'
+    code, out, err = run(capsys, 'design', str(default_model_path()), '--poles', '0.94+0.05j',
+                         '0.94-0.05j', '0', '0', '--v-range', '-2.2', '1.75', '--u-limits',
+                         '-2.5', '2.5', '--out', str(controller), '--plot',
+                         str(tmp_path / 'idz.png'), '--json')
+    assert code == 0, err
+    payload = json.loads(out)
+    for key in ('f', 'g', 'kI', 'poles', 'control_period', 'delay_samples', 'slopes',
+                'dead_zone', 'u_limits'):
+        assert key in payload
+    assert payload['poles'] == ['0.94+0.05j', '0.94-0.05j', '0+0j', '0+0j']
+    assert payload['f'][0] == pytest.approx(0.1261, abs=1e-4)
+    assert payload['slopes'] == pytest.approx([1.1746, 2.3951], abs=1e-4)
+    assert payload['delay_samples'] == 3
+    assert (tmp_path / 'idz.png').read_bytes()[:4] == b'\x89PNG'
+    code, out, err = run(capsys, 'closed-loop', str(default_model_path()), '--controller',
+                         str(controller), '--setpoints', '20', '-10', '--hold', '8',
+                         '--out', str(tmp_path / 'loop'), '--plot', str(tmp_path / 'loop.png'),
+                         '--json')
+    assert code == 0, err
+    result = json.loads(out)
+    assert result['settling_time'] < 5.0 and result['overshoot'] < 10.0
+    assert abs(result['steady_error']) < 0.5
+    assert [step['size'] for step in result['steps']] == [20.0, -30.0]
+    data = read_bag(tmp_path / 'loop')
+    assert set(data.floats) == {'/j2/valve_command', '/j2/setpoint'}
+    record = data.record()
+    assert len(record) == 1600
+    np.testing.assert_allclose(np.degrees(data.floats['/j2/setpoint'].data[-1]), -10.0)
+
+
+def test_design_refuses_bad_poles(capsys):
+    code, _, err = run(capsys, 'design', str(default_model_path()), '--poles', '0.9', '0.9')
+    assert code == 2 and 'needs 4 poles' in err
+    with pytest.raises(SystemExit):
+        main(['design', str(default_model_path()), '--poles', 'abc'])
+    assert 'expected a complex number' in capsys.readouterr().err
+
+
+def test_closed_loop_refuses_a_controller_of_another_joint(tmp_path, capsys):
+    controller = tmp_path / 'c.yaml'
+    assert run(capsys, 'design', str(default_model_path()), '--out', str(controller))[0] == 0
+    other = tmp_path / 'boom.yaml'
+    other.write_text(default_model_path().read_text().replace('joint: j2', 'joint: boom'))
+    code, _, err = run(capsys, 'closed-loop', str(other), '--controller', str(controller),
+                       '--setpoints', '10', '--out', str(tmp_path / 'bag'))
+    assert code == 2 and "controller is for joint 'j2'" in err
+    assert not (tmp_path / 'bag').exists()

@@ -4,10 +4,10 @@ Offline closed-loop simulation of PIP-IDZ controlled joints, and step metrics.
 The plant runs at its own sample period and the controller at a multiple of
 it; between control instants the valve command is held (zero-order hold). At
 plant sample ``j`` the controller, when ``j`` is a control instant, reads the
-(noisy) angle ``y_j`` and issues the command that the plant applies from
-``t_j`` on: exactly what the ROS nodes do in lockstep, so both give the same
-trajectory. Several joints run side by side, each with its own model,
-controller and set-point.
+(noisy) angle ``y_j`` and issues the command the plant applies over the next
+interval (``v_{j+1}``): exactly what the ROS nodes do in lockstep, and the
+timing of the verified loops of methods.md 4.6. Several joints run side by
+side, each with its own model, controller and set-point.
 
 """
 
@@ -65,9 +65,11 @@ class LoopTrace:
     measured : FloatArray
         Angle the controller saw (with noise), degrees.
     v : FloatArray
-        Valve command issued at each plant sample (held between control instants).
+        Valve command in force over the interval ending at each sample (as in a
+        :class:`~hydro_sdp.core.records.Record`): the controller's answer to
+        ``y_j`` is ``v[j + 1]``.
     u : FloatArray
-        Controller increment at each plant sample (held), degrees per control sample.
+        Controller increment alongside ``v``, degrees per control sample.
     setpoint : FloatArray
         Desired angle, degrees.
 
@@ -137,9 +139,9 @@ def run_closed_loop(joints: Sequence[LoopJoint], *, dt: float, control_period: f
         for j in range(samples):
             y[j] = simulator.angle
             measured[j] = y[j] + noise[index, j]
+            v[j], u[j] = command, increment
             if j % every == 0:
                 increment, command = joint.controller.step(float(setpoint[j]), measured[j])
-            v[j], u[j] = command, increment
             simulator.step(command)
             if on_sample is not None and j % 1000 == 0:
                 on_sample(index * samples + j, len(joints) * samples)
