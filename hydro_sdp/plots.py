@@ -269,15 +269,23 @@ def plot_closed_loop(traces: Sequence, *, title: str = '', command_unit: str = '
         The figure.
 
     """
-    figure, (angle_ax, u_ax, v_ax) = new_figure(3, height=2.2)
+    # Joints at different angles hide each other's errors: give them a panel of their own.
+    several = len(traces) > 1
+    figure, axes = new_figure(4 if several else 3, height=2.2)
+    angle_ax, u_ax, v_ax = axes[0], axes[-2], axes[-1]
     colours = [MEASURED, MODEL, '#1b9e77', '#7570b3']
     for index, trace in enumerate(traces):
         colour = colours[index % len(colours)]
         label = trace.joint
         angle_ax.plot(trace.t, trace.setpoint, color=colour, linestyle='--', linewidth=1.0)
         angle_ax.plot(trace.t, trace.y, color=colour, linewidth=1.4, label=label)
+        if several:
+            axes[1].plot(trace.t, trace.y - trace.setpoint, color=colour, linewidth=1.0)
         u_ax.plot(trace.t, trace.u, color=colour, linewidth=1.0, drawstyle='steps-pre')
         v_ax.plot(trace.t, trace.v, color=colour, linewidth=1.0, drawstyle='steps-pre')
+    if several:
+        axes[1].axhline(0.0, color='black', linewidth=0.6)
+        axes[1].set_ylabel('error y - d (deg)')
     angle_ax.set_ylabel('angle y (deg)')
     angle_ax.legend(loc='lower right', fontsize=8, frameon=False,
                     title='dashed: set-point', title_fontsize=8)
