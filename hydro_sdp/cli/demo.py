@@ -7,8 +7,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
 
-import numpy as np
-
 from hydro_sdp.bags import write_bag
 from hydro_sdp.cli.common import Outcome, table
 from hydro_sdp.cli.progress import ProgressBar
@@ -18,8 +16,8 @@ from hydro_sdp.core.controller_spec import design_from_model, format_pole
 from hydro_sdp.core.records import Record
 from hydro_sdp.files import (
     atomic_write_text, default_model_path, load_model, save_controller, shipped_config)
-from hydro_sdp.plots import (
-    plot_closed_loop, plot_idz, plot_record, plot_velocity_map, save_figure)
+from hydro_sdp.plots import plot_closed_loop, plot_idz, plot_record, plot_velocity_map, save_figure
+import numpy as np
 
 HELP = 'run the pipeline on the built-in BROKK J2 joint and write a report folder'
 DESCRIPTION = """\
@@ -107,8 +105,9 @@ def _control(report: Report) -> None:
     metrics = step_metrics(trace, initial=0.0)
     figures = [report.figure(plot_idz(model, spec.idz, 0.05, u_limits=spec.u_limits),
                              'idz.png'),
-               report.figure(plot_closed_loop([trace], title='J2 PIP-IDZ control '
-                                               '(West et al. 2018, Fig. 7)'), 'closed_loop.png')]
+               report.figure(plot_closed_loop(
+                   [trace], title='J2 PIP-IDZ control (West et al. 2018, Fig. 7)'),
+                   'closed_loop.png')]
     gains = spec.gains
     rows = [[f'{m.size:+.0f}', f'{m.settling_time:.2f}', f'{m.overshoot:.2f}',
              f'{m.steady_error:+.3f}'] for m in metrics]
