@@ -180,7 +180,7 @@ def plot_velocity_map(model: JointModel, *, v_range: tuple[float, float] | None 
             ax.axhline(speed, color=LIMIT, linestyle=':', linewidth=0.9)
     ax.set_xlabel(f'steady command v ({command_unit})')
     ax.set_ylabel('angular velocity (deg/s)')
-    ax.legend(loc='upper left', fontsize=8, frameon=False)
+    ax.legend(loc='center left', fontsize=8, frameon=False)
     figure.suptitle(title or f'velocity map of joint {model.joint}', fontsize=11)
     return figure
 
@@ -293,4 +293,97 @@ def plot_closed_loop(traces: Sequence, *, title: str = '', command_unit: str = '
     v_ax.set_ylabel(f'valve v ({command_unit})')
     v_ax.set_xlabel('time (s)')
     figure.suptitle(title or 'PIP-IDZ closed loop', fontsize=11)
+    return figure
+
+
+def plot_step_responses(experiments: Sequence, delay: int, dt: float, *,
+                        title: str = '') -> Figure:
+    """
+    Step responses and differenced angles against sample, as the paper's Fig. 1.
+
+    Parameters
+    ----------
+    experiments : sequence of Experiment
+        Experiments; only steps are drawn, each normalised to start at 0.
+    delay : int
+        Estimated delay, samples, drawn dashed.
+    dt : float
+        Sample period, s.
+    title : str
+        Figure title.
+
+    Returns
+    -------
+    Figure
+        The figure.
+
+    """
+    figure, (angle_ax, step_ax) = new_figure(2, height=2.8)
+    steps = [e for e in experiments if e.kind == 'step']
+    levels = np.array([e.level for e in steps]) if steps else np.zeros(1)
+    scale = max(np.max(np.abs(levels)), 1e-12)
+    colormap = matplotlib_colormap()
+    for experiment in steps:
+        k = np.arange(experiment.y.size - experiment.start)
+        angle = experiment.y[experiment.start:] - experiment.y[experiment.start]
+        colour = colormap(0.5 + 0.5 * experiment.level / scale)
+        angle_ax.plot(k, angle, color=colour, linewidth=0.8)
+        step_ax.plot(k[1:], np.diff(angle), color=colour, linewidth=0.6)
+    for ax in (angle_ax, step_ax):
+        ax.axvline(delay, color=LIMIT, linestyle='--', linewidth=1.0)
+    angle_ax.text(delay, 1.0, f' tau = {delay} samples ({delay * dt:g} s)', color=LIMIT,
+                  fontsize=8, transform=angle_ax.get_xaxis_transform(), va='top')
+    angle_ax.set_ylabel('angle y_k - y_0 (deg)')
+    step_ax.set_ylabel('y_k - y_{k-1} (deg)')
+    step_ax.set_xlabel(f'sample k after the step (dt = {dt:g} s)')
+    figure.suptitle(title or f'{len(steps)} step experiments (colour: command, blue < 0 < red)',
+                    fontsize=11)
+    return figure
+
+
+def matplotlib_colormap():
+    """Return the diverging colour map used for command levels."""
+    from matplotlib import colormaps
+    return colormaps['coolwarm']
+
+
+def plot_gains(points: Sequence, model: JointModel, dt: float, *, rest: float = 0.0,
+               command_unit: str = 'V') -> Figure:
+    """
+    State-dependent gain against command, as the paper's Fig. 2.
+
+    Parameters
+    ----------
+    points : sequence of LevelSpeed
+        Per-experiment gains ``b_tau``.
+    model : JointModel
+        The identified model; its ``b_tau(v) = dt rate(v) / (v - rest)`` is drawn.
+    dt : float
+        Sample period, s.
+    rest : float
+        Rest command.
+    command_unit : str
+        Unit of the command.
+
+    Returns
+    -------
+    Figure
+        The figure.
+
+    """
+    figure, (ax,) = new_figure(1, height=4.0, width=7.0)
+    levels = np.array([p.level for p in points if p.level != rest])
+    gains = np.array([p.gain * 1.0 for p in points if p.level != rest])
+    ax.plot(levels, gains, 'o', color=MEASURED, markerfacecolor='none', markersize=5,
+            label='per experiment (RIV)')
+    span = max(np.max(np.abs(levels - rest)), 1e-9) if levels.size else 1.0
+    v = np.linspace(rest - 1.05 * span, rest + 1.05 * span, 801)
+    v = v[np.abs(v - rest) > 1e-9 * span]
+    ax.plot(v, dt * model.rate(v) / (v - rest), color=MODEL, linewidth=1.8,
+            label=f'{model.kind} model')
+    ax.set_xlabel(f'steady command v ({command_unit})')
+    ax.set_ylabel('b_tau (deg per sample per unit)')
+    ax.legend(loc='upper left', fontsize=8, frameon=False)
+    figure.suptitle(f'State-dependent gain of joint {model.joint} (West et al. 2018, Fig. 2)',
+                    fontsize=11)
     return figure

@@ -110,3 +110,44 @@ def table(rows: list[list[str]], header: list[str]) -> list[str]:
     lines += ['  '.join(str(cell).ljust(width) for cell, width in zip(row, widths)).rstrip()
               for row in rows]
     return lines
+
+
+def read_records(bags: list[str], joint: str | None, command_topic: str | None,
+                 label: str = 'reading bags') -> list:
+    """
+    Read one joint's record from each bag, with a progress bar.
+
+    Parameters
+    ----------
+    bags : list of str
+        Bag paths.
+    joint : str or None
+        Joint name (default: the only joint of each bag).
+    command_topic : str or None
+        Command topic (default: the only ``valve_command`` topic).
+    label : str
+        Progress bar label.
+
+    Returns
+    -------
+    list of Record
+        One per bag.
+
+    """
+    from hydro_sdp.bags import read_bag
+    from hydro_sdp.cli.progress import ProgressBar
+
+    records = []
+    with ProgressBar(label, len(bags)) as bar:
+        for done, bag in enumerate(bags, start=1):
+            records.append(read_bag(bag).record(joint, command_topic))
+            bar.update(done)
+    return records
+
+
+def add_bag_options(parser: argparse.ArgumentParser) -> None:
+    """Add ``--joint`` and ``--command-topic`` (interfaces.md section 2)."""
+    parser.add_argument('--joint', help='joint name in JointState (default: the only one)')
+    parser.add_argument('--command-topic',
+                        help='Float64 command topic (default: the only one ending in '
+                             'valve_command)')

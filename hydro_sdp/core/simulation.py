@@ -164,7 +164,7 @@ def _check_commands(v: FloatArray) -> FloatArray:
 
 
 def simulate(model: JointModel, v: FloatArray, dt: float, y0: float,
-             *, v_before: float = 0.0) -> FloatArray:
+             *, v_before: float = 0.0, start: int = 0) -> FloatArray:
     """
     Simulate the joint's angle for a command sequence.
 
@@ -177,14 +177,19 @@ def simulate(model: JointModel, v: FloatArray, dt: float, y0: float,
     dt : float
         Sample period, s.
     y0 : float
-        Angle at the first sample, degrees (clamped into the end stops).
+        Angle at sample ``start``, degrees (clamped into the end stops).
     v_before : float
         Command assumed before the first sample (fills the delay line).
+    start : int
+        Sample the simulation starts from; the commands before it are history
+        (a measured record is best simulated from ``start`` = its delay, where
+        the delayed commands are all known).
 
     Returns
     -------
     FloatArray
-        Angle at each sample, degrees; ``y[0]`` is ``y0``.
+        Angle at each sample, degrees; ``y[start]`` is ``y0`` and the samples
+        before ``start`` repeat it.
 
     """
     dt = check_sample_period(dt)
@@ -205,19 +210,21 @@ def simulate(model: JointModel, v: FloatArray, dt: float, y0: float,
     if isinstance(lag, ValveLag):
         p = math.exp(-dt / lag.time_constant)
         speed, _ = lfilter([1.0 - p], [1.0, -p], speed, zi=[p * rate_before])
+    if not 0 <= start < v.size:
+        raise DataError(f'start must be a sample index below {v.size}, got {start}')
     low, high = _limits(model)
     gravity = model.effect(AngleDependentVelocity.name)
     if isinstance(gravity, AngleDependentVelocity):
-        y = _integrate_angle_dependent(speed, dt, y0, low, high, gravity)
+        y = _integrate_angle_dependent(speed[start:], dt, y0, low, high, gravity)
     else:
-        y = bounded_cumsum(y0, dt * speed[1:], low, high)
+        y = bounded_cumsum(y0, dt * speed[start + 1:], low, high)
     play = model.effect(Backlash.name)
     if isinstance(play, Backlash) and play.play > 0.0:
         half = 0.5 * play.play
         # The sensor lags the actuator by e in [-b, b]: e_k = clamp(e_{k-1} - dy_k).
         offset = bounded_cumsum(0.0, -np.diff(y), -half, half)
         y = np.clip(y + offset, low, high)
-    return y
+    return np.r_[np.full(start, y[0]), y] if start else y
 
 
 def _integrate_angle_dependent(speed: FloatArray, dt: float, y0: float, low: float,

@@ -249,12 +249,167 @@ class LinearMap:
         return cls(gain=require_float(data['gain'], 'gain'))
 
 
-StaticMap = Union[SdpMap, SdpDzMap, LinearMap]
+@dataclass(frozen=True)
+class PwlMap:
+    """
+    Monotone piecewise-linear map (kind ``pwl``), for valves that do not follow eq. (5).
+
+    Parameters
+    ----------
+    knots : tuple[float, ...]
+        Commands, strictly increasing (at least two), input units.
+    speeds : tuple[float, ...]
+        Velocity at each knot, deg/s, non-decreasing; held flat beyond the end knots.
+
+    """
+
+    kind: ClassVar[str] = 'pwl'
+    keys: ClassVar[tuple[str, ...]] = ('knots', 'speeds')
+
+    knots: tuple[float, ...]
+    speeds: tuple[float, ...]
+
+    def __post_init__(self) -> None:
+        knots = tuple(float(x) for x in self.knots)
+        speeds = tuple(float(x) for x in self.speeds)
+        if len(knots) < 2 or len(knots) != len(speeds):
+            raise ModelFileError("keys 'knots' and 'speeds': need two or more of each, "
+                                 'of equal number')
+        if not all(np.isfinite(knots + speeds)):
+            raise ModelFileError("keys 'knots' and 'speeds': values must be finite")
+        if np.any(np.diff(knots) <= 0.0):
+            raise ModelFileError("key 'knots': must be strictly increasing")
+        if np.any(np.diff(speeds) < 0.0):
+            raise ModelFileError("key 'speeds': must not decrease (a monotone valve map)")
+        object.__setattr__(self, 'knots', knots)
+        object.__setattr__(self, 'speeds', speeds)
+
+    @property
+    def dead_zone(self) -> tuple[float, float] | None:
+        """Return the commands bounding the zero-speed plateau, or None if there is none."""
+        zero = [k for k, speed in zip(self.knots, self.speeds) if speed == 0.0]
+        if not zero:
+            return None
+        return zero[0], zero[-1]
+
+    def rate(self, v: FloatArray) -> FloatArray:
+        """
+        Angular velocity (deg/s) for steady commands ``v``.
+
+        Parameters
+        ----------
+        v : FloatArray
+            Commands in input units.
+
+        Returns
+        -------
+        FloatArray
+            Velocities, same shape as ``v``.
+
+        """
+        return np.interp(np.asarray(v, dtype=np.float64), self.knots, self.speeds)
+
+    def to_mapping(self) -> dict[str, Any]:
+        """Return the model-file keys of this map."""
+        return {'knots': list(self.knots), 'speeds': list(self.speeds)}
+
+    @classmethod
+    def from_mapping(cls, data: Mapping[str, Any]) -> PwlMap:
+        """Build the map from model-file keys (already checked for presence)."""
+        return cls(knots=_float_list(data['knots'], 'knots'),
+                   speeds=_float_list(data['speeds'], 'speeds'))
+
+
+@dataclass(frozen=True)
+class PolyMap:
+    """
+    Polynomial gain map (kind ``poly``), the second paper's ``b(v)`` per direction.
+
+    ``rate(v) = v b(v)`` with ``b(v) = sum_i c_i v^i`` from ``gain_negative`` for
+    ``v < 0`` and ``gain_positive`` for ``v > 0``; commands are clipped to
+    ``command_range``, the range the polynomials were fitted on.
+
+    Parameters
+    ----------
+    gain_negative : tuple[float, ...]
+        Coefficients ``c_0, c_1, ..`` for negative commands, deg/s per input unit.
+    gain_positive : tuple[float, ...]
+        Coefficients for positive commands.
+    command_range : tuple[float, float]
+        ``(v_min, v_max)`` with ``v_min < 0 < v_max``.
+
+    """
+
+    kind: ClassVar[str] = 'poly'
+    keys: ClassVar[tuple[str, ...]] = ('gain_negative', 'gain_positive', 'command_range')
+
+    gain_negative: tuple[float, ...]
+    gain_positive: tuple[float, ...]
+    command_range: tuple[float, float]
+
+    def __post_init__(self) -> None:
+        for name in ('gain_negative', 'gain_positive'):
+            values = tuple(float(x) for x in getattr(self, name))
+            if not values or not all(np.isfinite(values)):
+                raise ModelFileError(f'key {name!r}: needs finite coefficients')
+            object.__setattr__(self, name, values)
+        low, high = (float(x) for x in self.command_range)
+        if not low < 0.0 < high:
+            raise ModelFileError(f"key 'command_range': expected [negative, positive], "
+                                 f'got [{low}, {high}]')
+        object.__setattr__(self, 'command_range', (low, high))
+
+    @property
+    def dead_zone(self) -> None:
+        """Return None: the polynomial map has no explicit dead-zone."""
+        return None
+
+    def rate(self, v: FloatArray) -> FloatArray:
+        """
+        Angular velocity (deg/s) for steady commands ``v``.
+
+        Parameters
+        ----------
+        v : FloatArray
+            Commands in input units.
+
+        Returns
+        -------
+        FloatArray
+            Velocities, same shape as ``v``.
+
+        """
+        v = np.clip(np.asarray(v, dtype=np.float64), *self.command_range)
+        negative = np.polynomial.polynomial.polyval(v, self.gain_negative)
+        positive = np.polynomial.polynomial.polyval(v, self.gain_positive)
+        return v * np.where(v < 0.0, negative, positive)
+
+    def to_mapping(self) -> dict[str, Any]:
+        """Return the model-file keys of this map."""
+        return {'gain_negative': list(self.gain_negative),
+                'gain_positive': list(self.gain_positive),
+                'command_range': list(self.command_range)}
+
+    @classmethod
+    def from_mapping(cls, data: Mapping[str, Any]) -> PolyMap:
+        """Build the map from model-file keys (already checked for presence)."""
+        return cls(gain_negative=_float_list(data['gain_negative'], 'gain_negative'),
+                   gain_positive=_float_list(data['gain_positive'], 'gain_positive'),
+                   command_range=require_ordered_pair(data['command_range'], 'command_range'))
+
+
+StaticMap = Union[SdpMap, SdpDzMap, LinearMap, PwlMap, PolyMap]
 
 #: Map classes by the model file's ``kind``.
-MAP_KINDS: dict[str, type[SdpMap] | type[SdpDzMap] | type[LinearMap]] = {
-    cls.kind: cls for cls in (SdpMap, SdpDzMap, LinearMap)
+MAP_KINDS: dict[str, type] = {
+    cls.kind: cls for cls in (SdpMap, SdpDzMap, LinearMap, PwlMap, PolyMap)
 }
+
+
+def _float_list(values: Any, key: str) -> tuple[float, ...]:
+    if not isinstance(values, (list, tuple)):
+        raise ModelFileError(f'key {key!r}: expected a list of numbers')
+    return tuple(require_float(value, f'{key}[{i}]') for i, value in enumerate(values))
 
 
 def linearise(sdp: SdpMap, v_min: float, v_max: float) -> SdpDzMap:

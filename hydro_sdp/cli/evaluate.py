@@ -1,0 +1,76 @@
+"""``hydro-sdp evaluate``: Table 2 of West et al. on recorded bags."""
+
+from __future__ import annotations
+
+import argparse
+import math
+from pathlib import Path
+
+from hydro_sdp.cli.common import add_bag_options, Outcome, read_records, table
+from hydro_sdp.core.evaluate import evaluate, simulated_angles
+from hydro_sdp.files import load_model
+from hydro_sdp.plots import plot_record, save_figure
+import numpy as np
+
+HELP = 'simulation error of a model and its SDP-DZ and linear benchmarks (Table 2)'
+DESCRIPTION = """\
+Hold a model against recorded runs, as Table 2 of West et al. (2018): each run is
+simulated with its measured commands from its measured angle once the delayed
+commands are known, and the mean absolute error (deg) is given for
+
+  model    the model file as it is
+  sdp_dz   its SDP-DZ linearisation: chords from the dead-zone edges to where
+           the speed reaches two thirds of saturation (eq. 6), same delay and
+           end stops
+  linear   the linear integrator of eq. (2), its gain optimised for each run
+
+example:
+  hydro-sdp evaluate run1 run2 run3 --model j2_model.yaml --plot-dir figures
+"""
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    """Add the ``evaluate`` command to the command line."""
+    parser = subparsers.add_parser('evaluate', help=HELP, description=DESCRIPTION,
+                                   formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument('bags', nargs='+', metavar='BAG', help='evaluation bags')
+    parser.add_argument('--model', required=True, help='model file')
+    add_bag_options(parser)
+    parser.add_argument('--plot-dir', help='folder for a Fig. 4 style plot of each run')
+    parser.set_defaults(run=run)
+
+
+def _number(value: float) -> float | None:
+    return value if math.isfinite(value) else None
+
+
+def run(args: argparse.Namespace) -> Outcome:
+    """Run ``evaluate``."""
+    model = load_model(args.model)
+    records = read_records(args.bags, args.joint or model.joint, args.command_topic)
+    scores = evaluate(records, model)
+    rows = [{'bag': bag, 'samples': s.samples, 'model': s.model, 'sdp_dz': _number(s.sdp_dz),
+             'linear': s.linear, 'linear_gain': s.linear_gain}
+            for bag, s in zip(args.bags, scores)]
+    mean = {key: _number(float(np.mean([getattr(s, key) for s in scores])))
+            for key in ('model', 'sdp_dz', 'linear')}
+    payload = {'mae': mean, 'records': rows, 'model_file': args.model}
+    if args.plot_dir:
+        folder = Path(args.plot_dir)
+        payload['plots'] = []
+        for index, record in enumerate(records, start=1):
+            figure = plot_record(record, model, simulated=simulated_angles(model, record),
+                                 title=f'Model evaluation, run {index} (West et al. 2018, '
+                                       'Fig. 4)')
+            payload['plots'].append(str(save_figure(figure, folder / f'evaluation_{index}.png')))
+    lines = [f'mean absolute simulation error (deg) of {args.model} and its benchmarks:']
+    lines += table([[Path(r['bag']).name, f"{r['model']:.4f}", _format(r['sdp_dz']),
+                     f"{r['linear']:.4f}"] for r in rows] +
+                   [['mean', _format(mean['model']), _format(mean['sdp_dz']),
+                     _format(mean['linear'])]],
+                   ['run', 'model', 'SDP-DZ', 'linear'])
+    return Outcome(payload, lines)
+
+
+def _format(value: float | None) -> str:
+    return '-' if value is None else f'{value:.4f}'

@@ -1,0 +1,163 @@
+"""``hydro-sdp identify``: an SDP model of a joint from recorded bags."""
+
+from __future__ import annotations
+
+import argparse
+import math
+from pathlib import Path
+
+from hydro_sdp.cli.common import (
+    add_bag_options, finite_float, Outcome, positive_float, read_records, table)
+from hydro_sdp.cli.progress import ProgressBar
+from hydro_sdp.core.identify import identify, Identification, KINDS
+from hydro_sdp.files import save_model
+from hydro_sdp.plots import plot_gains, plot_step_responses, plot_velocity_map, save_figure
+
+HELP = 'identify a joint model from step or random-level bags'
+DESCRIPTION = """\
+Identify a hydraulic joint from recorded bags, as West et al. (2018) section 4:
+
+  1. cut the records into step experiments (command leaves rest, holds, returns)
+     and runs, dropping what an end stop clamps;
+  2. estimate the pure delay (fit of the differenced angle, checked against motion
+     onsets and cross-correlation);
+  3. measure the speed of every command level (Figs. 2 and 3);
+  4. fit the static map to the raw angles by regret-regression (--method rr) or by
+     the paper's output-error simplex fit (--method oe);
+  5. with --kind auto, also fit a monotone piecewise-linear map and the second
+     paper's polynomial gain, and keep the family that predicts held-out
+     experiments best (sdp when it is within 5 %).
+
+Commands may be in any unit (volts, percent duty): nothing assumes +-10 V.
+
+examples:
+  hydro-sdp identify steps_bag --out j2_model.yaml --plot-dir figures
+  hydro-sdp identify run1 run2 --joint boom --command-topic /boom/cmd --kind pwl
+"""
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    """Add the ``identify`` command to the command line."""
+    parser = subparsers.add_parser('identify', help=HELP, description=DESCRIPTION,
+                                   formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument('bags', nargs='+', metavar='BAG', help='rosbag2 bags of one joint')
+    add_bag_options(parser)
+    parser.add_argument('--method', choices=('rr', 'oe'), default='rr',
+                        help='regret-regression (default) or output-error simplex fit')
+    parser.add_argument('--kind', choices=('auto',) + KINDS, default='auto',
+                        help='static-map family (default: auto, chosen on held-out data)')
+    parser.add_argument('--max-delay', type=positive_float, default=0.5,
+                        help='largest delay considered, s (default: 0.5)')
+    parser.add_argument('--angle-limits', nargs=2, type=finite_float, metavar=('LOW', 'HIGH'),
+                        help='known end stops, deg (default: those seen in the data)')
+    parser.add_argument('--input-limits', nargs=2, type=finite_float, metavar=('LOW', 'HIGH'),
+                        help='command range of the valve, written to the model')
+    parser.add_argument('--out', help='model file to write (YAML)')
+    parser.add_argument('--plot-dir', help='folder for Figs. 1-3 (step responses, gains, speeds)')
+    parser.set_defaults(run=run)
+
+
+def _number(value: float) -> float | None:
+    return value if math.isfinite(value) else None
+
+
+def describe(result: Identification) -> dict:
+    """Return the ``--json`` object of an identification."""
+    segmentation = result.segmentation
+    payload = result.model.to_mapping()
+    payload.update({
+        'alpha': list(result.alpha) if result.alpha is not None else None,
+        'sample_period': result.sample_period,
+        'method': result.fit.method,
+        'beta': result.fit.beta,
+        'standard_errors': result.fit.standard_errors,
+        'experiments': {
+            'used': len(segmentation.experiments), 'steps': segmentation.steps,
+            'runs': segmentation.runs,
+            'dropped': [{'t': d.t0, 'reason': d.reason, 'source': d.source}
+                        for d in segmentation.dropped]},
+        'delay_estimates': {'samples': result.delay.samples, 'seconds': result.delay.seconds,
+                            'fit': result.delay.fit, 'onset': result.delay.onset,
+                            'xcorr': result.delay.xcorr, 'agree': result.delay.agree},
+        'noise_std': segmentation.noise_std,
+        'comparison': [{'kind': s.kind, 'mae': _number(s.mae), 'note': s.note}
+                       for s in result.comparison],
+        'mae': result.mae,
+    })
+    return payload
+
+
+def run(args: argparse.Namespace) -> Outcome:
+    """Run ``identify``."""
+    records = read_records(args.bags, args.joint, args.command_topic)
+    stages = ['segmenting', 'estimating the delay', 'fitting the static map',
+              'comparing map families on held-out experiments']
+    with ProgressBar('identify', len(stages)) as bar:
+        result = identify(
+            records, method=args.method, kind=args.kind, max_delay=args.max_delay,
+            angle_limits=tuple(args.angle_limits) if args.angle_limits else None,
+            input_limits=tuple(args.input_limits) if args.input_limits else None,
+            progress=lambda name: bar.update(stages.index(name)))
+    payload = describe(result)
+    model = result.model
+    if args.out:
+        payload['model'] = str(save_model(model, args.out))
+    if args.plot_dir:
+        folder = Path(args.plot_dir)
+        segmentation = result.segmentation
+        moving = [p for p in result.points if p.level != segmentation.rest]
+        payload['plots'] = [
+            str(save_figure(plot_step_responses(segmentation.experiments, result.delay.samples,
+                                                result.sample_period),
+                            folder / 'step_responses.png')),
+            str(save_figure(plot_gains(result.points, model, result.sample_period,
+                                       rest=segmentation.rest), folder / 'gains.png')),
+            str(save_figure(plot_velocity_map(
+                model, v_range=_command_range(result),
+                points=([p.level for p in moving], [p.speed for p in moving]),
+                title=f'Velocity map of joint {model.joint} (West et al. 2018, Fig. 3)'),
+                folder / 'velocity_map.png')),
+        ]
+    segmentation = result.segmentation
+    lines = [f'joint {model.joint}: {len(segmentation.experiments)} experiments '
+             f'({segmentation.steps} steps, {segmentation.runs} runs), '
+             f'{len(segmentation.dropped)} segments dropped, sample period '
+             f'{result.sample_period:g} s, noise {segmentation.noise_std:.3g} deg']
+    for dropped in segmentation.dropped[:5]:
+        lines.append(f'  dropped at t = {dropped.t0:.2f} s: {dropped.reason}')
+    delay = result.delay
+    lines.append(f'delay: {delay.samples} samples = {delay.seconds:g} s (fit; onset '
+                 f'{delay.onset}, cross-correlation {delay.xcorr})')
+    rows = [[key, _format(value), _format(result.fit.standard_errors.get(name, math.nan))]
+            for key, value, name in _parameter_rows(model)]
+    lines += table(rows, ['parameter', 'value', 'std. error'])
+    if result.comparison:
+        lines.append('held-out simulation MAE by map family:')
+        lines += table([[s.kind, _format(s.mae), s.note[:60]] for s in result.comparison],
+                       ['kind', 'MAE (deg)', 'note'])
+    lines.append(f'chosen: {model.kind} ({result.fit.method}, beta {result.fit.beta:.3f}); '
+                 f'simulation MAE on the experiments {result.mae:.4f} deg')
+    if args.out:
+        lines.append(f'wrote {payload["model"]}')
+    return Outcome(payload, lines)
+
+
+def _command_range(result: Identification) -> tuple[float, float]:
+    levels = [p.level for p in result.points]
+    span = max(levels) - min(levels)
+    return min(levels) - 0.1 * span, max(levels) + 0.1 * span
+
+
+def _parameter_rows(model):
+    mapping = model.static_map.to_mapping()
+    for key, value in mapping.items():
+        if isinstance(value, list):
+            for i, item in enumerate(value):
+                yield f'{key}[{i}]', item, f'{key}[{i}]'
+        else:
+            yield key, value, key
+    yield 'delay', model.delay, 'delay'
+
+
+def _format(value: float) -> str:
+    return '-' if value is None or not math.isfinite(value) else f'{value:.5g}'

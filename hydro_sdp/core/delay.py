@@ -1,0 +1,259 @@
+"""
+Pure time delay of a hydraulic joint, estimated three ways.
+
+A small step moves the joint slowly, so its motion crosses any threshold late
+and looks like extra delay; the estimators here avoid that:
+
+* **fit** (the answer): for each candidate delay, the differenced angle is
+  explained by one mean speed per experiment and delayed command level (a
+  non-parametric static map); the delay whose map explains most of it wins.
+  This is the differenced-output fit of methods.md 1.5, free of any map shape.
+* **onset**: on the fastest steps, the time the motion crosses six noise
+  standard deviations, moved back by the time that distance takes at the step's
+  speed.
+* **cross-correlation**: the lag where changes of speed line up with changes
+  of command.
+
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Sequence
+
+from hydro_sdp.core.arrays import FloatArray
+from hydro_sdp.core.errors import DataError
+from hydro_sdp.core.experiments import Experiment
+import numpy as np
+
+
+@dataclass(frozen=True)
+class DelayEstimate:
+    """
+    The delay, and what each estimator found.
+
+    Parameters
+    ----------
+    samples : int
+        Chosen delay, samples (from the fit).
+    seconds : float
+        The same in seconds.
+    fit : int
+        Delay that explains the differenced angle best.
+    onset : int or None
+        Delay from motion onsets of the fastest steps (None without steps).
+    xcorr : int or None
+        Delay from cross-correlation of speed and command changes.
+    explained : FloatArray
+        Share of the differenced angle's variance explained at each candidate delay.
+
+    """
+
+    samples: int
+    seconds: float
+    fit: int
+    onset: int | None
+    xcorr: int | None
+    explained: FloatArray
+
+    @property
+    def agree(self) -> bool:
+        """Whether the other estimators are within one sample of the fit."""
+        others = [d for d in (self.onset, self.xcorr) if d is not None]
+        return all(abs(d - self.fit) <= 1 for d in others)
+
+
+def level_groups(experiments: Sequence[Experiment], delay: int):
+    """
+    Differenced angles grouped by experiment and delayed command level.
+
+    Parameters
+    ----------
+    experiments : sequence of Experiment
+        The experiments.
+    delay : int
+        Delay, samples.
+
+    Returns
+    -------
+    tuple
+        ``(dy, group, levels)``: every predicted sample's angle increment, its
+        group index, and the command of each group.
+
+    """
+    increments, groups, levels = [], [], []
+    offset = 0
+    for experiment in experiments:
+        k = np.arange(experiment.start + 1, experiment.y.size)
+        delayed = experiment.v[np.maximum(k - delay, 0)]
+        values, inverse = np.unique(delayed, return_inverse=True)
+        increments.append(experiment.y[k] - experiment.y[k - 1])
+        groups.append(inverse + offset)
+        levels.append(values)
+        offset += values.size
+    return np.concatenate(increments), np.concatenate(groups), np.concatenate(levels)
+
+
+def _explained(experiments: Sequence[Experiment], delay: int) -> float:
+    dy, group, levels = level_groups(experiments, delay)
+    sums = np.bincount(group, weights=dy, minlength=levels.size)
+    counts = np.bincount(group, minlength=levels.size)
+    total = float(np.sum(dy ** 2))
+    return float(np.sum(sums ** 2 / np.maximum(counts, 1)) / total) if total > 0 else 0.0
+
+
+def _onset(experiments: Sequence[Experiment], rest: float, noise: float,
+           max_delay: int) -> int | None:
+    threshold = 6.0 * max(noise, 1e-9)
+    found = []
+    for experiment in experiments:
+        if experiment.kind != 'step':
+            continue
+        start = experiment.start
+        held = np.flatnonzero(experiment.v[start + 1:] != experiment.level)
+        length = int(held[0]) if held.size else experiment.v.size - start - 1
+        window = experiment.y[start:start + 1 + min(length + max_delay, experiment.y.size)]
+        moved = np.abs(window - window[0])
+        crossing = np.flatnonzero(moved > threshold)
+        if crossing.size == 0 or crossing[0] + 20 > window.size:
+            continue
+        k = int(crossing[0])
+        speed = abs(window[min(k + 20, window.size - 1)] - window[k]) / 20.0
+        if speed <= 0.0:
+            continue
+        found.append((speed, k - threshold / speed))
+    if len(found) < 2:
+        return None
+    found.sort(reverse=True)
+    fastest = [onset for _, onset in found[:max(2, len(found) // 3)]]
+    # The step's first command is v[start + 1]; its motion first shows at y[start + 1 + delay].
+    return int(round(float(np.median(fastest)))) - 1
+
+
+def _xcorr(experiments: Sequence[Experiment], max_delay: int) -> int | None:
+    score = np.zeros(max_delay + 1)
+    for experiment in experiments:
+        acceleration = np.diff(experiment.y, 2)
+        change = np.diff(experiment.v)[:-1]
+        if acceleration.size <= max_delay or not np.any(change):
+            continue
+        for lag in range(1, max_delay + 1):
+            score[lag] += float(np.dot(acceleration[lag:], change[:change.size - lag]))
+    if not np.any(score):
+        return None
+    # A command change between v[i] and v[i+1] changes the speed in y[i+1+delay]: the
+    # second difference centred one sample earlier, so the lag is delay - 1.
+    return int(np.argmax(score)) + 1
+
+
+def estimate_delay(experiments: Sequence[Experiment], dt: float, *, max_delay: int,
+                   rest: float = 0.0, noise: float = 0.0) -> DelayEstimate:
+    """
+    Estimate the pure delay from experiments.
+
+    Parameters
+    ----------
+    experiments : sequence of Experiment
+        Step or run experiments, each with at least ``max_delay`` samples of history.
+    dt : float
+        Sample period, s.
+    max_delay : int
+        Largest delay considered, samples.
+    rest : float
+        Rest command.
+    noise : float
+        Angle noise standard deviation, degrees.
+
+    Returns
+    -------
+    DelayEstimate
+        The delay (from the fit) and the other estimators' answers.
+
+    """
+    if not experiments:
+        raise DataError('no experiments to estimate the delay from')
+    candidates = np.arange(1, max_delay + 1)
+    explained = np.array([_explained(experiments, int(d)) for d in candidates])
+    best = int(candidates[int(np.argmax(explained))])
+    return DelayEstimate(samples=best, seconds=best * dt, fit=best,
+                         onset=_onset(experiments, rest, noise, max_delay),
+                         xcorr=_xcorr(experiments, max_delay), explained=explained)
+
+
+@dataclass(frozen=True)
+class LevelSpeed:
+    """
+    Mean speed of the joint while one command level acted on it.
+
+    Parameters
+    ----------
+    level : float
+        Command, input units.
+    speed : float
+        Mean angular velocity, deg/s.
+    standard_error : float
+        Its standard error, deg/s.
+    samples : int
+        Samples averaged.
+    gain : float
+        The SDP gain ``b_tau = speed dt / (level - rest)``, deg per sample per unit
+        (NaN at rest).
+
+    """
+
+    level: float
+    speed: float
+    standard_error: float
+    samples: int
+    gain: float
+
+
+def level_speeds(experiments: Sequence[Experiment], delay: int, dt: float, *,
+                 rest: float = 0.0, skip: int = 0, min_samples: int = 5) -> list[LevelSpeed]:
+    """
+    Mean speed per experiment and delayed command level (the points of Figs. 2 and 3).
+
+    For a step experiment this is the RIV estimate of ``b_tau`` of West et al.
+    (methods.md 1.10): with the integrator known, the integrated-input SRIV is
+    least squares, and its speed is the mean of the differenced angle.
+
+    Parameters
+    ----------
+    experiments : sequence of Experiment
+        The experiments.
+    delay : int
+        Delay, samples.
+    dt : float
+        Sample period, s.
+    rest : float
+        Rest command.
+    skip : int
+        Samples left out after each level change (valve transients).
+    min_samples : int
+        Fewest samples for a point.
+
+    Returns
+    -------
+    list of LevelSpeed
+        One point per experiment and level, sorted by level.
+
+    """
+    points = []
+    for experiment in experiments:
+        k = np.arange(experiment.start + 1, experiment.y.size)
+        delayed = experiment.v[np.maximum(k - delay, 0)]
+        dy = experiment.y[k] - experiment.y[k - 1]
+        changed = np.r_[True, delayed[1:] != delayed[:-1]]
+        since_change = np.arange(k.size) - np.maximum.accumulate(
+            np.where(changed, np.arange(k.size), 0))
+        keep = since_change >= skip
+        for level in np.unique(delayed[keep]):
+            values = dy[keep & (delayed == level)]
+            if values.size < min_samples:
+                continue
+            mean = float(np.mean(values))
+            error = float(np.std(values, ddof=1) / np.sqrt(values.size))
+            gain = mean / (level - rest) if level != rest else float('nan')
+            points.append(LevelSpeed(float(level), mean / dt, error / dt, int(values.size),
+                                     gain))
+    return sorted(points, key=lambda p: p.level)

@@ -1,0 +1,357 @@
+"""
+Experiments: the pieces of a record that identification fits.
+
+A record is cut where the command leaves its rest value and where it returns.
+A block of one held command is a *step* experiment (West et al. 2018, Fig. 1);
+a block of changing commands (random levels, closed-loop traffic) is a *run*.
+Each experiment keeps some samples of command history before its start, so
+that the delayed input of its first samples is known (methods.md 2.3), and
+ends before the joint is clamped by an end stop: an end stop makes the joint
+stand still although the command drives it, which no static map explains.
+What is dropped is kept with the reason.
+
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+import math
+from typing import Sequence
+
+from hydro_sdp.core.arrays import FloatArray
+from hydro_sdp.core.errors import DataError
+from hydro_sdp.core.records import Record
+import numpy as np
+
+#: Samples an experiment needs beyond its start to be worth fitting.
+MIN_SAMPLES = 10
+
+
+@dataclass(frozen=True, eq=False)
+class Experiment:
+    """
+    One segment of a record, with command history before its start.
+
+    Parameters
+    ----------
+    v : FloatArray
+        Commands from the start of the history to the end.
+    y : FloatArray
+        Angles alongside ``v``, degrees.
+    start : int
+        Index of the initial state: fits predict ``y[start + 1:]`` from ``y[start]``.
+    kind : str
+        ``step`` (one held command) or ``run``.
+    level : float
+        The held command of a step; NaN for a run.
+    t0 : float
+        Record time of ``y[start]``, s.
+    source : str
+        Where the record came from.
+
+    """
+
+    v: FloatArray
+    y: FloatArray
+    start: int
+    kind: str
+    level: float
+    t0: float
+    source: str = ''
+
+    @property
+    def samples(self) -> int:
+        """Number of predicted samples."""
+        return int(self.y.size - self.start - 1)
+
+
+@dataclass(frozen=True)
+class Dropped:
+    """
+    A segment that was not used, and why.
+
+    Parameters
+    ----------
+    t0 : float
+        Record time where it started, s.
+    reason : str
+        Why it was not used.
+    source : str
+        Where the record came from.
+
+    """
+
+    t0: float
+    reason: str
+    source: str = ''
+
+
+@dataclass(frozen=True, eq=False)
+class Segmentation:
+    """
+    Experiments cut from records, with what was dropped and the noise level.
+
+    Parameters
+    ----------
+    experiments : tuple[Experiment, ...]
+        Usable experiments.
+    dropped : tuple[Dropped, ...]
+        Segments not used, with reasons.
+    rest : float
+        Command taken as rest.
+    noise_std : float
+        Angle measurement noise estimated at rest, degrees.
+    end_stops : tuple[float | None, float | None]
+        Angles where the joint was seen clamped (lower, upper), degrees.
+
+    """
+
+    experiments: tuple[Experiment, ...]
+    dropped: tuple[Dropped, ...]
+    rest: float
+    noise_std: float
+    end_stops: tuple[float | None, float | None]
+
+    @property
+    def steps(self) -> int:
+        """Number of step experiments."""
+        return sum(e.kind == 'step' for e in self.experiments)
+
+    @property
+    def runs(self) -> int:
+        """Number of run experiments."""
+        return sum(e.kind == 'run' for e in self.experiments)
+
+
+def check_record(record: Record, *, min_samples: int = 50, max_gap: float = 3.0) -> float:
+    """
+    Check that a record can be identified from, and return its sample period.
+
+    Parameters
+    ----------
+    record : Record
+        The record.
+    min_samples : int
+        Fewest samples accepted.
+    max_gap : float
+        Largest accepted spacing of time stamps, in sample periods.
+
+    Returns
+    -------
+    float
+        Median sample period, s.
+
+    Raises
+    ------
+    DataError
+        Naming the problem: too few samples, or a gap in the time stamps.
+
+    """
+    label = record.source or 'record'
+    if len(record) < min_samples:
+        raise DataError(f'{label}: too few samples ({len(record)}; need at least {min_samples})')
+    steps = np.diff(record.t)
+    period = float(np.median(steps))
+    gaps = np.flatnonzero(steps > max_gap * period)
+    if gaps.size:
+        k = int(gaps[0])
+        raise DataError(f'{label}: gap of {steps[k]:.3f} s in the time stamps at '
+                        f't = {record.t[k]:.3f} s (sample period {period:.4f} s); split the '
+                        'record there')
+    return period
+
+
+def rest_command(v: FloatArray, y: FloatArray | None = None) -> float:
+    """
+    Return the command the record rests at.
+
+    Among the commands held for at least 5 % of the samples, the one during
+    which the joint moves least (with angles given), else the most frequent;
+    0 when no command is held that often.
+
+    Parameters
+    ----------
+    v : FloatArray
+        Commands.
+    y : FloatArray or None
+        Angles alongside ``v``.
+
+    Returns
+    -------
+    float
+        The rest command.
+
+    """
+    values, inverse, counts = np.unique(v, return_inverse=True, return_counts=True)
+    frequent = np.flatnonzero((counts >= 0.05 * v.size) & (counts > 1))
+    if frequent.size == 0:
+        return 0.0
+    if y is None or frequent.size == 1:
+        return float(values[frequent[np.argmax(counts[frequent])]])
+    speed = np.abs(np.diff(y, prepend=y[0]))
+    mean_speed = np.bincount(inverse, weights=speed, minlength=values.size) / counts
+    return float(values[frequent[np.argmin(mean_speed[frequent])]])
+
+
+def noise_level(record: Record, rest: float, settle: int) -> float:
+    """
+    Estimate the angle noise from samples taken well after the command went to rest.
+
+    Parameters
+    ----------
+    record : Record
+        The record.
+    rest : float
+        Rest command.
+    settle : int
+        Samples after the command reaches rest before the joint is taken as still.
+
+    Returns
+    -------
+    float
+        Standard deviation of the angle noise, degrees (robust, from differences).
+
+    """
+    at_rest = record.v == rest
+    # A sample counts when the command has rested for `settle` samples before it.
+    run = np.convolve(at_rest.astype(np.int64), np.ones(settle + 1, dtype=np.int64))[
+        :at_rest.size] == settle + 1
+    differences = np.diff(record.y)[run[1:]]
+    if differences.size < 10:
+        differences = np.diff(np.diff(record.y)) / math.sqrt(3.0)
+    deviation = np.median(np.abs(differences - np.median(differences)))
+    return float(1.4826 * deviation / math.sqrt(2.0))
+
+
+def _blocks(v: FloatArray, rest: float) -> list[tuple[int, int]]:
+    active = v != rest
+    edges = np.flatnonzero(np.diff(np.r_[0, active.astype(np.int8), 0]))
+    return list(zip(edges[::2].tolist(), edges[1::2].tolist()))
+
+
+def _clamp_start(y: FloatArray, v: FloatArray, rest: float, begin: int, end: int,
+                 delay: int, noise: float, extremes: tuple[float, float],
+                 limits: tuple[float, float] | None) -> tuple[int, float] | None:
+    """First index in ``[begin, end)`` where the joint is held by an end stop, if any."""
+    tolerance = max(6.0 * noise, 0.05)
+    window = 10
+    if end - begin < window:
+        return None
+    if limits is not None:
+        near = (y[begin:end] <= limits[0] + tolerance) | (y[begin:end] >= limits[1] - tolerance)
+        hits = np.flatnonzero(near)
+        return (begin + int(hits[0]), float(y[begin + hits[0]])) if hits.size else None
+    step = np.abs(np.diff(y[begin:end]))
+    moving = np.convolve(step, np.ones(window) / window, mode='valid')
+    for direction, extreme in ((1.0, extremes[1]), (-1.0, extremes[0])):
+        near = np.abs(y[begin:end] - extreme) <= tolerance
+        driven = np.sign(v[begin:end] - rest) == direction
+        for index in np.flatnonzero(near[:moving.size] & driven[:moving.size]):
+            # Held: still now, although it was moving the moment before, under the same drive.
+            if index >= window and moving[index] < 1.5 * noise and \
+                    moving[index - window] > 6.0 * noise and \
+                    np.all(v[begin + index - window - delay:begin + index + 1] ==
+                           v[begin + index]):
+                return begin + int(index), float(extreme)
+    return None
+
+
+def segment_record(record: Record, *, max_delay: int, rest: float | None = None,
+                   angle_limits: tuple[float, float] | None = None,
+                   min_samples: int = MIN_SAMPLES) -> Segmentation:
+    """
+    Cut a record into step and run experiments.
+
+    Parameters
+    ----------
+    record : Record
+        The record.
+    max_delay : int
+        Largest delay considered, samples: the history kept before each
+        experiment and the tail kept after its command returns to rest.
+    rest : float or None
+        Rest command; default: the record's most frequent command.
+    angle_limits : tuple[float, float] or None
+        Known end stops; default: detected where the joint is held still while driven.
+    min_samples : int
+        Fewest predicted samples an experiment needs.
+
+    Returns
+    -------
+    Segmentation
+        The experiments and what was dropped.
+
+    """
+    v, y = record.v, record.y
+    rest = rest_command(v, y) if rest is None else rest
+    noise = noise_level(record, rest, max_delay)
+    blocks = _blocks(v, rest)
+    extremes = (float(np.min(y)), float(np.max(y)))
+    experiments: list[Experiment] = []
+    dropped: list[Dropped] = []
+    stops: list[list[float]] = [[], []]
+    for index, (begin, end) in enumerate(blocks):
+        start = max(begin - 1, 0)
+        next_begin = blocks[index + 1][0] if index + 1 < len(blocks) else v.size
+        stop = min(end + max_delay, next_begin, v.size)
+        held = np.all(v[begin:end] == v[begin])
+        clamp = _clamp_start(y, v, rest, start, stop, max_delay, noise, extremes, angle_limits)
+        t0 = float(record.t[start])
+        if clamp is not None:
+            held_angle = float(np.median(y[clamp[0]:stop]))
+            stops[int(clamp[1] > np.mean(extremes))].append(held_angle)
+            stop = clamp[0]
+        if stop - start - 1 < min_samples:
+            reason = ('clamped by an end stop' if clamp is not None
+                      else f'too short ({max(stop - start - 1, 0)} samples)')
+            dropped.append(Dropped(t0, reason, record.source))
+            continue
+        history = max(start - max_delay, 0)
+        experiments.append(Experiment(
+            v=v[history:stop], y=y[history:stop], start=start - history,
+            kind='step' if held else 'run', level=float(v[begin]) if held else math.nan,
+            t0=t0, source=record.source))
+        if clamp is not None:
+            dropped.append(Dropped(float(record.t[clamp[0]]),
+                                   'the rest of this segment is clamped by an end stop',
+                                   record.source))
+    end_stops = (float(np.median(stops[0])) if stops[0] else None,
+                 float(np.median(stops[1])) if stops[1] else None)
+    if angle_limits is not None:
+        end_stops = angle_limits
+    return Segmentation(tuple(experiments), tuple(dropped), rest, noise, end_stops)
+
+
+def segment_records(records: Sequence[Record], *, max_delay: int,
+                    angle_limits: tuple[float, float] | None = None) -> Segmentation:
+    """
+    Segment several records of one joint and pool the experiments.
+
+    Parameters
+    ----------
+    records : sequence of Record
+        Records of the same joint at the same sample period.
+    max_delay : int
+        Largest delay considered, samples.
+    angle_limits : tuple[float, float] or None
+        Known end stops.
+
+    Returns
+    -------
+    Segmentation
+        Pooled experiments; rest and noise from all records.
+
+    """
+    if not records:
+        raise DataError('no records to identify from')
+    rest = rest_command(np.concatenate([r.v for r in records]),
+                        np.concatenate([r.y for r in records]))
+    parts = [segment_record(r, max_delay=max_delay, rest=rest, angle_limits=angle_limits)
+             for r in records]
+    lows = [p.end_stops[0] for p in parts if p.end_stops[0] is not None]
+    highs = [p.end_stops[1] for p in parts if p.end_stops[1] is not None]
+    return Segmentation(
+        tuple(e for p in parts for e in p.experiments),
+        tuple(d for p in parts for d in p.dropped), rest,
+        float(np.median([p.noise_std for p in parts])),
+        (min(lows) if lows else None, max(highs) if highs else None))

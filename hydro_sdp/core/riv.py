@@ -1,0 +1,379 @@
+"""
+Refined instrumental variable estimation of discrete transfer functions (SRIV/RIV).
+
+``y_k = [B(z^-1) / A(z^-1)] u_{k-delay} + xi_k`` with ``A = 1 + a_1 z^-1 + .. + a_n z^-n``
+and ``B = b_0 + b_1 z^-1 + .. + b_m z^-m`` (CAPTAIN's ``[n, m + 1, delay]``). SRIV
+(Young 2011, ch. 6-8; methods.md section 1) iterates: simulate the auxiliary
+model ``x = B/A u`` as instrument source, prefilter everything with ``1/A``,
+solve the IV normal equations, until the parameters stop changing. Several
+experiments are pooled without filtering across their boundaries. A known
+factor of ``A`` (the integrator ``1 - z^-1`` of a hydraulic joint) is handled by
+filtering the input with its inverse and estimating the rest (methods.md 1.4 a).
+With ``noise_order > 0`` the noise is modelled as AR and the prefilter becomes
+``C/A`` (RIV, methods.md 1.6).
+
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Sequence
+import warnings
+
+from hydro_sdp.core.arrays import FloatArray
+from hydro_sdp.core.errors import DataError, HydroSdpError
+import numpy as np
+from scipy.signal import lfilter
+
+
+class NotConvergedWarning(UserWarning):
+    """An iterative estimator stopped at its iteration limit."""
+
+
+@dataclass(frozen=True, eq=False)
+class TfEstimate:
+    """
+    An estimated discrete transfer function with its diagnostics.
+
+    Parameters
+    ----------
+    a : FloatArray
+        Full denominator ``[1, a_1, .., a_n]`` (known factor included).
+    b : FloatArray
+        Numerator ``[b_0, .., b_m]`` acting on ``u_{k-delay}``.
+    delay : int
+        Pure delay, samples.
+    parameters : FloatArray
+        The estimated parameters ``[a'_1 .. a'_n', b_0 .. b_m]`` (without the known factor).
+    covariance : FloatArray
+        ``P* = sigma2 [sum phi^ phi^']^-1`` of ``parameters``.
+    sigma2 : float
+        Residual (simulation error) variance.
+    rt2 : float
+        Coefficient of determination of the simulated output.
+    rt2_diff : float
+        The same on the differenced output (informative for integrating outputs).
+    yic : float
+        Young information criterion (more negative is better).
+    fit : float
+        NRMSE fit, percent.
+    iterations : int
+        IV iterations done.
+    converged : bool
+        Whether the relative parameter change fell below the tolerance.
+    warnings : tuple[str, ...]
+        Anything the user should know (not converged, unstable model...).
+    simulated : tuple[FloatArray, ...]
+        Noise-free model output per experiment.
+    noise_ar : FloatArray
+        AR noise polynomial ``[1, c_1 ..]`` (RIV), ``[1]`` for SRIV.
+
+    """
+
+    a: FloatArray
+    b: FloatArray
+    delay: int
+    parameters: FloatArray
+    covariance: FloatArray
+    sigma2: float
+    rt2: float
+    rt2_diff: float
+    yic: float
+    fit: float
+    iterations: int
+    converged: bool
+    warnings: tuple[str, ...] = ()
+    simulated: tuple[FloatArray, ...] = field(default=(), repr=False)
+    noise_ar: FloatArray = field(default_factory=lambda: np.ones(1))
+
+    @property
+    def standard_errors(self) -> FloatArray:
+        """Standard errors of ``parameters``."""
+        return np.sqrt(np.diag(self.covariance))
+
+    @property
+    def structure(self) -> tuple[int, int, int]:
+        """CAPTAIN's ``[na, nb, nd]``: denominator order, numerator count and delay."""
+        return len(self.a) - 1, len(self.b), self.delay
+
+
+def _stabilise(a: FloatArray) -> FloatArray:
+    """Reflect roots of ``z^n + a_1 z^(n-1) + ..`` outside the unit circle (CAPTAIN Stb=1)."""
+    if a.size <= 1:
+        return a
+    roots = np.roots(a)
+    outside = np.abs(roots) > 1.0
+    if not outside.any():
+        return a
+    roots[outside] = 1.0 / np.conj(roots[outside])
+    return np.real(np.poly(roots))
+
+
+def _regressors(y: FloatArray, u: FloatArray, n: int, m: int, delay: int) -> FloatArray:
+    """Rows ``[-y_{k-1} .. -y_{k-n}, u_{k-delay} .. u_{k-delay-m}]`` for every k (zeros before 0)."""
+    size = y.size
+    columns = []
+    for i in range(1, n + 1):
+        columns.append(-np.r_[np.zeros(min(i, size)), y[:size - i]][:size])
+    for j in range(m + 1):
+        lag = delay + j
+        columns.append(np.r_[np.zeros(min(lag, size)), u[:size - lag]][:size])
+    return np.column_stack(columns) if columns else np.zeros((size, 0))
+
+
+def _as_experiments(y, u) -> list[tuple[FloatArray, FloatArray]]:
+    if isinstance(y, np.ndarray) and y.ndim == 1:
+        y, u = [y], [u]
+    pairs = []
+    for index, (output, data) in enumerate(zip(y, u)):
+        output = np.asarray(output, dtype=np.float64)
+        data = np.asarray(data, dtype=np.float64)
+        if output.shape != data.shape or output.ndim != 1:
+            raise DataError(f'experiment {index}: y and u must be 1-D of equal length')
+        if not (np.all(np.isfinite(output)) and np.all(np.isfinite(data))):
+            raise DataError(f'experiment {index}: y or u is not finite')
+        pairs.append((output, data))
+    if not pairs:
+        raise DataError('no experiments to estimate from')
+    return pairs
+
+
+def sriv(y: FloatArray | Sequence[FloatArray], u: FloatArray | Sequence[FloatArray], n: int,
+         m: int, delay: int, *, known_factor: Sequence[float] = (1.0,), noise_order: int = 0,
+         tol: float = 1e-4, max_iterations: int = 20, warm_up: int | None = None) -> TfEstimate:
+    """
+    Estimate ``B/A`` by simplified (or, with ``noise_order``, full) refined IV.
+
+    Parameters
+    ----------
+    y, u : array or sequence of arrays
+        Output and input of one experiment, or lists of several experiments.
+        Each experiment should start at rest (deviations from an operating point).
+    n : int
+        Order of the estimated part of ``A`` (the known factor excluded; may be 0).
+    m : int
+        Numerator order (``m + 1`` coefficients).
+    delay : int
+        Pure delay, samples.
+    known_factor : sequence of float
+        Known factor ``K`` of ``A`` as ``[1, k_1, ..]``; ``[1, -1]`` is an integrator.
+    noise_order : int
+        AR order of the noise model (RIV); 0 for SRIV.
+    tol : float
+        Relative parameter change that ends the iterations.
+    max_iterations : int
+        Iteration limit.
+    warm_up : int or None
+        Samples skipped at each experiment's start (default ``max(n, delay + m)``).
+
+    Returns
+    -------
+    TfEstimate
+        The estimate and its diagnostics.
+
+    """
+    if n < 0 or m < 0 or delay < 0:
+        raise DataError(f'orders and delay must be >= 0, got n={n}, m={m}, delay={delay}')
+    experiments = _as_experiments(y, u)
+    factor = np.asarray(known_factor, dtype=np.float64)
+    if factor.size == 0 or factor[0] != 1.0:
+        raise DataError('the known factor of A must start with 1')
+    # y = B / (A' K) u = B / A' (u / K): filter the input by the known factor's inverse.
+    experiments = [(output, lfilter([1.0], factor, data)) for output, data in experiments]
+    k0 = max(n, delay + m) if warm_up is None else warm_up
+    parameters = n + m + 1
+    used = sum(max(0, output.size - k0) for output, _ in experiments)
+    if used <= parameters + 1:
+        raise DataError(f'too few samples ({used}) for {parameters} parameters')
+
+    def pooled(a_filter: FloatArray, c_filter: FloatArray, rho: FloatArray | None):
+        """Sum the IV cross-products over experiments with per-experiment filtering."""
+        instrument_product = np.zeros((parameters, parameters))
+        cross = np.zeros((parameters, parameters))
+        rhs = np.zeros(parameters)
+        simulated = []
+        for output, data in experiments:
+            if rho is None:
+                x = output
+                phi = _regressors(output, data, n, m, delay)[k0:]
+                instruments, target = phi, output[k0:]
+            else:
+                a_model = np.r_[1.0, rho[:n]]
+                x = lfilter(np.r_[np.zeros(delay), rho[n:]], a_model, data)
+                prefilter_den = np.convolve(a_filter, [1.0])
+                y_f = lfilter(c_filter, prefilter_den, output)
+                u_f = lfilter(c_filter, prefilter_den, data)
+                x_f = lfilter(c_filter, prefilter_den, x)
+                phi = _regressors(y_f, u_f, n, m, delay)[k0:]
+                instruments = _regressors(x_f, u_f, n, m, delay)[k0:]
+                target = y_f[k0:]
+            simulated.append(x)
+            cross += instruments.T @ phi
+            rhs += instruments.T @ target
+            instrument_product += instruments.T @ instruments
+        return cross, rhs, instrument_product, simulated
+
+    cross, rhs, _, _ = pooled(np.ones(1), np.ones(1), None)
+    try:
+        rho = np.linalg.lstsq(cross, rhs, rcond=None)[0]
+    except np.linalg.LinAlgError as error:
+        raise DataError(f'the least-squares start failed: {error}') from None
+    noise = np.ones(1)
+    notes: list[str] = []
+    converged = False
+    iterations = 0
+    for iterations in range(1, max_iterations + 1):
+        a_hat = _stabilise(np.r_[1.0, rho[:n]])
+        rho_stable = np.r_[a_hat[1:], rho[n:]]
+        if noise_order > 0:
+            _, _, _, simulated = pooled(a_hat, noise, rho_stable)
+            residual = np.concatenate([output - x for (output, _), x in
+                                       zip(experiments, simulated)])
+            noise = _ar_fit(residual, noise_order)
+        cross, rhs, _, _ = pooled(a_hat, noise, rho_stable)
+        new = np.linalg.lstsq(cross, rhs, rcond=None)[0]
+        change = np.linalg.norm(new - rho) / max(np.linalg.norm(rho), 1e-12)
+        rho = new
+        if change < tol:
+            converged = True
+            break
+    if not converged:
+        notes.append(f'not converged after {max_iterations} iterations')
+        warnings.warn(f'SRIV did not converge in {max_iterations} iterations',
+                      NotConvergedWarning, stacklevel=2)
+    a_hat = np.r_[1.0, rho[:n]]
+    if n and np.any(np.abs(np.roots(a_hat)) >= 1.0):
+        notes.append('the estimated denominator is not stable')
+    a_stable = _stabilise(a_hat)
+    with np.errstate(over='ignore', invalid='ignore'):
+        _, _, instrument_product, simulated = pooled(a_stable, noise,
+                                                     np.r_[a_stable[1:], rho[n:]])
+    errors = [output[k0:] - x[k0:] for (output, _), x in zip(experiments, simulated)]
+    error = np.concatenate(errors)
+    outputs = np.concatenate([output[k0:] for output, _ in experiments])
+    sigma2 = float(np.sum(error ** 2) / max(error.size - parameters, 1))
+    innovation_variance = sigma2
+    if noise_order > 0:
+        innovations = np.concatenate([lfilter(noise, [1.0], e) for e in errors])
+        innovation_variance = float(np.var(innovations))
+    try:
+        covariance = innovation_variance * np.linalg.inv(instrument_product)
+    except np.linalg.LinAlgError:
+        covariance = np.full((parameters, parameters), np.inf)
+        notes.append('the instrument product matrix is singular')
+    variance_y = float(np.var(outputs))
+    rt2 = 1.0 - float(np.var(error)) / variance_y if variance_y > 0 else float('nan')
+    diff_error = np.concatenate([np.diff(e) for e in errors])
+    diff_y = np.concatenate([np.diff(output[k0:]) for output, _ in experiments])
+    rt2_diff = 1.0 - float(np.var(diff_error)) / float(np.var(diff_y)) \
+        if np.var(diff_y) > 0 else float('nan')
+    with np.errstate(divide='ignore', invalid='ignore'):
+        nevn = float(np.mean(np.diag(covariance) / rho ** 2))
+        yic = float(np.log(np.var(error) / variance_y) + np.log(nevn))
+    norm = np.linalg.norm(outputs - outputs.mean())
+    fit = 100.0 * (1.0 - np.linalg.norm(error) / norm) if norm > 0 else float('nan')
+    return TfEstimate(
+        a=np.convolve(a_hat, factor), b=rho[n:].copy(), delay=delay, parameters=rho,
+        covariance=covariance, sigma2=sigma2, rt2=rt2, rt2_diff=rt2_diff, yic=yic, fit=fit,
+        iterations=iterations, converged=converged, warnings=tuple(notes),
+        simulated=tuple(simulated), noise_ar=noise)
+
+
+def _ar_fit(residual: FloatArray, order: int) -> FloatArray:
+    """Least-squares AR polynomial ``[1, c_1 .. c_p]`` of a residual series."""
+    rows = np.column_stack([-np.r_[np.zeros(i), residual[:-i]] for i in range(1, order + 1)])
+    coefficients = np.linalg.lstsq(rows[order:], residual[order:], rcond=None)[0]
+    return np.r_[1.0, coefficients]
+
+
+@dataclass(frozen=True)
+class StructureRow:
+    """
+    One candidate structure of a search.
+
+    Parameters
+    ----------
+    n : int
+        Denominator order (known factor excluded).
+    m : int
+        Numerator order.
+    delay : int
+        Delay, samples.
+    rt2 : float
+        ``R_T^2``.
+    rt2_diff : float
+        ``R_T^2`` of the differenced output.
+    yic : float
+        Young information criterion.
+    converged : bool
+        Whether SRIV converged.
+    stable : bool
+        Whether the estimated denominator is stable.
+
+    """
+
+    n: int
+    m: int
+    delay: int
+    rt2: float
+    rt2_diff: float
+    yic: float
+    converged: bool
+    stable: bool
+
+
+def structure_search(y, u, n_range: Sequence[int], m_range: Sequence[int],
+                     delay_range: Sequence[int], *, known_factor: Sequence[float] = (1.0,),
+                     criterion: str = 'yic', min_rt2: float | None = None) -> list[StructureRow]:
+    """
+    Estimate every structure in a range and rank them (CAPTAIN ``rivid``, methods.md 1.9).
+
+    Parameters
+    ----------
+    y, u : array or sequence of arrays
+        Data as for :func:`sriv`.
+    n_range, m_range, delay_range : sequence of int
+        Candidate orders and delays.
+    known_factor : sequence of float
+        Known factor of ``A``.
+    criterion : str
+        ``yic`` (most negative first, among models with ``R_T^2 >= min_rt2``),
+        ``rt2`` or ``rt2_diff`` (largest first).
+    min_rt2 : float or None
+        Models below this ``R_T^2`` are ranked after all others for ``yic``;
+        default: 0.001 below the best ``R_T^2`` (YIC chooses among the models that
+        explain the data about as well as the best, as in Young's practice).
+
+    Returns
+    -------
+    list of StructureRow
+        Sorted best first; structures that failed to estimate are left out.
+
+    """
+    if criterion not in ('yic', 'rt2', 'rt2_diff'):
+        raise DataError(f'criterion must be yic, rt2 or rt2_diff, got {criterion!r}')
+    rows = []
+    for n in n_range:
+        for m in m_range:
+            for delay in delay_range:
+                with warnings.catch_warnings(), np.errstate(all='ignore'):
+                    warnings.simplefilter('ignore', NotConvergedWarning)
+                    try:
+                        estimate = sriv(y, u, n, m, delay, known_factor=known_factor)
+                    except (HydroSdpError, np.linalg.LinAlgError):
+                        continue
+                stable = not any('not stable' in note for note in estimate.warnings)
+                rows.append(StructureRow(n, m, delay, estimate.rt2, estimate.rt2_diff,
+                                         estimate.yic, estimate.converged, stable))
+    if min_rt2 is None:
+        min_rt2 = max((row.rt2 for row in rows if row.stable and np.isfinite(row.rt2)),
+                      default=0.0) - 1e-3
+    if criterion == 'yic':
+        def key(row):
+            ok = row.rt2 >= min_rt2 and row.stable and np.isfinite(row.yic)
+            return (not ok, row.yic if np.isfinite(row.yic) else np.inf)
+    else:
+        def key(row):
+            value = getattr(row, criterion)
+            return (not row.stable, -value if np.isfinite(value) else np.inf)
+    return sorted(rows, key=key)
