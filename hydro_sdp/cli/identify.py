@@ -9,7 +9,7 @@ from pathlib import Path
 from hydro_sdp.cli.common import (
     add_bag_options, finite_float, Outcome, positive_float, read_records, table)
 from hydro_sdp.cli.progress import ProgressBar
-from hydro_sdp.core.identify import identify, Identification, KINDS
+from hydro_sdp.core.identify import Identification, identify, KINDS
 from hydro_sdp.files import save_model
 from hydro_sdp.plots import plot_gains, plot_step_responses, plot_velocity_map, save_figure
 

@@ -18,7 +18,7 @@ import math
 from typing import Sequence
 
 from hydro_sdp.core.arrays import FloatArray
-from hydro_sdp.core.controller_spec import CHORD_SPEED_FRACTION, chord_commands
+from hydro_sdp.core.controller_spec import chord_commands, CHORD_SPEED_FRACTION
 from hydro_sdp.core.experiments import check_record
 from hydro_sdp.core.model import JointModel
 from hydro_sdp.core.records import Record

@@ -61,7 +61,7 @@ class Experiment:
 
     @property
     def samples(self) -> int:
-        """Number of predicted samples."""
+        """Return the number of predicted samples."""
         return int(self.y.size - self.start - 1)
 
 
@@ -114,12 +114,12 @@ class Segmentation:
 
     @property
     def steps(self) -> int:
-        """Number of step experiments."""
+        """Return the number of step experiments."""
         return sum(e.kind == 'step' for e in self.experiments)
 
     @property
     def runs(self) -> int:
-        """Number of run experiments."""
+        """Return the number of run experiments."""
         return sum(e.kind == 'run' for e in self.experiments)
 
 
@@ -235,6 +235,8 @@ def _clamp_start(y: FloatArray, v: FloatArray, rest: float, begin: int, end: int
     """First index in ``[begin, end)`` where the joint is held by an end stop, if any."""
     tolerance = max(6.0 * noise, 0.05)
     window = 10
+    # Mean |y_k - y_{k-1}| of a joint at rest: E|N(0, 2 noise^2)| = 1.13 noise.
+    still = 1.13 * max(noise, 1e-6)
     if end - begin < window:
         return None
     if limits is not None:
@@ -248,8 +250,8 @@ def _clamp_start(y: FloatArray, v: FloatArray, rest: float, begin: int, end: int
         driven = np.sign(v[begin:end] - rest) == direction
         for index in np.flatnonzero(near[:moving.size] & driven[:moving.size]):
             # Held: still now, although it was moving the moment before, under the same drive.
-            if index >= window and moving[index] < 1.5 * noise and \
-                    moving[index - window] > 6.0 * noise and \
+            if index >= window and moving[index] < 1.6 * still and \
+                    moving[index - window] > 4.0 * still and \
                     np.all(v[begin + index - window - delay:begin + index + 1] ==
                            v[begin + index]):
                 return begin + int(index), float(extreme)

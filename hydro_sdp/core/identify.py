@@ -90,7 +90,7 @@ class Identification:
 
     @property
     def alpha(self) -> tuple[float, ...] | None:
-        """The paper's ``alpha_1..alpha_6`` at the records' sample period (kind ``sdp``)."""
+        """Return the paper's ``alpha_1..alpha_6`` at the records' sample period (``sdp``)."""
         if self.model.kind != 'sdp':
             return None
         return self.model.alpha(self.sample_period)

@@ -174,7 +174,7 @@ def sdp_rate(x: FloatArray) -> RateFunction:
 
 def initial_sdp(points: Sequence[LevelSpeed], rest: float) -> FloatArray:
     """
-    Starting values of ``(vn, cn, a3, vp, cp, a6)`` from per-level speeds.
+    Return starting values of ``(vn, cn, a3, vp, cp, a6)`` from per-level speeds.
 
     The edges lie between the outermost still level and the innermost moving
     one on each side; the saturation speeds a little beyond the fastest points;

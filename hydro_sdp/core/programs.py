@@ -18,7 +18,7 @@ import math
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import ConfigurationError
 from hydro_sdp.core.model import check_sample_period, JointModel
-from hydro_sdp.core.static_maps import SdpDzMap, SdpMap
+from hydro_sdp.core.static_maps import PolyMap, PwlMap, SdpMap
 import numpy as np
 
 # Fraction of the end-stop range a program may use around its centre.
@@ -46,19 +46,23 @@ def rest_command(model: JointModel) -> float:
     return 0.5 * (dead_zone[0] + dead_zone[1])
 
 
-def command_span(model: JointModel) -> tuple[tuple[float, float], tuple[float, float]]:
+def command_span(model: JointModel, *, saturation: float = 0.99
+                 ) -> tuple[tuple[float, float], tuple[float, float]]:
     """
     Smallest and largest step commands for each direction.
 
     The small end lies inside the dead-zone (60 % of the way to the edge), so
     the experiments show it; the large end is where an exponential map reaches
-    99 % of its saturation, or three dead-zone widths beyond a linear edge, and
-    never beyond 95 % of the input limits.
+    ``saturation`` of its saturation speed, three dead-zone widths beyond a
+    linear edge, or the end of a piecewise-linear or polynomial map's range,
+    and never beyond 95 % of the input limits.
 
     Parameters
     ----------
     model : JointModel
         The joint.
+    saturation : float
+        Fraction of the saturation speed where an ``sdp`` map's span ends.
 
     Returns
     -------
@@ -75,11 +79,14 @@ def command_span(model: JointModel) -> tuple[tuple[float, float], tuple[float, f
             edge = model.dead_zone[side]
             small = rest + 0.6 * (edge - rest)
             if isinstance(static_map, SdpMap):
-                large = edge + sign * math.log(100.0) / static_map.curvature[side]
-            elif isinstance(static_map, SdpDzMap):
+                large = edge - sign * math.log(1.0 - saturation) / static_map.curvature[side]
+            elif isinstance(static_map, PwlMap):
+                large = static_map.knots[-1 if sign > 0 else 0]
+            else:
                 large = edge + sign * 3.0 * max(abs(edge - rest), 0.1 * _scale(limits))
-            else:  # pragma: no cover - only maps with a dead-zone reach here
-                large = edge
+        elif isinstance(static_map, PolyMap):
+            small = rest + sign * 0.05 * abs(static_map.command_range[side])
+            large = static_map.command_range[side]
         else:
             small = rest + sign * 0.05 * _scale(limits)
             large = rest + sign * 0.5 * _scale(limits)
@@ -177,10 +184,12 @@ def random_program(model: JointModel, dt: float, duration: float, *, seed: int =
     """
     Make random command levels held for random times (evaluation runs).
 
-    Each level's size is uniform over the model's command span (dead-zone
-    included); its sign is drawn with a probability that pulls the joint back
-    towards the middle of its travel, and its hold time is cut short before the
-    predicted angle would leave the usable band.
+    Each level's size is uniform over the model's command span up to 90 % of
+    saturation (dead-zone included), where an evaluation run tells models
+    apart rather than only their saturation speeds; its sign is drawn with a
+    probability that pulls the joint back towards the middle of its travel, and
+    its hold time is cut short before the predicted angle would leave the
+    usable band.
 
     Parameters
     ----------
@@ -207,7 +216,7 @@ def random_program(model: JointModel, dt: float, duration: float, *, seed: int =
     if not duration > 0.0:
         raise ConfigurationError(f'duration must be > 0 s, got {duration}')
     rng = np.random.default_rng(seed)
-    (small_neg, large_neg), (small_pos, large_pos) = command_span(model)
+    (small_neg, large_neg), (small_pos, large_pos) = command_span(model, saturation=0.9)
     base = rest_command(model)
     low, high = _travel_band(model, y0)
     total = max(1, round(duration / dt))

@@ -88,12 +88,12 @@ class TfEstimate:
 
     @property
     def standard_errors(self) -> FloatArray:
-        """Standard errors of ``parameters``."""
+        """Return the standard errors of ``parameters``."""
         return np.sqrt(np.diag(self.covariance))
 
     @property
     def structure(self) -> tuple[int, int, int]:
-        """CAPTAIN's ``[na, nb, nd]``: denominator order, numerator count and delay."""
+        """Return ``[na, nb, nd]`` as CAPTAIN writes it: orders and delay."""
         return len(self.a) - 1, len(self.b), self.delay
 
 
@@ -110,7 +110,7 @@ def _stabilise(a: FloatArray) -> FloatArray:
 
 
 def _regressors(y: FloatArray, u: FloatArray, n: int, m: int, delay: int) -> FloatArray:
-    """Rows ``[-y_{k-1} .. -y_{k-n}, u_{k-delay} .. u_{k-delay-m}]`` for every k (zeros before 0)."""
+    """Return rows ``[-y_{k-1} .. -y_{k-n}, u_{k-delay} .. u_{k-delay-m}]`` (zeros before 0)."""
     size = y.size
     columns = []
     for i in range(1, n + 1):

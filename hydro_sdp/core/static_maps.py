@@ -118,7 +118,8 @@ class SdpMap:
                 self.saturation_velocity[1] * dt, self.curvature[1], self.dead_zone[1])
 
     @classmethod
-    def from_alpha(cls, alpha: tuple[float, ...], dt: float) -> SdpMap:
+    def from_alpha(cls, alpha: tuple[float, ...], dt: float, *,
+                   convention: str = 'signed') -> SdpMap:
         """
         Build the map from the paper's ``alpha_1..alpha_6`` at sample period ``dt``.
 
@@ -128,6 +129,9 @@ class SdpMap:
             ``(a1, a2, a3, a4, a5, a6)``; ``a1`` and ``a4`` in deg per sample.
         dt : float
             Sample period the coefficients refer to, s.
+        convention : str
+            ``signed`` (the paper's text: ``a1 < 0``) or ``magnitude`` (its Table 1:
+            ``a1 > 0`` is the size of the negative saturation; methods.md 2.3).
 
         Returns
         -------
@@ -136,6 +140,11 @@ class SdpMap:
 
         """
         a1, a2, a3, a4, a5, a6 = (float(a) for a in alpha)
+        if convention == 'magnitude':
+            a1 = -abs(a1)
+        elif convention != 'signed':
+            raise ModelFileError(f"alpha convention must be 'signed' or 'magnitude', "
+                                 f'got {convention!r}')
         return cls(dead_zone=(a3, a6), saturation_velocity=(a1 / dt, a4 / dt),
                    curvature=(a2, a5))
 
