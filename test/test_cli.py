@@ -191,3 +191,50 @@ def test_closed_loop_refuses_a_controller_of_another_joint(tmp_path, capsys):
                        '--setpoints', '10', '--out', str(tmp_path / 'bag'))
     assert code == 2 and "controller is for joint 'j2'" in err
     assert not (tmp_path / 'bag').exists()
+
+
+def test_identify_and_evaluate_from_bags(tmp_path, capsys):
+    model = str(default_model_path())
+    assert run(capsys, 'simulate', model, '--program', 'steps', '--out',
+               str(tmp_path / 'steps'), '--seed', '1')[0] == 0
+    for seed in (2, 3):
+        assert run(capsys, 'simulate', model, '--program', 'random', '--duration', '40',
+                   '--out', str(tmp_path / f'run{seed}'), '--seed', str(seed))[0] == 0
+    code, out, err = run(capsys, 'identify', str(tmp_path / 'steps'), '--out',
+                         str(tmp_path / 'model.yaml'), '--angle-limits', '-13.8', '63.6',
+                         '--input-limits', '-10', '10', '--plot-dir', str(tmp_path / 'figs'),
+                         '--json')
+    assert code == 0, err
+    payload = json.loads(out)
+    for key in ('format', 'joint', 'kind', 'delay', 'angle_limits', 'input_limits', 'dead_zone',
+                'saturation_velocity', 'curvature', 'effects', 'alpha', 'sample_period',
+                'experiments', 'mae'):
+        assert key in payload
+    assert payload['kind'] == 'sdp' and payload['delay'] == 0.15
+    np.testing.assert_allclose(payload['alpha'], (-0.2951, 1.3560, -1.3298, 0.3887, 1.7710,
+                                                  1.3124), rtol=0.01)
+    assert payload['experiments']['used'] == 40
+    identified = load_model(tmp_path / 'model.yaml')
+    assert identified.angle_limits == (-13.8, 63.6)
+    for name in ('step_responses.png', 'gains.png', 'velocity_map.png'):
+        assert (tmp_path / 'figs' / name).read_bytes()[:4] == b'\x89PNG'
+    code, out, err = run(capsys, 'evaluate', str(tmp_path / 'run2'), str(tmp_path / 'run3'),
+                         '--model', str(tmp_path / 'model.yaml'), '--json')
+    assert code == 0, err
+    result = json.loads(out)
+    assert set(result['mae']) == {'model', 'sdp_dz', 'linear'}
+    assert result['mae']['model'] < result['mae']['sdp_dz'] < result['mae']['linear']
+    assert len(result['records']) == 2
+
+
+def test_identify_refuses_data_without_excitation(tmp_path, capsys):
+    flat = tmp_path / 'flat.yaml'
+    flat.write_text(default_model_path().read_text().replace(
+        'dead_zone: [-1.3298, 1.3124]', 'dead_zone: [-9.5, 9.5]'))
+    assert run(capsys, 'simulate', str(flat), '--program', 'steps', '--duration', '30',
+               '--out', str(tmp_path / 'bag'))[0] == 0
+    code, out, err = run(capsys, 'identify', str(tmp_path / 'bag'))
+    assert code == 2 and out == ''
+    assert err.startswith('error: no excitation')
+    code, _, err = run(capsys, 'identify', str(tmp_path / 'bag'), '--joint', 'elbow')
+    assert code == 2 and "joint 'elbow' is not in /joint_states" in err

@@ -324,6 +324,70 @@ def segment_record(record: Record, *, max_delay: int, rest: float | None = None,
     return Segmentation(tuple(experiments), tuple(dropped), rest, noise, end_stops)
 
 
+def split_long(experiments: Sequence[Experiment], max_samples: int,
+               history: int) -> list[Experiment]:
+    """
+    Cut experiments longer than ``max_samples`` into consecutive pieces.
+
+    Each piece restarts from its measured angle with ``history`` samples of
+    commands before it, so fits see many medium-length pieces instead of one
+    long run (an output-error fit would otherwise drift over an hour).
+
+    Parameters
+    ----------
+    experiments : sequence of Experiment
+        The experiments.
+    max_samples : int
+        Longest piece, predicted samples.
+    history : int
+        Command history kept before each piece, samples.
+
+    Returns
+    -------
+    list of Experiment
+        The pieces, in order.
+
+    """
+    pieces = []
+    for experiment in experiments:
+        if experiment.samples <= max_samples:
+            pieces.append(experiment)
+            continue
+        for start in range(experiment.start, experiment.y.size - 1, max_samples):
+            first = max(start - history, 0)
+            stop = min(start + max_samples + 1, experiment.y.size)
+            if stop - start - 1 < MIN_SAMPLES:
+                break
+            pieces.append(Experiment(experiment.v[first:stop], experiment.y[first:stop],
+                                     start - first, experiment.kind, experiment.level,
+                                     experiment.t0, experiment.source))
+    return pieces
+
+
+def thin(experiments: Sequence[Experiment], max_samples: int) -> list[Experiment]:
+    """
+    Keep evenly spread experiments up to about ``max_samples`` predicted samples.
+
+    Parameters
+    ----------
+    experiments : sequence of Experiment
+        The experiments.
+    max_samples : int
+        Sample budget.
+
+    Returns
+    -------
+    list of Experiment
+        All of them when within budget, else every k-th.
+
+    """
+    total = sum(e.samples for e in experiments)
+    if total <= max_samples:
+        return list(experiments)
+    stride = math.ceil(total / max_samples)
+    return list(experiments[::stride])
+
+
 def segment_records(records: Sequence[Record], *, max_delay: int,
                     angle_limits: tuple[float, float] | None = None) -> Segmentation:
     """

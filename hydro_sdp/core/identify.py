@@ -20,13 +20,20 @@ from typing import Callable, Sequence
 
 from hydro_sdp.core.delay import DelayEstimate, estimate_delay, level_speeds, LevelSpeed
 from hydro_sdp.core.errors import DataError, HydroSdpError
-from hydro_sdp.core.experiments import check_record, Experiment, segment_records, Segmentation
+from hydro_sdp.core.experiments import (
+    check_record, Experiment, segment_records, Segmentation, split_long, thin)
 from hydro_sdp.core.map_fit import fit_poly, fit_pwl, fit_sdp, FitData, MapFit
 from hydro_sdp.core.model import JointModel
 from hydro_sdp.core.records import Record
 import numpy as np
 
 KINDS = ('sdp', 'pwl', 'poly')
+#: Longest piece a fit sees, and the sample budgets of the multi-start search and the
+#: delay search: long records are cut and thinned there, and the best start is then
+#: refined on all the data.
+PIECE_SAMPLES = 3000
+SEARCH_SAMPLES = 60_000
+DELAY_SAMPLES = 100_000
 #: ``auto`` keeps ``sdp`` when its held-out error is within this factor of the best.
 PARSIMONY = 1.05
 
@@ -97,9 +104,9 @@ class Identification:
 
 
 def _fit_kind(kind: str, data: FitData, points: Sequence[LevelSpeed], rest: float,
-              method: str, dead_zone: tuple[float, float] | None) -> MapFit:
+              method: str, dead_zone: tuple[float, float] | None, starts: int = 4) -> MapFit:
     if kind == 'sdp':
-        return fit_sdp(data, points, rest, method=method)
+        return fit_sdp(data, points, rest, method=method, starts=starts)
     if kind == 'pwl':
         if dead_zone is None:
             dead_zone = fit_sdp(data, points, rest, method='rr', starts=1).static_map.dead_zone
@@ -130,7 +137,8 @@ def _folds(experiments: Sequence[Experiment]) -> tuple[list[Experiment], list[Ex
 
 
 def compare_kinds(experiments: Sequence[Experiment], delay: int, dt: float, rest: float,
-                  method: str, kinds: Sequence[str] = KINDS) -> list[KindScore]:
+                  method: str, kinds: Sequence[str] = KINDS,
+                  dead_zone: tuple[float, float] | None = None) -> list[KindScore]:
     """
     Two-fold held-out simulation error of each map family.
 
@@ -148,6 +156,8 @@ def compare_kinds(experiments: Sequence[Experiment], delay: int, dt: float, rest
         Fitting method for ``sdp``.
     kinds : sequence of str
         Families to compare.
+    dead_zone : tuple[float, float] or None
+        Plateau of the ``pwl`` map (default: from an ``sdp`` fit of each fold).
 
     Returns
     -------
@@ -163,7 +173,8 @@ def compare_kinds(experiments: Sequence[Experiment], delay: int, dt: float, rest
         for train, test in ((folds[0], folds[1]), (folds[1], folds[0])):
             try:
                 points = level_speeds(train, delay, dt, rest=rest)
-                fitted = _fit_kind(kind, FitData(train, delay, dt), points, rest, method, None)
+                fitted = _fit_kind(kind, FitData(train, delay, dt), points, rest, method,
+                                   dead_zone, starts=2)
                 errors.append(FitData(test, delay, dt).simulation_mae(fitted.static_map.rate))
             except HydroSdpError as error:
                 note = str(error)
@@ -239,19 +250,22 @@ def identify(records: Sequence[Record], *, method: str = 'rr', kind: str = 'auto
         reasons = '; '.join(sorted({d.reason for d in segmentation.dropped})) or 'none found'
         raise DataError(f'no usable experiments ({reasons})')
     step('estimating the delay')
-    delay = estimate_delay(segmentation.experiments, dt, max_delay=horizon,
+    pieces = split_long(segmentation.experiments, PIECE_SAMPLES, horizon)
+    delay = estimate_delay(thin(pieces, DELAY_SAMPLES), dt, max_delay=horizon,
                            rest=segmentation.rest, noise=segmentation.noise_std)
-    points = tuple(level_speeds(segmentation.experiments, delay.samples, dt,
-                                rest=segmentation.rest))
-    data = FitData(segmentation.experiments, delay.samples, dt)
+    points = tuple(level_speeds(pieces, delay.samples, dt, rest=segmentation.rest))
+    data = FitData(pieces, delay.samples, dt)
+    sample = thin(pieces, SEARCH_SAMPLES)
+    search = data if len(sample) == len(pieces) else FitData(sample, delay.samples, dt)
     step('fitting the static map')
-    sdp_fit = fit_sdp(data, points, segmentation.rest, method=method)
+    sdp_fit = fit_sdp(search, points, segmentation.rest, method=method,
+                      polish=None if search is data else data)
     comparison: tuple[KindScore, ...] = ()
     chosen = kind
     if kind == 'auto':
         step('comparing map families on held-out experiments')
-        comparison = tuple(compare_kinds(segmentation.experiments, delay.samples, dt,
-                                         segmentation.rest, method))
+        comparison = tuple(compare_kinds(sample, delay.samples, dt, segmentation.rest,
+                                         method, dead_zone=sdp_fit.static_map.dead_zone))
         chosen = choose_kind(comparison)
     fit = sdp_fit if chosen == 'sdp' else _fit_kind(
         chosen, data, points, segmentation.rest, method, sdp_fit.static_map.dead_zone)

@@ -283,10 +283,36 @@ SDP_NAMES = ('saturation_velocity[0]', 'curvature[0]', 'dead_zone[0]',
              'saturation_velocity[1]', 'curvature[1]', 'dead_zone[1]')
 
 
+def _to_free(x: FloatArray, rest: float, scale: float) -> FloatArray:
+    """Map ``(vn, cn, a3, vp, cp, a6, beta)`` to unconstrained values (logs and a logit)."""
+    tiny = 1e-9 * scale
+    beta = min(max(x[6], 1e-6), 1.0 - 1e-6)
+    return np.array([math.log(max(-x[0], 1e-12)), math.log(x[1]), math.log(max(rest - x[2], tiny)),
+                     math.log(max(x[3], 1e-12)), math.log(x[4]), math.log(max(x[5] - rest, tiny)),
+                     math.log(beta / (1.0 - beta))])
+
+
+def _to_natural(p: FloatArray, rest: float) -> FloatArray:
+    """Invert :func:`_to_free`: signs, ordering ``a3 <= rest <= a6`` and ``0 < beta < 1`` hold."""
+    return np.array([-math.exp(p[0]), math.exp(p[1]), rest - math.exp(p[2]), math.exp(p[3]),
+                     math.exp(p[4]), rest + math.exp(p[5]), 1.0 / (1.0 + math.exp(-p[6]))])
+
+
+def _natural_derivative(p: FloatArray) -> FloatArray:
+    """Return the derivative of each natural parameter with respect to its free value."""
+    beta = 1.0 / (1.0 + math.exp(-p[6]))
+    return np.array([-math.exp(p[0]), math.exp(p[1]), -math.exp(p[2]), math.exp(p[3]),
+                     math.exp(p[4]), math.exp(p[5]), beta * (1.0 - beta)])
+
+
 def fit_sdp(data: FitData, points: Sequence[LevelSpeed], rest: float, *, method: str = 'rr',
-            starts: int = 4) -> MapFit:
+            starts: int = 4, polish: FitData | None = None) -> MapFit:
     """
     Fit eq. (5) of West et al. by regret-regression or by output error.
+
+    Regret-regression is solved by Levenberg-Marquardt (MINPACK) on logs of the
+    positive quantities and a logit of ``beta``, which keeps the signs, the
+    ordering ``a3 <= rest <= a6`` and ``0 < beta < 1`` without bounds.
 
     Parameters
     ----------
@@ -301,6 +327,9 @@ def fit_sdp(data: FitData, points: Sequence[LevelSpeed], rest: float, *, method:
         estimated) or ``oe`` (Nelder-Mead on the mean simulation error).
     starts : int
         Number of starting points (the curvatures are varied around the start).
+    polish : FitData or None
+        Larger data set: the starts run on ``data`` (a sample of it) and the best
+        is refined on ``polish``.
 
     Returns
     -------
@@ -311,41 +340,56 @@ def fit_sdp(data: FitData, points: Sequence[LevelSpeed], rest: float, *, method:
     if method not in ('rr', 'oe'):
         raise DataError(f"method must be 'rr' or 'oe', got {method!r}")
     base = initial_sdp(points, rest)
-    lower, upper = sdp_bounds(np.array([p.level for p in points]),
-                              np.array([p.speed for p in points]), rest)
+    levels = np.array([p.level for p in points])
+    lower, upper = sdp_bounds(levels, np.array([p.speed for p in points]), rest)
+    scale = max(float(np.max(np.abs(levels - rest))), 1e-9)
     factors = [1.0, 0.5, 2.0, 4.0, 0.25][:max(starts, 1)]
+
+    def rr_fit(fit_data: FitData, free: FloatArray):
+        def residuals(p: FloatArray) -> FloatArray:
+            x = _to_natural(p, rest)
+            return fit_data.residuals(sdp_rate(x), x[6])
+        return least_squares(residuals, free, method='lm', x_scale=1.0)
+
+    def oe_fit(fit_data: FitData, x0: FloatArray, iterations: int):
+        return minimize(lambda x: fit_data.mean_experiment_sse(sdp_rate(x)), x0,
+                        method='Nelder-Mead', bounds=list(zip(lower[:6], upper[:6])),
+                        options={'maxiter': iterations, 'maxfev': iterations, 'xatol': 1e-7,
+                                 'fatol': 1e-12, 'adaptive': True})
+
     best = None
     evaluations = 0
     for factor in factors:
         x0 = base.copy()
         x0[[1, 4]] *= factor
         if method == 'rr':
-            x0 = np.clip(np.r_[x0, 0.5], lower, upper)
-            result = least_squares(
-                lambda x: data.residuals(sdp_rate(x), x[6]), x0, bounds=(lower, upper),
-                x_scale='jac', method='trf')
-            evaluations += result.nfev
-            candidate = (result.cost, result.x, result.jac)
+            result = rr_fit(data, _to_free(np.r_[x0, 0.5], rest, scale))
+            cost = float(result.cost)
         else:
-            x0 = np.clip(x0, lower[:6], upper[:6])
-            result = minimize(lambda x: data.mean_experiment_sse(sdp_rate(x)), x0,
-                              method='Nelder-Mead', bounds=list(zip(lower[:6], upper[:6])),
-                              options={'maxiter': 6000, 'maxfev': 6000, 'xatol': 1e-7,
-                                       'fatol': 1e-12, 'adaptive': True})
-            evaluations += result.nfev
+            result = oe_fit(data, np.clip(x0, lower[:6], upper[:6]), 6000)
             cost = 0.5 * float(np.sum(data.residuals(sdp_rate(result.x)) ** 2))
-            candidate = (cost, np.r_[result.x, 0.0], None)
-        if best is None or candidate[0] < best[0]:
-            best = candidate
-    cost, x, jacobian = best
-    if jacobian is None:
+        evaluations += result.nfev
+        if best is None or cost < best[0]:
+            best = (cost, result)
+    cost, result = best
+    if polish is not None:
+        data = polish
+        result = rr_fit(data, result.x) if method == 'rr' else oe_fit(data, result.x, 2000)
+        evaluations += result.nfev
+    if method == 'rr':
+        x = _to_natural(result.x, rest)
+        cost = float(result.cost)
+        jacobian = np.asarray(result.jac) / _natural_derivative(result.x)
+    else:
+        x = np.r_[result.x, 0.0]
+        cost = 0.5 * float(np.sum(data.residuals(sdp_rate(x)) ** 2))
         jacobian = _numeric_jacobian(lambda p: data.residuals(sdp_rate(p)), x[:6])
-    errors = _covariance_errors(np.asarray(jacobian), cost, data.samples)
+    errors = _covariance_errors(jacobian, cost, data.samples)
     names = SDP_NAMES + (('beta',) if method == 'rr' else ())
     static_map = SdpMap(dead_zone=(float(x[2]), float(x[5])),
                         saturation_velocity=(float(x[0]), float(x[3])),
                         curvature=(float(x[1]), float(x[4])))
-    return MapFit(static_map, method, float(x[6]), float(cost),
+    return MapFit(static_map, method, float(x[6]), cost,
                   dict(zip(names, errors.tolist())), evaluations, len(factors))
 
 
