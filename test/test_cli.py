@@ -112,12 +112,16 @@ def test_demo_writes_a_report(tmp_path, capsys):
     summary = json.loads(out)['summary']
     report = tmp_path / 'report'
     assert (report / 'summary.md').read_text().startswith('# hydro_sdp demo')
-    for name in ('steps.png', 'random.png', 'velocity_map.png', 'idz.png', 'closed_loop.png',
-                 'two_joints.png'):
+    for name in ('steps.png', 'step_responses.png', 'gains.png', 'velocity_map.png',
+                 'evaluation.png', 'idz.png', 'closed_loop.png', 'two_joints.png'):
         png = report / 'figures' / name
         assert png.read_bytes()[:8] == b'\x89PNG\r\n\x1a\n'
     assert read_record(summary['bags']['steps']).joint == 'j2'
     assert summary['control']['f'][0] == pytest.approx(0.1261, abs=1e-4)
+    identified = summary['identification']
+    np.testing.assert_allclose(identified['alpha'], identified['true_alpha'], rtol=0.01)
+    mae = identified['mae']
+    assert mae['model'] < mae['sdp_dz'] < mae['linear']
     assert all(step['settling_time'] < 5.0 for step in summary['control']['steps'])
     assert (report / 'j2_controller.yaml').is_file()
 
