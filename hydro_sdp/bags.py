@@ -187,6 +187,30 @@ def _collect(path: Path, keep: Callable[[str], bool],
     return collected, sources
 
 
+def raw_messages(path: str | os.PathLike[str]) -> list[tuple[str, str, int, bytes]]:
+    """
+    Every message of a bag as ``(topic, msgtype, timestamp_ns, raw CDR bytes)``.
+
+    Parameters
+    ----------
+    path : str or PathLike
+        The bag.
+
+    Returns
+    -------
+    list of tuple
+        In the order the storage returns them (by time).
+
+    """
+    collected, _ = _collect(Path(path), lambda msgtype: True)
+    out = []
+    for topic, raws in collected.raws.items():
+        msgtype = collected.topics[topic][0]
+        out.extend((topic, msgtype, stamp, bytes(raw))
+                   for stamp, raw in zip(collected.stamps[topic], raws))
+    return sorted(out, key=lambda message: message[2])
+
+
 def inspect_bag(path: str | os.PathLike[str]) -> BagInfo:
     """
     List a bag's topics and count its messages.

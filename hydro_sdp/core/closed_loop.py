@@ -124,9 +124,10 @@ def run_closed_loop(joints: Sequence[LoopJoint], *, dt: float, control_period: f
         raise ConfigurationError('every joint needs a set-point for every sample')
     if not noise_std >= 0.0 or not math.isfinite(noise_std):
         raise ConfigurationError(f'noise_std must be >= 0, got {noise_std}')
-    rng = np.random.default_rng(seed)
-    noise = rng.normal(0.0, noise_std, (len(joints), samples)) if noise_std > 0 else \
-        np.zeros((len(joints), samples))
+    # One stream per joint, seeded [seed, index]: the plant node draws the same numbers
+    # one sample at a time.
+    noise = np.array([np.random.default_rng([seed, index]).normal(0.0, noise_std, samples)
+                      if noise_std > 0 else np.zeros(samples) for index in range(len(joints))])
     traces = []
     for index, joint in enumerate(joints):
         simulator = JointSimulator(joint.model, dt, joint.y0, v_before=joint.controller.last_v)

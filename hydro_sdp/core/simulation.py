@@ -20,6 +20,7 @@ ROS nodes, and ``tau = delay / dt`` (15 at 0.01 s, 3 at 0.05 s for J2).
 from __future__ import annotations
 
 from collections import deque
+from dataclasses import replace
 import math
 
 from hydro_sdp.core.arrays import FloatArray
@@ -289,6 +290,20 @@ class JointSimulator:
         self._actuator = min(max(float(y0), self._low), self._high)
         self._offset = 0.0
         self.samples = 0
+
+    def set_static_map(self, static_map) -> None:
+        """
+        Swap the command-to-speed map from now on (valve wear or replacement).
+
+        Commands already in the delay line keep the speeds they were given.
+
+        Parameters
+        ----------
+        static_map : StaticMap
+            The new map.
+
+        """
+        self.model = replace(self.model, static_map=static_map)
 
     @property
     def angle(self) -> float:

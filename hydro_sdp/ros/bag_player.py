@@ -1,0 +1,126 @@
+"""
+Replay a bag's JointState and Float64 topics (``ros2 run hydro_sdp bag_player``).
+
+Messages go out in recorded order at the recorded timing times ``rate``; with
+``publish_clock`` the bag time is published on ``/clock`` first, so nodes with
+``use_sim_time`` (an identifier fed from a recording) follow the bag's time.
+Tests can drive the player without a wall clock through :meth:`play_until`.
+
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+import time
+from typing import Any
+
+from hydro_sdp.bags import EmptyBagError, FLOAT64, JOINT_STATE, raw_messages
+from hydro_sdp.core.errors import ConfigurationError
+from hydro_sdp.ros.params import declare
+from hydro_sdp.ros.runner import run_node
+from rclpy.node import Node
+from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import JointState
+from std_msgs.msg import Float64
+
+TYPES = {JOINT_STATE: JointState, FLOAT64: Float64}
+
+
+class BagPlayerNode(Node):
+    """
+    Publish a bag's JointState and Float64 topics.
+
+    Parameters
+    ----------
+    node_name : str
+        ROS node name.
+    **kwargs : Any
+        Forwarded to :class:`rclpy.node.Node`.
+
+    """
+
+    def __init__(self, *, node_name: str = 'bag_player', **kwargs: Any) -> None:
+        super().__init__(node_name, **kwargs)
+        bag = declare(self, 'bag', '', 'bag to play (required)', read_only=True)
+        self.rate = declare(self, 'rate', 1.0, 'playback speed relative to the recording',
+                            low=1e-3, high=1e3, read_only=True)
+        self.publish_clock = declare(self, 'publish_clock', False,
+                                     'publish the bag time on /clock', read_only=True)
+        autostart = declare(self, 'autostart', True,
+                            'start playing on a wall-clock timer at once', read_only=True)
+        if not bag:
+            raise ConfigurationError("parameter 'bag' is required")
+        messages = [m for m in raw_messages(Path(bag)) if m[1] in TYPES]
+        if not messages:
+            raise EmptyBagError(f'{bag}: no JointState or Float64 messages to play')
+        messages.sort(key=lambda m: m[2])
+        self._messages = messages
+        self._topic_pubs = {}
+        for topic, msgtype, _, _ in messages:
+            if topic not in self._topic_pubs:
+                # Bag topics are absolute; drop the slash so a namespace still applies.
+                self._topic_pubs[topic] = self.create_publisher(TYPES[msgtype],
+                                                                topic.lstrip('/'), 100)
+        self._clock_pub = self.create_publisher(Clock, '/clock', 10) if self.publish_clock \
+            else None
+        self.start_ns = messages[0][2]
+        self.published = 0
+        self._started: float | None = None
+        self._timer = self.create_timer(0.001, self._on_timer) if autostart else None
+
+    @property
+    def finished(self) -> bool:
+        """Whether every message has been published."""
+        return self.published >= len(self._messages)
+
+    def play_next(self) -> str:
+        """Publish the next message alone and return its type (for step-by-step tests)."""
+        topic, message_type, stamp, raw = self._messages[self.published]
+        if self._clock_pub is not None:
+            clock = Clock()
+            clock.clock.sec, clock.clock.nanosec = divmod(stamp, 1_000_000_000)
+            self._clock_pub.publish(clock)
+        self._topic_pubs[topic].publish(raw)
+        self.published += 1
+        return message_type
+
+    def play_until(self, bag_time_ns: int) -> int:
+        """
+        Publish every message stamped at or before ``bag_time_ns``.
+
+        Parameters
+        ----------
+        bag_time_ns : int
+            Bag time, ns.
+
+        Returns
+        -------
+        int
+            Messages published by this call.
+
+        """
+        count = 0
+        while not self.finished and self._messages[self.published][2] <= bag_time_ns:
+            topic, _, stamp, raw = self._messages[self.published]
+            if self._clock_pub is not None:
+                clock = Clock()
+                clock.clock.sec, clock.clock.nanosec = divmod(stamp, 1_000_000_000)
+                self._clock_pub.publish(clock)
+            self._topic_pubs[topic].publish(raw)
+            self.published += 1
+            count += 1
+        return count
+
+    def _on_timer(self) -> None:
+        now = time.monotonic()
+        if self._started is None:
+            self._started = now
+        self.play_until(self.start_ns + int((now - self._started) * self.rate * 1e9))
+        if self.finished:
+            self._timer.cancel()
+            self.get_logger().info(f'played {self.published} messages')
+
+
+def main(args: list[str] | None = None) -> None:
+    """Run :class:`BagPlayerNode` until shutdown (console script ``bag_player``)."""
+    run_node(BagPlayerNode, args)

@@ -1,0 +1,222 @@
+"""
+A launch-free harness to run hydro_sdp nodes in-process, deterministically.
+
+Nodes share one private :class:`rclpy.context.Context` and one
+:class:`~rclpy.executors.SingleThreadedExecutor`, so every callback runs in the
+caller's thread. With simulated time the harness sets every node's clock and
+spins until a barrier holds, one plant period at a time; the trajectory is then
+the same on every run and equal to the offline simulation (conventions.md 4).
+
+Usable in any test::
+
+    with RosHarness() as ros:
+        plant = ros.add(PlantNode, parameters={'noise_std': 0.0})
+        controller = ros.add(PipControllerNode)
+        loop = Lockstep(ros, plant, controller=controller)
+        loop.run(500)
+
+"""
+
+from __future__ import annotations
+
+import os
+import random
+import time
+from typing import Any, Callable, Iterable
+
+import rclpy
+from rclpy.context import Context
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+from rclpy.time import Time
+
+# Nodes of one context still match with discovery off; nothing else on the host is seen.
+os.environ.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'OFF')
+
+
+class RosHarness:
+    """
+    A private ROS context with an executor and the nodes added to it.
+
+    Parameters
+    ----------
+    domain_id : int or None
+        DDS domain; default: a random one, so parallel test runs do not meet.
+
+    """
+
+    def __init__(self, domain_id: int | None = None) -> None:
+        self.context = Context()
+        rclpy.init(context=self.context,
+                   domain_id=random.randint(1, 200) if domain_id is None else domain_id)
+        self.executor = SingleThreadedExecutor(context=self.context)
+        self.nodes: list[Node] = []
+        self.time_ns = 0
+        #: Longest wait of one spin; short, since messages within a process arrive fast.
+        self.spin_timeout = 0.001
+
+    def add(self, node_cls: type[Node], *, parameters: dict[str, Any] | None = None,
+            sim_time: bool = True, cli_args: list[str] | None = None,
+            **kwargs: Any) -> Any:
+        """
+        Create a node in the harness and add it to the executor.
+
+        Parameters
+        ----------
+        node_cls : type
+            A node class that forwards ``**kwargs`` to :class:`rclpy.node.Node`.
+        parameters : dict or None
+            Parameter overrides by name.
+        sim_time : bool
+            Whether the node's clock is set by the harness.
+        cli_args : list of str or None
+            ROS command-line arguments (``--ros-args --params-file ...``).
+        **kwargs : Any
+            More constructor arguments (``node_name``...).
+
+        Returns
+        -------
+        Node
+            The node.
+
+        """
+        overrides = [Parameter(name, value=value) for name, value in (parameters or {}).items()]
+        if sim_time:
+            overrides.append(Parameter('use_sim_time', value=True))
+        node = node_cls(context=self.context, parameter_overrides=overrides,
+                        cli_args=cli_args, **kwargs)
+        if sim_time:
+            node.get_clock().set_ros_time_override(Time(nanoseconds=self.time_ns))
+        self.executor.add_node(node)
+        self.nodes.append(node)
+        return node
+
+    def helper(self, name: str = 'test_helper') -> Node:
+        """Return a plain node (simulated time) for a test's own publishers and subscribers."""
+        return self.add(Node, node_name=name)
+
+    def set_time(self, nanoseconds: int) -> None:
+        """Set the clock of every simulated-time node (timers that are due fire on spin)."""
+        self.time_ns = nanoseconds
+        for node in self.nodes:
+            if node.get_parameter('use_sim_time').value:
+                node.get_clock().set_ros_time_override(Time(nanoseconds=nanoseconds))
+
+    def spin_until(self, predicate: Callable[[], bool], timeout: float = 5.0) -> bool:
+        """
+        Spin until ``predicate()`` holds or ``timeout`` seconds of wall time pass.
+
+        Parameters
+        ----------
+        predicate : callable
+            Condition to wait for.
+        timeout : float
+            Wall-clock limit, s.
+
+        Returns
+        -------
+        bool
+            Whether the condition holds.
+
+        """
+        deadline = time.monotonic() + timeout
+        while not predicate():
+            if time.monotonic() > deadline:
+                return False
+            self.executor.spin_once(timeout_sec=self.spin_timeout)
+        return True
+
+    def spin_for(self, seconds: float) -> None:
+        """Spin for ``seconds`` of wall time."""
+        deadline = time.monotonic() + seconds
+        while time.monotonic() < deadline:
+            self.executor.spin_once(timeout_sec=0.005)
+
+    def close(self) -> None:
+        """Destroy the nodes and shut the context down."""
+        self.executor.shutdown()
+        for node in reversed(self.nodes):
+            node.destroy_node()
+        self.nodes.clear()
+        rclpy.try_shutdown(context=self.context)
+
+    def __enter__(self) -> RosHarness:
+        """Return the harness."""
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        """Close the harness."""
+        self.close()
+
+
+class Lockstep:
+    """
+    Advance a plant node one period at a time and wait until the graph has settled.
+
+    After each step: the plant has ticked once more, every observer has taken the
+    new sample, and every command the controllers sent has reached the plant and
+    every observer. Timers fire before subscriptions in one wait, so waiting for
+    consumption (not just publication) keeps the loop exact.
+
+    Parameters
+    ----------
+    harness : RosHarness
+        The harness.
+    plant : PlantNode
+        The plant node (its ``sample_period`` is the step).
+    controllers : iterable of PipControllerNode
+        Controllers in the loop.
+    observers : iterable of Node
+        Nodes with ``samples`` (and ``commands_received``) counters, e.g. identifiers.
+    timeout : float
+        Wall-clock limit of one step, s.
+
+    """
+
+    def __init__(self, harness: RosHarness, plant: Any, *, controllers: Iterable[Any] = (),
+                 observers: Iterable[Any] = (), timeout: float = 5.0) -> None:
+        self.harness = harness
+        self.plant = plant
+        self.controllers = list(controllers)
+        self.observers = list(observers)
+        self.period_ns = int(round(plant.sample_period * 1e9))
+        self.timeout = timeout
+        self.steps = 0
+        listeners = len(self.controllers) + len(self.observers)
+        matched = harness.spin_until(lambda: plant.count_subscribers('joint_states') >= listeners
+                                     and all(c.count_subscribers(f'{c.joint}/valve_command') >= 1
+                                             for c in self.controllers), timeout)
+        if not matched:
+            raise TimeoutError('the nodes did not discover each other')
+
+    def _settled(self) -> bool:
+        ticks = self.plant.ticks
+        if ticks != self.steps:
+            return False
+        outputs = sum(controller.outputs for controller in self.controllers)
+        if any(controller.samples != ticks for controller in self.controllers):
+            return False
+        if self.controllers and self.plant.commands_received < outputs:
+            return False
+        for observer in self.observers:
+            if observer.samples != ticks:
+                return False
+            if self.controllers and observer.commands_received < outputs:
+                return False
+        return True
+
+    def step(self) -> None:
+        """Advance one plant period and wait for the graph to settle."""
+        self.steps += 1
+        self.harness.set_time(self.steps * self.period_ns)
+        if not self.harness.spin_until(self._settled, self.timeout):
+            raise TimeoutError(f'lockstep step {self.steps} did not settle (plant ticks '
+                               f'{self.plant.ticks})')
+
+    def run(self, steps: int, on_step: Callable[[int], None] | None = None) -> None:
+        """Advance ``steps`` periods, calling ``on_step(k)`` after each."""
+        for _ in range(steps):
+            self.step()
+            if on_step is not None:
+                on_step(self.steps)

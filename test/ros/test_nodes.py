@@ -1,0 +1,319 @@
+"""The ROS nodes in-process: lockstep equals offline, safety, parameters, recalibration, bags."""
+
+import math
+import os
+from pathlib import Path
+import shutil
+import subprocess
+import sys
+import time
+
+from conftest import REPO
+import numpy as np
+import pytest
+
+rclpy = pytest.importorskip('rclpy')
+
+from hydro_sdp.bags import read_bag  # noqa: E402
+from hydro_sdp.core.closed_loop import LoopJoint, run_closed_loop, valve_reversals  # noqa: E402
+from hydro_sdp.core.controller_spec import design_from_model  # noqa: E402
+from hydro_sdp.core.identify import identify  # noqa: E402
+from hydro_sdp.core.programs import random_program  # noqa: E402
+from hydro_sdp.files import default_model_path, load_model  # noqa: E402
+from hydro_sdp.ros.bag_player import BagPlayerNode  # noqa: E402
+from hydro_sdp.ros.bag_recorder import BagRecorderNode  # noqa: E402
+from hydro_sdp.ros.controller_node import PipControllerNode  # noqa: E402
+from hydro_sdp.ros.identifier_node import IdentifierNode  # noqa: E402
+from hydro_sdp.ros.plant_node import PlantNode  # noqa: E402
+from hydro_sdp.ros.testing import Lockstep, RosHarness  # noqa: E402
+from rclpy.parameter import Parameter  # noqa: E402
+from sensor_msgs.msg import JointState  # noqa: E402
+from std_msgs.msg import Float64  # noqa: E402
+
+pytestmark = pytest.mark.ros
+
+
+@pytest.fixture
+def ros():
+    """Return a harness with its own context, closed after the test."""
+    with RosHarness() as harness:
+        yield harness
+
+
+def _collector(ros, topic, msgtype=JointState):
+    helper = ros.helper(f'collect_{topic.replace("/", "_")}')
+    received = []
+    helper.create_subscription(msgtype, topic, received.append, 100)
+    return helper, received
+
+
+def _setpoint_publisher(ros, controller):
+    helper = ros.helper('setpoints')
+    publisher = helper.create_publisher(Float64, 'j2/setpoint', 10)
+    assert ros.spin_until(lambda: publisher.get_subscription_count() >= 1)
+
+    def send(degrees):
+        count = controller.setpoints_received
+        publisher.publish(Float64(data=math.radians(degrees)))
+        assert ros.spin_until(lambda: controller.setpoints_received > count)
+    return send
+
+
+def test_lockstep_loop_reproduces_the_offline_closed_loop(ros):
+    steps = 600
+    plant = ros.add(PlantNode, parameters={'noise_std': 0.02, 'seed': 7})
+    controller = ros.add(PipControllerNode)
+    identifier = ros.add(IdentifierNode)
+    _, states = _collector(ros, 'joint_states')
+    loop = Lockstep(ros, plant, controllers=[controller], observers=[identifier])
+    send = _setpoint_publisher(ros, controller)
+    send(20.0)
+    loop.run(steps)
+    assert ros.spin_until(lambda: len(states) >= steps)
+    measured = np.degrees([state.position[0] for state in states[:steps]])
+    model = load_model(default_model_path())
+    trace = run_closed_loop([LoopJoint(model, design_from_model(model).controller(),
+                                       np.full(steps, 20.0), 0.0)],
+                            dt=0.01, control_period=0.05, noise_std=0.02, seed=7)[0]
+    np.testing.assert_allclose(measured, trace.measured, atol=1e-9, rtol=0)
+    assert controller.outputs == steps // 5 and identifier.samples == steps
+
+
+def test_shipped_parameter_file_loads_into_every_node(ros):
+    params = str(REPO / 'config' / 'hydro_sdp.yaml')
+    plant = ros.add(PlantNode, cli_args=['--ros-args', '--params-file', params])
+    controller = ros.add(PipControllerNode, cli_args=['--ros-args', '--params-file', params])
+    identifier = ros.add(IdentifierNode, cli_args=['--ros-args', '--params-file', params])
+    assert plant.get_parameter('noise_std').value == 0.02
+    assert plant.get_parameter('seed').value == 1
+    assert controller.get_parameter('feedback_timeout').value == 0.5
+    assert controller.joint == 'j2'
+    assert identifier.get_parameter('publish_period').value == 0.1
+    assert identifier.get_parameter('auto_recalibrate').value is False
+
+
+def _state(stamp_ns, names=('j2',), positions=(0.0,)):
+    message = JointState()
+    message.header.stamp.sec, message.header.stamp.nanosec = divmod(stamp_ns, 10**9)
+    message.name = list(names)
+    message.position = [float(p) for p in positions]
+    return message
+
+
+@pytest.mark.parametrize(('message', 'reason'), [
+    (_state(10**8, positions=(math.nan,)), 'not finite'),
+    (_state(10**8, positions=(math.inf,)), 'not finite'),
+    (_state(10**8, names=('elbow',)), "joint 'j2' is not in JointState"),
+    (_state(10**8, names=('j2', 'elbow'), positions=(0.1,)), '2 names but 1 positions'),
+    (_state(10**8, names=(), positions=()), "joint 'j2' is not in JointState"),
+    (_state(10**6), 'is not after the last one'),
+])
+def test_controller_refuses_bad_feedback_and_closes_the_valve(ros, message, reason):
+    controller = ros.add(PipControllerNode)
+    _, commands = _collector(ros, 'j2/valve_command', Float64)
+    send = _setpoint_publisher(ros, controller)
+    send(20.0)
+    controller._on_state(_state(5 * 10**7, positions=(0.0,)))
+    assert controller.last_command > 1.0          # driving towards 20 deg
+    controller._on_state(message)
+    assert controller.refused == 1
+    assert controller.last_command == 0.0         # valve closed
+    assert ros.spin_until(lambda: len(commands) == 2 and commands[-1].data == 0.0)
+    # The next valid sample resumes without a bump: from rest, not from the old command.
+    controller._on_state(_state(2 * 10**8, positions=(0.0,)))
+    assert 0.0 < controller.controller.last_u < 0.25
+
+
+def test_setpoints_beyond_the_end_stops_are_clamped_and_nan_is_refused(ros):
+    controller = ros.add(PipControllerNode)
+    send = _setpoint_publisher(ros, controller)
+    send(90.0)
+    assert controller._setpoint == pytest.approx(63.6)
+    controller._on_setpoint(Float64(data=math.nan))
+    assert controller._setpoint == pytest.approx(63.6)
+
+
+def test_watchdog_closes_the_valve_and_control_resumes_without_a_bump(ros):
+    steps = 60          # 0.6 s into a 30 deg step: the valve is wide open
+    plant = ros.add(PlantNode)
+    controller = ros.add(PipControllerNode, parameters={'feedback_timeout': 0.2})
+    loop = Lockstep(ros, plant, controllers=[controller])
+    send = _setpoint_publisher(ros, controller)
+    send(30.0)
+    loop.run(steps)
+    assert controller.last_command > 1.0
+    # The plant falls silent: time goes on, no feedback arrives.
+    ros.executor.remove_node(plant)
+    for k in range(1, 41):
+        ros.set_time((steps + k) * 10**7)
+        ros.spin_for(0.002)
+    assert controller._blind and controller.last_command == 0.0
+    ros.executor.add_node(plant)
+    before = plant.commands_received
+    loop.steps = plant.ticks
+    loop.run(5)
+    assert not controller._blind
+    assert plant.commands_received > before
+    assert abs(controller.controller.last_u) < 0.3    # restarted from rest, no jump
+
+
+def test_idz_parameters_change_at_run_time_and_are_validated(ros):
+    controller = ros.add(PipControllerNode)
+    result = controller.set_parameters([Parameter('idz.dead_zone', value=[-1.2, 1.1])])
+    assert result[0].successful
+    assert controller.controller.settings.idz.dead_zone == (-1.2, 1.1)
+    result = controller.set_parameters([Parameter('idz.dead_zone', value=[1.2, -1.1])])
+    assert not result[0].successful and 'reversed' in result[0].reason
+    result = controller.set_parameters([Parameter('idz.slopes', value=[0.0, 1.0])])
+    assert not result[0].successful and 'slopes' in result[0].reason
+    result = controller.set_parameters([Parameter('idz.beta', value=500.0)])
+    assert not result[0].successful
+    result = controller.set_parameters([Parameter('gains.k_i', value=5.0)])
+    assert not result[0].successful and 'unstable' in result[0].reason
+    assert controller.controller.settings.idz.dead_zone == (-1.2, 1.1)
+
+
+HOLDS = 20
+
+
+def _recalibration_run(ros, with_identifier):
+    """Track set-point steps (4 s each) while the plant's dead-zone narrows by 0.3 V at 20 s."""
+    plant = ros.add(PlantNode, parameters={'noise_std': 0.01, 'seed': 2})
+    controller = ros.add(PipControllerNode)
+    observers = []
+    if with_identifier:
+        observers.append(ros.add(IdentifierNode, parameters={'auto_recalibrate': True,
+                                                             'noise_std': 0.01}))
+    loop = Lockstep(ros, plant, controllers=[controller], observers=observers)
+    send = _setpoint_publisher(ros, controller)
+    levels = [20.0, 35.0, 15.0, 30.0]
+    errors, commands = [], []
+    for hold in range(HOLDS):
+        if hold == 5:
+            assert plant.set_parameters([Parameter('dead_zone_shift',
+                                                   value=[0.3, -0.3])])[0].successful
+        target = levels[hold % len(levels)]
+        send(target)
+        for _ in range(400):                                   # 4 s per set-point
+            loop.step()
+            errors.append(plant.last_angles[0] - target)
+            commands.append(controller.last_command)
+    # Settled by the end: the last half second of each of the last four holds.
+    tail = np.abs(np.array(errors).reshape(HOLDS, 400)[-4:, -50:])
+    return tail, valve_reversals(np.array(commands[-1600:])), observers
+
+
+def test_recalibration_after_the_dead_zone_moves(ros):
+    tail, reversals, _ = _recalibration_run(ros, with_identifier=False)
+    # The IDZ now over-compensates: the loop hunts in a limit cycle.
+    assert tail.max() > 0.5 and reversals > 20
+
+
+def test_auto_recalibration_restores_tracking(ros):
+    tail, reversals, (identifier,) = _recalibration_run(ros, with_identifier=True)
+    assert identifier.recalibrations >= 1
+    edges = identifier.reference
+    np.testing.assert_allclose(edges, (-1.3298 + 0.3, 1.3124 - 0.3), atol=0.06)
+    assert tail.max() < 0.5
+
+
+def test_replayed_bag_feeds_the_identifier_as_identify_reads_it(ros, tmp_path):
+    steps = 12000
+    shift = [0.2, -0.15]
+    plant = ros.add(PlantNode, parameters={'noise_std': 0.03, 'seed': 3,
+                                           'initial_angles': [25.0]})
+    assert plant.set_parameters([Parameter('dead_zone_shift', value=shift)])[0].successful
+    recorder = ros.add(BagRecorderNode, parameters={'output': str(tmp_path / 'bag')})
+    helper = ros.helper('commands')
+    publisher = helper.create_publisher(Float64, 'j2/valve_command', 10)
+    assert ros.spin_until(lambda: publisher.get_subscription_count() >= 2)
+    model = load_model(default_model_path())
+    program = random_program(model, 0.01, steps * 0.01, seed=4, y0=25.0)
+    loop = Lockstep(ros, plant, observers=[])
+    for k in range(steps):
+        publisher.publish(Float64(data=float(program[k])))
+        assert ros.spin_until(lambda: plant.commands_received == k + 1)
+        loop.step()
+    assert ros.spin_until(lambda: recorder.messages >= 2 * steps)
+    recorder.close()
+    offline = identify([read_bag(tmp_path / 'bag').record()], kind='sdp')
+    player = ros.add(BagPlayerNode, parameters={'bag': str(tmp_path / 'bag'),
+                                                'autostart': False})
+    identifier = ros.add(IdentifierNode, parameters={'noise_std': 0.03})
+    assert ros.spin_until(lambda: player.count_subscribers('joint_states') >= 1)
+    while not player.finished:
+        # One message at a time, consumed before the next: the identifier pairs each angle
+        # with the command received before it, as the bag reader does.
+        before = (identifier.samples, identifier.commands_received)
+        player.play_next()
+        assert ros.spin_until(lambda: (identifier.samples, identifier.commands_received) !=
+                              before)
+    estimator = identifier.estimator
+    errors = estimator.standard_errors
+    theta = estimator.theta
+    truth = offline.model.alpha(0.01)
+    for index in (0, 2, 3, 5):       # saturation speeds and dead-zone edges
+        assert abs(theta[index] - truth[index]) < 2.0 * errors[index] + 1e-9, index
+    np.testing.assert_allclose(offline.model.dead_zone, (-1.3298 + 0.2, 1.3124 - 0.15),
+                               atol=0.02)
+
+
+def test_recorder_and_player_refuse_missing_settings(ros):
+    from hydro_sdp.core.errors import ConfigurationError
+    with pytest.raises(ConfigurationError, match="'output'"):
+        ros.add(BagRecorderNode)
+    with pytest.raises(ConfigurationError, match="'bag'"):
+        ros.add(BagPlayerNode)
+
+
+def _script(name):
+    return shutil.which(name, path=str(Path(sys.executable).parent))
+
+
+@pytest.mark.slow
+def test_nodes_as_separate_processes_settle_a_step(tmp_path):
+    if _script('plant_node') is None:
+        pytest.skip('the console scripts are not installed in this environment')
+    domain = str(100 + os.getpid() % 100)
+    environment = dict(os.environ, ROS_DOMAIN_ID=domain,
+                       ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST')
+    processes = [subprocess.Popen([_script(name), '--ros-args'] + arguments,
+                                  env=environment, stdout=subprocess.DEVNULL,
+                                  stderr=subprocess.PIPE, text=True)
+                 for name, arguments in (('plant_node', ['-p', 'noise_std:=0.01']),
+                                         ('controller_node', []),
+                                         ('identifier_node', []))]
+    from rclpy.context import Context
+    from rclpy.executors import SingleThreadedExecutor
+    from rclpy.node import Node
+    context = Context()
+    rclpy.init(context=context, domain_id=int(domain))
+    node = Node('step_test', context=context)
+    executor = SingleThreadedExecutor(context=context)
+    executor.add_node(node)
+    angles = []
+    node.create_subscription(JointState, 'joint_states',
+                             lambda m: angles.append((time.monotonic(),
+                                                      math.degrees(m.position[0]))), 100)
+    publisher = node.create_publisher(Float64, 'j2/setpoint', 10)
+    try:
+        deadline = time.monotonic() + 30.0
+        while (publisher.get_subscription_count() < 1 or len(angles) < 10) and \
+                time.monotonic() < deadline:
+            executor.spin_once(timeout_sec=0.05)
+        assert angles, 'no joint_states from the plant process'
+        start = time.monotonic()
+        publisher.publish(Float64(data=math.radians(20.0)))
+        while time.monotonic() < start + 8.0:
+            executor.spin_once(timeout_sec=0.05)
+        after = [(t - start, a) for t, a in angles if t >= start]
+        settled = [a for t, a in after if t >= 6.0]
+        assert settled and max(abs(a - 20.0) for a in settled) < 0.5
+    finally:
+        for process in processes:
+            process.terminate()
+        for process in processes:
+            process.wait(timeout=10)
+        executor.shutdown()
+        node.destroy_node()
+        rclpy.try_shutdown(context=context)
