@@ -9,26 +9,25 @@ import sys
 import time
 
 from conftest import REPO
+from hydro_sdp.bags import read_bag
+from hydro_sdp.core.closed_loop import LoopJoint, run_closed_loop, valve_reversals
+from hydro_sdp.core.controller_spec import design_from_model
+from hydro_sdp.core.errors import ConfigurationError
+from hydro_sdp.core.identify import identify
+from hydro_sdp.core.programs import random_program
+from hydro_sdp.files import default_model_path, load_model
+from hydro_sdp.ros.bag_player import BagPlayerNode
+from hydro_sdp.ros.bag_recorder import BagRecorderNode
+from hydro_sdp.ros.controller_node import PipControllerNode
+from hydro_sdp.ros.identifier_node import IdentifierNode
+from hydro_sdp.ros.plant_node import PlantNode
+from hydro_sdp.ros.testing import Lockstep, RosHarness
 import numpy as np
 import pytest
-
-rclpy = pytest.importorskip('rclpy')
-
-from hydro_sdp.bags import read_bag  # noqa: E402
-from hydro_sdp.core.closed_loop import LoopJoint, run_closed_loop, valve_reversals  # noqa: E402
-from hydro_sdp.core.controller_spec import design_from_model  # noqa: E402
-from hydro_sdp.core.identify import identify  # noqa: E402
-from hydro_sdp.core.programs import random_program  # noqa: E402
-from hydro_sdp.files import default_model_path, load_model  # noqa: E402
-from hydro_sdp.ros.bag_player import BagPlayerNode  # noqa: E402
-from hydro_sdp.ros.bag_recorder import BagRecorderNode  # noqa: E402
-from hydro_sdp.ros.controller_node import PipControllerNode  # noqa: E402
-from hydro_sdp.ros.identifier_node import IdentifierNode  # noqa: E402
-from hydro_sdp.ros.plant_node import PlantNode  # noqa: E402
-from hydro_sdp.ros.testing import Lockstep, RosHarness  # noqa: E402
-from rclpy.parameter import Parameter  # noqa: E402
-from sensor_msgs.msg import JointState  # noqa: E402
-from std_msgs.msg import Float64  # noqa: E402
+import rclpy
+from rclpy.parameter import Parameter
+from sensor_msgs.msg import JointState
+from std_msgs.msg import Float64
 
 pytestmark = pytest.mark.ros
 
@@ -259,7 +258,6 @@ def test_replayed_bag_feeds_the_identifier_as_identify_reads_it(ros, tmp_path):
 
 
 def test_recorder_and_player_refuse_missing_settings(ros):
-    from hydro_sdp.core.errors import ConfigurationError
     with pytest.raises(ConfigurationError, match="'output'"):
         ros.add(BagRecorderNode)
     with pytest.raises(ConfigurationError, match="'bag'"):
