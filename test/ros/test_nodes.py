@@ -269,12 +269,13 @@ def _script(name):
 
 
 @pytest.mark.slow
-def test_nodes_as_separate_processes_settle_a_step(tmp_path):
+def test_nodes_as_separate_processes_settle_a_step(tmp_path, monkeypatch):
     if _script('plant_node') is None:
         pytest.skip('the console scripts are not installed in this environment')
     domain = str(100 + os.getpid() % 100)
-    environment = dict(os.environ, ROS_DOMAIN_ID=domain,
-                       ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST')
+    # The in-process harness turns discovery off; processes must find each other on the host.
+    monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
+    environment = dict(os.environ, ROS_DOMAIN_ID=domain)
     processes = [subprocess.Popen([_script(name), '--ros-args'] + arguments,
                                   env=environment, stdout=subprocess.DEVNULL,
                                   stderr=subprocess.PIPE, text=True)
