@@ -30,7 +30,7 @@ from hydro_sdp.core.simulation import simulate
 from hydro_sdp.files import default_model_path, load_model
 import numpy as np
 
-ECHO = '''
+ECHO = """
 import rclpy
 from rclpy.node import Node
 from sensor_msgs.msg import JointState
@@ -44,7 +44,7 @@ try:
     rclpy.spin(node)
 except KeyboardInterrupt:
     pass
-'''
+"""
 
 
 def lockstep_speed(steps: int) -> float:

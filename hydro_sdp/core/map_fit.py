@@ -294,12 +294,15 @@ def _to_free(x: FloatArray, rest: float, scale: float) -> FloatArray:
 
 def _to_natural(p: FloatArray, rest: float) -> FloatArray:
     """Invert :func:`_to_free`: signs, ordering ``a3 <= rest <= a6`` and ``0 < beta < 1`` hold."""
+    # A wild Levenberg-Marquardt step must not overflow; such points just cost a lot.
+    p = np.clip(p, -50.0, 50.0)
     return np.array([-math.exp(p[0]), math.exp(p[1]), rest - math.exp(p[2]), math.exp(p[3]),
                      math.exp(p[4]), rest + math.exp(p[5]), 1.0 / (1.0 + math.exp(-p[6]))])
 
 
 def _natural_derivative(p: FloatArray) -> FloatArray:
     """Return the derivative of each natural parameter with respect to its free value."""
+    p = np.clip(p, -50.0, 50.0)
     beta = 1.0 / (1.0 + math.exp(-p[6]))
     return np.array([-math.exp(p[0]), math.exp(p[1]), -math.exp(p[2]), math.exp(p[3]),
                      math.exp(p[4]), math.exp(p[5]), beta * (1.0 - beta)])

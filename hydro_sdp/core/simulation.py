@@ -165,7 +165,8 @@ def _check_commands(v: FloatArray) -> FloatArray:
 
 
 def simulate(model: JointModel, v: FloatArray, dt: float, y0: float,
-             *, v_before: float = 0.0, start: int = 0) -> FloatArray:
+             *, v_before: float = 0.0, start: int = 0,
+             backlash_offset: float = 0.0) -> FloatArray:
     """
     Simulate the joint's angle for a command sequence.
 
@@ -185,6 +186,8 @@ def simulate(model: JointModel, v: FloatArray, dt: float, y0: float,
         Sample the simulation starts from; the commands before it are history
         (a measured record is best simulated from ``start`` = its delay, where
         the delayed commands are all known).
+    backlash_offset : float
+        Sensor angle minus actuator angle at the start, within +-play/2 (with backlash).
 
     Returns
     -------
@@ -197,6 +200,52 @@ def simulate(model: JointModel, v: FloatArray, dt: float, y0: float,
     v = _check_commands(v)
     if v.size == 0:
         return np.empty(0)
+    speed = speed_profile(model, v, dt, v_before=v_before)
+    if not 0 <= start < v.size:
+        raise DataError(f'start must be a sample index below {v.size}, got {start}')
+    low, high = _limits(model)
+    gravity = model.effect(AngleDependentVelocity.name)
+    if isinstance(gravity, AngleDependentVelocity):
+        y = _integrate_angle_dependent(speed[start:], dt, y0, low, high, gravity)
+    else:
+        y = bounded_cumsum(y0, dt * speed[start + 1:], low, high)
+    play = model.effect(Backlash.name)
+    if isinstance(play, Backlash) and play.play > 0.0:
+        half = 0.5 * play.play
+        # The sensor lags the actuator by e in [-b, b]: e_k = clamp(e_{k-1} - dy_k).
+        initial = min(max(backlash_offset, -half), half)
+        offset = bounded_cumsum(initial, -np.diff(y), -half, half)
+        y = np.clip(y - initial + offset, low, high)
+    return np.r_[np.full(start, y[0]), y] if start else y
+
+
+def speed_profile(model: JointModel, v: FloatArray, dt: float, *,
+                  v_before: float = 0.0) -> FloatArray:
+    """
+    Speed ``w_k`` (deg/s) that moves the joint from ``y_{k-1}`` to ``y_k``, before end stops.
+
+    The static map of the delayed command, with separate delays per direction and
+    the valve lag applied; angle-dependent speed and backlash act on top of it.
+
+    Parameters
+    ----------
+    model : JointModel
+        The joint.
+    v : FloatArray
+        Commands.
+    dt : float
+        Sample period, s.
+    v_before : float
+        Command assumed before the first sample.
+
+    Returns
+    -------
+    FloatArray
+        One speed per sample (``w_0`` belongs to no interval).
+
+    """
+    dt = check_sample_period(dt)
+    v = _check_commands(v)
     rates = _rate_of_levels(model, v)
     rate_before = float(model.rate(np.array([v_before]))[0])
     split = model.effect(DirectionDependentDelay.name)
@@ -211,21 +260,54 @@ def simulate(model: JointModel, v: FloatArray, dt: float, y0: float,
     if isinstance(lag, ValveLag):
         p = math.exp(-dt / lag.time_constant)
         speed, _ = lfilter([1.0 - p], [1.0, -p], speed, zi=[p * rate_before])
-    if not 0 <= start < v.size:
-        raise DataError(f'start must be a sample index below {v.size}, got {start}')
-    low, high = _limits(model)
+    return speed
+
+
+def one_step_increments(model: JointModel, v: FloatArray, y: FloatArray, dt: float, *,
+                        start: int = 0, v_before: float = 0.0) -> FloatArray:
+    """
+    Return the increments ``y^_k - y_{k-1}`` the model predicts from each measured angle.
+
+    Unlike a simulation these do not drift: angle-dependent speed and end stops
+    use the measured ``y_{k-1}``, so a discrepancy shows where it happens
+    (methods.md 8, the velocity residual). Backlash follows the model's own
+    play state.
+
+    Parameters
+    ----------
+    model : JointModel
+        The joint.
+    v : FloatArray
+        Commands.
+    y : FloatArray
+        Measured angles, degrees.
+    dt : float
+        Sample period, s.
+    start : int
+        First sample whose delayed commands are known.
+    v_before : float
+        Command assumed before the first sample.
+
+    Returns
+    -------
+    FloatArray
+        Predicted increments for samples ``start + 1 ..``.
+
+    """
+    speed = speed_profile(model, v, dt, v_before=v_before)[start + 1:]
+    previous = np.asarray(y, dtype=np.float64)[start:-1]
+    increment = dt * speed
     gravity = model.effect(AngleDependentVelocity.name)
     if isinstance(gravity, AngleDependentVelocity):
-        y = _integrate_angle_dependent(speed[start:], dt, y0, low, high, gravity)
-    else:
-        y = bounded_cumsum(y0, dt * speed[start + 1:], low, high)
+        increment = increment + dt * gravity.amplitude * np.abs(speed) * np.cos(
+            np.radians(previous + gravity.phase))
     play = model.effect(Backlash.name)
     if isinstance(play, Backlash) and play.play > 0.0:
         half = 0.5 * play.play
-        # The sensor lags the actuator by e in [-b, b]: e_k = clamp(e_{k-1} - dy_k).
-        offset = bounded_cumsum(0.0, -np.diff(y), -half, half)
-        y = np.clip(y + offset, low, high)
-    return np.r_[np.full(start, y[0]), y] if start else y
+        offset = bounded_cumsum(0.0, -increment, -half, half)
+        increment = increment + np.diff(offset)
+    low, high = _limits(model)
+    return np.clip(previous + increment, low, high) - previous
 
 
 def _integrate_angle_dependent(speed: FloatArray, dt: float, y0: float, low: float,
