@@ -387,3 +387,154 @@ def plot_gains(points: Sequence, model: JointModel, dt: float, *, rest: float = 
     figure.suptitle(f'State-dependent gain of joint {model.joint} (West et al. 2018, Fig. 2)',
                     fontsize=11)
     return figure
+
+
+SIGNATURE_FEATURES = {
+    'dead_zone': 'command', 'velocity_saturation': 'command', 'asymmetry': 'command',
+    'time_delay': 'events', 'direction_dependent_delay': 'events', 'valve_lag': 'events',
+    'backlash': 'reversals', 'angle_limits': 'angle', 'angle_dependent_velocity': 'angle',
+}
+
+
+def _binned(x: np.ndarray, values: np.ndarray, bins: int = 30):
+    edges = np.linspace(np.min(x), np.max(x), bins + 1)
+    index = np.clip(np.digitize(x, edges) - 1, 0, bins - 1)
+    counts = np.bincount(index, minlength=bins)
+    sums = np.bincount(index, weights=values, minlength=bins)
+    keep = counts > 5
+    return 0.5 * (edges[1:] + edges[:-1])[keep], (sums / np.maximum(counts, 1))[keep]
+
+
+def _event_average(triggers: np.ndarray, values: np.ndarray, span: int,
+                   signs: np.ndarray | None = None):
+    # Each event's residual is flipped by the sign of its change, so that rising and
+    # falling changes add up instead of cancelling.
+    signs = np.ones(triggers.size) if signs is None else signs
+    rows = [sign * values[k:k + span] for k, sign in zip(triggers, signs)
+            if k + span <= values.size]
+    if not rows:
+        return np.arange(span), np.zeros(span)
+    return np.arange(span), np.mean(rows, axis=0)
+
+
+def plot_signature(effect: str, features: dict, before: np.ndarray, after: np.ndarray,
+                   dt: float) -> Figure:
+    """
+    Draw the residual signature that named an effect, before and after adding it.
+
+    Parameters
+    ----------
+    effect : str
+        Vocabulary word.
+    features : dict
+        ``command`` (delayed command), ``angle`` (degrees) and ``speed`` (model
+        increments) alongside the residuals.
+    before, after : numpy.ndarray
+        Velocity residuals (measured minus predicted increments), degrees.
+    dt : float
+        Sample period, s.
+
+    Returns
+    -------
+    Figure
+        The figure.
+
+    """
+    figure, (ax,) = new_figure(1, height=3.8, width=8.0)
+    kind = SIGNATURE_FEATURES.get(effect, 'command')
+    if kind in ('events', 'reversals'):
+        command = features['command']
+        if kind == 'events':
+            triggers = np.flatnonzero(np.diff(command)) + 1
+            signs = np.sign(np.diff(command)[triggers - 1])
+            label = 'samples after a delayed command change (signed by the change)'
+        else:
+            direction = np.sign(features['speed'])
+            moving = np.flatnonzero(direction != 0)
+            triggers = moving[1:][np.diff(direction[moving]) != 0]
+            signs = direction[triggers]
+            label = 'samples after a reversal of motion (signed by the new direction)'
+        span = int(round(1.0 / dt))
+        for values, colour, name in ((before, MODEL, 'before'), (after, MEASURED, 'after')):
+            lags, mean = _event_average(triggers, values / dt, span, signs)
+            ax.plot(lags, mean, color=colour, linewidth=1.6, label=name)
+        ax.set_xlabel(label)
+    else:
+        x = features['command'] if kind == 'command' else features['angle']
+        for values, colour, name in ((before, MODEL, 'before'), (after, MEASURED, 'after')):
+            centres, means = _binned(x, values / dt)
+            ax.plot(centres, means, 'o-', color=colour, markersize=3, linewidth=1.2, label=name)
+        ax.set_xlabel('delayed command' if kind == 'command' else 'joint angle (deg)')
+    ax.axhline(0.0, color='black', linewidth=0.6)
+    ax.set_ylabel('mean velocity residual (deg/s)')
+    ax.legend(loc='best', fontsize=8, frameon=False)
+    figure.suptitle(f'Residual signature of {effect}', fontsize=11)
+    return figure
+
+
+def plot_gap(t: np.ndarray, measured: np.ndarray, before: np.ndarray, after: np.ndarray, *,
+             title: str = '') -> Figure:
+    """
+    Measured angle against the model before and after the named effects.
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        Time, s.
+    measured, before, after : numpy.ndarray
+        Angles, degrees.
+    title : str
+        Figure title.
+
+    Returns
+    -------
+    Figure
+        The figure.
+
+    """
+    figure, (angle_ax, error_ax) = new_figure(2, height=2.8)
+    time = t - t[0]
+    angle_ax.plot(time, measured, color='black', linewidth=1.6, label='measured')
+    angle_ax.plot(time, before, color=MODEL, linewidth=1.0, label='model before')
+    angle_ax.plot(time, after, color=MEASURED, linewidth=1.0, linestyle='--',
+                  label='model after')
+    angle_ax.set_ylabel('angle (deg)')
+    angle_ax.legend(loc='best', fontsize=8, frameon=False)
+    error_ax.plot(time, measured - before, color=MODEL, linewidth=0.9, label='before')
+    error_ax.plot(time, measured - after, color=MEASURED, linewidth=0.9, label='after')
+    error_ax.axhline(0.0, color='black', linewidth=0.6)
+    error_ax.set_ylabel('simulation error (deg)')
+    error_ax.set_xlabel('time (s)')
+    error_ax.legend(loc='best', fontsize=8, frameon=False)
+    figure.suptitle(title or 'The gap between model and measurement', fontsize=11)
+    return figure
+
+
+def plot_ledger(mae_start: float, steps: Sequence) -> Figure:
+    """
+    Draw the validation MAE after each effect added (the gap ledger).
+
+    Parameters
+    ----------
+    mae_start : float
+        MAE of the model given, degrees.
+    steps : sequence of LedgerStep
+        The effects added in turn.
+
+    Returns
+    -------
+    Figure
+        The figure.
+
+    """
+    figure, (ax,) = new_figure(1, height=3.2, width=7.0)
+    labels = ['model given'] + [f'+ {step.effect}' for step in steps]
+    values = [mae_start] + [step.mae_after for step in steps]
+    ax.bar(range(len(values)), values, color=[MODEL] + [MEASURED] * len(steps))
+    for index, value in enumerate(values):
+        ax.text(index, value, f'{value:.3g}', ha='center', va='bottom', fontsize=8)
+    ax.set_xticks(range(len(values)), labels, fontsize=8)
+    ax.set_yscale('log')
+    ax.set_ylabel('validation MAE (deg, log scale)')
+    figure.suptitle('Gap ledger', fontsize=11)
+    return figure

@@ -8,6 +8,8 @@ import sys
 
 from hydro_sdp.bags import read_bag, read_record
 from hydro_sdp.cli.main import main
+from hydro_sdp.cli.simulate import experiment_record
+from hydro_sdp.core.effects import ValveLag
 from hydro_sdp.files import default_model_path, load_model
 import numpy as np
 import pytest
@@ -242,3 +244,27 @@ def test_identify_refuses_data_without_excitation(tmp_path, capsys):
     assert err.startswith('error: no excitation')
     code, _, err = run(capsys, 'identify', str(tmp_path / 'bag'), '--joint', 'elbow')
     assert code == 2 and "joint 'elbow' is not in /joint_states" in err
+
+
+def test_diagnose_names_the_effect_and_writes_the_report(tmp_path, capsys):
+    truth = load_model(default_model_path()).with_effect(ValveLag(0.15))
+    from hydro_sdp.bags import write_bag
+    for index, seed in enumerate((3, 4, 5)):
+        write_bag(tmp_path / f'run{index}',
+                  [experiment_record(truth, 'random', seed=seed, duration=40.0)])
+    code, out, err = run(capsys, 'diagnose', str(tmp_path / 'run0'), str(tmp_path / 'run1'),
+                         '--validation', str(tmp_path / 'run2'), '--model',
+                         str(default_model_path()), '--out', str(tmp_path / 'augmented.yaml'),
+                         '--report', str(tmp_path / 'report'), '--json')
+    assert code == 0, err
+    payload = json.loads(out)
+    assert payload['effect'] == 'valve_lag'
+    assert payload['mae_after'] < 0.5 * payload['mae_before']
+    assert payload['candidates'][0]['effect'] == 'valve_lag'
+    assert payload['ledger'][0]['parameters']['time_constant'] == pytest.approx(0.15, rel=0.05)
+    augmented = load_model(tmp_path / 'augmented.yaml')
+    assert augmented.effect('valve_lag') is not None
+    summary = (tmp_path / 'report' / 'summary.md').read_text()
+    assert '**Named effect: `valve_lag`.**' in summary
+    for name in ('gap.png', 'ledger.png', 'signature.png'):
+        assert (tmp_path / 'report' / name).read_bytes()[:4] == b'\x89PNG'

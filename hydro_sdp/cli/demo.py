@@ -9,17 +9,19 @@ from typing import Callable
 
 from hydro_sdp.bags import read_bag, write_bag
 from hydro_sdp.cli.common import Outcome, table
+from hydro_sdp.cli.diagnose import write_report
 from hydro_sdp.cli.progress import ProgressBar
 from hydro_sdp.cli.simulate import experiment_record
 from hydro_sdp.core.closed_loop import LoopJoint, run_closed_loop, step_metrics, step_setpoints
 from hydro_sdp.core.controller_spec import design_from_model, format_pole
+from hydro_sdp.core.diagnose import diagnose
+from hydro_sdp.core.effects import ValveLag
 from hydro_sdp.core.evaluate import evaluate, simulated_angles
 from hydro_sdp.core.identify import identify
 from hydro_sdp.core.model import JointModel
 from hydro_sdp.core.records import Record
 from hydro_sdp.files import (
-    atomic_write_text, default_model_path, load_model, save_controller, save_model,
-    shipped_config)
+    atomic_write_text, default_model_path, load_model, save_controller, save_model, shipped_config)
 from hydro_sdp.plots import (
     plot_closed_loop, plot_gains, plot_idz, plot_record, plot_step_responses, plot_velocity_map,
     save_figure)
@@ -227,11 +229,44 @@ def _two_joints(report: Report) -> None:
         *[f'| {" | ".join(r)} |' for r in rows], '', f'![two joints]({figure})', '']))
 
 
+def _diagnosis(report: Report) -> None:
+    # The 'measured' joint has a valve lag that the identified model does not know about.
+    truth = load_model(default_model_path()).with_effect(ValveLag(0.12))
+    duration = 40.0 if report.short else 90.0
+    records = [experiment_record(truth, 'random', seed=report.seed + 10 + index,
+                                 duration=duration) for index in range(3)]
+    for index, record in enumerate(records, start=1):
+        write_bag(report.out / f'lagged_bag_{index}', [record])
+    model = report.identified
+    result = diagnose(records[:2], model, validation=records[2:])
+    save_model(result.model, report.out / 'j2_augmented.yaml')
+    folder = report.out / 'diagnosis'
+    write_report(folder, result, model, records[:2], records[2:])
+    rows = [[str(i), step.effect, f'{step.mae_before:.3f}', f'{step.mae_after:.3f}']
+            for i, step in enumerate(result.ledger, start=1)]
+    report.lines += ['', f'diagnosis of a joint with a hidden valve lag: named {result.effect}']
+    report.lines += table(rows, ['step', 'effect', 'MAE before', 'MAE after'])
+    report.sections.append('\n'.join([
+        '## Diagnosis', '',
+        'A "measured" J2 joint whose valve has a first-order lag of 0.12 s, held against the '
+        f'identified model. Named effect: **{result.effect}**; validation MAE '
+        f'{result.mae_before:.3f} deg before, {result.mae_after:.3f} deg after.', '',
+        '| step | effect | MAE before (deg) | MAE after (deg) |', '|---|---|---|---|',
+        *[f'| {" | ".join(r)} |' for r in rows], '',
+        '![gap](diagnosis/gap.png)', '![signature](diagnosis/signature.png)',
+        '![ledger](diagnosis/ledger.png)', '',
+        'The full report is in `diagnosis/summary.md`.', '']))
+    report.payload['diagnosis'] = {'effect': result.effect, 'mae_before': result.mae_before,
+                                   'mae_after': result.mae_after,
+                                   'ledger': [s.effect for s in result.ledger]}
+
+
 STAGES: list[tuple[str, Callable[[Report], None]]] = [
     ('experiments', _experiments),
     ('identification', _identification),
     ('control', _control),
     ('two joints', _two_joints),
+    ('diagnosis', _diagnosis),
 ]
 
 

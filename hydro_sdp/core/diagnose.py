@@ -536,7 +536,7 @@ DETECTORS = {
 }
 
 
-def _runs(records: Sequence[Record], model: JointModel, max_delay: float) -> list[_Run]:
+def runs_of(records: Sequence[Record], model: JointModel, max_delay: float) -> list[_Run]:
     """
     Wrap records with the sample each is simulated from.
 
@@ -582,8 +582,8 @@ def diagnose(records: Sequence[Record], model: JointModel, *,
     """
     if not records:
         raise DataError('no records to diagnose')
-    runs = _runs(records, model, max_delay)
-    checks = _runs(validation, model, max_delay) if validation else runs
+    runs = runs_of(records, model, max_delay)
+    checks = runs_of(validation, model, max_delay) if validation else runs
     dt = runs[0].dt
     horizon = max(2, int(round(max_delay / dt)))
     before = mae(model, checks)
