@@ -124,6 +124,10 @@ def test_demo_writes_a_report(tmp_path, capsys):
     np.testing.assert_allclose(identified['alpha'], identified['true_alpha'], rtol=0.01)
     mae = identified['mae']
     assert mae['model'] < mae['sdp_dz'] < mae['linear']
+    diagnosis = summary['diagnosis']
+    assert diagnosis['effect'] == 'valve_lag'
+    assert diagnosis['mae_after'] < 0.5 * diagnosis['mae_before']
+    assert (report / 'diagnosis' / 'summary.md').is_file()
     assert all(step['settling_time'] < 5.0 for step in summary['control']['steps'])
     assert (report / 'j2_controller.yaml').is_file()
 
