@@ -109,7 +109,7 @@ def main():
           f'{samples / slow_eval:,.0f} samples/s, {slow_eval / fast_eval:.1f}x')
 
     with tempfile.TemporaryDirectory() as folder:
-        t = np.arange(samples) * 0.01
+        t = np.arange(1, samples + 1) * 0.01
         record = Record(t, v, y, joint='j2')
         for storage in ('sqlite3', 'mcap'):
             bag = Path(folder) / f'hour_{storage}'
