@@ -72,7 +72,7 @@ def rosbags_baseline(path, joint, topic):
                 command_t.append(timestamp)
                 command.append(message.data)
     t = np.asarray(stamps) * 1e-9
-    index = np.searchsorted(np.asarray(command_t) * 1e-9, t, side='right') - 1
+    index = np.searchsorted(np.asarray(command_t) * 1e-9, t, side='left') - 1
     keep = index >= 0
     return Record(t[keep], np.asarray(command)[index[keep]], np.degrees(np.asarray(angles))[keep],
                   joint=joint)
