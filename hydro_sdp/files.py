@@ -15,7 +15,7 @@ import os
 from pathlib import Path
 import shutil
 import tempfile
-from typing import Any, Iterator
+from typing import Any, Callable, Iterator
 
 from hydro_sdp.core.controller_spec import ControllerSpec
 from hydro_sdp.core.errors import ModelFileError
@@ -140,6 +140,15 @@ def load_yaml(path: str | os.PathLike[str]) -> Any:
         raise ModelFileError(f'{source}: not valid YAML{where}') from None
 
 
+def _load(path: str | os.PathLike[str], build: Callable[[Any], Any]) -> Any:
+    """Read a YAML file and build an object from it; errors name the file."""
+    data = load_yaml(path)
+    try:
+        return build(data)
+    except ModelFileError as error:
+        raise ModelFileError(f'{path}: {error}') from None
+
+
 def load_model(path: str | os.PathLike[str]) -> JointModel:
     """
     Load and validate a model file (interfaces.md section 1).
@@ -160,11 +169,7 @@ def load_model(path: str | os.PathLike[str]) -> JointModel:
         With the file name, the key and the reason.
 
     """
-    data = load_yaml(path)
-    try:
-        return JointModel.from_mapping(data)
-    except ModelFileError as error:
-        raise ModelFileError(f'{path}: {error}') from None
+    return _load(path, JointModel.from_mapping)
 
 
 def dump_model(model: JointModel) -> str:
@@ -243,11 +248,7 @@ def load_controller(path: str | os.PathLike[str]) -> ControllerSpec:
         The controller; its closed loop is checked to be stable.
 
     """
-    data = load_yaml(path)
-    try:
-        return ControllerSpec.from_mapping(data)
-    except ModelFileError as error:
-        raise ModelFileError(f'{path}: {error}') from None
+    return _load(path, ControllerSpec.from_mapping)
 
 
 def save_controller(spec: ControllerSpec, path: str | os.PathLike[str]) -> Path:

@@ -73,8 +73,7 @@ class BagPlayerNode(Node):
         """Whether every message has been published."""
         return self.published >= len(self._messages)
 
-    def play_next(self) -> str:
-        """Publish the next message alone and return its type (for step-by-step tests)."""
+    def _publish_next(self) -> str:
         topic, message_type, stamp, raw = self._messages[self.published]
         if self._clock_pub is not None:
             clock = Clock()
@@ -83,6 +82,10 @@ class BagPlayerNode(Node):
         self._topic_pubs[topic].publish(raw)
         self.published += 1
         return message_type
+
+    def play_next(self) -> str:
+        """Publish the next message alone and return its type (for step-by-step tests)."""
+        return self._publish_next()
 
     def play_until(self, bag_time_ns: int) -> int:
         """
@@ -101,13 +104,7 @@ class BagPlayerNode(Node):
         """
         count = 0
         while not self.finished and self._messages[self.published][2] <= bag_time_ns:
-            topic, _, stamp, raw = self._messages[self.published]
-            if self._clock_pub is not None:
-                clock = Clock()
-                clock.clock.sec, clock.clock.nanosec = divmod(stamp, 1_000_000_000)
-                self._clock_pub.publish(clock)
-            self._topic_pubs[topic].publish(raw)
-            self.published += 1
+            self._publish_next()
             count += 1
         return count
 
