@@ -538,3 +538,47 @@ def plot_ledger(mae_start: float, steps: Sequence) -> Figure:
     ax.set_ylabel('validation MAE (deg, log scale)')
     figure.suptitle('Gap ledger', fontsize=11)
     return figure
+
+
+def plot_recalibration(t: np.ndarray, angle: np.ndarray, setpoint: np.ndarray,
+                       command: np.ndarray, edges: np.ndarray, drift: float) -> Figure:
+    """
+    Draw a loop whose dead-zone drifts and whose IDZ the identifier recalibrates.
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        Time, s.
+    angle, setpoint : numpy.ndarray
+        Joint angle and set-point, degrees.
+    command : numpy.ndarray
+        Valve command, V.
+    edges : numpy.ndarray
+        ``(samples, 2)`` IDZ edges the controller used, V.
+    drift : float
+        Time the plant's dead-zone moved, s.
+
+    Returns
+    -------
+    Figure
+        The figure.
+
+    """
+    figure, (angle_ax, command_ax, edge_ax) = new_figure(3, height=2.3)
+    angle_ax.plot(t, setpoint, color=LIMIT, linestyle='--', linewidth=1.0, label='set-point')
+    angle_ax.plot(t, angle, color=MEASURED, linewidth=1.2, label='angle')
+    angle_ax.set_ylabel('angle (deg)')
+    angle_ax.legend(loc='upper right', fontsize=8, frameon=False)
+    command_ax.plot(t, command, color=MODEL, linewidth=0.8)
+    command_ax.set_ylabel('valve v (V)')
+    edge_ax.plot(t, edges[:, 0], color=MEASURED, linewidth=1.4, label='IDZ lower edge')
+    edge_ax.plot(t, edges[:, 1], color=MODEL, linewidth=1.4, label='IDZ upper edge')
+    edge_ax.set_ylabel('IDZ edges (V)')
+    edge_ax.set_xlabel('time (s)')
+    edge_ax.legend(loc='center right', fontsize=8, frameon=False)
+    for ax in (angle_ax, command_ax, edge_ax):
+        ax.axvline(drift, color='black', linestyle=':', linewidth=1.0)
+    angle_ax.text(drift, 1.0, ' dead-zone narrows by 0.3 V', transform=angle_ax.get_xaxis_transform(),
+                  fontsize=8, va='top')
+    figure.suptitle('Wear, detected and recalibrated by the identifier node', fontsize=11)
+    return figure

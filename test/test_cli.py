@@ -115,7 +115,8 @@ def test_demo_writes_a_report(tmp_path, capsys):
     report = tmp_path / 'report'
     assert (report / 'summary.md').read_text().startswith('# hydro_sdp demo')
     for name in ('steps.png', 'step_responses.png', 'gains.png', 'velocity_map.png',
-                 'evaluation.png', 'idz.png', 'closed_loop.png', 'two_joints.png'):
+                 'evaluation.png', 'idz.png', 'closed_loop.png', 'two_joints.png',
+                 'recalibration.png'):
         png = report / 'figures' / name
         assert png.read_bytes()[:8] == b'\x89PNG\r\n\x1a\n'
     assert read_record(summary['bags']['steps']).joint == 'j2'
@@ -124,6 +125,9 @@ def test_demo_writes_a_report(tmp_path, capsys):
     np.testing.assert_allclose(identified['alpha'], identified['true_alpha'], rtol=0.01)
     mae = identified['mae']
     assert mae['model'] < mae['sdp_dz'] < mae['linear']
+    recalibration = summary['recalibration']
+    assert recalibration['recalibrations'] >= 1
+    assert recalibration['error_recalibrated'] < 0.5 < recalibration['error_after_drift']
     diagnosis = summary['diagnosis']
     assert diagnosis['effect'] == 'valve_lag'
     assert diagnosis['mae_after'] < 0.5 * diagnosis['mae_before']
