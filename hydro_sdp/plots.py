@@ -578,7 +578,7 @@ def plot_recalibration(t: np.ndarray, angle: np.ndarray, setpoint: np.ndarray,
     edge_ax.legend(loc='center right', fontsize=8, frameon=False)
     for ax in (angle_ax, command_ax, edge_ax):
         ax.axvline(drift, color='black', linestyle=':', linewidth=1.0)
-    angle_ax.text(drift, 1.0, ' dead-zone narrows by 0.3 V', transform=angle_ax.get_xaxis_transform(),
-                  fontsize=8, va='top')
+    angle_ax.text(drift, 1.0, ' dead-zone narrows by 0.3 V', fontsize=8, va='top',
+                  transform=angle_ax.get_xaxis_transform())
     figure.suptitle('Wear, detected and recalibrated by the identifier node', fontsize=11)
     return figure

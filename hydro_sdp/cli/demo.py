@@ -318,9 +318,9 @@ def _ros_nodes(report: Report) -> None:
         '## The ROS nodes and automatic recalibration', '',
         'plant_node, controller_node and identifier_node run in one process on simulated '
         'time (the launch-free harness). Set-points change every 4 s; at '
-        f'{drift_at * 4} s the plant\'s dead-zone narrows by 0.3 V on both sides (wear), the '
+        f"{drift_at * 4} s the plant's dead-zone narrows by 0.3 V on both sides (wear), the "
         'IDZ now over-compensates and the loop hunts. The identifier detects the change, '
-        f'and with auto_recalibrate it set the controller\'s IDZ {recalibrations} times; '
+        f"and with auto_recalibrate it set the controller's IDZ {recalibrations} times; "
         f'the edges end at [{final_edges[0]:.3f}, {final_edges[1]:.3f}] V (true '
         f'[{-1.3298 + 0.3:.3f}, {1.3124 - 0.3:.3f}]).', '',
         '| tracking | worst error at the end of a hold (deg) |', '|---|---|',
