@@ -27,7 +27,7 @@ import pytest
 import rclpy
 from rclpy.parameter import Parameter
 from sensor_msgs.msg import JointState
-from std_msgs.msg import Float64
+from std_msgs.msg import Bool, Float64
 
 pytestmark = pytest.mark.ros
 
@@ -316,3 +316,38 @@ def test_nodes_as_separate_processes_settle_a_step(tmp_path, monkeypatch):
         executor.shutdown()
         node.destroy_node()
         rclpy.try_shutdown(context=context)
+
+
+def test_plant_simulates_several_joints_in_one_joint_state(ros):
+    files = [str(REPO / 'config' / name) for name in ('lucie_boom.yaml', 'lucie_dipper.yaml')]
+    plant = ros.add(PlantNode, parameters={'model_files': files, 'sample_period': 0.02,
+                                           'initial_angles': [5.0, -80.0]})
+    _, states = _collector(ros, 'joint_states')
+    helper = ros.helper('dipper_command')
+    publisher = helper.create_publisher(Float64, 'dipper/valve_command', 10)
+    loop = Lockstep(ros, plant)
+    assert ros.spin_until(lambda: publisher.get_subscription_count() >= 1)
+    publisher.publish(Float64(data=300.0))
+    assert ros.spin_until(lambda: plant.commands_received == 1)
+    loop.run(50)
+    assert ros.spin_until(lambda: len(states) >= 50)
+    assert list(states[-1].name) == ['boom', 'dipper']
+    boom, dipper = np.degrees(states[-1].position)
+    assert boom == pytest.approx(5.0)                      # no command: at rest
+    assert dipper > -80.0 + 10.0                           # driven for about 1 s
+
+
+def test_identifier_publishes_estimates_and_the_recalibration_flag(ros):
+    plant = ros.add(PlantNode, parameters={'noise_std': 0.01})
+    controller = ros.add(PipControllerNode)
+    identifier = ros.add(IdentifierNode, parameters={'noise_std': 0.01})
+    helper, lower = _collector(ros, 'j2/sdp/dead_zone_lower', Float64)
+    flags = []
+    helper.create_subscription(Bool, 'j2/sdp/recalibration_needed', flags.append, 100)
+    loop = Lockstep(ros, plant, controllers=[controller], observers=[identifier])
+    send = _setpoint_publisher(ros, controller)
+    send(30.0)
+    loop.run(300)
+    assert ros.spin_until(lambda: len(lower) >= 25 and len(flags) >= 25)
+    assert lower[-1].data == pytest.approx(-1.3298, abs=0.05)
+    assert flags[-1].data is False          # the model is right: nothing to recalibrate
