@@ -262,50 +262,22 @@ def _diagnosis(report: Report) -> None:
 
 
 def _ros_nodes(report: Report) -> None:
-    # Imported here: the rest of the demo runs where rclpy is not installed.
-    import math
-
-    from rclpy.parameter import Parameter
-    from std_msgs.msg import Float64
-
-    from hydro_sdp.ros.controller_node import PipControllerNode
-    from hydro_sdp.ros.identifier_node import IdentifierNode
-    from hydro_sdp.ros.plant_node import PlantNode
-    from hydro_sdp.ros.testing import Lockstep, RosHarness
+    # Imported here, so that the rest of the demo runs where rclpy is not installed.
+    try:
+        from hydro_sdp.ros.scenarios import wear_and_recalibration
+    except ImportError as error:
+        report.lines += ['', f'ROS nodes skipped: {error}']
+        report.sections.append(f'## The ROS nodes\n\nSkipped: {error}.\n')
+        return
 
     holds, steps, drift_at = (14, 400, 4) if report.short else (20, 400, 5)
-    levels = [20.0, 35.0, 15.0, 30.0]
-    t, angle, target, command, edges = [], [], [], [], []
-    with RosHarness() as ros:
-        plant = ros.add(PlantNode, parameters={'noise_std': 0.01, 'seed': report.seed})
-        controller = ros.add(PipControllerNode)
-        identifier = ros.add(IdentifierNode, parameters={'auto_recalibrate': True,
-                                                         'noise_std': 0.01})
-        helper = ros.helper('demo_setpoints')
-        publisher = helper.create_publisher(Float64, 'j2/setpoint', 10)
-        loop = Lockstep(ros, plant, controllers=[controller], observers=[identifier])
-        ros.spin_until(lambda: publisher.get_subscription_count() >= 1)
-        for hold in range(holds):
-            if hold == drift_at:
-                plant.set_parameters([Parameter('dead_zone_shift', value=[0.3, -0.3])])
-            level = levels[hold % len(levels)]
-            count = controller.setpoints_received
-            publisher.publish(Float64(data=math.radians(level)))
-            ros.spin_until(lambda: controller.setpoints_received > count)
-            for _ in range(steps):
-                loop.step()
-                t.append(loop.steps * plant.sample_period)
-                angle.append(plant.last_angles[0])
-                target.append(level)
-                command.append(controller.last_command)
-                edges.append(controller.controller.settings.idz.dead_zone)
-        recalibrations = identifier.recalibrations
-        final_edges = controller.controller.settings.idz.dead_zone
-    t, angle, target = np.array(t), np.array(angle), np.array(target)
-    error = np.abs(angle - target).reshape(holds, steps)[:, -50:].max(axis=1)
-    figure = report.figure(plot_recalibration(t, angle, target, np.array(command),
-                                              np.array(edges), drift_at * steps * 0.01),
-                           'recalibration.png')
+    run = wear_and_recalibration(holds=holds, steps=steps, drift_at=drift_at,
+                                 seed=report.seed)
+    recalibrations = run.recalibrations
+    final_edges = tuple(run.edges[-1])
+    error = np.abs(run.angle - run.setpoint).reshape(holds, steps)[:, -50:].max(axis=1)
+    figure = report.figure(plot_recalibration(run.t, run.angle, run.setpoint, run.command,
+                                              run.edges, run.drift_time), 'recalibration.png')
     before, during, after = error[:drift_at].max(), error[drift_at:drift_at + 2].max(), \
         error[-4:].max()
     report.lines += ['', 'three ROS nodes in-process: the dead-zone narrows by 0.3 V, the '

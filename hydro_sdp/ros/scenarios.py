@@ -1,0 +1,108 @@
+"""
+Scenarios run through the ROS nodes in-process, for the demo and for users' checks.
+
+:func:`wear_and_recalibration` runs the plant, controller and identifier nodes
+on simulated time while the plant's valve wears, and returns what happened.
+
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+import math
+from typing import Sequence
+
+from hydro_sdp.ros.controller_node import PipControllerNode
+from hydro_sdp.ros.identifier_node import IdentifierNode
+from hydro_sdp.ros.plant_node import PlantNode
+from hydro_sdp.ros.testing import Lockstep, RosHarness
+import numpy as np
+from rclpy.parameter import Parameter
+from std_msgs.msg import Float64
+
+
+@dataclass(frozen=True, eq=False)
+class WearRun:
+    """
+    A set-point sequence through the three nodes while the valve wears.
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        Time, s.
+    angle, setpoint : numpy.ndarray
+        True joint angle and set-point, degrees.
+    command : numpy.ndarray
+        Valve command the controller sent, V.
+    edges : numpy.ndarray
+        ``(samples, 2)`` IDZ edges the controller used, V.
+    drift_time : float
+        When the dead-zone moved, s.
+    recalibrations : int
+        IDZ updates the identifier made.
+
+    """
+
+    t: np.ndarray
+    angle: np.ndarray
+    setpoint: np.ndarray
+    command: np.ndarray
+    edges: np.ndarray
+    drift_time: float
+    recalibrations: int
+
+
+def wear_and_recalibration(*, holds: int = 20, steps: int = 400, drift_at: int = 5,
+                           shift: Sequence[float] = (0.3, -0.3), seed: int = 1,
+                           levels: Sequence[float] = (20.0, 35.0, 15.0, 30.0)) -> WearRun:
+    """
+    Track set-points while the plant's dead-zone moves; the identifier recalibrates.
+
+    Parameters
+    ----------
+    holds : int
+        Number of set-points, each held ``steps`` plant samples (0.01 s).
+    steps : int
+        Samples per set-point.
+    drift_at : int
+        Set-point at whose start the dead-zone edges move by ``shift``.
+    shift : sequence of float
+        Movement of the lower and upper edge, V.
+    seed : int
+        Seed of the measurement noise.
+    levels : sequence of float
+        Set-points, degrees, used in turn.
+
+    Returns
+    -------
+    WearRun
+        The run.
+
+    """
+    rows = []
+    with RosHarness() as ros:
+        plant = ros.add(PlantNode, parameters={'noise_std': 0.01, 'seed': seed})
+        controller = ros.add(PipControllerNode)
+        identifier = ros.add(IdentifierNode, parameters={'auto_recalibrate': True,
+                                                         'noise_std': 0.01})
+        helper = ros.helper('scenario_setpoints')
+        publisher = helper.create_publisher(Float64, 'j2/setpoint', 10)
+        loop = Lockstep(ros, plant, controllers=[controller], observers=[identifier])
+        ros.spin_until(lambda: publisher.get_subscription_count() >= 1)
+        for hold in range(holds):
+            if hold == drift_at:
+                plant.set_parameters([Parameter('dead_zone_shift', value=list(shift))])
+            level = levels[hold % len(levels)]
+            count = controller.setpoints_received
+            publisher.publish(Float64(data=math.radians(level)))
+            ros.spin_until(lambda: controller.setpoints_received > count)
+            for _ in range(steps):
+                loop.step()
+                rows.append((loop.steps * plant.sample_period, plant.last_angles[0], level,
+                             controller.last_command,
+                             *controller.controller.settings.idz.dead_zone))
+        recalibrations = identifier.recalibrations
+    table = np.array(rows)
+    return WearRun(t=table[:, 0], angle=table[:, 1], setpoint=table[:, 2],
+                   command=table[:, 3], edges=table[:, 4:6],
+                   drift_time=drift_at * steps * 0.01, recalibrations=recalibrations)
