@@ -8,13 +8,13 @@ import os
 from pathlib import Path
 import shutil
 
-from hypothesis import given, HealthCheck, settings, strategies as st
 from hydro_sdp.bags import read_bag, write_bag
 from hydro_sdp.core.errors import HydroSdpError
 from hydro_sdp.core.identify import identify
 from hydro_sdp.core.model import JointModel
 from hydro_sdp.core.records import Record
 from hydro_sdp.files import default_model_path, dump_model, load_model
+from hypothesis import given, HealthCheck, settings, strategies as st
 import numpy as np
 import pytest
 import yaml

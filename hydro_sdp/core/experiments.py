@@ -297,42 +297,35 @@ def segment_record(record: Record, *, max_delay: int, rest: float | None = None,
         next_begin = blocks[index + 1][0] if index + 1 < len(blocks) else v.size
         block_stop = min(end + max_delay, next_begin, v.size)
         held = np.all(v[begin:end] == v[begin])
+        if block_stop - start - 1 < min_samples:
+            dropped.append(Dropped(float(record.t[start]),
+                                   f'too short ({max(block_stop - start - 1, 0)} samples)',
+                                   record.source))
+            continue
         # A block may meet the end stops several times: cut out each stretch the joint
-        # is held and go on where it leaves the stop.
+        # is held, and go on where it leaves the stop.
         while block_stop - start - 1 >= min_samples:
-            stop = block_stop
-            clamp = _clamp_start(y, v, rest, start, stop, max_delay, noise, extremes,
+            clamp = _clamp_start(y, v, rest, start, block_stop, max_delay, noise, extremes,
                                  angle_limits)
-            t0 = float(record.t[start])
-            released = stop
-            if clamp is not None:
-                stop = clamp[0]
-                # The joint leaves the stop only once the command that holds it there has
-                # changed and the change has come through the delay.
-                changed = np.flatnonzero(v[stop:block_stop] != v[stop])
-                released = min(stop + int(changed[0]) + max_delay, block_stop) \
-                    if changed.size else block_stop
-                stops[int(clamp[1] > np.mean(extremes))].append(
-                    float(np.median(y[stop:released])))
-                dropped.append(Dropped(float(record.t[stop]), 'clamped by an end stop',
-                                       record.source))
+            stop = block_stop if clamp is None else clamp[0]
             if stop - start - 1 >= min_samples:
                 history = max(start - max_delay, 0)
                 experiments.append(Experiment(
                     v=v[history:stop], y=y[history:stop], start=start - history,
                     kind='step' if held else 'run',
-                    level=float(v[begin]) if held else math.nan, t0=t0, source=record.source))
-            elif clamp is None:
-                dropped.append(Dropped(t0, f'too short ({max(stop - start - 1, 0)} samples)',
-                                       record.source))
+                    level=float(v[begin]) if held else math.nan, t0=float(record.t[start]),
+                    source=record.source))
             if clamp is None:
                 break
+            # The joint leaves the stop only once the command that holds it there has
+            # changed and the change has come through the delay.
+            changed = np.flatnonzero(v[stop:block_stop] != v[stop])
+            released = min(stop + int(changed[0]) + max_delay, block_stop) \
+                if changed.size else block_stop
+            stops[int(clamp[1] > np.mean(extremes))].append(float(np.median(y[stop:released])))
+            dropped.append(Dropped(float(record.t[stop]), 'clamped by an end stop',
+                                   record.source))
             start = released
-        else:
-            if block_stop - start - 1 > 0 and start == max(begin - 1, 0):
-                dropped.append(Dropped(float(record.t[start]),
-                                       f'too short ({block_stop - start - 1} samples)',
-                                       record.source))
     end_stops = (float(np.median(stops[0])) if stops[0] else None,
                  float(np.median(stops[1])) if stops[1] else None)
     if angle_limits is not None:
