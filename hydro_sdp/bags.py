@@ -448,16 +448,22 @@ def read_bag(path: str | os.PathLike[str], *, state_topic: str | None = None,
     raws = collected.raws.get(state_topic, [])
     if not raws:
         raise DataError(f'{bag}: topic {state_topic} has no messages')
-    decoded = decode_joint_states(raws)
-    receive = np.asarray(collected.stamps[state_topic], dtype=np.int64)
+    try:
+        decoded = decode_joint_states(raws)
+        receive = np.asarray(collected.stamps[state_topic], dtype=np.int64)
+        floats = {}
+        for name, (msgtype, _) in collected.topics.items():
+            if msgtype == FLOAT64:
+                floats[name] = Series(name, np.asarray(collected.stamps.get(name, []),
+                                                       dtype=np.int64) * 1e-9,
+                                      decode_float64(collected.raws.get(name, [])))
+    except (TypeError, ValueError, OverflowError) as error:
+        if isinstance(error, BagFormatError):
+            raise
+        # A damaged storage file can hand back NULL or mistyped time stamps and payloads.
+        raise BagFormatError(f'{bag}: malformed messages or time stamps ({error})') from None
     # A publisher that never fills header.stamp leaves it at zero; use receive times then.
     stamps = receive if not decoded.stamps.any() else decoded.stamps
-    floats = {}
-    for name, (msgtype, _) in collected.topics.items():
-        if msgtype == FLOAT64:
-            floats[name] = Series(name, np.asarray(collected.stamps.get(name, []),
-                                                   dtype=np.int64) * 1e-9,
-                                  decode_float64(collected.raws.get(name, [])))
     return BagData(bag, state_topic, stamps * 1e-9, decoded.names, decoded.positions,
                    decoded.present, floats, info)
 

@@ -30,6 +30,7 @@ from hydro_sdp.core.errors import DataError
 from hydro_sdp.core.experiments import Experiment
 from hydro_sdp.core.static_maps import PolyMap, PwlMap, SdpMap, StaticMap
 import numpy as np
+import numpy.typing as npt
 from scipy.optimize import least_squares, minimize
 from scipy.signal import lfilter
 
@@ -198,7 +199,7 @@ def initial_sdp(points: Sequence[LevelSpeed], rest: float) -> FloatArray:
     speeds = np.array([p.speed for p in points])
     errors = np.array([p.standard_error for p in points])
     peak = np.max(np.abs(speeds))
-    moving = (np.abs(speeds) > 3.0 * errors) & (np.abs(speeds) > 0.02 * peak)
+    moving = _moving(speeds, errors)
     scale = max(np.max(np.abs(levels - rest)), 1e-9)
     guess = []
     for sign in (-1.0, 1.0):
@@ -257,7 +258,7 @@ def check_excitation(points: Sequence[LevelSpeed], rest: float) -> None:
     speeds = np.array([p.speed for p in points])
     errors = np.array([p.standard_error for p in points])
     levels = np.array([p.level for p in points])
-    moving = np.abs(speeds) > np.maximum(3.0 * errors, 1e-9)
+    moving = _moving(speeds, errors)
     if not np.any(moving & (np.abs(speeds) > 0.05 * np.max(np.abs(speeds)))):
         raise DataError('no excitation: the joint never moves (are all commands inside the '
                         'dead-zone?)')
@@ -267,6 +268,13 @@ def check_excitation(points: Sequence[LevelSpeed], rest: float) -> None:
         direction = 'positive' if up else 'negative'
         raise DataError(f'the joint moves in the {direction} direction only: the map needs '
                         'commands on both sides of rest that move it')
+
+
+def _moving(speeds: FloatArray, errors: FloatArray) -> npt.NDArray[np.bool_]:
+    # One test of "this level moves the joint" for the checks and the starting values, so
+    # data the checks accept always give the starting values something on both sides.
+    peak = max(float(np.max(np.abs(speeds))), 1e-9)
+    return (np.abs(speeds) > np.maximum(3.0 * errors, 1e-9)) & (np.abs(speeds) > 0.02 * peak)
 
 
 def _covariance_errors(jacobian: FloatArray, cost: float, samples: int) -> FloatArray:
