@@ -7,9 +7,10 @@ each control instant, so the feedback-to-command latency is the computation
 time), converts units, keeps the valve safe and exposes the gains and the IDZ
 as parameters. Safety: set-points beyond the end stops are clamped; a sample
 that cannot be used (NaN, joint missing, arrays of different lengths, stamp not
-after the last one) is refused with a throttled warning and the valve is
-closed; if no valid feedback arrives for ``feedback_timeout`` the watchdog
-closes the valve, and control resumes from the next valid sample without a bump.
+after the last one or further than ``feedback_timeout`` from the node's clock)
+is refused with a throttled warning and the valve is closed; if no valid
+feedback arrives for ``feedback_timeout`` the watchdog closes the valve, and
+control resumes from the next valid sample without a bump.
 
 """
 
@@ -141,6 +142,7 @@ class PipControllerNode(Node):
             if self._last_stamp is not None and stamp <= self._last_stamp:
                 raise DataError(f'JointState stamp {stamp * 1e-9:.6f} s is not after the last '
                                 f'one ({self._last_stamp * 1e-9:.6f} s)')
+            self._check_freshness(stamp)
         except DataError as error:
             self.refused += 1
             self._warn(f'refused feedback ({error}); valve closed')
@@ -172,6 +174,19 @@ class PipControllerNode(Node):
         self.outputs += 1
         missed = (stamp - self._next_instant) // self._period_ns
         self._next_instant += (missed + 1) * self._period_ns
+
+    def _check_freshness(self, stamp: int) -> None:
+        # A stamp far from this node's clock is stale feedback or a clock mix-up; one from the
+        # future would also make every later sample look old, so neither is accepted.
+        now = self.get_clock().now().nanoseconds
+        if now == 0:
+            return          # simulated time that has not started yet
+        lead = (stamp - now) * 1e-9
+        if abs(lead) > self.feedback_timeout:
+            where = 'ahead of' if lead > 0 else 'behind'
+            raise DataError(f'JointState stamp is {abs(lead):.3f} s {where} the node clock '
+                            f'(more than feedback_timeout {self.feedback_timeout} s; '
+                            'check use_sim_time on every node)')
 
     def _on_watchdog(self) -> None:
         silent = self.get_clock().now().nanoseconds - self._last_valid

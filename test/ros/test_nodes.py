@@ -106,9 +106,11 @@ def _state(stamp_ns, names=('j2',), positions=(0.0,)):
     (_state(10**8, names=('j2', 'elbow'), positions=(0.1,)), '2 names but 1 positions'),
     (_state(10**8, names=(), positions=()), "joint 'j2' is not in JointState"),
     (_state(10**6), 'is not after the last one'),
+    (_state(10**10), 's ahead of the node clock'),
 ])
 def test_controller_refuses_bad_feedback_and_closes_the_valve(ros, message, reason):
     controller = ros.add(PipControllerNode)
+    ros.set_time(10**8)
     _, commands = _collector(ros, 'j2/valve_command', Float64)
     send = _setpoint_publisher(ros, controller)
     send(20.0)
@@ -121,6 +123,18 @@ def test_controller_refuses_bad_feedback_and_closes_the_valve(ros, message, reas
     # The next valid sample resumes without a bump: from rest, not from the old command.
     controller._on_state(_state(2 * 10**8, positions=(0.0,)))
     assert 0.0 < controller.controller.last_u < 0.25
+
+
+def test_stale_feedback_is_refused_against_the_node_clock(ros):
+    controller = ros.add(PipControllerNode)
+    ros.set_time(5 * 10**9)
+    controller._on_state(_state(5 * 10**9 - 10**7))
+    assert controller.refused == 0 and controller.outputs == 1
+    controller._on_state(_state(5 * 10**9 + 10**7))
+    # A sample delayed by a 2 s burst arrives after fresher ones would have: refused.
+    ros.set_time(8 * 10**9)
+    controller._on_state(_state(6 * 10**9))
+    assert controller.refused == 1 and controller.last_command == 0.0
 
 
 def test_setpoints_beyond_the_end_stops_are_clamped_and_nan_is_refused(ros):
