@@ -1,0 +1,37 @@
+"""The bad-input inventory in docs/bad_inputs.md names tests that exist."""
+
+import re
+import subprocess
+import sys
+
+from conftest import REPO
+
+ROW = re.compile(r'^\| (\d+) \|.*\| `(test/[^`:]+::\w+(\[[^`]*)?)` \|$')
+
+
+def _rows():
+    text = (REPO / 'docs' / 'bad_inputs.md').read_text()
+    return [(line, ROW.match(line)) for line in text.splitlines()
+            if re.match(r'^\| \d+ \|', line)]
+
+
+def test_rows_are_numbered_and_name_a_test():
+    rows = _rows()
+    for line, row in rows:
+        assert row, f'row does not end with a test name: {line}'
+    assert [int(row.group(1)) for _, row in rows] == list(range(1, len(rows) + 1))
+    assert len(rows) >= 40
+
+
+def test_every_named_test_is_collected():
+    names = [row.group(2) for _, row in _rows()]
+    files = sorted({name.split('::')[0] for name in names})
+    listing = subprocess.run(
+        [sys.executable, '-m', 'pytest', '--collect-only', '-q', '-p', 'no:cacheprovider',
+         *files], cwd=REPO, capture_output=True, text=True, check=True).stdout
+    collected = [line for line in listing.splitlines() if '::' in line]
+    for name in names:
+        # A parameter case is named by its pytest id up to the first '-'.
+        start = name[:-1] + '-' if name.endswith(']') else name + '['
+        assert any(test == name or test.startswith(start) for test in collected), \
+            f'{name} is not a test of the suite'
