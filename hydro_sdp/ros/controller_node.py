@@ -6,9 +6,10 @@ control; this node only decides when (the first JointState sample at or after
 each control instant, so the feedback-to-command latency is the computation
 time), converts units, keeps the valve safe and exposes the gains and the IDZ
 as parameters. Safety: set-points beyond the end stops are clamped; a sample
-that cannot be used (NaN, joint missing, arrays of different lengths, stamp not
-after the last one or further than ``feedback_timeout`` from the node's clock)
-is refused with a throttled warning and the valve is closed; if no valid
+that cannot be used (NaN, joint missing, arrays of different lengths, stamp
+further than ``feedback_timeout`` from the node's clock) is refused with a
+throttled warning and the valve is closed; a duplicate or out-of-order sample
+is ignored (the command in force came from fresher feedback); if no valid
 feedback arrives for ``feedback_timeout`` the watchdog closes the valve, and
 control resumes from the next valid sample without a bump.
 
@@ -140,8 +141,12 @@ class PipControllerNode(Node):
         try:
             stamp, angle = conversions.joint_angle(message, self.joint)
             if self._last_stamp is not None and stamp <= self._last_stamp:
-                raise DataError(f'JointState stamp {stamp * 1e-9:.6f} s is not after the last '
-                                f'one ({self._last_stamp * 1e-9:.6f} s)')
+                # A duplicate or a sample overtaken by a newer one: the command in force was
+                # computed from fresher feedback, so it stays; the sample is only dropped.
+                self.refused += 1
+                self._warn(f'ignored JointState stamp {stamp * 1e-9:.6f} s: it is not after '
+                           f'the last one ({self._last_stamp * 1e-9:.6f} s)')
+                return
             self._check_freshness(stamp)
         except DataError as error:
             self.refused += 1

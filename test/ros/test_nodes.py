@@ -105,7 +105,6 @@ def _state(stamp_ns, names=('j2',), positions=(0.0,)):
     (_state(10**8, names=('elbow',)), "joint 'j2' is not in JointState"),
     (_state(10**8, names=('j2', 'elbow'), positions=(0.1,)), '2 names but 1 positions'),
     (_state(10**8, names=(), positions=()), "joint 'j2' is not in JointState"),
-    (_state(10**6), 'is not after the last one'),
     (_state(10**10), 's ahead of the node clock'),
 ])
 def test_controller_refuses_bad_feedback_and_closes_the_valve(ros, message, reason):
@@ -123,6 +122,18 @@ def test_controller_refuses_bad_feedback_and_closes_the_valve(ros, message, reas
     # The next valid sample resumes without a bump: from rest, not from the old command.
     controller._on_state(_state(2 * 10**8, positions=(0.0,)))
     assert 0.0 < controller.controller.last_u < 0.25
+
+
+def test_duplicated_and_overtaken_samples_are_ignored_without_closing_the_valve(ros):
+    controller = ros.add(PipControllerNode)
+    ros.set_time(10**8)
+    _setpoint_publisher(ros, controller)(20.0)
+    controller._on_state(_state(5 * 10**7))
+    driving = controller.last_command
+    assert driving > 1.0
+    controller._on_state(_state(5 * 10**7))           # duplicate
+    controller._on_state(_state(10**6))               # overtaken by a newer sample
+    assert controller.refused == 2 and controller.last_command == driving
 
 
 def test_stale_feedback_is_refused_against_the_node_clock(ros):
