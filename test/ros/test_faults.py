@@ -8,6 +8,12 @@ crash, without windup and, after the valve was closed, without a bump.
 """
 
 import math
+import os
+from pathlib import Path
+import shutil
+import subprocess
+import sys
+import time
 
 from hydro_sdp.core.simulation import JointSimulator
 from hydro_sdp.files import default_model_path, load_model
@@ -15,6 +21,7 @@ from hydro_sdp.ros.controller_node import PipControllerNode
 from hydro_sdp.ros.testing import RosHarness
 import numpy as np
 import pytest
+import rclpy
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64
 
@@ -157,3 +164,126 @@ def test_controller_restarted_mid_motion(ros, baseline):
     assert loop.controller.last_command == 0.0     # a new controller starts with the valve shut
     angles, commands = loop.run(STEPS - 60)
     _assert_settled(angles, commands, baseline)
+
+
+def _script(name):
+    return shutil.which(name, path=str(Path(sys.executable).parent))
+
+
+class _Processes:
+    """Node processes on one ROS domain, restartable by name."""
+
+    def __init__(self, domain):
+        self.environment = dict(os.environ, ROS_DOMAIN_ID=domain)
+        self.running = {}
+        self.finished = []
+
+    def start(self, name, *arguments):
+        self.running[name] = subprocess.Popen(
+            [_script(name), '--ros-args', *arguments], env=self.environment,
+            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+
+    def stop(self, name):
+        process = self.running.pop(name)
+        assert process.poll() is None, f'{name} died: {process.stderr.read()}'
+        process.terminate()
+        process.wait(timeout=10)
+        self.finished.append((name, process))
+
+    def stop_all(self):
+        for name in list(self.running):
+            self.stop(name)
+        return {name: process.stderr.read() for name, process in self.finished}
+
+
+@pytest.mark.slow
+def test_separate_processes_survive_a_faulty_link_and_restarts(monkeypatch):
+    """
+    Plant and controller processes joined through a relay that drops, duplicates and blacks out.
+
+    The plant publishes on ``raw/joint_states``; this test relays to ``joint_states`` with
+    10 % dropped and 10 % duplicated, then a 1 s blackout, then restarts the controller and
+    then the plant mid-motion. After each, the joint must settle on the set-point again.
+    """
+    if _script('plant_node') is None:
+        pytest.skip('the console scripts are not installed in this environment')
+    from rclpy.context import Context
+    from rclpy.executors import SingleThreadedExecutor
+    from rclpy.node import Node
+    domain = str(100 + (os.getpid() + 50) % 100)
+    # The in-process harness turns discovery off; processes must find each other on the host.
+    monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
+    processes = _Processes(domain)
+    processes.start('plant_node', '-r', 'joint_states:=raw/joint_states', '-p', 'noise_std:=0.01')
+    processes.start('controller_node')
+    context = Context()
+    rclpy.init(context=context, domain_id=int(domain))
+    node = Node('faulty_link', context=context)
+    executor = SingleThreadedExecutor(context=context)
+    executor.add_node(node)
+    rng = np.random.default_rng(7)
+    link = {'blackout': False}
+    angles = []
+    relay = node.create_publisher(JointState, 'joint_states', 10)
+    setpoint = node.create_publisher(Float64, 'j2/setpoint', 10)
+
+    def on_raw(message):
+        angles.append((time.monotonic(), math.degrees(message.position[0])))
+        if link['blackout'] or rng.random() < 0.1:
+            return
+        relay.publish(message)
+        if rng.random() < 0.1:
+            relay.publish(message)
+
+    node.create_subscription(JointState, 'raw/joint_states', on_raw, 100)
+
+    def spin(seconds):
+        end = time.monotonic() + seconds
+        while time.monotonic() < end:
+            executor.spin_once(timeout_sec=0.02)
+
+    def command_step(degrees):
+        deadline = time.monotonic() + 30.0
+        while (setpoint.get_subscription_count() < 1 or not angles) and \
+                time.monotonic() < deadline:
+            executor.spin_once(timeout_sec=0.05)
+        assert angles, 'no joint_states from the plant process'
+        spin(0.5)
+        setpoint.publish(Float64(data=math.radians(degrees)))
+
+    def settled_on(degrees, deadline):
+        # Process start-up and discovery take a varying time: wait for 1.5 s within 0.5 deg.
+        start = time.monotonic()
+        while time.monotonic() < start + deadline:
+            spin(0.25)
+            now = time.monotonic()
+            window = [a for t, a in angles if t >= max(start, now - 1.5)]
+            if now - start > 1.5 and len(window) > 100 and \
+                    max(abs(a - degrees) for a in window) < 0.5:
+                return True
+        return False
+
+    try:
+        command_step(20.0)
+        spin(0.6)
+        link['blackout'] = True
+        spin(1.0)
+        link['blackout'] = False
+        assert settled_on(20.0, 15.0), 'no settling after drops, duplicates and a blackout'
+        command_step(-10.0)
+        spin(0.6)                                   # mid-motion
+        processes.stop('controller_node')
+        processes.start('controller_node')
+        command_step(-10.0)
+        assert settled_on(-10.0, 15.0), 'no settling after the controller restarted'
+        processes.stop('plant_node')                # back to its initial angle, 0 deg
+        processes.start('plant_node', '-r', 'joint_states:=raw/joint_states',
+                        '-p', 'noise_std:=0.01')
+        assert settled_on(-10.0, 20.0), 'no settling after the plant restarted'
+    finally:
+        errors = processes.stop_all()
+        executor.shutdown()
+        node.destroy_node()
+        rclpy.try_shutdown(context=context)
+    for name, text in errors.items():
+        assert 'Traceback' not in text, f'{name}: {text[-2000:]}'
