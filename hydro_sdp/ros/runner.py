@@ -37,11 +37,6 @@ def run_node(node_cls: type[Node], args: list[str] | None = None) -> None:
     except (HydroSdpError, OSError, ParameterException, NameValidationException) as error:
         sys.stderr.write(f'error: {error}\n')
         code = 2
-    except Exception:
-        # SIGTERM shuts the context down while a callback may still be publishing; the
-        # "context is invalid" error that follows is the shutdown, not a fault.
-        if rclpy.ok():
-            raise
     finally:
         if node is not None:
             node.destroy_node()
