@@ -36,12 +36,21 @@ class Outcome:
     lines: list[str] = field(default_factory=list)
 
 
-def positive_float(text: str) -> float:
-    """Argparse type: a finite number > 0."""
+def _parse_number(text: str) -> float:
     try:
-        value = float(text)
+        return float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f'expected a number, got {text!r}') from None
+
+
+def json_number(value: float) -> float | None:
+    """Return ``value`` for a ``--json`` object, or None (JSON null) if it is not finite."""
+    return value if math.isfinite(value) else None
+
+
+def positive_float(text: str) -> float:
+    """Argparse type: a finite number > 0."""
+    value = _parse_number(text)
     if not (math.isfinite(value) and value > 0.0):
         raise argparse.ArgumentTypeError(f'must be a positive number, got {text!r}')
     return value
@@ -49,10 +58,7 @@ def positive_float(text: str) -> float:
 
 def non_negative_float(text: str) -> float:
     """Argparse type: a finite number >= 0."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f'expected a number, got {text!r}') from None
+    value = _parse_number(text)
     if not (math.isfinite(value) and value >= 0.0):
         raise argparse.ArgumentTypeError(f'must be a number >= 0, got {text!r}')
     return value
@@ -60,10 +66,7 @@ def non_negative_float(text: str) -> float:
 
 def finite_float(text: str) -> float:
     """Argparse type: any finite number."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f'expected a number, got {text!r}') from None
+    value = _parse_number(text)
     if not math.isfinite(value):
         raise argparse.ArgumentTypeError(f'must be finite, got {text!r}')
     return value

@@ -3,10 +3,9 @@
 from __future__ import annotations
 
 import argparse
-import math
 from pathlib import Path
 
-from hydro_sdp.cli.common import add_bag_options, Outcome, read_records, table
+from hydro_sdp.cli.common import add_bag_options, json_number, Outcome, read_records, table
 from hydro_sdp.cli.progress import ProgressBar
 from hydro_sdp.core.diagnose import (
     diagnose, Diagnosis, runs_of, simulate_record, velocity_residuals, VOCABULARY)
@@ -54,16 +53,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.set_defaults(run=run)
 
 
-def _number(value: float) -> float | None:
-    return value if math.isfinite(value) else None
-
-
 def describe(result: Diagnosis) -> dict:
     """Return the ``--json`` object of a diagnosis."""
     return {
         'effect': result.effect,
         'candidates': [{'effect': c.effect, 'applicable': c.applicable, 'gain': c.gain,
-                        't': _number(c.t), 'significant': c.significant,
+                        't': json_number(c.t), 'significant': c.significant,
                         'parameters': c.parameters, 'evidence': c.evidence}
                        for c in result.candidates],
         'ledger': [{'effect': s.effect, 'parameters': s.parameters,

@@ -3,10 +3,9 @@
 from __future__ import annotations
 
 import argparse
-import math
 from pathlib import Path
 
-from hydro_sdp.cli.common import add_bag_options, Outcome, read_records, table
+from hydro_sdp.cli.common import add_bag_options, json_number, Outcome, read_records, table
 from hydro_sdp.core.evaluate import evaluate, simulated_angles
 from hydro_sdp.files import load_model
 from hydro_sdp.plots import plot_record, save_figure
@@ -40,19 +39,15 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.set_defaults(run=run)
 
 
-def _number(value: float) -> float | None:
-    return value if math.isfinite(value) else None
-
-
 def run(args: argparse.Namespace) -> Outcome:
     """Run ``evaluate``."""
     model = load_model(args.model)
     records = read_records(args.bags, args.joint or model.joint, args.command_topic)
     scores = evaluate(records, model)
-    rows = [{'bag': bag, 'samples': s.samples, 'model': s.model, 'sdp_dz': _number(s.sdp_dz),
+    rows = [{'bag': bag, 'samples': s.samples, 'model': s.model, 'sdp_dz': json_number(s.sdp_dz),
              'linear': s.linear, 'linear_gain': s.linear_gain}
             for bag, s in zip(args.bags, scores)]
-    mean = {key: _number(float(np.mean([getattr(s, key) for s in scores])))
+    mean = {key: json_number(float(np.mean([getattr(s, key) for s in scores])))
             for key in ('model', 'sdp_dz', 'linear')}
     payload = {'mae': mean, 'records': rows, 'model_file': args.model}
     if args.plot_dir:

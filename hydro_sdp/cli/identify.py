@@ -7,7 +7,7 @@ import math
 from pathlib import Path
 
 from hydro_sdp.cli.common import (
-    add_bag_options, finite_float, Outcome, positive_float, read_records, table)
+    add_bag_options, finite_float, json_number, Outcome, positive_float, read_records, table)
 from hydro_sdp.cli.progress import ProgressBar
 from hydro_sdp.core.identify import Identification, identify, KINDS
 from hydro_sdp.files import save_model
@@ -57,10 +57,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.set_defaults(run=run)
 
 
-def _number(value: float) -> float | None:
-    return value if math.isfinite(value) else None
-
-
 def describe(result: Identification) -> dict:
     """Return the ``--json`` object of an identification."""
     segmentation = result.segmentation
@@ -80,7 +76,7 @@ def describe(result: Identification) -> dict:
                             'fit': result.delay.fit, 'onset': result.delay.onset,
                             'xcorr': result.delay.xcorr, 'agree': result.delay.agree},
         'noise_std': segmentation.noise_std,
-        'comparison': [{'kind': s.kind, 'mae': _number(s.mae), 'note': s.note}
+        'comparison': [{'kind': s.kind, 'mae': json_number(s.mae), 'note': s.note}
                        for s in result.comparison],
         'mae': result.mae,
     })
