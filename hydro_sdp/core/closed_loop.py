@@ -19,9 +19,10 @@ from typing import Callable, Sequence
 
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import ConfigurationError
-from hydro_sdp.core.model import check_sample_period, JointModel
+from hydro_sdp.core.model import JointModel
 from hydro_sdp.core.pip_controller import PipIdzController
 from hydro_sdp.core.simulation import JointSimulator
+from hydro_sdp.core.timing import check_sample_period
 import numpy as np
 
 

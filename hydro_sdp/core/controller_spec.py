@@ -19,12 +19,13 @@ from typing import Any, Mapping, Sequence
 from hydro_sdp.core._validate import require_float, require_ordered_pair, require_pair
 from hydro_sdp.core.errors import ConfigurationError, ModelFileError
 from hydro_sdp.core.idz import IDZ_MODES, InverseDeadZone
-from hydro_sdp.core.model import check_sample_period, JointModel
+from hydro_sdp.core.model import JointModel
 from hydro_sdp.core.pip_controller import ControllerSettings, PipIdzController
 from hydro_sdp.core.pip_design import (
     closed_loop_poles, DiscretePlant, lq_design, LqWeights, PipGains, pole_assignment)
 from hydro_sdp.core.programs import rest_command
 from hydro_sdp.core.static_maps import linearise, LinearMap, SdpDzMap, SdpMap
+from hydro_sdp.core.timing import check_sample_period
 import numpy as np
 
 CONTROLLER_FORMAT = 'hydro_sdp/controller/v1'

@@ -19,58 +19,13 @@ from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.effects import Effect, effect_from_mapping, effect_to_mapping, EFFECT_TYPES
 from hydro_sdp.core.errors import ConfigurationError, ModelFileError
 from hydro_sdp.core.static_maps import MAP_KINDS, SdpMap, StaticMap
+from hydro_sdp.core.timing import check_sample_period, delay_samples
 import numpy as np
 
 MODEL_FORMAT = 'hydro_sdp/model/v1'
 
 _COMMON_KEYS = ('format', 'joint', 'kind', 'delay', 'angle_limits', 'input_limits')
 _ALL_MAP_KEYS = tuple(dict.fromkeys(key for cls in MAP_KINDS.values() for key in cls.keys))
-
-
-def delay_samples(delay: float, dt: float) -> int:
-    """
-    Convert a delay in seconds to whole samples at period ``dt`` (nearest, ties up).
-
-    The papers count the delay from issuing a command to the first sample that
-    shows its motion, so it is at least one sample: a command issued at ``t_k``
-    can move the joint in the interval ending at ``t_{k+1}`` at the earliest.
-
-    Parameters
-    ----------
-    delay : float
-        Pure time delay, s.
-    dt : float
-        Sample period, s.
-
-    Returns
-    -------
-    int
-        Delay in samples.
-
-    """
-    check_sample_period(dt)
-    # The small tolerance keeps 0.15 / 0.05 = 2.9999999999999996 at 3.
-    return max(1, int(math.floor(delay / dt + 0.5 + 1e-9)))
-
-
-def check_sample_period(dt: float) -> float:
-    """
-    Return ``dt`` if it is a usable sample period, else raise :class:`ConfigurationError`.
-
-    Parameters
-    ----------
-    dt : float
-        Sample period, s.
-
-    Returns
-    -------
-    float
-        The same period.
-
-    """
-    if not (isinstance(dt, (int, float)) and math.isfinite(dt) and dt > 0.0):
-        raise ConfigurationError(f'sample period must be a positive number of seconds, got {dt!r}')
-    return float(dt)
 
 
 @dataclass(frozen=True)

@@ -20,8 +20,9 @@ import math
 
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import ConfigurationError
-from hydro_sdp.core.model import check_sample_period, JointModel
+from hydro_sdp.core.model import JointModel
 from hydro_sdp.core.static_maps import SdpMap
+from hydro_sdp.core.timing import check_sample_period
 import numpy as np
 
 #: Process noise of the random walk, as a ratio to the measurement noise variance.

@@ -27,7 +27,8 @@ from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.effects import (
     AngleDependentVelocity, Backlash, DirectionDependentDelay, ValveLag)
 from hydro_sdp.core.errors import DataError
-from hydro_sdp.core.model import check_sample_period, delay_samples, JointModel
+from hydro_sdp.core.model import JointModel
+from hydro_sdp.core.timing import check_sample_period, delay_samples
 import numpy as np
 from scipy.signal import lfilter
 
