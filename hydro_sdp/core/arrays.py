@@ -1,7 +1,10 @@
 """Type aliases shared by the core modules."""
 
+from typing import Any
+
 import numpy as np
 import numpy.typing as npt
 
-FloatArray = npt.NDArray[np.float64]
-IntArray = npt.NDArray[np.int64]
+# Floating rather than float64 alone: numpy's linear algebra is typed to return the former.
+FloatArray = npt.NDArray[np.floating[Any]]
+IntArray = npt.NDArray[np.integer[Any]]

@@ -246,7 +246,7 @@ def _polynomial_from_poles(poles: Sequence[complex]) -> FloatArray:
     coefficients = np.poly(np.asarray(poles, dtype=complex))
     if np.max(np.abs(coefficients.imag)) > 1e-9:
         raise ConfigurationError('complex poles must come in conjugate pairs')
-    return coefficients.real
+    return np.asarray(coefficients.real, dtype=np.float64)
 
 
 def pole_assignment(plant: DiscretePlant, poles: Sequence[complex]) -> PipGains:

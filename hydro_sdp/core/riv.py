@@ -121,11 +121,14 @@ def _regressors(y: FloatArray, u: FloatArray, n: int, m: int, delay: int) -> Flo
     return np.column_stack(columns) if columns else np.zeros((size, 0))
 
 
-def _as_experiments(y, u) -> list[tuple[FloatArray, FloatArray]]:
-    if isinstance(y, np.ndarray) and y.ndim == 1:
-        y, u = [y], [u]
+def _as_experiments(y: FloatArray | Sequence[FloatArray],
+                    u: FloatArray | Sequence[FloatArray]) -> list[tuple[FloatArray, FloatArray]]:
+    # One experiment may be given as bare arrays, several as sequences of arrays.
+    single = isinstance(y, np.ndarray) and y.ndim == 1
+    outputs = [y] if single else list(y)
+    inputs = [u] if single else list(u)
     pairs = []
-    for index, (output, data) in enumerate(zip(y, u)):
+    for index, (output, data) in enumerate(zip(outputs, inputs)):
         output = np.asarray(output, dtype=np.float64)
         data = np.asarray(data, dtype=np.float64)
         if output.shape != data.shape or output.ndim != 1:
@@ -186,7 +189,8 @@ def sriv(y: FloatArray | Sequence[FloatArray], u: FloatArray | Sequence[FloatArr
     if used <= parameters + 1:
         raise DataError(f'too few samples ({used}) for {parameters} parameters')
 
-    def pooled(a_filter: FloatArray, c_filter: FloatArray, rho: FloatArray | None):
+    def pooled(a_filter: FloatArray, c_filter: FloatArray, rho: FloatArray | None
+               ) -> tuple[FloatArray, FloatArray, FloatArray, list[FloatArray]]:
         """Sum the IV cross-products over experiments with per-experiment filtering."""
         instrument_product = np.zeros((parameters, parameters))
         cross = np.zeros((parameters, parameters))
@@ -215,10 +219,10 @@ def sriv(y: FloatArray | Sequence[FloatArray], u: FloatArray | Sequence[FloatArr
 
     cross, rhs, _, _ = pooled(np.ones(1), np.ones(1), None)
     try:
-        rho = np.linalg.lstsq(cross, rhs, rcond=None)[0]
+        rho: FloatArray = np.linalg.lstsq(cross, rhs, rcond=None)[0]
     except np.linalg.LinAlgError as error:
         raise DataError(f'the least-squares start failed: {error}') from None
-    noise = np.ones(1)
+    noise: FloatArray = np.ones(1)
     notes: list[str] = []
     converged = False
     iterations = 0
@@ -232,7 +236,7 @@ def sriv(y: FloatArray | Sequence[FloatArray], u: FloatArray | Sequence[FloatArr
             noise = _ar_fit(residual, noise_order)
         cross, rhs, _, _ = pooled(a_hat, noise, rho_stable)
         new = np.linalg.lstsq(cross, rhs, rcond=None)[0]
-        change = np.linalg.norm(new - rho) / max(np.linalg.norm(rho), 1e-12)
+        change = float(np.linalg.norm(new - rho)) / max(float(np.linalg.norm(rho)), 1e-12)
         rho = new
         if change < tol:
             converged = True
@@ -249,29 +253,29 @@ def sriv(y: FloatArray | Sequence[FloatArray], u: FloatArray | Sequence[FloatArr
         _, _, instrument_product, simulated = pooled(a_stable, noise,
                                                      np.r_[a_stable[1:], rho[n:]])
     errors = [output[k0:] - x[k0:] for (output, _), x in zip(experiments, simulated)]
-    error = np.concatenate(errors)
+    misfit = np.concatenate(errors)
     outputs = np.concatenate([output[k0:] for output, _ in experiments])
-    sigma2 = float(np.sum(error ** 2) / max(error.size - parameters, 1))
+    sigma2 = float(np.sum(misfit ** 2) / max(misfit.size - parameters, 1))
     innovation_variance = sigma2
     if noise_order > 0:
         innovations = np.concatenate([lfilter(noise, [1.0], e) for e in errors])
         innovation_variance = float(np.var(innovations))
     try:
-        covariance = innovation_variance * np.linalg.inv(instrument_product)
+        covariance: FloatArray = innovation_variance * np.linalg.inv(instrument_product)
     except np.linalg.LinAlgError:
         covariance = np.full((parameters, parameters), np.inf)
         notes.append('the instrument product matrix is singular')
     variance_y = float(np.var(outputs))
-    rt2 = 1.0 - float(np.var(error)) / variance_y if variance_y > 0 else float('nan')
+    rt2 = 1.0 - float(np.var(misfit)) / variance_y if variance_y > 0 else float('nan')
     diff_error = np.concatenate([np.diff(e) for e in errors])
     diff_y = np.concatenate([np.diff(output[k0:]) for output, _ in experiments])
     rt2_diff = 1.0 - float(np.var(diff_error)) / float(np.var(diff_y)) \
         if np.var(diff_y) > 0 else float('nan')
     with np.errstate(divide='ignore', invalid='ignore'):
         nevn = float(np.mean(np.diag(covariance) / rho ** 2))
-        yic = float(np.log(np.var(error) / variance_y) + np.log(nevn))
+        yic = float(np.log(np.var(misfit) / variance_y) + np.log(nevn))
     norm = np.linalg.norm(outputs - outputs.mean())
-    fit = 100.0 * (1.0 - np.linalg.norm(error) / norm) if norm > 0 else float('nan')
+    fit = 100.0 * (1.0 - float(np.linalg.norm(misfit)) / float(norm)) if norm > 0 else float('nan')
     return TfEstimate(
         a=np.convolve(a_hat, factor), b=rho[n:].copy(), delay=delay, parameters=rho,
         covariance=covariance, sigma2=sigma2, rt2=rt2, rt2_diff=rt2_diff, yic=yic, fit=fit,
@@ -322,7 +326,8 @@ class StructureRow:
     stable: bool
 
 
-def structure_search(y, u, n_range: Sequence[int], m_range: Sequence[int],
+def structure_search(y: FloatArray | Sequence[FloatArray], u: FloatArray | Sequence[FloatArray],
+                     n_range: Sequence[int], m_range: Sequence[int],
                      delay_range: Sequence[int], *, known_factor: Sequence[float] = (1.0,),
                      criterion: str = 'yic', min_rt2: float | None = None) -> list[StructureRow]:
     """
@@ -369,11 +374,11 @@ def structure_search(y, u, n_range: Sequence[int], m_range: Sequence[int],
         min_rt2 = max((row.rt2 for row in rows if row.stable and np.isfinite(row.rt2)),
                       default=0.0) - 1e-3
     if criterion == 'yic':
-        def key(row):
+        def key(row: StructureRow) -> tuple[bool, float]:
             ok = row.rt2 >= min_rt2 and row.stable and np.isfinite(row.yic)
             return (not ok, row.yic if np.isfinite(row.yic) else np.inf)
     else:
-        def key(row):
+        def key(row: StructureRow) -> tuple[bool, float]:
             value = getattr(row, criterion)
             return (not row.stable, -value if np.isfinite(value) else np.inf)
     return sorted(rows, key=key)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import sys
+from typing import Callable
 
 from hydro_sdp.core.errors import HydroSdpError
 import rclpy
@@ -11,7 +12,7 @@ from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 
 
-def run_node(node_cls: type[Node], args: list[str] | None = None) -> None:
+def run_node(node_cls: Callable[[], Node], args: list[str] | None = None) -> None:
     """
     Initialise rclpy, spin one node of ``node_cls`` and always clean up.
 
@@ -20,7 +21,7 @@ def run_node(node_cls: type[Node], args: list[str] | None = None) -> None:
 
     Parameters
     ----------
-    node_cls : type[Node]
+    node_cls : callable returning Node
         Node class constructed with no arguments.
     args : list[str] or None
         Command-line arguments (``--ros-args`` included) passed to ``rclpy.init``.
