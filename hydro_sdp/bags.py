@@ -2,7 +2,7 @@
 Reading and writing rosbag2 bags (sqlite3 and mcap) with ``rosbags``.
 
 Bags hold ``/joint_states`` (``sensor_msgs/msg/JointState``, radians) and one
-``std_msgs/msg/Float64`` valve command topic per joint (interfaces.md
+``std_msgs/msg/Float64`` valve command topic per joint (docs/interfaces.md
 section 2). :func:`read_bag` turns a bag into arrays; :meth:`BagData.record`
 picks one joint and its command and returns a :class:`~hydro_sdp.core.records.Record`
 in degrees. Anything that cannot be used is refused with a typed error that

@@ -151,7 +151,7 @@ def _load(path: str | os.PathLike[str], build: Callable[[Any], Any]) -> Any:
 
 def load_model(path: str | os.PathLike[str]) -> JointModel:
     """
-    Load and validate a model file (interfaces.md section 1).
+    Load and validate a model file (docs/interfaces.md section 1).
 
     Parameters
     ----------

@@ -3,7 +3,7 @@ What every ``hydro-sdp`` command shares: options, output and exit codes.
 
 Commands return a :class:`Outcome`; :func:`hydro_sdp.cli.main.main` prints it
 as one JSON object (``--json``) or as text, and turns errors into the exit
-codes of interfaces.md section 4: 0 success, 2 bad input with a one-line
+codes of docs/interfaces.md section 4.1: 0 success, 2 bad input with a one-line
 ``error: ...`` on stderr, 1 internal failure.
 
 """
@@ -149,7 +149,7 @@ def read_records(bags: list[str], joint: str | None, command_topic: str | None,
 
 
 def add_bag_options(parser: argparse.ArgumentParser) -> None:
-    """Add ``--joint`` and ``--command-topic`` (interfaces.md section 2)."""
+    """Add ``--joint`` and ``--command-topic`` (docs/interfaces.md section 2)."""
     parser.add_argument('--joint', help='joint name in JointState (default: the only one)')
     parser.add_argument('--command-topic',
                         help='Float64 command topic (default: the only one ending in '

@@ -1,7 +1,7 @@
 """
 Entry point of the ``hydro-sdp`` command line.
 
-Exit codes (interfaces.md section 4): 0 success; 2 bad input, with one line
+Exit codes (docs/interfaces.md section 4.1): 0 success; 2 bad input, with one line
 ``error: ...`` on stderr and no traceback; 1 internal failure; 130 when
 interrupted (nothing half-written is left behind: files are written atomically).
 

@@ -6,7 +6,7 @@ it; between control instants the valve command is held (zero-order hold). At
 plant sample ``j`` the controller, when ``j`` is a control instant, reads the
 (noisy) angle ``y_j`` and issues the command the plant applies over the next
 interval (``v_{j+1}``): exactly what the ROS nodes do in lockstep, and the
-timing of the verified loops of methods.md 4.6. Several joints run side by
+timing of the verified loops of docs/methods.md section 4.6. Several joints run side by
 side, each with its own model, controller and set-point.
 
 """
@@ -258,7 +258,7 @@ def step_metrics(trace: LoopTrace, *, band: float = 0.5, initial: float | None =
 
 def valve_reversals(v: FloatArray, rest: float = 0.0) -> int:
     """
-    Count how often the valve command changes side of ``rest`` (methods.md 5.2).
+    Count how often the valve command changes side of ``rest`` (docs/methods.md section 5.2).
 
     Parameters
     ----------

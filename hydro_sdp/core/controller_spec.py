@@ -3,7 +3,7 @@ Controller specifications: PIP-IDZ design from a joint model, and the controller
 
 :func:`design_from_model` turns a :class:`~hydro_sdp.core.model.JointModel`
 into a :class:`ControllerSpec` at a chosen control period: IDZ slopes from the
-chord of the static map (methods.md 3.3), the delay in control samples, and
+chord of the static map (docs/methods.md section 3.3), the delay in control samples, and
 PIP gains for the plant the IDZ leaves behind, ``y_k = y_{k-1} + u_{k-tau}``.
 The spec is what ``hydro-sdp design`` writes (format ``hydro_sdp/controller/v1``)
 and what the controller node loads.
@@ -246,7 +246,7 @@ def idz_for_model(model: JointModel, control_period: float, *, beta: float | Non
                   mode: str = 'zero',
                   v_range: tuple[float, float] | None = None) -> InverseDeadZone:
     """
-    Inverse dead-zone of a model at the control period (methods.md 3.3).
+    Inverse dead-zone of a model at the control period (docs/methods.md section 3.3).
 
     Parameters
     ----------

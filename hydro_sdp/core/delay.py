@@ -7,7 +7,7 @@ and looks like extra delay; the estimators here avoid that:
 * **fit** (the answer): for each candidate delay, the differenced angle is
   explained by one mean speed per experiment and delayed command level (a
   non-parametric static map); the delay whose map explains most of it wins.
-  This is the differenced-output fit of methods.md 1.5, free of any map shape.
+  This is the differenced-output fit of docs/methods.md section 1.5, free of any map shape.
 * **onset**: on the fastest steps, the time the motion crosses six noise
   standard deviations, moved back by the time that distance takes at the step's
   speed.
@@ -214,7 +214,7 @@ def level_speeds(experiments: Sequence[Experiment], delay: int, dt: float, *,
     Mean speed per experiment and delayed command level (the points of Figs. 2 and 3).
 
     For a step experiment this is the RIV estimate of ``b_tau`` of West et al.
-    (methods.md 1.10): with the integrator known, the integrated-input SRIV is
+    (docs/methods.md section 1.10): with the integrator known, the integrated-input SRIV is
     least squares, and its speed is the mean of the differenced angle.
 
     Parameters

@@ -1,11 +1,11 @@
 """
-The discrepancy workflow (interfaces.md section 5).
+The discrepancy workflow (docs/interfaces.md section 5).
 
 Find where a model and measured data disagree, name the missing effect, add it,
 and show the gap shrink.
 
 The measured commands are replayed through the model; the velocity residual
-``eps_k = dy_k - dy^_k`` (measured against simulated increments, methods.md 8)
+``eps_k = dy_k - dy^_k`` (measured against simulated increments, docs/methods.md section 8.1)
 localises a discrepancy in time without the drift of the simulation error.
 For every word of the vocabulary a candidate model is built that adds that
 effect and only it (a dead-zone, saturation, asymmetry, a new delay, separate
@@ -499,7 +499,7 @@ def _try_angle_velocity(context: _Context):
         return Candidate('angle_dependent_velocity', False), None
     # eps ~ dt |w| (A cos y + B sin y) with A = c cos(phi), B = -c sin(phi): a linear
     # regression of the velocity residual on the model speed times the angle's cosine and
-    # sine (the library term 'q cos(y) sgn(q)' of methods.md 8) gives c and phi at once.
+    # sine (the library term 'q cos(y) sgn(q)' of docs/methods.md 8.6) gives c and phi at once.
     rows, targets = [], []
     for run, residual in zip(context.runs, context.base):
         record = run.record

@@ -1,7 +1,7 @@
 """
 Effects: composable additions to a joint model.
 
-Each effect is one word of the discrepancy vocabulary (interfaces.md section 5)
+Each effect is one word of the discrepancy vocabulary (docs/interfaces.md section 5)
 that cannot be expressed by the base parameters of a static map. An effect is a
 frozen dataclass whose fields are its parameters in the model file's
 ``effects`` mapping, e.g. ``effects: {valve_lag: {time_constant: 0.08}}``. The

@@ -5,7 +5,7 @@ A record is cut where the command leaves its rest value and where it returns.
 A block of one held command is a *step* experiment (West et al. 2018, Fig. 1);
 a block of changing commands (random levels, closed-loop traffic) is a *run*.
 Each experiment keeps some samples of command history before its start, so
-that the delayed input of its first samples is known (methods.md 2.3), and
+that the delayed input of its first samples is known (docs/methods.md section 2.3), and
 ends before the joint is clamped by an end stop: an end stop makes the joint
 stand still although the command drives it, which no static map explains.
 What is dropped is kept with the reason.

@@ -6,7 +6,7 @@ sample. The IDZ turns it into a valve command ``v`` by inverting the chord
 model ``q_lin(v) = s_n (v - a3)`` below the dead-zone and ``s_p (v - a6)``
 above it, so that the loop sees ``y_k = y_{k-1} + u_{k-tau}``. Near ``u = 0``
 a pure inverse would flip between the two edges at every sample; three modes
-avoid that (methods.md 5.2): a zero band (the paper's, ``v = rest`` while
+avoid that (docs/methods.md section 5.2): a zero band (the paper's, ``v = rest`` while
 ``|u| <= beta``), a smooth blend of the two branches over ``beta``, and a
 hysteresis (Schmitt) band that switches branch only when ``u`` crosses ``+-beta``.
 

@@ -1,5 +1,5 @@
 """
-Fitting the static map of a joint to experiments (methods.md section 2).
+Fitting the static map of a joint to experiments (docs/methods.md section 2).
 
 Every experiment predicts its angles from its initial state with
 ``pred_k = x_{k-1} + dt rate(v_{k-tau})``, ``Z_k = y_k - pred_k`` and

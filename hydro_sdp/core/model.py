@@ -1,5 +1,5 @@
 """
-The joint model: the model file of interfaces.md section 1 as a frozen object.
+The joint model: the model file of docs/interfaces.md section 1 as a frozen object.
 
 A :class:`JointModel` is a static map (the ``kind``), a pure delay, optional end
 stops and input limits, and a tuple of effects. It is built from and turned
@@ -78,7 +78,7 @@ class JointModel:
 
     @property
     def kind(self) -> str:
-        """Model kind: the static map's family (``sdp``, ``sdp_dz`` or ``linear``)."""
+        """Model kind: the map family (``sdp``, ``sdp_dz``, ``linear``, ``pwl`` or ``poly``)."""
         return self.static_map.kind
 
     @property
@@ -149,7 +149,7 @@ class JointModel:
         Returns
         -------
         dict[str, Any]
-            Keys in the order of interfaces.md section 1.
+            Keys in the order of docs/interfaces.md section 1.
 
         """
         data: dict[str, Any] = {

@@ -1,5 +1,5 @@
 """
-Online identification of the SDP map (methods.md section 7), one sample at a time.
+Online identification of the SDP map (docs/methods.md section 7), one sample at a time.
 
 A random-walk Kalman filter tracks ``theta = (a1 .. a6)`` of eq. (5) (per-sample
 units at the records' sample period) from ``dy_k = q(v_{k-tau}; theta) + noise``.
@@ -32,7 +32,7 @@ NOISE_VARIANCE_RATIOS = (1e-6, 1e-5, 1e-5, 1e-6, 1e-5, 1e-5)
 @dataclass(frozen=True)
 class OnlineSettings:
     """
-    Tuning of the online identifier (defaults from methods.md 7.2, for +-10 V commands).
+    Tuning of the online identifier (defaults from docs/methods.md 7.2, for +-10 V commands).
 
     Parameters
     ----------

@@ -2,7 +2,7 @@
 The runtime PIP-IDZ controller: one object used offline and inside the ROS node.
 
 Each call of :meth:`PipIdzController.step` is one control sample of the
-incremental PIP law (eq. (8) of West et al. 2018, generalised in methods.md 4.2)
+incremental PIP law (eq. (8) of West et al. 2018, generalised in docs/methods.md section 4.2)
 
 ``u_k = u_{k-1} - sum_j g_j (u_{k-j} - u_{k-j-1}) - sum_i f_i (y_{k-i} - y_{k-i-1})
 + k_I (d_k - y_k)``
@@ -11,7 +11,7 @@ followed by the clamp of ``u`` to its limits, the inverse dead-zone and the
 clamp of the valve command to the valve's range. The history keeps the ``u``
 that was really applied: the clamped value, or, when the valve range cut the
 command, the increment that the cut command produces (back-calculation). The
-integral action lives only in that history, so it cannot wind up (methods.md 6).
+integral action lives only in that history, so it cannot wind up (docs/methods.md section 6).
 
 """
 

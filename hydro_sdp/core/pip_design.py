@@ -5,7 +5,7 @@ The plant is ``A(z^-1) y_k = B(z^-1) u_k`` with ``A = 1 + a_1 z^-1 + ... + a_n z
 and ``B = b_1 z^-1 + ... + b_m z^-m`` (a pure delay is leading zeros in ``b``).
 The NMSS state is ``[y_k .. y_{k-n+1}, u_{k-1} .. u_{k-m+1}, z_k]`` with the
 integral-of-error state ``z_k = z_{k-1} + d_k - y_k`` (Taylor, Young & Chotai
-2013, *True Digital Control*; methods.md section 4). The control law
+2013, *True Digital Control*; docs/methods.md section 4). The control law
 ``u_k = -k' x_k`` with ``k = [f_0 .. f_{n-1}, g_1 .. g_{m-1}, -k_I]`` is found by
 pole assignment (coefficient matching of the closed-loop polynomial, which,
 unlike scipy's ``place_poles``, accepts repeated poles and poles at the origin)
@@ -121,7 +121,7 @@ class Nmss:
 
 def nmss(plant: DiscretePlant) -> Nmss:
     """
-    Build the NMSS model of ``plant`` (methods.md 4.1).
+    Build the NMSS model of ``plant`` (docs/methods.md section 4.1).
 
     Parameters
     ----------
@@ -320,7 +320,7 @@ class LqWeights:
     """
     Diagonal LQ weights in the True Digital Control convention.
 
-    ``Q = diag(w_y/n .. , w_u/m .., w_e)`` and ``r = w_u/m`` (methods.md 4.4).
+    ``Q = diag(w_y/n .. , w_u/m .., w_e)`` and ``r = w_u/m`` (docs/methods.md section 4.4).
 
     Parameters
     ----------

@@ -3,14 +3,14 @@ Refined instrumental variable estimation of discrete transfer functions (SRIV/RI
 
 ``y_k = [B(z^-1) / A(z^-1)] u_{k-delay} + xi_k`` with ``A = 1 + a_1 z^-1 + .. + a_n z^-n``
 and ``B = b_0 + b_1 z^-1 + .. + b_m z^-m`` (CAPTAIN's ``[n, m + 1, delay]``). SRIV
-(Young 2011, ch. 6-8; methods.md section 1) iterates: simulate the auxiliary
+(Young 2011, ch. 6-8; docs/methods.md section 1) iterates: simulate the auxiliary
 model ``x = B/A u`` as instrument source, prefilter everything with ``1/A``,
 solve the IV normal equations, until the parameters stop changing. Several
 experiments are pooled without filtering across their boundaries. A known
 factor of ``A`` (the integrator ``1 - z^-1`` of a hydraulic joint) is handled by
-filtering the input with its inverse and estimating the rest (methods.md 1.4 a).
+filtering the input with its inverse and estimating the rest (docs/methods.md section 1.4 a).
 With ``noise_order > 0`` the noise is modelled as AR and the prefilter becomes
-``C/A`` (RIV, methods.md 1.6).
+``C/A`` (RIV, docs/methods.md section 1.6).
 
 """
 
@@ -331,7 +331,7 @@ def structure_search(y: FloatArray | Sequence[FloatArray], u: FloatArray | Seque
                      delay_range: Sequence[int], *, known_factor: Sequence[float] = (1.0,),
                      criterion: str = 'yic', min_rt2: float | None = None) -> list[StructureRow]:
     """
-    Estimate every structure in a range and rank them (CAPTAIN ``rivid``, methods.md 1.9).
+    Estimate every structure in a range and rank them (CAPTAIN ``rivid``, docs/methods.md 1.9).
 
     Parameters
     ----------

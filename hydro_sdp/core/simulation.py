@@ -2,7 +2,7 @@
 Simulation of a joint model at any sample period.
 
 ``y_k = clamp(y_{k-1} + dt * w_k, y_min, y_max)`` with ``w_k = rate(v_{k-tau})``
-(eqs. (3)-(4) of West et al., methods.md 3.1-3.2) plus the model's effects.
+(eqs. (3)-(4) of West et al., docs/methods.md sections 3.1-3.2) plus the model's effects.
 :func:`simulate` processes a whole command sequence with numpy; the end-stop
 clamp, a recursion, is solved exactly by reflecting the cumulative sum at one
 stop at a time (:func:`bounded_cumsum`). :class:`JointSimulator` steps the same
@@ -12,7 +12,7 @@ the same trajectory.
 ``v_k`` is the command in force over the sample interval that ends at ``t_k``:
 the one issued during ``[t_{k-1}, t_k)`` (in a bag, the last command received
 before ``t_k``). A controller that reads ``y_k`` therefore issues ``v_{k+1}``.
-This is the timing of the verified closed loops of methods.md 4.6 and of the
+This is the timing of the verified closed loops of docs/methods.md section 4.6 and of the
 ROS nodes, and ``tau = delay / dt`` (15 at 0.01 s, 3 at 0.05 s for J2).
 
 """
@@ -271,7 +271,7 @@ def one_step_increments(model: JointModel, v: FloatArray, y: FloatArray, dt: flo
 
     Unlike a simulation these do not drift: angle-dependent speed and end stops
     use the measured ``y_{k-1}``, so a discrepancy shows where it happens
-    (methods.md 8, the velocity residual). Backlash follows the model's own
+    (docs/methods.md section 8.1, the velocity residual). Backlash follows the model's own
     play state.
 
     Parameters

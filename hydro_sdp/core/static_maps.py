@@ -5,7 +5,7 @@ A hydraulic joint is an integrator whose speed is a static function of the
 delayed command: ``y_k = y_{k-1} + dt * rate(v_{k-tau})``. Each class here is
 one family of that function (one ``kind`` of the model file), with its
 parameters in rate units (deg/s) so that the same map serves every sample
-period. The maths is eq. (5) of West et al. (2018) as corrected in methods.md
+period. The maths is eq. (5) of West et al. (2018) as corrected in docs/methods.md
 section 3.1, and its dead-zone linearisation eq. (6).
 
 """
@@ -131,7 +131,7 @@ class SdpMap:
             Sample period the coefficients refer to, s.
         convention : str
             ``signed`` (the paper's text: ``a1 < 0``) or ``magnitude`` (its Table 1:
-            ``a1 > 0`` is the size of the negative saturation; methods.md 2.3).
+            ``a1 > 0`` is the size of the negative saturation; docs/methods.md section 2.3).
 
         Returns
         -------

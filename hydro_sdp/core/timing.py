@@ -1,7 +1,7 @@
 """
 Timing: which command is in force at each sample, and how delay is counted.
 
-One rule runs through the whole package (docs/methods.md, section "Timing"):
+One rule runs through the whole package (docs/methods.md section 3.4):
 ``v_k`` is the command in force over the interval ``(t_{k-1}, t_k]`` that ends at
 sample ``t_k``: in a bag, the last command received *before* ``t_k``; in a loop,
 the answer a controller gave to ``y_{k-1}``. A pure delay of ``tau`` samples

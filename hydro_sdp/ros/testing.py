@@ -5,7 +5,7 @@ Nodes share one private :class:`rclpy.context.Context` and one
 :class:`~rclpy.executors.SingleThreadedExecutor`, so every callback runs in the
 caller's thread. With simulated time the harness sets every node's clock and
 spins until a barrier holds, one plant period at a time; the trajectory is then
-the same on every run and equal to the offline simulation (conventions.md 4).
+the same on every run and equal to the offline simulation (docs/methods.md section 9.4).
 
 Usable in any test::
 

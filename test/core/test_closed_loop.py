@@ -40,7 +40,7 @@ def test_design_from_the_j2_model_uses_the_papers_slopes(j2):
 
 
 @pytest.mark.parametrize(('target', 'overshoot', 'settling'), [
-    # methods.md 4.6 (printed gains): 0.85 % / 2.15 s, 2.87 % / 2.90 s, 9.0 % / 4.25 s.
+    # docs/methods.md 4.6 (printed gains): 0.85 % / 2.15 s, 2.87 % / 2.90 s, 9.0 % / 4.25 s.
     (20.0, 0.85, 2.15), (-10.0, 2.87, 2.90), (50.0, 9.0, 4.25)])
 def test_j2_steps_settle_as_in_methods_4_6(j2, target, overshoot, settling):
     trace = run_step(j2, paper_controller(j2), target)
@@ -77,7 +77,7 @@ def test_incremental_form_does_not_wind_up_on_a_60_degree_step(j2):
     fast = step_metrics(incremental, initial=0.0)[0]
     slow = step_metrics(positional, initial=0.0)[0]
     assert np.max(incremental.u) == 2.5                      # u saturates
-    # methods.md 6: 3.55 s (4.5 %) against 7.40 s (6.0 %) for the positional form.
+    # docs/methods.md section 6: 3.55 s (4.5 %) against 7.40 s (6.0 %) for the positional form.
     assert fast.settling_time == pytest.approx(3.55, abs=0.1)
     assert slow.settling_time > 1.8 * fast.settling_time
     assert slow.overshoot > fast.overshoot
@@ -93,7 +93,7 @@ def test_idz_edges_outside_the_true_ones_make_a_limit_cycle(j2):
         tail = trace.y[-1000:] - 20.0
         runs[label] = (np.ptp(tail), valve_reversals(trace.v[-1000:]),
                        step_metrics(trace, initial=0.0)[0])
-    # Over-compensation hunts in a +-0.8 deg limit cycle (methods.md 4.6) ...
+    # Over-compensation hunts in a +-0.8 deg limit cycle (docs/methods.md section 4.6) ...
     assert runs['wide'][0] > 1.2 and runs['wide'][1] >= 10
     assert runs['wide'][2].settling_time > 20.0       # in and out of the band to the end
     # ... while the right edges, and edges a little inside the true ones, settle.
@@ -108,7 +108,7 @@ def test_chatter_band_stops_valve_reversals(j2):
         spec = paper_controller(j2, beta=beta)
         trace = run_step(j2, spec, 20.0, 40.0, noise_std=0.01, seed=3)
         reversals[beta] = valve_reversals(trace.v[-2000:])   # the last 20 s
-    assert reversals[0.0] > 100       # methods.md 5.2: about every sample
+    assert reversals[0.0] > 100       # docs/methods.md section 5.2: about every sample
     assert reversals[0.05] <= 2
 
 

@@ -70,7 +70,7 @@ def test_idz_slopes_at_the_control_period(j2):
     chord = linearise(j2.static_map, -2.2, 1.75)
     assert chord.slope[0] == pytest.approx(23.49, abs=5e-3)
     assert chord.slope[1] == pytest.approx(47.90, abs=5e-3)
-    # methods.md 3.3: per 0.05 s control sample.
+    # docs/methods.md section 3.3: per 0.05 s control sample.
     assert chord.slope[0] * 0.05 == pytest.approx(1.1746, abs=1e-4)
     assert chord.slope[1] * 0.05 == pytest.approx(2.3951, abs=1e-4)
     np.testing.assert_allclose(chord.rate(np.array([-2.2, 1.75])),

@@ -44,7 +44,7 @@ def test_tracks_a_dead_zone_that_moves(j2, rng):
     _run(estimator, v[:half], y[:half])
     assert estimator.theta[2] == pytest.approx(-1.3298, abs=0.02)
     _run(estimator, v[half:], y[half:])
-    # methods.md 7.2 tracked this change in 300 s with its slow random walk; the change
+    # docs/methods.md 7.2 tracked this change in 300 s with its slow random walk; the change
     # detector resets the edge covariance and gets there within two minutes.
     assert estimator.resets >= 1
     assert estimator.theta[2] == pytest.approx(-1.10, abs=0.02)

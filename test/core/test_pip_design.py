@@ -30,7 +30,7 @@ def test_pole_assignment_gives_the_papers_gains(poles, expected):
     f0, g1, g2, k_i = expected
     np.testing.assert_allclose([gains.f[0], gains.g[0], gains.g[1], gains.k_i],
                                [f0, g1, g2, k_i], atol=1e-4)
-    # The closed forms of methods.md 4.3 hold exactly.
+    # The closed forms of docs/methods.md section 4.3 hold exactly.
     p1, p2 = poles[:2]
     assert gains.g[0] == pytest.approx((2 - (p1 + p2)).real, abs=1e-12)
     assert gains.f[0] == pytest.approx(gains.g[1], abs=1e-12)

@@ -53,7 +53,7 @@ def test_known_integrator_is_least_squares_on_the_integrated_input(rng):
         inputs.append(u)
     estimate = sriv(outputs, inputs, n=0, m=0, delay=3, known_factor=[1.0, -1.0])
     np.testing.assert_allclose(estimate.a, [1.0, -1.0])
-    # methods.md 1.4 (a): b = sum y U / sum U^2 over the pooled experiments.
+    # docs/methods.md section 1.4 (a): b = sum y U / sum U^2 over the pooled experiments.
     integrated = [np.r_[np.zeros(3), np.cumsum(u)[:-3]] for u in inputs]
     closed = sum(np.dot(y[3:], U[3:]) for y, U in zip(outputs, integrated)) / \
         sum(np.dot(U[3:], U[3:]) for U in integrated)
@@ -88,7 +88,7 @@ def test_structure_search_finds_the_true_structure(rng):
     found = {(row.n, row.m, row.delay): row for row in rows}
     # The true [2 2 2] is among the two best (a third pole can mimic its zero equally well);
     # over-parameterising raises YIC sharply and under-parameterising loses R_T^2
-    # (methods.md 1.8).
+    # (docs/methods.md section 1.8).
     assert (2, 1, 2) in [(row.n, row.m, row.delay) for row in rows[:2]]
     assert found[(3, 2, 2)].yic > found[(2, 1, 2)].yic + 2.0
     assert found[(1, 0, 2)].rt2 < found[(2, 1, 2)].rt2 - 0.05
