@@ -6,7 +6,10 @@ it; between control instants the valve command is held (zero-order hold). At
 plant sample ``j`` the controller, when ``j`` is a control instant, reads the
 (noisy) angle ``y_j`` and issues the command the plant applies over the next
 interval (``v_{j+1}``): exactly what the ROS nodes do in lockstep, and the
-timing of the verified loops of docs/methods.md section 4.6. Several joints run side by
+timing of the verified loops of docs/methods.md section 4.6. The control
+instants come from the same :class:`~hydro_sdp.core.scheduling.ControlSchedule`
+as the node's, and the commands in force from
+:func:`~hydro_sdp.core.timing.command_in_force`. Several joints run side by
 side, each with its own model, controller and set-point.
 
 """
@@ -21,8 +24,9 @@ from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import ConfigurationError
 from hydro_sdp.core.model import JointModel
 from hydro_sdp.core.pip_controller import PipIdzController
+from hydro_sdp.core.scheduling import ControlSchedule, seconds_to_ns
 from hydro_sdp.core.simulation import JointSimulator
-from hydro_sdp.core.timing import check_sample_period
+from hydro_sdp.core.timing import check_sample_period, command_in_force
 import numpy as np
 
 
@@ -129,24 +133,36 @@ def run_closed_loop(joints: Sequence[LoopJoint], *, dt: float, control_period: f
     # one sample at a time.
     noise = np.array([np.random.default_rng([seed, index]).normal(0.0, noise_std, samples)
                       if noise_std > 0 else np.zeros(samples) for index in range(len(joints))])
+    dt_ns = seconds_to_ns(dt)
+    stamps = np.arange(samples, dtype=np.int64) * dt_ns
     traces = []
     for index, joint in enumerate(joints):
         simulator = JointSimulator(joint.model, dt, joint.y0, v_before=joint.controller.last_v)
         setpoint = np.asarray(joint.setpoint, dtype=np.float64)
         y = np.empty(samples)
-        measured = y + noise[index]
-        v = np.empty(samples)
-        u = np.empty(samples)
-        command, increment = joint.controller.last_v, joint.controller.last_u
+        measured = np.empty(samples)
+        # The controller acts at the node's control instants; offline the valve is never
+        # closed by a watchdog, so a 'resume' tick is a plain step (the controller may come
+        # with a history to continue from).
+        schedule = ControlSchedule(every * dt_ns)
+        issued: list[int] = []
+        answers = [(joint.controller.last_u, joint.controller.last_v)]
+        command = joint.controller.last_v
         for j in range(samples):
             y[j] = simulator.angle
             measured[j] = y[j] + noise[index, j]
-            v[j], u[j] = command, increment
-            if j % every == 0:
-                increment, command = joint.controller.step(float(setpoint[j]), measured[j])
+            if schedule.tick(int(stamps[j])) != 'wait':
+                answer = joint.controller.step(float(setpoint[j]), measured[j])
+                schedule.stepped(int(stamps[j]))
+                issued.append(int(stamps[j]))
+                answers.append(answer)
+                command = answer[1]
             simulator.step(command)
             if on_sample is not None and j % 1000 == 0:
                 on_sample(index * samples + j, len(joints) * samples)
+        # v_j is the answer in force over the interval ending at sample j: the last one
+        # issued before t_j (index 0 of ``answers`` is what was in force before the run).
+        u, v = np.array(answers)[command_in_force(stamps, np.array(issued, dtype=np.int64)) + 1].T
         traces.append(LoopTrace(joint.model.joint, np.arange(samples) * dt, y, measured, v, u,
                                 setpoint))
     return traces

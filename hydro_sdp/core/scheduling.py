@@ -1,0 +1,252 @@
+"""
+When a controller may use a feedback sample and when it acts: a pure feedback gate and schedule.
+
+The controller node and the offline closed loop share these rules (docs/methods.md,
+section "Timing"); everything takes stamps and clock readings in integer
+nanoseconds as arguments and returns a decision, so the rules are tested without a
+clock or ROS:
+
+* :class:`FeedbackGate`: stamps must increase (a duplicate or a sample overtaken
+  by a newer one is ignored, the command in force came from fresher feedback); a
+  stamp further than the timeout from the reader's clock is refused (stale, or a
+  clock mix-up); the watchdog says when nothing valid came for the timeout.
+* :class:`ControlSchedule`: control instants every period from the first sample;
+  the first sample at or after an instant is the one controlled, missed instants
+  are skipped; after the valve was closed the next step starts from rest
+  (bumpless resume).
+
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+from hydro_sdp.core.errors import ConfigurationError, DataError
+
+#: What a gate says of a sample: ``ignored`` (not newer than the last one),
+#: ``accepted``, or ``resumed`` (accepted, and the first one after the watchdog fired).
+Admission = Literal['ignored', 'accepted', 'resumed']
+#: What the watchdog says: ``fed`` (valid feedback within the timeout), ``lost`` (the
+#: timeout just passed) or ``blind`` (still nothing valid).
+WatchdogState = Literal['fed', 'lost', 'blind']
+#: What a schedule says of an admitted sample: ``wait`` (no control instant reached),
+#: ``step``, or ``resume`` (step, from rest: forget the controller's history first).
+Tick = Literal['wait', 'step', 'resume']
+
+
+def _positive_ns(value: int, name: str) -> int:
+    if isinstance(value, bool) or not isinstance(value, int) or value <= 0:
+        raise ConfigurationError(f'{name} must be a positive whole number of ns, got {value!r}')
+    return value
+
+
+def seconds_to_ns(seconds: float) -> int:
+    """
+    Return a duration in seconds as whole nanoseconds (nearest).
+
+    Parameters
+    ----------
+    seconds : float
+        Duration, s.
+
+    Returns
+    -------
+    int
+        Duration, ns.
+
+    """
+    return int(round(float(seconds) * 1e9))
+
+
+class FeedbackGate:
+    """
+    Admission of feedback samples by stamp, and the feedback watchdog.
+
+    Parameters
+    ----------
+    timeout_ns : int
+        Longest accepted distance of a stamp from the clock, and longest silence
+        before the watchdog fires, ns.
+    now_ns : int
+        Clock reading at creation, ns (the silence is counted from here).
+
+    """
+
+    def __init__(self, timeout_ns: int, now_ns: int) -> None:
+        self._timeout_ns = _positive_ns(timeout_ns, 'timeout_ns')
+        self.last_stamp: int | None = None
+        self.last_valid_ns = int(now_ns)
+        self.blind = False
+
+    @property
+    def timeout_ns(self) -> int:
+        """Feedback timeout, ns (settable; applies from the next call)."""
+        return self._timeout_ns
+
+    @timeout_ns.setter
+    def timeout_ns(self, value: int) -> None:
+        self._timeout_ns = _positive_ns(value, 'timeout_ns')
+
+    def admit(self, stamp_ns: int, now_ns: int) -> Admission:
+        """
+        Decide on one sample stamped ``stamp_ns`` arriving at clock reading ``now_ns``.
+
+        Parameters
+        ----------
+        stamp_ns : int
+            Stamp of the sample, ns.
+        now_ns : int
+            Reader's clock, ns; 0 means simulated time has not started, and the
+            freshness check is skipped.
+
+        Returns
+        -------
+        Admission
+            ``ignored`` for a duplicate or overtaken sample (nothing changes),
+            ``accepted``, or ``resumed`` after a silence the watchdog reported.
+
+        Raises
+        ------
+        DataError
+            If the stamp is further than the timeout from the clock, behind or
+            ahead (one from the future would make every later sample look old);
+            the caller closes the valve.
+
+        """
+        if self.last_stamp is not None and stamp_ns <= self.last_stamp:
+            return 'ignored'
+        if now_ns != 0:
+            lead = stamp_ns - now_ns
+            if abs(lead) > self._timeout_ns:
+                where = 'ahead of' if lead > 0 else 'behind'
+                raise DataError(f'JointState stamp is {abs(lead) * 1e-9:.3f} s {where} the node '
+                                f'clock (more than feedback_timeout {self._timeout_ns * 1e-9:g} '
+                                's; check use_sim_time on every node)')
+        self.last_stamp = stamp_ns
+        self.last_valid_ns = now_ns
+        if self.blind:
+            self.blind = False
+            return 'resumed'
+        return 'accepted'
+
+    def silence_ns(self, now_ns: int) -> int:
+        """Return the time since the last valid sample (or creation), ns."""
+        return now_ns - self.last_valid_ns
+
+    def watchdog(self, now_ns: int) -> WatchdogState:
+        """
+        Check the silence at clock reading ``now_ns``.
+
+        Parameters
+        ----------
+        now_ns : int
+            Clock reading, ns.
+
+        Returns
+        -------
+        WatchdogState
+            ``fed``; ``lost`` the first time the silence exceeds the timeout;
+            ``blind`` while it lasts. The caller keeps the valve closed on both.
+
+        """
+        if self.silence_ns(now_ns) <= self._timeout_ns:
+            return 'fed'
+        if self.blind:
+            return 'blind'
+        self.blind = True
+        return 'lost'
+
+
+def watchdog_period_ns(timeout_ns: int, longest_ns: int = 100_000_000) -> int:
+    """
+    Return how often to run a watchdog of ``timeout_ns``: half of it, at most ``longest_ns``.
+
+    Parameters
+    ----------
+    timeout_ns : int
+        Feedback timeout, ns.
+    longest_ns : int
+        Longest check period, ns (0.1 s).
+
+    Returns
+    -------
+    int
+        Check period, ns.
+
+    """
+    return max(1, min(_positive_ns(timeout_ns, 'timeout_ns') // 2, longest_ns))
+
+
+class ControlSchedule:
+    """
+    Control instants every ``period_ns`` from the first admitted sample.
+
+    Parameters
+    ----------
+    period_ns : int
+        Control period, ns.
+
+    """
+
+    def __init__(self, period_ns: int) -> None:
+        self.period_ns = _positive_ns(period_ns, 'period_ns')
+        self.next_instant: int | None = None
+        self.missed = 0
+        self._from_rest = True
+
+    def tick(self, stamp_ns: int) -> Tick:
+        """
+        Decide whether the sample stamped ``stamp_ns`` is controlled.
+
+        Parameters
+        ----------
+        stamp_ns : int
+            Stamp of an admitted sample, ns.
+
+        Returns
+        -------
+        Tick
+            ``wait`` before the next control instant; ``step`` at or after it;
+            ``resume`` instead of ``step`` for the first step after
+            :meth:`hold` (and the first of all): the caller resets its
+            controller to rest, ``u = 0``, before stepping. Call :meth:`stepped`
+            once the command is out.
+
+        """
+        if self.next_instant is None:
+            self.next_instant = stamp_ns
+        if stamp_ns < self.next_instant:
+            return 'wait'
+        return 'resume' if self._from_rest else 'step'
+
+    def stepped(self, stamp_ns: int) -> int:
+        """
+        Record that the sample stamped ``stamp_ns`` was controlled; move to the next instant.
+
+        Parameters
+        ----------
+        stamp_ns : int
+            Stamp of the controlled sample, ns.
+
+        Returns
+        -------
+        int
+            Control instants missed before this sample (0 on time).
+
+        """
+        if self.next_instant is None:
+            self.next_instant = stamp_ns
+        missed = max(0, (stamp_ns - self.next_instant) // self.period_ns)
+        self.next_instant += (missed + 1) * self.period_ns
+        self.missed += missed
+        self._from_rest = False
+        return missed
+
+    def hold(self) -> None:
+        """Note that the valve was closed: the next step starts from rest."""
+        self._from_rest = True
+
+    @property
+    def holding(self) -> bool:
+        """Whether the next step starts from rest."""
+        return self._from_rest
