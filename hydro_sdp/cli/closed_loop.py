@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
 
 from hydro_sdp.bags import STORAGES, write_bag
 from hydro_sdp.cli.common import finite_float, non_negative_float, Outcome, positive_float, table
@@ -12,6 +13,7 @@ from hydro_sdp.core.closed_loop import LoopJoint, run_closed_loop, step_metrics,
 from hydro_sdp.core.controller_spec import design_from_model
 from hydro_sdp.core.errors import ConfigurationError
 from hydro_sdp.core.records import Record
+from hydro_sdp.core.safety import check_controller_fits, clamp_setpoint, SETPOINT_MARGIN
 from hydro_sdp.files import load_controller, load_model
 from hydro_sdp.plots import plot_closed_loop, save_figure
 import numpy as np
@@ -20,7 +22,9 @@ HELP = 'simulate the PIP-IDZ closed loop offline and record it as a bag'
 DESCRIPTION = """\
 Simulate a joint model under PIP-IDZ control: the plant at its sample period,
 the controller at its own (a whole multiple), the command held in between, the
-model's effects included. Each set-point is held for --hold seconds. The bag gets
+model's effects included. Each set-point is held for --hold seconds; one beyond
+the end stops is clamped to --setpoint-margin inside them (with a warning), as
+the controller node does. The bag gets
 /joint_states, /<joint>/valve_command and /<joint>/setpoint; the report gives the
 settling time (into +-band), overshoot and steady error of every step.
 
@@ -52,6 +56,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument('--noise', type=non_negative_float, default=0.0,
                         help='std of the angle measurement noise, deg (default: 0)')
     parser.add_argument('--seed', type=int, default=0, help='noise seed (default: 0)')
+    parser.add_argument('--setpoint-margin', type=non_negative_float, default=SETPOINT_MARGIN,
+                        help='set-points are kept this far inside the end stops, deg '
+                             f'(default: {SETPOINT_MARGIN:g})')
     parser.add_argument('--band', type=positive_float, default=0.5,
                         help='settling band, deg (default: 0.5)')
     parser.add_argument('--storage', choices=STORAGES, default='sqlite3',
@@ -69,16 +76,22 @@ def run(args: argparse.Namespace) -> Outcome:
     model = load_model(args.model)
     if args.controller:
         spec = load_controller(args.controller)
-        if spec.joint != model.joint:
-            raise ConfigurationError(f'the controller is for joint {spec.joint!r}, the model is '
-                                     f'joint {model.joint!r}')
+        check_controller_fits(spec, model)
     else:
         spec = design_from_model(model, control_period=args.control_period)
     y0 = args.y0
     if y0 is None:
         limits = model.angle_limits
         y0 = 0.0 if limits is None or limits[0] < 0.0 < limits[1] else 0.5 * sum(limits)
-    setpoint = step_setpoints(args.setpoints, args.hold, args.sample_period)
+    levels = []
+    for level in args.setpoints:
+        safe = clamp_setpoint(level, model.angle_limits, args.setpoint_margin)
+        if safe != level:
+            sys.stderr.write(f'warning: set-point {level:g} deg is beyond the end stops '
+                             f'{list(model.angle_limits or ())} less the margin '
+                             f'{args.setpoint_margin:g} deg; using {safe:g} deg\n')
+        levels.append(safe)
+    setpoint = step_setpoints(levels, args.hold, args.sample_period)
     with ProgressBar('closed loop', setpoint.size) as bar:
         trace = run_closed_loop(
             [LoopJoint(model, spec.controller(), setpoint, y0)], dt=args.sample_period,
