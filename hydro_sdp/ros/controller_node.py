@@ -2,16 +2,21 @@
 The PIP-IDZ controller as a ROS node (``ros2 run hydro_sdp controller_node``).
 
 The core :class:`~hydro_sdp.core.pip_controller.PipIdzController` does the
-control; this node only decides when (the first JointState sample at or after
-each control instant, so the feedback-to-command latency is the computation
-time), converts units, keeps the valve safe and exposes the gains and the IDZ
-as parameters. Safety: set-points beyond the end stops are clamped; a sample
-that cannot be used (NaN, joint missing, arrays of different lengths, stamp
-further than ``feedback_timeout`` from the node's clock) is refused with a
-throttled warning and the valve is closed; a duplicate or out-of-order sample
-is ignored (the command in force came from fresher feedback); if no valid
-feedback arrives for ``feedback_timeout`` the watchdog closes the valve, and
-control resumes from the next valid sample without a bump.
+control and the core :mod:`~hydro_sdp.core.scheduling` decides when: the first
+JointState sample at or after each control instant is controlled (so the
+feedback-to-command latency is the computation time); a duplicate or
+out-of-order sample is ignored; a sample that cannot be used (NaN, joint
+missing, arrays of different lengths, stamp further than ``feedback_timeout``
+from the node's clock) is refused with a throttled warning and the valve is
+closed; if no valid feedback arrives for ``feedback_timeout`` the watchdog
+closes the valve, and control resumes from the next valid sample without a bump.
+Set-points are kept ``setpoint_margin`` degrees inside the end stops
+(:mod:`~hydro_sdp.core.safety`). This node only wires these to ROS: topics, unit
+conversions, logging and parameters.
+
+Every writable parameter applies at run time. A change request is checked as a
+whole before anything is applied (an atomic request with a valid IDZ and unstable
+gains changes nothing) and applied in the post-set callback.
 
 """
 
@@ -26,6 +31,10 @@ from hydro_sdp.core.errors import DataError, HydroSdpError
 from hydro_sdp.core.idz import IDZ_MODES, InverseDeadZone
 from hydro_sdp.core.pip_controller import PipIdzController
 from hydro_sdp.core.pip_design import PipGains
+from hydro_sdp.core.safety import check_controller_fits, clamp_setpoint, SETPOINT_MARGIN, \
+    setpoint_range
+from hydro_sdp.core.scheduling import ControlSchedule, FeedbackGate, seconds_to_ns, \
+    watchdog_period_ns
 from hydro_sdp.files import default_model_path, load_controller, load_model
 from hydro_sdp.ros import conversions, qos
 from hydro_sdp.ros.params import declare, pair, value_of
@@ -64,18 +73,28 @@ class PipControllerNode(Node):
                          'control period when designing from the model, s',
                          low=1e-3, high=10.0, read_only=True)
         self.model = load_model(model_file)
-        spec = load_controller(controller_file) if controller_file else \
-            design_from_model(self.model, control_period=period)
+        if controller_file:
+            spec = load_controller(controller_file)
+            check_controller_fits(spec, self.model)
+        else:
+            spec = design_from_model(self.model, control_period=period)
         self.joint = declare(self, 'joint', spec.joint, 'joint name in JointState',
                              read_only=True)
         self.feedback_timeout = declare(self, 'feedback_timeout', 0.5,
                                         'watchdog: close the valve after this long without '
                                         'valid feedback, s', low=1e-3, high=60.0)
+        self.setpoint_margin = declare(self, 'setpoint_margin', SETPOINT_MARGIN,
+                                       'set-points are kept this far inside the end stops, deg',
+                                       low=0.0, high=90.0)
+        setpoint_range(self.model.angle_limits, self.setpoint_margin)   # leaves room?
         gains = spec.gains
-        declare(self, 'gains.f', list(gains.f), 'PIP output feedback gains f0..')
+        declare(self, 'gains.f', list(gains.f),
+                'PIP output feedback gains f0.., (deg per control sample) per deg')
         declare(self, 'gains.g', list(gains.g) or Parameter.Type.DOUBLE_ARRAY,
-                'PIP input feedback gains g1..')
-        declare(self, 'gains.k_i', gains.k_i, 'PIP integral gain kI', low=0.0, high=10.0)
+                'PIP input feedback gains g1.. (dimensionless)')
+        declare(self, 'gains.k_i', gains.k_i,
+                'PIP integral gain kI, (deg per control sample) per deg of error',
+                low=0.0, high=10.0)
         idz = spec.idz
         if idz is not None:
             declare(self, 'idz.dead_zone', list(idz.dead_zone), 'IDZ edges, input units')
@@ -87,13 +106,10 @@ class PipControllerNode(Node):
         self.spec = spec
         self.controller = PipIdzController(spec.settings())
         self._rest = idz.rest if idz is not None else 0.0
-        self._period_ns = int(round(spec.control_period * 1e9))
-        self._next_instant: int | None = None
-        self._last_stamp: int | None = None
+        self.schedule = ControlSchedule(seconds_to_ns(spec.control_period))
+        timeout_ns = seconds_to_ns(self.feedback_timeout)
+        self.gate = FeedbackGate(timeout_ns, self.get_clock().now().nanoseconds)
         self._setpoint: float | None = None
-        self._blind = False
-        self._restart = True
-        self._last_valid = self.get_clock().now().nanoseconds
         self.samples = 0
         self.outputs = 0
         self.refused = 0
@@ -106,8 +122,14 @@ class PipControllerNode(Node):
         self._setpoint_sub = self.create_subscription(Float64, f'{self.joint}/setpoint',
                                                       self._on_setpoint, qos.COMMAND_QOS)
         self.add_on_set_parameters_callback(self._check_parameters)
-        self._watchdog = self.create_timer(min(self.feedback_timeout / 2.0, 0.1),
+        self.add_post_set_parameters_callback(self._apply_parameters)
+        self._watchdog = self.create_timer(watchdog_period_ns(timeout_ns) * 1e-9,
                                            self._on_watchdog)
+
+    @property
+    def _blind(self) -> bool:
+        """Whether the watchdog found no valid feedback (the valve is closed)."""
+        return self.gate.blind
 
     def _warn(self, text: str) -> None:
         self.get_logger().warning(text, throttle_duration_sec=1.0,
@@ -119,7 +141,7 @@ class PipControllerNode(Node):
 
     def _close_valve(self) -> None:
         self._publish(self._rest)
-        self._restart = True
+        self.schedule.hold()
 
     def _on_setpoint(self, message: Float64) -> None:
         self.setpoints_received += 1
@@ -127,110 +149,119 @@ class PipControllerNode(Node):
         if not math.isfinite(value):
             self._warn(f'refused a non-finite set-point; keeping {self._setpoint}')
             return
-        setpoint = math.degrees(value)
-        limits = self.model.angle_limits
-        if limits is not None and not limits[0] <= setpoint <= limits[1]:
-            clamped = min(max(setpoint, limits[0]), limits[1])
-            self._warn(f'set-point {setpoint:.2f} deg is beyond the end stops {list(limits)}; '
-                       f'using {clamped:.2f} deg')
-            setpoint = clamped
-        self._setpoint = setpoint
+        self._setpoint = self._safe_setpoint(math.degrees(value))
+
+    def _safe_setpoint(self, setpoint: float) -> float:
+        safe = clamp_setpoint(setpoint, self.model.angle_limits, self.setpoint_margin)
+        if safe != setpoint:
+            self._warn(f'set-point {setpoint:.2f} deg is beyond the end stops '
+                       f'{list(self.model.angle_limits or ())} less the margin '
+                       f'{self.setpoint_margin:g} deg; using {safe:.2f} deg')
+        return safe
 
     def _on_state(self, message: JointState) -> None:
         self.samples += 1
+        now = self.get_clock().now().nanoseconds
         try:
             stamp, angle = conversions.joint_angle(message, self.joint)
-            if self._last_stamp is not None and stamp <= self._last_stamp:
-                # A duplicate or a sample overtaken by a newer one: the command in force was
-                # computed from fresher feedback, so it stays; the sample is only dropped.
-                self.refused += 1
-                self._warn(f'ignored JointState stamp {stamp * 1e-9:.6f} s: it is not after '
-                           f'the last one ({self._last_stamp * 1e-9:.6f} s)')
-                return
-            self._check_freshness(stamp)
+            admission = self.gate.admit(stamp, now)
         except DataError as error:
             self.refused += 1
             self._warn(f'refused feedback ({error}); valve closed')
             self._close_valve()
             return
-        self._last_stamp = stamp
-        self._last_valid = self.get_clock().now().nanoseconds
-        if self._blind:
-            self.get_logger().info('feedback is back; control resumes')
-            self._blind = False
-        if self._next_instant is None or self._restart:
-            self._next_instant = stamp if self._next_instant is None else self._next_instant
-            if self._restart:
-                # Resume bumplessly: the valve was closed, so the last applied increment is 0.
-                self.controller.reset(u=0.0)
-                self._restart = False
-        if stamp < self._next_instant:
+        if admission == 'ignored':
+            # A duplicate or a sample overtaken by a newer one: the command in force was
+            # computed from fresher feedback, so it stays; the sample is only dropped.
+            self.refused += 1
+            self._warn(f'ignored JointState stamp {stamp * 1e-9:.6f} s: it is not after '
+                       f'the last one ({(self.gate.last_stamp or 0) * 1e-9:.6f} s)')
             return
-        setpoint = self._setpoint if self._setpoint is not None else angle
+        if admission == 'resumed':
+            self.get_logger().info('feedback is back; control resumes')
+        tick = self.schedule.tick(stamp)
+        if tick == 'wait':
+            return
+        if tick == 'resume':
+            # Resume bumplessly: the valve was closed, so the last applied increment is 0.
+            self.controller.reset(u=0.0)
         if self._setpoint is None:
             self._setpoint = angle        # hold where the joint is until told otherwise
         try:
-            _, command = self.controller.step(setpoint, angle)
+            _, command = self.controller.step(self._setpoint, angle)
         except HydroSdpError as error:
             self._warn(f'controller refused the sample ({error}); valve closed')
             self._close_valve()
             return
         self._publish(command)
         self.outputs += 1
-        missed = (stamp - self._next_instant) // self._period_ns
-        self._next_instant += (missed + 1) * self._period_ns
-
-    def _check_freshness(self, stamp: int) -> None:
-        # A stamp far from this node's clock is stale feedback or a clock mix-up; one from the
-        # future would also make every later sample look old, so neither is accepted.
-        now = self.get_clock().now().nanoseconds
-        if now == 0:
-            return          # simulated time that has not started yet
-        lead = (stamp - now) * 1e-9
-        if abs(lead) > self.feedback_timeout:
-            where = 'ahead of' if lead > 0 else 'behind'
-            raise DataError(f'JointState stamp is {abs(lead):.3f} s {where} the node clock '
-                            f'(more than feedback_timeout {self.feedback_timeout} s; '
-                            'check use_sim_time on every node)')
+        self.schedule.stepped(stamp)
 
     def _on_watchdog(self) -> None:
-        silent = self.get_clock().now().nanoseconds - self._last_valid
-        if silent > self.feedback_timeout * 1e9:
-            if not self._blind:
-                self._warn(f'no valid feedback for {silent * 1e-9:.2f} s; valve closed')
-            self._blind = True
+        now = self.get_clock().now().nanoseconds
+        state = self.gate.watchdog(now)
+        if state == 'lost':
+            self._warn(f'no valid feedback for {self.gate.silence_ns(now) * 1e-9:.2f} s; '
+                       'valve closed')
+        if state != 'fed':
             self._close_valve()
 
-    def _check_parameters(self, parameters: list[Parameter]) -> SetParametersResult:
+    def _candidate(self, parameters: list[Parameter]) -> ControllerSpec:
+        """Return the spec a set request would give; raises if it is not valid."""
         names = {parameter.name for parameter in parameters}
+        spec = self.spec
+        if names & set(IDZ_PARAMETERS) and spec.idz is not None:
+            current = spec.idz
+            idz = InverseDeadZone(
+                dead_zone=pair(value_of(parameters, 'idz.dead_zone', current.dead_zone),
+                               'idz.dead_zone'),
+                slopes=pair(value_of(parameters, 'idz.slopes', current.slopes), 'idz.slopes'),
+                beta=float(value_of(parameters, 'idz.beta', current.beta)),
+                mode=str(value_of(parameters, 'idz.mode', current.mode)),
+                rest=current.rest)
+            spec = replace(spec, idz=idz)    # checks the IDZ against the valve range
+        if names & set(GAIN_PARAMETERS):
+            current_gains = spec.gains
+            gains = PipGains(
+                f=tuple(float(x) for x in value_of(parameters, 'gains.f', current_gains.f)),
+                g=tuple(float(x) for x in value_of(parameters, 'gains.g', current_gains.g) or ()),
+                k_i=float(value_of(parameters, 'gains.k_i', current_gains.k_i)))
+            spec = replace(spec, gains=gains)   # checks orders and closed-loop stability
+        return spec
+
+    def _check_parameters(self, parameters: list[Parameter]) -> SetParametersResult:
+        # On-set: validate the whole request; nothing is applied here.
         try:
-            if names & set(IDZ_PARAMETERS):
-                current = self.controller.settings.idz
-                idz = InverseDeadZone(
-                    dead_zone=pair(value_of(parameters, 'idz.dead_zone', current.dead_zone),
-                                   'idz.dead_zone'),
-                    slopes=pair(value_of(parameters, 'idz.slopes', current.slopes),
-                                'idz.slopes'),
-                    beta=float(value_of(parameters, 'idz.beta', current.beta)),
-                    mode=str(value_of(parameters, 'idz.mode', current.mode)),
-                    rest=current.rest)
-                replace(self.controller.settings, idz=idz)   # validates against the valve
-                self.controller.update_idz(idz)
-                self.get_logger().info(f'IDZ now edges {list(idz.dead_zone)}, slopes '
-                                       f'{[round(s, 4) for s in idz.slopes]}')
-            if names & set(GAIN_PARAMETERS):
-                current = self.controller.settings.gains
-                gains = PipGains(
-                    f=tuple(value_of(parameters, 'gains.f', current.f)),
-                    g=tuple(value_of(parameters, 'gains.g', current.g) or ()),
-                    k_i=float(value_of(parameters, 'gains.k_i', current.k_i)))
-                candidate = ControllerSpec(self.spec.joint, self.spec.control_period,
-                                           self.spec.plant, gains, self.spec.idz,
-                                           self.spec.u_limits, self.spec.v_limits)
-                self.controller.update_gains(candidate.gains)
+            self._candidate(parameters)
+            margin = value_of(parameters, 'setpoint_margin', self.setpoint_margin)
+            setpoint_range(self.model.angle_limits, float(margin))
         except (HydroSdpError, TypeError, ValueError) as error:
             return SetParametersResult(successful=False, reason=str(error))
         return SetParametersResult(successful=True)
+
+    def _apply_parameters(self, parameters: list[Parameter]) -> None:
+        # Post-set: the request was accepted as a whole; apply all of it.
+        names = {parameter.name for parameter in parameters}
+        spec = self._candidate(parameters)
+        if spec.idz is not None and spec.idz != self.spec.idz:
+            self.controller.update_idz(spec.idz)
+            self.get_logger().info(f'IDZ now edges {list(spec.idz.dead_zone)}, slopes '
+                                   f'{[round(s, 4) for s in spec.idz.slopes]}')
+        if spec.gains != self.spec.gains:
+            self.controller.update_gains(spec.gains)
+            self.get_logger().info(f'gains now f {list(spec.gains.f)}, g {list(spec.gains.g)}, '
+                                   f'kI {spec.gains.k_i}')
+        self.spec = spec
+        if 'feedback_timeout' in names:
+            self.feedback_timeout = float(value_of(parameters, 'feedback_timeout', 0.0))
+            timeout_ns = seconds_to_ns(self.feedback_timeout)
+            self.gate.timeout_ns = timeout_ns
+            self._watchdog.timer_period_ns = watchdog_period_ns(timeout_ns)
+            self.get_logger().info(f'feedback_timeout now {self.feedback_timeout:g} s')
+        if 'setpoint_margin' in names:
+            self.setpoint_margin = float(value_of(parameters, 'setpoint_margin', 0.0))
+            if self._setpoint is not None:
+                self._setpoint = self._safe_setpoint(self._setpoint)
 
 
 def main(args: list[str] | None = None) -> None:

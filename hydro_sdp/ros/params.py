@@ -1,4 +1,13 @@
-"""Declaring ROS parameters with descriptions and ranges in one line each."""
+"""
+Declaring ROS parameters with descriptions and ranges in one line each.
+
+:func:`declare` also makes a double parameter take an integer, as users of
+``ros2 param set NODE gains.k_i 1`` or ``-p feedback_timeout:=1`` expect (rclpy
+alone refuses it as the wrong type): an override given at start-up is converted
+before the declaration, and a value set at run time by a pre-set callback
+(:func:`integers_as_doubles`), so the declared range still applies.
+
+"""
 
 from __future__ import annotations
 
@@ -8,6 +17,68 @@ from hydro_sdp.core.errors import ConfigurationError
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
+
+_WIDENED = {Parameter.Type.INTEGER: Parameter.Type.DOUBLE,
+            Parameter.Type.INTEGER_ARRAY: Parameter.Type.DOUBLE_ARRAY}
+# Marks a node whose pre-set callback is registered (rclpy concatenates the lists that
+# several pre-set callbacks return, so there must be exactly one).
+_HOOKED = '_hydro_sdp_integers_as_doubles'
+
+
+def as_double(parameter: Parameter, declared: Parameter.Type) -> Parameter:
+    """
+    Return ``parameter`` as a double (array) if it is an integer (array) and ``declared`` is.
+
+    Parameters
+    ----------
+    parameter : Parameter
+        A value being set.
+    declared : Parameter.Type
+        The declared type of the parameter.
+
+    Returns
+    -------
+    Parameter
+        The converted parameter, or ``parameter`` itself.
+
+    """
+    if _WIDENED.get(parameter.type_) != declared:
+        return parameter
+    value = parameter.value
+    converted = [float(x) for x in value] if declared == Parameter.Type.DOUBLE_ARRAY \
+        else float(value)
+    return Parameter(parameter.name, declared, converted)
+
+
+def integers_as_doubles(node: Node, parameters: list[Parameter]) -> list[Parameter]:
+    """
+    Pre-set callback: convert integer values of declared double parameters.
+
+    Parameters
+    ----------
+    node : Node
+        The node whose parameters are set.
+    parameters : list of Parameter
+        The request.
+
+    Returns
+    -------
+    list of Parameter
+        The request with integers of double parameters as doubles.
+
+    """
+    return [as_double(p, Parameter.Type(node.describe_parameter(p.name).type))
+            if node.has_parameter(p.name) else p for p in parameters]
+
+
+def _declared_type(default: Any) -> Parameter.Type | None:
+    if isinstance(default, Parameter.Type):
+        return default
+    if isinstance(default, float):
+        return Parameter.Type.DOUBLE
+    if isinstance(default, list) and default and all(isinstance(x, float) for x in default):
+        return Parameter.Type.DOUBLE_ARRAY
+    return None
 
 
 def declare(node: Node, name: str, default: Any, description: str, *,
@@ -37,6 +108,15 @@ def declare(node: Node, name: str, default: Any, description: str, *,
         The value (None for a typed parameter that nobody set).
 
     """
+    if not getattr(node, _HOOKED, False):
+        node.add_pre_set_parameters_callback(lambda ps: integers_as_doubles(node, ps))
+        setattr(node, _HOOKED, True)
+    declared = _declared_type(default)
+    # rclpy keeps start-up overrides (-p, params files) only in this attribute, and checks
+    # their type against the default's before any callback could convert them.
+    overrides = node._parameter_overrides
+    if declared is not None and name in overrides:
+        overrides[name] = as_double(overrides[name], declared)
     descriptor = ParameterDescriptor(description=description, read_only=read_only)
     if low is not None and high is not None:
         if isinstance(default, int) and not isinstance(default, bool):

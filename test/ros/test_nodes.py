@@ -152,9 +152,9 @@ def test_setpoints_beyond_the_end_stops_are_clamped_and_nan_is_refused(ros):
     controller = ros.add(PipControllerNode)
     send = _setpoint_publisher(ros, controller)
     send(90.0)
-    assert controller._setpoint == pytest.approx(63.6)
+    assert controller._setpoint == pytest.approx(63.6 - 0.5)   # setpoint_margin
     controller._on_setpoint(Float64(data=math.nan))
-    assert controller._setpoint == pytest.approx(63.6)
+    assert controller._setpoint == pytest.approx(63.6 - 0.5)   # setpoint_margin
 
 
 def test_watchdog_closes_the_valve_and_control_resumes_without_a_bump(ros):

@@ -1,0 +1,316 @@
+"""
+The controller node's parameters: checked as a whole, applied at run time, integers for doubles.
+
+In-process with the harness, and over the parameter services of a ``controller_node``
+process from an outside rclpy client (what ``ros2 param set`` does).
+"""
+
+from dataclasses import replace
+import math
+import os
+from pathlib import Path
+import random
+import shutil
+import subprocess
+import sys
+import time
+
+from hydro_sdp.core.controller_spec import design_from_model
+from hydro_sdp.core.errors import ConfigurationError
+from hydro_sdp.core.pip_controller import PipIdzController
+from hydro_sdp.files import default_model_path, load_model, save_controller
+from hydro_sdp.ros.controller_node import PipControllerNode
+from hydro_sdp.ros.testing import RosHarness
+import pytest
+from rcl_interfaces.srv import GetParameters, SetParametersAtomically
+import rclpy
+from rclpy.parameter import Parameter, parameter_value_to_python
+from sensor_msgs.msg import JointState
+from std_msgs.msg import Float64
+
+pytestmark = pytest.mark.ros
+
+NEW_EDGES = [-1.0, 1.0]
+
+
+@pytest.fixture
+def ros():
+    """Return a harness with its own context, closed after the test."""
+    with RosHarness() as harness:
+        yield harness
+
+
+def _state(stamp_ns, angle_deg=0.0):
+    message = JointState()
+    message.header.stamp.sec, message.header.stamp.nanosec = divmod(stamp_ns, 10**9)
+    message.name, message.position = ['j2'], [math.radians(angle_deg)]
+    return message
+
+
+def _first_command(setpoint, angle=0.0, edges=None):
+    """Return the command a fresh default controller answers to one sample."""
+    spec = design_from_model(load_model(default_model_path()))
+    settings = spec.settings()
+    if edges is not None:
+        settings = replace(settings, idz=replace(spec.idz, dead_zone=tuple(edges)))
+    return PipIdzController(settings).step(setpoint, angle)[1]
+
+
+def test_a_refused_atomic_change_changes_nothing(ros):
+    controller = ros.add(PipControllerNode)
+    before = (controller.spec, controller.controller.settings)
+    result = controller.set_parameters_atomically([
+        Parameter('idz.dead_zone', value=NEW_EDGES), Parameter('gains.k_i', value=5.0)])
+    assert not result.successful and 'unstable' in result.reason
+    assert (controller.spec, controller.controller.settings) == before
+    assert controller.get_parameter('idz.dead_zone').value == [-1.3298, 1.3124]
+    assert controller.get_parameter('gains.k_i').value == before[0].gains.k_i
+    ros.set_time(10**8)
+    controller._on_setpoint(Float64(data=math.radians(20.0)))
+    controller._on_state(_state(10**8))
+    assert controller.last_command == pytest.approx(_first_command(20.0), abs=1e-12)
+
+
+def test_an_accepted_change_keeps_the_spec_current(ros):
+    controller = ros.add(PipControllerNode)
+    gains = controller.spec.gains
+    assert controller.set_parameters_atomically([
+        Parameter('idz.dead_zone', value=NEW_EDGES), Parameter('idz.beta', value=0.1),
+        Parameter('gains.k_i', value=gains.k_i * 0.5)]).successful
+    assert controller.spec.idz.dead_zone == (-1.0, 1.0) and controller.spec.idz.beta == 0.1
+    assert controller.spec.gains == replace(gains, k_i=gains.k_i * 0.5)
+    assert controller.controller.settings == controller.spec.settings()
+    # A later gain change keeps the IDZ set before (the spec is not rebuilt from stale parts).
+    assert controller.set_parameters([Parameter('gains.k_i', value=gains.k_i)])[0].successful
+    assert controller.spec.idz.dead_zone == (-1.0, 1.0)
+    assert controller.controller.settings.idz.dead_zone == (-1.0, 1.0)
+    assert controller.spec.design == design_from_model(controller.model).design
+
+
+def test_integers_are_accepted_for_double_parameters(ros):
+    controller = ros.add(PipControllerNode, parameters={'feedback_timeout': 1,
+                                                        'setpoint_margin': 2})
+    assert controller.get_parameter('feedback_timeout').value == 1.0
+    assert controller.get_parameter('feedback_timeout').type_ == Parameter.Type.DOUBLE
+    assert controller.gate.timeout_ns == 10**9 and controller.setpoint_margin == 2.0
+    result = controller.set_parameters([Parameter('idz.beta', value=0),
+                                        Parameter('idz.dead_zone', value=[-1, 1]),
+                                        Parameter('gains.k_i', value=1)])
+    assert result[0].successful and controller.spec.idz.beta == 0.0
+    assert result[1].successful and controller.spec.idz.dead_zone == (-1.0, 1.0)
+    assert controller.get_parameter('idz.dead_zone').type_ == Parameter.Type.DOUBLE_ARRAY
+    # kI = 1 arrives as a double and is then refused for what it does, not for its type.
+    assert not result[2].successful and 'unstable' in result[2].reason
+    result = controller.set_parameters([Parameter('idz.beta', value=500)])
+    assert not result[0].successful and 'out of range' in result[0].reason
+
+
+def test_feedback_timeout_applies_at_run_time(ros):
+    controller = ros.add(PipControllerNode)
+    assert controller._watchdog.timer_period_ns == 10**8
+    assert controller.set_parameters([Parameter('feedback_timeout', value=2.0)])[0].successful
+    assert controller.gate.timeout_ns == 2 * 10**9
+    ros.set_time(10**8)
+    controller._on_setpoint(Float64(data=math.radians(20.0)))
+    controller._on_state(_state(10**8))
+    assert controller.last_command > 1.0
+    for k in range(2, 21):                      # 1.9 s of silence: still inside the timeout
+        ros.set_time(k * 10**8)
+        ros.spin_for(0.002)
+    assert not controller._blind and controller.last_command > 1.0
+    # A stamp 1.5 s old is fresh enough for a 2 s timeout.
+    controller._on_state(_state(5 * 10**8))
+    assert controller.refused == 0
+    assert controller.set_parameters([Parameter('feedback_timeout', value=0.06)])[0].successful
+    assert controller._watchdog.timer_period_ns == 3 * 10**7
+    ros.set_time(21 * 10**8)
+    ros.spin_for(0.01)
+    assert controller._blind and controller.last_command == 0.0
+
+
+def test_setpoint_margin_applies_at_run_time(ros):
+    controller = ros.add(PipControllerNode)
+    controller._on_setpoint(Float64(data=math.radians(90.0)))
+    assert controller._setpoint == pytest.approx(63.1)
+    assert controller.set_parameters([Parameter('setpoint_margin', value=5.0)])[0].successful
+    assert controller._setpoint == pytest.approx(58.6)          # the held set-point too
+    controller._on_setpoint(Float64(data=math.radians(-40.0)))
+    assert controller._setpoint == pytest.approx(-8.8)
+    result = controller.set_parameters([Parameter('setpoint_margin', value=40.0)])
+    assert not result[0].successful and 'leaves no set-point' in result[0].reason
+    assert controller.setpoint_margin == 5.0
+
+
+def test_read_only_parameters_refuse_changes(ros):
+    controller = ros.add(PipControllerNode)
+    for name, value in (('joint', 'j3'), ('control_period', 0.1), ('model_file', 'x.yaml'),
+                        ('controller_file', 'c.yaml')):
+        result = controller.set_parameters([Parameter(name, value=value)])[0]
+        assert not result.successful and 'read-only' in result.reason
+
+
+def test_a_controller_file_for_another_valve_range_is_refused(ros, tmp_path):
+    model = load_model(default_model_path())
+    percent = replace(model, input_limits=(-100.0, 100.0))
+    save_controller(design_from_model(percent), tmp_path / 'c.yaml')
+    with pytest.raises(ConfigurationError,
+                       match=r'controller is for valve range \[-100.0, 100.0\]'):
+        ros.add(PipControllerNode, parameters={'controller_file': str(tmp_path / 'c.yaml')})
+    other = tmp_path / 'boom.yaml'
+    other.write_text(default_model_path().read_text().replace('joint: j2', 'joint: boom'))
+    save_controller(design_from_model(load_model(other)), tmp_path / 'boom_c.yaml')
+    with pytest.raises(ConfigurationError, match="controller is for joint 'boom'"):
+        ros.add(PipControllerNode,
+                parameters={'controller_file': str(tmp_path / 'boom_c.yaml')})
+
+
+def _script(name):
+    return shutil.which(name, path=str(Path(sys.executable).parent))
+
+
+class OutsideClient:
+    """A controller_node process and a client in this process: parameter services and topics."""
+
+    def __init__(self, *arguments):
+        if _script('controller_node') is None:
+            pytest.skip('the console scripts are not installed in this environment')
+        domain = random.randint(1, 200)
+        # The in-process harness turns discovery off; a process must be found on the host.
+        environment = dict(os.environ, ROS_DOMAIN_ID=str(domain),
+                           ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST')
+        self.process = subprocess.Popen([_script('controller_node'), '--ros-args', *arguments],
+                                        env=environment, stdout=subprocess.DEVNULL,
+                                        stderr=subprocess.PIPE, text=True)
+        from rclpy.context import Context
+        from rclpy.executors import SingleThreadedExecutor
+        from rclpy.node import Node
+        os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
+        self.context = Context()
+        rclpy.init(context=self.context, domain_id=domain)
+        self.node = Node('param_client', context=self.context)
+        self.executor = SingleThreadedExecutor(context=self.context)
+        self.executor.add_node(self.node)
+        self.commands = []
+        self.node.create_subscription(Float64, 'j2/valve_command',
+                                      lambda m: self.commands.append(m.data), 100)
+        self.states = self.node.create_publisher(JointState, 'joint_states', 10)
+        self.setpoints = self.node.create_publisher(Float64, 'j2/setpoint', 10)
+        self.set_client = self.node.create_client(SetParametersAtomically,
+                                                  '/pip_controller/set_parameters_atomically')
+        self.get_client = self.node.create_client(GetParameters,
+                                                  '/pip_controller/get_parameters')
+        assert self.set_client.wait_for_service(timeout_sec=30.0), self._died()
+        assert self.get_client.wait_for_service(timeout_sec=10.0), self._died()
+        assert self.spin_until(lambda: self.states.get_subscription_count() >= 1
+                               and self.setpoints.get_subscription_count() >= 1), self._died()
+
+    def _died(self):
+        return 'controller_node did not come up' + (
+            f': {self.process.stderr.read()}' if self.process.poll() is not None else '')
+
+    def spin_until(self, predicate, timeout=10.0):
+        deadline = time.monotonic() + timeout
+        while not predicate():
+            if time.monotonic() > deadline:
+                return False
+            self.executor.spin_once(timeout_sec=0.01)
+        return True
+
+    def spin_for(self, seconds):
+        self.spin_until(lambda: False, seconds)
+
+    def _call(self, client, request):
+        future = client.call_async(request)
+        assert self.spin_until(future.done), 'no answer from the parameter service'
+        return future.result()
+
+    def set_atomically(self, **values):
+        """Set parameters atomically (dots written as ``__``); return the result."""
+        request = SetParametersAtomically.Request()
+        request.parameters = [Parameter(name.replace('__', '.'), value=value).to_parameter_msg()
+                              for name, value in values.items()]
+        return self._call(self.set_client, request).result
+
+    def get(self, *names):
+        """Return ``(type, value)`` of parameters."""
+        answer = self._call(self.get_client, GetParameters.Request(names=list(names)))
+        return [(Parameter.Type(value.type), parameter_value_to_python(value))
+                for value in answer.values]
+
+    def setpoint(self, degrees):
+        self.setpoints.publish(Float64(data=math.radians(degrees)))
+        self.spin_for(0.3)
+
+    def answer(self, angle=0.0):
+        """Send one fresh sample and return the controller's (non-rest) answer."""
+        count = len(self.commands)
+        self.states.publish(_state(self.node.get_clock().now().nanoseconds, angle))
+        assert self.spin_until(lambda: any(c != 0.0 for c in self.commands[count:]))
+        return next(c for c in self.commands[count:] if c != 0.0)
+
+    def wait_for_rest(self, timeout):
+        """Return whether the watchdog closed the valve within ``timeout`` seconds."""
+        count = len(self.commands)
+        return self.spin_until(lambda: 0.0 in self.commands[count:], timeout)
+
+    def close(self):
+        alive = self.process.poll() is None
+        self.process.terminate()
+        try:
+            self.process.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            self.process.kill()
+            self.process.wait(timeout=10)
+        self.executor.shutdown()
+        self.node.destroy_node()
+        rclpy.try_shutdown(context=self.context)
+        assert alive, 'controller_node died'
+
+
+@pytest.fixture
+def outside(monkeypatch):
+    """Start a controller_node process and an outside client; stop both after the test."""
+    monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
+    clients = []
+
+    def start(*arguments):
+        clients.append(OutsideClient(*arguments))
+        return clients[-1]
+    yield start
+    for client in clients:
+        client.close()
+
+
+@pytest.mark.slow
+def test_a_refused_atomic_change_changes_nothing_over_the_services(outside):
+    client = outside()
+    result = client.set_atomically(idz__dead_zone=NEW_EDGES, gains__k_i=5.0)
+    assert not result.successful and 'unstable' in result.reason
+    (_, edges), (_, k_i) = client.get('idz.dead_zone', 'gains.k_i')
+    assert list(edges) == [-1.3298, 1.3124] and k_i < 0.01
+    client.setpoint(20.0)
+    # The first answer is the unchanged controller's, to the last digit.
+    assert client.answer() == pytest.approx(_first_command(20.0), abs=1e-12)
+    # The IDZ alone is accepted and applies to the next step from rest.
+    assert client.set_atomically(idz__dead_zone=NEW_EDGES).successful
+    assert client.wait_for_rest(3.0)
+    assert client.answer() == pytest.approx(_first_command(20.0, edges=NEW_EDGES), abs=1e-12)
+
+
+@pytest.mark.slow
+def test_run_time_changes_take_effect_over_the_services(outside):
+    client = outside('-p', 'feedback_timeout:=1')           # an integer at start-up
+    assert client.get('feedback_timeout') == [(Parameter.Type.DOUBLE, 1.0)]
+    assert client.set_atomically(feedback_timeout=3).successful         # and at run time
+    client.setpoint(20.0)
+    assert client.answer() > 1.0
+    assert not client.wait_for_rest(1.5)                     # the old 0.5 s would have fired
+    assert client.set_atomically(feedback_timeout=0.2).successful
+    assert client.wait_for_rest(1.0)
+    result = client.set_atomically(gains__k_i=1)        # a double, refused as unstable
+    assert not result.successful and 'unstable' in result.reason
+    assert client.set_atomically(setpoint_margin=5).successful
+    client.setpoint(90.0)
+    assert client.answer() == pytest.approx(_first_command(63.6 - 5.0), abs=1e-12)
+    result = client.set_atomically(joint='j3')
+    assert not result.successful and 'read-only' in result.reason
