@@ -3,16 +3,21 @@ Simulated hydraulic joints as a ROS node (``ros2 run hydro_sdp plant_node``).
 
 The node owns the only timer of a simulated machine. On each tick it applies,
 for every joint, the last valve command received before the tick (the command
-in force over the interval that ends now), advances the core
+in force over the interval that ends now: the rule of
+:func:`~hydro_sdp.core.timing.command_in_force`, here in arrival order since a
+Float64 carries no stamp), advances the core
 :class:`~hydro_sdp.core.simulation.JointSimulator` one sample, and publishes one
-``joint_states`` with every joint in radians. With ``use_sim_time`` the tick
-follows ``/clock``, so a test can run the machine in lockstep.
+``joint_states`` with every joint (REP 103: position in rad, velocity in rad/s,
+the simulated motion over the last sample, without measurement noise). Angle
+parameters are in degrees. With ``use_sim_time`` the tick follows ``/clock``, so
+a test can run the machine in lockstep.
 
 """
 
 from __future__ import annotations
 
 from dataclasses import replace
+from functools import partial
 import math
 from typing import Any
 
@@ -116,8 +121,7 @@ class PlantNode(Node):
         self._state_pub = self.create_publisher(JointState, 'joint_states', qos.STATE_QOS)
         self._command_subs = [
             self.create_subscription(Float64, f'{name}/valve_command',
-                                     lambda msg, i=index: self._on_command(i, msg),
-                                     qos.COMMAND_QOS)
+                                     partial(self._on_command, index), qos.COMMAND_QOS)
             for index, name in enumerate(names)]
         self.add_on_set_parameters_callback(self._check_parameters)
         self._timer = self.create_timer(period, self._on_tick)
@@ -149,11 +153,13 @@ class PlantNode(Node):
         self.commands_received += 1
 
     def _on_tick(self) -> None:
+        before = self.last_angles
         if self.ticks:
             angles = [sim.step(command)
                       for sim, command in zip(self._simulators, self._commands)]
         else:
             angles = [sim.angle for sim in self._simulators]
+        speeds = [(now - then) / self.sample_period for now, then in zip(angles, before)]
         if self._noise > 0.0:
             measured = [a + float(rng.normal(0.0, self._noise))
                         for a, rng in zip(angles, self._rngs)]
@@ -161,7 +167,7 @@ class PlantNode(Node):
             measured = angles
         self.last_angles = angles
         message = conversions.fill_joint_state(
-            JointState(), self.get_clock().now().nanoseconds, self.names, measured)
+            JointState(), self.get_clock().now().nanoseconds, self.names, measured, speeds)
         self._state_pub.publish(message)
         self.ticks += 1
 

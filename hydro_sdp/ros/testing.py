@@ -12,7 +12,7 @@ Usable in any test::
     with RosHarness() as ros:
         plant = ros.add(PlantNode, parameters={'noise_std': 0.0})
         controller = ros.add(PipControllerNode)
-        loop = Lockstep(ros, plant, controller=controller)
+        loop = Lockstep(ros, plant, controllers=[controller])
         loop.run(500)
 
 """
@@ -22,9 +22,10 @@ from __future__ import annotations
 import os
 import random
 import time
-from typing import Any, Callable, Iterable
+from typing import Any, Callable, cast, Iterable
 
 import rclpy
+from rclpy.clock import ROSClock
 from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
@@ -33,6 +34,11 @@ from rclpy.time import Time
 
 # Nodes of one context still match with discovery off; nothing else on the host is seen.
 os.environ.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'OFF')
+
+
+def _set_clock(node: Node, nanoseconds: int) -> None:
+    # A node's clock is a ROSClock (ROS time), the one that takes an override.
+    cast(ROSClock, node.get_clock()).set_ros_time_override(Time(nanoseconds=nanoseconds))
 
 
 class RosHarness:
@@ -87,7 +93,7 @@ class RosHarness:
         node = node_cls(context=self.context, parameter_overrides=overrides,
                         cli_args=cli_args, **kwargs)
         if sim_time:
-            node.get_clock().set_ros_time_override(Time(nanoseconds=self.time_ns))
+            _set_clock(node, self.time_ns)
         self.executor.add_node(node)
         self.nodes.append(node)
         return node
@@ -101,7 +107,7 @@ class RosHarness:
         self.time_ns = nanoseconds
         for node in self.nodes:
             if node.get_parameter('use_sim_time').value:
-                node.get_clock().set_ros_time_override(Time(nanoseconds=nanoseconds))
+                _set_clock(node, nanoseconds)
 
     def spin_until(self, predicate: Callable[[], bool], timeout: float = 5.0) -> bool:
         """
