@@ -1,10 +1,10 @@
 """
 When a controller may use a feedback sample and when it acts: a pure feedback gate and schedule.
 
-The controller node and the offline closed loop share these rules (docs/methods.md,
-section "Timing"); everything takes stamps and clock readings in integer
-nanoseconds as arguments and returns a decision, so the rules are tested without a
-clock or ROS:
+The controller node and the offline closed loop share these rules
+(docs/methods.md section 4.8); everything takes stamps and clock readings in
+integer nanoseconds as arguments and returns a decision, so the rules are tested
+without a clock or ROS:
 
 * :class:`FeedbackGate`: stamps must increase (a duplicate or a sample overtaken
   by a newer one is ignored, the command in force came from fresher feedback); a
