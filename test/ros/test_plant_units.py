@@ -1,4 +1,4 @@
-"""The plant node at the ROS boundary: JointState velocity in rad/s, angle parameters in degrees."""
+"""The plant node at the ROS boundary: JointState velocity in rad/s, angles in degrees."""
 
 import math
 
