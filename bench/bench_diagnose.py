@@ -11,9 +11,9 @@ repeats).
 
 import time
 
-from hydro_sdp.cli.simulate import experiment_record
-from hydro_sdp.core.diagnose import diagnose, VOCABULARY
+from hydro_sdp.core.diagnosis import diagnose, VOCABULARY
 from hydro_sdp.core.effects import ValveLag
+from hydro_sdp.core.experiment_records import experiment_record
 from hydro_sdp.core.simulation import simulate
 from hydro_sdp.files import default_model_path, load_model
 

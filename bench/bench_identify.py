@@ -23,8 +23,8 @@ import time
 
 from bench_foundation import best_of, rosbags_baseline
 from hydro_sdp.bags import write_bag
-from hydro_sdp.cli.simulate import experiment_record
 from hydro_sdp.core.delay import level_speeds
+from hydro_sdp.core.experiment_records import experiment_record
 from hydro_sdp.core.experiments import Experiment
 from hydro_sdp.core.map_fit import fit_sdp, FitData, initial_sdp, sdp_from_alpha_vector
 from hydro_sdp.core.programs import command_span

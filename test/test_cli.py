@@ -8,8 +8,8 @@ import sys
 
 from hydro_sdp.bags import read_bag, read_record
 from hydro_sdp.cli.main import main
-from hydro_sdp.cli.simulate import experiment_record
 from hydro_sdp.core.effects import ValveLag
+from hydro_sdp.core.experiment_records import experiment_record
 from hydro_sdp.files import default_model_path, load_model
 import numpy as np
 import pytest

@@ -9,14 +9,14 @@ from typing import Callable
 
 from hydro_sdp.bags import read_bag, write_bag
 from hydro_sdp.cli.common import Outcome, table
-from hydro_sdp.cli.diagnose import write_report
 from hydro_sdp.cli.progress import ProgressBar
-from hydro_sdp.cli.simulate import experiment_record
 from hydro_sdp.core.closed_loop import LoopJoint, run_closed_loop, step_metrics, step_setpoints
 from hydro_sdp.core.controller_spec import design_from_model, format_pole
-from hydro_sdp.core.diagnose import diagnose
+from hydro_sdp.core.diagnosis import diagnose
 from hydro_sdp.core.effects import ValveLag
+from hydro_sdp.core.errors import DataError
 from hydro_sdp.core.evaluate import evaluate, simulated_angles
+from hydro_sdp.core.experiment_records import experiment_record
 from hydro_sdp.core.identify import identify
 from hydro_sdp.core.model import JointModel
 from hydro_sdp.core.records import Record
@@ -25,6 +25,8 @@ from hydro_sdp.files import (
 from hydro_sdp.plots import (
     plot_closed_loop, plot_gains, plot_idz, plot_recalibration, plot_record, plot_step_responses,
     plot_velocity_map, save_figure)
+from hydro_sdp.report.diagnosis import write_report
+from matplotlib.figure import Figure
 import numpy as np
 
 HELP = 'run the pipeline on the built-in BROKK J2 joint and write a report folder'
@@ -66,10 +68,16 @@ class Report:
     payload: dict = field(default_factory=dict)
     identified: JointModel | None = None
 
-    def figure(self, figure, name: str) -> str:
+    def figure(self, figure: Figure, name: str) -> str:
         """Save a figure into ``figures/`` and return its path relative to the report."""
         save_figure(figure, self.out / 'figures' / name)
         return f'figures/{name}'
+
+    def model(self) -> JointModel:
+        """Return the model the identification stage left."""
+        if self.identified is None:
+            raise DataError('the demo stages run in order: identification comes first')
+        return self.identified
 
 
 def _experiments(report: Report) -> None:
@@ -107,7 +115,7 @@ def _identification(report: Report) -> None:
     model = result.model
     save_model(model, report.out / 'j2_identified.yaml')
     report.identified = model
-    true_alpha, alpha = truth.alpha(0.01), result.alpha
+    true_alpha, alpha = truth.alpha(0.01), model.alpha(result.sample_period)
     names = ['alpha_1', 'alpha_2', 'alpha_3', 'alpha_4', 'alpha_5', 'alpha_6', 'delay (s)']
     values = list(zip(names, list(true_alpha) + [truth.delay], list(alpha) + [model.delay]))
     rows = [[name, f'{want:.4f}', f'{got:.4f}', f'{100 * (got - want) / abs(want):+.3f}']
@@ -125,8 +133,8 @@ def _identification(report: Report) -> None:
                                           result.sample_period), 'step_responses.png'),
         report.figure(plot_gains(result.points, model, result.sample_period), 'gains.png'),
         report.figure(plot_velocity_map(
-            model, v_range=(-6.0, 6.0), points=([p.level for p in moving],
-                                                [p.speed for p in moving]),
+            model, v_range=(-6.0, 6.0), points=(np.array([p.level for p in moving]),
+                                                np.array([p.speed for p in moving])),
             title='Identified J2 velocity map (West et al. 2018, Fig. 3)'), 'velocity_map.png'),
         report.figure(plot_record(runs[0], model, simulated=simulated_angles(model, runs[0]),
                                   title='Model evaluation (West et al. 2018, Fig. 4)'),
@@ -158,9 +166,12 @@ def _identification(report: Report) -> None:
 def _control(report: Report) -> None:
     model = load_model(default_model_path())
     # The controller comes from the identified model; the plant is the true joint.
-    spec = design_from_model(report.identified, poles=[0.94 + 0.05j, 0.94 - 0.05j, 0.0, 0.0],
+    spec = design_from_model(report.model(), poles=[0.94 + 0.05j, 0.94 - 0.05j, 0.0, 0.0],
                              v_range=(-2.2, 1.75), u_limits=(-2.5, 2.5))
     save_controller(spec, report.out / 'j2_controller.yaml')
+    idz = spec.idz
+    if idz is None:
+        raise DataError('the J2 design has an inverse dead-zone')
     levels = [20.0, 10.0, 55.0]
     hold = 6.0 if report.short else 10.0
     trace = run_closed_loop([LoopJoint(model, spec.controller(),
@@ -170,7 +181,7 @@ def _control(report: Report) -> None:
               [Record(trace.t + 0.01, trace.v, trace.measured, joint=model.joint)],
               setpoints={model.joint: trace.setpoint})
     metrics = step_metrics(trace, initial=0.0)
-    figures = [report.figure(plot_idz(model, spec.idz, 0.05, u_limits=spec.u_limits),
+    figures = [report.figure(plot_idz(model, idz, 0.05, u_limits=spec.u_limits),
                              'idz.png'),
                report.figure(plot_closed_loop(
                    [trace], title='J2 PIP-IDZ control (West et al. 2018, Fig. 7)'),
@@ -180,7 +191,7 @@ def _control(report: Report) -> None:
              f'{m.steady_error:+.3f}'] for m in metrics]
     report.lines += ['', f'PIP-IDZ design: f0 {gains.f[0]:.4f}, g {gains.g[0]:.4f} '
                      f'{gains.g[1]:.4f}, kI {gains.k_i:.4f}; IDZ slopes '
-                     f'{spec.idz.slopes[0]:.4f} {spec.idz.slopes[1]:.4f}']
+                     f'{idz.slopes[0]:.4f} {idz.slopes[1]:.4f}']
     report.lines += table(rows, ['step (deg)', 'settling (s)', 'overshoot (%)',
                                  'steady error (deg)'])
     report.sections.append('\n'.join([
@@ -188,7 +199,7 @@ def _control(report: Report) -> None:
         f'Poles {", ".join(format_pole(p) for p in spec.poles)} at 0.05 s give '
         f'f0 = {gains.f[0]:.4f}, g1 = {gains.g[0]:.4f}, g2 = {gains.g[1]:.4f}, '
         f'kI = {gains.k_i:.4f} (the paper prints 0.1261, 0.12, 0.1261, 0.0061). IDZ slopes '
-        f'{spec.idz.slopes[0]:.4f} and {spec.idz.slopes[1]:.4f} deg per sample per V; u within '
+        f'{idz.slopes[0]:.4f} and {idz.slopes[1]:.4f} deg per sample per V; u within '
         '+-2.5. Plant at 0.01 s, controller at 0.05 s, 0.01 deg noise; settling into +-0.5 deg.',
         '', '| step (deg) | settling (s) | overshoot (%) | steady error (deg) |',
         '|---|---|---|---|', *[f'| {" | ".join(r)} |' for r in rows], '',
@@ -237,11 +248,11 @@ def _diagnosis(report: Report) -> None:
                                  duration=duration) for index in range(3)]
     for index, record in enumerate(records, start=1):
         write_bag(report.out / f'lagged_bag_{index}', [record])
-    model = report.identified
+    model = report.model()
     result = diagnose(records[:2], model, validation=records[2:])
     save_model(result.model, report.out / 'j2_augmented.yaml')
     folder = report.out / 'diagnosis'
-    write_report(folder, result, model, records[:2], records[2:])
+    write_report(folder, result)
     rows = [[str(i), step.effect, f'{step.mae_before:.3f}', f'{step.mae_after:.3f}']
             for i, step in enumerate(result.ledger, start=1)]
     report.lines += ['', f'diagnosis of a joint with a hidden valve lag: named {result.effect}']
@@ -275,11 +286,11 @@ def _ros_nodes(report: Report) -> None:
                                  seed=report.seed)
     recalibrations = run.recalibrations
     final_edges = tuple(run.edges[-1])
-    error = np.abs(run.angle - run.setpoint).reshape(holds, steps)[:, -50:].max(axis=1)
+    worst = np.abs(run.angle - run.setpoint).reshape(holds, steps)[:, -50:].max(axis=1)
     figure = report.figure(plot_recalibration(run.t, run.angle, run.setpoint, run.command,
                                               run.edges, run.drift_time), 'recalibration.png')
-    before, during, after = error[:drift_at].max(), error[drift_at:drift_at + 2].max(), \
-        error[-4:].max()
+    before, during, after = worst[:drift_at].max(), worst[drift_at:drift_at + 2].max(), \
+        worst[-4:].max()
     report.lines += ['', 'three ROS nodes in-process: the dead-zone narrows by 0.3 V, the '
                      f'identifier recalibrated the controller {recalibrations} times']
     report.lines += table([['before the drift', f'{before:.2f}'],

@@ -6,12 +6,8 @@ import argparse
 
 from hydro_sdp.bags import STORAGES, write_bag
 from hydro_sdp.cli.common import finite_float, non_negative_float, Outcome, positive_float
-from hydro_sdp.core.model import JointModel
-from hydro_sdp.core.programs import random_program, start_angle, step_program
-from hydro_sdp.core.records import Record
-from hydro_sdp.core.simulation import simulate
+from hydro_sdp.core.experiment_records import experiment_record
 from hydro_sdp.files import load_model
-import numpy as np
 
 HELP = 'open-loop step or random-level experiments on a model, recorded as a bag'
 DESCRIPTION = """\
@@ -49,49 +45,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument('--storage', choices=STORAGES, default='sqlite3',
                         help='rosbag2 storage (default: sqlite3)')
     parser.set_defaults(run=run)
-
-
-def experiment_record(model: JointModel, program: str, *, dt: float = 0.01, seed: int = 0,
-                      duration: float | None = None, noise: float = 0.03,
-                      y0: float | None = None) -> Record:
-    """
-    Simulate one open-loop program on ``model`` with measurement noise.
-
-    Parameters
-    ----------
-    model : JointModel
-        The joint.
-    program : str
-        ``steps`` or ``random``.
-    dt : float
-        Sample period, s.
-    seed : int
-        Seed for the program and the noise.
-    duration : float or None
-        Length in s; default 40 steps, or 60 s of random levels.
-    noise : float
-        Standard deviation of the measurement noise, degrees.
-    y0 : float or None
-        Starting angle; default: the middle of the end stops.
-
-    Returns
-    -------
-    Record
-        The noisy record, ``t`` starting at ``dt``.
-
-    """
-    start = start_angle(model) if y0 is None else y0
-    if program == 'steps':
-        steps = 40 if duration is None else max(2, int(duration // 3.0))
-        v = step_program(model, dt, steps=steps, y0=start)
-    else:
-        v = random_program(model, dt, 60.0 if duration is None else duration, seed=seed,
-                           y0=start)
-    y = simulate(model, v, dt, start)
-    rng = np.random.default_rng([seed, 1])
-    measured = y + rng.normal(0.0, noise, y.size) if noise > 0.0 else y
-    # Time starts one period in, so that v_0 has a (non-negative) time to be sent at.
-    return Record(np.arange(1, v.size + 1) * dt, v, measured, joint=model.joint)
 
 
 def run(args: argparse.Namespace) -> Outcome:

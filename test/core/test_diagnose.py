@@ -2,7 +2,7 @@
 
 from dataclasses import replace
 
-from hydro_sdp.core.diagnose import diagnose
+from hydro_sdp.core.diagnosis import diagnose
 from hydro_sdp.core.effects import (
     AngleDependentVelocity, Backlash, DirectionDependentDelay, ValveLag)
 from hydro_sdp.core.model import JointModel

@@ -1,10 +1,10 @@
 """Identification of joints: the paper's Table 1, step bags, delay, map families, bad data."""
 
 from hydro_sdp.bags import read_record, write_bag
-from hydro_sdp.cli.simulate import experiment_record
 from hydro_sdp.core.delay import estimate_delay, level_speeds
 from hydro_sdp.core.errors import DataError
 from hydro_sdp.core.evaluate import evaluate
+from hydro_sdp.core.experiment_records import experiment_record
 from hydro_sdp.core.experiments import Experiment, segment_record
 from hydro_sdp.core.identify import identify
 from hydro_sdp.core.map_fit import fit_sdp, FitData

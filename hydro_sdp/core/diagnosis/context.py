@@ -1,0 +1,71 @@
+"""Data shared by the detectors of one iteration, and the scoring of their candidates."""
+
+from __future__ import annotations
+
+import math
+from typing import Any, Callable, Sequence
+
+from hydro_sdp.core.diagnosis.residuals import (
+    BLOCK_SECONDS, block_sums, compare, MIN_GAIN, Run, T_LIMIT, velocity_residuals)
+from hydro_sdp.core.diagnosis.results import Candidate, Trial
+from hydro_sdp.core.experiments import segment_records, split_long, thin
+from hydro_sdp.core.map_fit import FitData
+from hydro_sdp.core.model import JointModel
+from hydro_sdp.core.programs import rest_command
+import numpy as np
+from scipy.optimize import minimize_scalar
+
+
+class Context:
+    """
+    The model under test, the runs and what every detector needs from them.
+
+    Parameters
+    ----------
+    model : JointModel
+        The model the candidates augment.
+    runs : sequence of Run
+        Estimation runs.
+    max_delay : int
+        Largest delay considered, samples.
+
+    """
+
+    def __init__(self, model: JointModel, runs: Sequence[Run], max_delay: int) -> None:
+        self.model = model
+        self.runs = runs
+        self.dt = runs[0].dt
+        self.max_delay = max_delay
+        self.block = max(2, int(round(BLOCK_SECONDS / self.dt)))
+        self.base = velocity_residuals(model, runs)
+        self.segmentation = segment_records([r.record for r in runs], max_delay=max_delay)
+        levels = np.concatenate([r.record.v for r in runs])
+        self.rest = rest_command(model) if model.dead_zone is not None else \
+            self.segmentation.rest
+        self.scale = max(float(np.max(np.abs(levels - self.rest))), 1e-9)
+
+    def fit_data(self, delay: int) -> FitData:
+        """Return the experiments as regret-regression data at ``delay`` samples."""
+        pieces = split_long(self.segmentation.experiments, 3000, self.max_delay)
+        return FitData(thin(pieces, 60_000), delay, self.dt)
+
+    def squared_residual(self, model: JointModel) -> float:
+        """Return the squared velocity residual of ``model`` over whole blocks, deg^2."""
+        return float(block_sums(velocity_residuals(model, self.runs), self.block).sum())
+
+    def score(self, effect: str, candidate: JointModel, parameters: dict[str, Any],
+              evidence: str) -> Trial:
+        """Compare ``candidate`` with the model under test; return the scored trial."""
+        gain, t = compare(self.base, velocity_residuals(candidate, self.runs), self.block)
+        significant = t > T_LIMIT and gain > MIN_GAIN
+        return Candidate(effect, True, gain, t, significant, parameters, evidence), candidate
+
+    def fit_scalar(self, build: Callable[[float], JointModel], bounds: tuple[float, float],
+                   log: bool = False) -> float:
+        """Return the parameter in ``bounds`` whose model has the least squared residual."""
+        def cost(x: float) -> float:
+            return self.squared_residual(build(math.exp(x) if log else x))
+        low, high = (math.log(bounds[0]), math.log(bounds[1])) if log else bounds
+        result = minimize_scalar(cost, bounds=(low, high), method='bounded',
+                                 options={'xatol': 1e-3})
+        return math.exp(result.x) if log else float(result.x)

@@ -1,0 +1,57 @@
+"""
+The detectors of the discrepancy workflow, one word of the vocabulary each.
+
+:data:`DETECTORS` is the one list: the vocabulary, the command-line help, the
+search order and the report's signature figures all derive from it. A new word
+is a :class:`Detector` subclass in a module of this package, registered here.
+
+"""
+
+from __future__ import annotations
+
+from hydro_sdp.core.diagnosis.detectors.angle import AngleDependentVelocity, AngleLimits
+from hydro_sdp.core.diagnosis.detectors.base import Detector, feature_signature
+from hydro_sdp.core.diagnosis.detectors.delays import DirectionDependentDelay, TimeDelay
+from hydro_sdp.core.diagnosis.detectors.dynamics import Backlash, ValveLag
+from hydro_sdp.core.diagnosis.detectors.map_shape import Asymmetry, DeadZone, VelocitySaturation
+from hydro_sdp.core.errors import ConfigurationError
+
+#: Every detector, in the order the search tries them (ties in gain go to the first).
+DETECTORS: tuple[Detector, ...] = (
+    DeadZone(), VelocitySaturation(), Asymmetry(), TimeDelay(), DirectionDependentDelay(),
+    AngleLimits(), ValveLag(), Backlash(), AngleDependentVelocity(),
+)
+
+#: The vocabulary: every word the workflow can name (besides ``none``).
+VOCABULARY: tuple[str, ...] = tuple(detector.word for detector in DETECTORS)
+
+
+def detector(word: str) -> Detector:
+    """
+    Return the detector of a vocabulary word.
+
+    Parameters
+    ----------
+    word : str
+        Vocabulary word.
+
+    Returns
+    -------
+    Detector
+        Its registered detector.
+
+    """
+    for candidate in DETECTORS:
+        if candidate.word == word:
+            return candidate
+    raise ConfigurationError(f'unknown effect {word!r} (known: {", ".join(VOCABULARY)})')
+
+
+def vocabulary_table() -> list[str]:
+    """Return the vocabulary as Markdown table rows: word, what is missed, how it is added."""
+    return ['| word | what the model misses | how it is added |', '|---|---|---|',
+            *[f'| `{d.word}` | {d.description} | {d.remedy} |' for d in DETECTORS]]
+
+
+__all__ = ['DETECTORS', 'Detector', 'detector', 'feature_signature', 'VOCABULARY',
+           'vocabulary_table']

@@ -1,0 +1,135 @@
+"""
+What a detector is: one word of the vocabulary, how it is fitted and how it shows.
+
+A detector tries one effect on the data (:meth:`Detector.fit`) and says what its
+residual signature is drawn against (:attr:`Detector.feature`,
+:meth:`Detector.signature`). The vocabulary, the command-line help and the
+report's signature figure all come from the registered detectors.
+
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from typing import ClassVar
+
+from hydro_sdp.core.diagnosis.context import Context
+from hydro_sdp.core.diagnosis.residuals import Run, velocity_residuals
+from hydro_sdp.core.diagnosis.results import Feature, Signature, Trial
+from hydro_sdp.core.model import JointModel
+from hydro_sdp.core.simulation import speed_profile
+from hydro_sdp.core.timing import delayed_at
+import numpy as np
+
+#: What the x axis of each feature's signature shows.
+FEATURE_LABELS: dict[Feature, str] = {
+    'command': 'delayed command',
+    'angle': 'joint angle (deg)',
+    'events': 'samples after a delayed command change (signed by the change)',
+    'reversals': 'samples after a reversal of motion (signed by the new direction)',
+}
+
+
+class Detector(ABC):
+    """
+    One effect of the vocabulary: what the model misses, how it is fitted, how it shows.
+
+    Subclasses set the class attributes and implement :meth:`fit`; registering an
+    instance in :data:`hydro_sdp.core.diagnosis.detectors.DETECTORS` adds the word.
+
+    """
+
+    #: Vocabulary word (also the effect's key in a model file when it is an effect).
+    word: ClassVar[str]
+    #: What the model misses, in a few words.
+    description: ClassVar[str]
+    #: How the effect is added to the model.
+    remedy: ClassVar[str]
+    #: What the residual signature is drawn against.
+    feature: ClassVar[Feature]
+
+    @abstractmethod
+    def fit(self, context: Context) -> Trial:
+        """
+        Add the effect to the model under test, fit it and score it.
+
+        Parameters
+        ----------
+        context : Context
+            The model under test and the data.
+
+        Returns
+        -------
+        Trial
+            The candidate, and the augmented model (None when there is none to keep).
+
+        """
+
+    def signature(self, model: JointModel, augmented: JointModel, run: Run) -> Signature:
+        """
+        Return the residual signature of the effect on one run, before and after adding it.
+
+        Parameters
+        ----------
+        model : JointModel
+            The model given.
+        augmented : JointModel
+            The model with the effect (and any others kept).
+        run : Run
+            The run to draw.
+
+        Returns
+        -------
+        Signature
+            The residuals and what they are drawn against.
+
+        """
+        return feature_signature(self.word, self.feature, model, augmented, run)
+
+
+def feature_signature(word: str, feature: Feature, model: JointModel, augmented: JointModel,
+                      run: Run) -> Signature:
+    """
+    Return the residual signature of ``word`` drawn against ``feature``.
+
+    Parameters
+    ----------
+    word : str
+        Vocabulary word.
+    feature : Feature
+        What the residual is drawn against.
+    model, augmented : JointModel
+        The model given and the augmented model.
+    run : Run
+        The run to draw.
+
+    Returns
+    -------
+    Signature
+        Residuals of both models and the feature, aligned sample by sample.
+
+    """
+    record, start = run.record, run.start
+    # Residual i is the increment from sample start + i to start + i + 1.
+    samples = np.arange(start + 1, len(record))
+    command = delayed_at(record.v, samples, model.delay_samples(run.dt))
+    before = velocity_residuals(model, [run])[0]
+    after = velocity_residuals(augmented, [run])[0]
+    x = None
+    triggers = np.zeros(0, dtype=np.int64)
+    signs = np.zeros(0)
+    if feature == 'command':
+        x = command
+    elif feature == 'angle':
+        x = record.y[start:-1]
+    elif feature == 'events':
+        triggers = np.flatnonzero(np.diff(command)) + 1
+        signs = np.sign(np.diff(command)[triggers - 1])
+    else:
+        speed = speed_profile(model, record.v, run.dt, v_before=float(record.v[0]))
+        direction = np.sign(speed[start + 1:])
+        moving = np.flatnonzero(direction != 0)
+        triggers = moving[1:][np.diff(direction[moving]) != 0]
+        signs = direction[triggers]
+    return Signature(word, feature, FEATURE_LABELS[feature], run.dt, before, after, x,
+                     triggers, signs)

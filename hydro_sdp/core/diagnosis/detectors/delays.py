@@ -1,0 +1,71 @@
+"""Detectors of timing: a wrong pure delay, different delays for the two directions."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+from hydro_sdp.core.delay import estimate_delay
+from hydro_sdp.core.diagnosis.context import Context
+from hydro_sdp.core.diagnosis.detectors.base import Detector
+from hydro_sdp.core.diagnosis.residuals import block_sums
+from hydro_sdp.core.diagnosis.results import Candidate, Trial
+from hydro_sdp.core.effects import DirectionDependentDelay as Split
+from hydro_sdp.core.experiments import thin
+
+
+class TimeDelay(Detector):
+    """The delay is wrong: re-estimate it by cross-correlation."""
+
+    word = 'time_delay'
+    description = 'the delay is wrong'
+    remedy = 'the delay re-estimated'
+    feature = 'events'
+
+    def fit(self, context: Context) -> Trial:
+        """Re-estimate the delay from the experiments and score the model with it."""
+        experiments = thin(context.segmentation.experiments, 100_000)
+        estimate = estimate_delay(experiments, context.dt, max_delay=context.max_delay,
+                                  rest=context.segmentation.rest,
+                                  noise=context.segmentation.noise_std)
+        current = context.model.delay_samples(context.dt)
+        if estimate.samples == current:
+            return Candidate(self.word, True, evidence=f'the data agree with the delay of '
+                             f'{current} samples'), None
+        delay = round(estimate.samples * context.dt, 9)
+        candidate = replace(context.model, delay=delay)
+        return context.score(self.word, candidate, {'delay': delay},
+                             f'speed changes follow command changes after '
+                             f'{estimate.samples} samples, not {current} (cross-correlation '
+                             f'{estimate.xcorr})')
+
+
+class DirectionDependentDelay(Detector):
+    """The two directions start after different delays: grid search over both."""
+
+    word = 'direction_dependent_delay'
+    description = 'the delay differs between directions'
+    remedy = 'effect, delays by grid search'
+    feature = 'events'
+
+    def fit(self, context: Context) -> Trial:
+        """Search both delays within 10 samples of the model's and score the best pair."""
+        current = context.model.delay_samples(context.dt)
+        best: tuple[float, int, int] | None = None
+        span = range(max(1, current - 10), current + 11)
+        base = float(block_sums(context.base, context.block).sum())
+        for positive in span:
+            for negative in span:
+                if positive == negative:
+                    continue
+                total = context.squared_residual(context.model.with_effect(
+                    Split(positive * context.dt, negative * context.dt)))
+                if best is None or total < best[0]:
+                    best = (total, positive, negative)
+        if best is None or best[0] >= base:
+            return Candidate(self.word, True), None
+        _, positive, negative = best
+        effect = Split(round(positive * context.dt, 9), round(negative * context.dt, 9))
+        return context.score(self.word, context.model.with_effect(effect),
+                             {'positive': effect.positive, 'negative': effect.negative},
+                             f'motion in the positive direction starts {positive} samples '
+                             f'after its command, in the negative direction {negative}')

@@ -1,0 +1,169 @@
+"""
+Static maps refitted with a chosen set of features (dead-zone, saturation, asymmetry).
+
+The map-shape detectors add one feature to the model's map and refit the whole
+map by regret-regression (docs/methods.md sections 2.1 and 8.2) on the experiments
+of the data.
+
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+import math
+from typing import Any, NamedTuple
+
+from hydro_sdp.core.arrays import FloatArray
+from hydro_sdp.core.delay import level_speeds
+from hydro_sdp.core.diagnosis.context import Context
+from hydro_sdp.core.map_fit import fit_sdp, FitData
+from hydro_sdp.core.model import JointModel
+from hydro_sdp.core.static_maps import LinearMap, SdpDzMap, SdpMap, StaticMap
+import numpy as np
+from scipy.optimize import least_squares
+
+
+class Features(NamedTuple):
+    """Which features a static map has."""
+
+    dead_zone: bool
+    saturation: bool
+    asymmetric: bool
+
+
+def map_features(static_map: StaticMap) -> Features:
+    """Return whether a map has a dead-zone, saturates and treats the directions apart."""
+    if isinstance(static_map, LinearMap):
+        return Features(False, False, False)
+    if isinstance(static_map, SdpDzMap):
+        low, high = static_map.dead_zone
+        same = math.isclose(static_map.slope[0], static_map.slope[1], rel_tol=1e-6)
+        return Features(high > low, False, not same)
+    if isinstance(static_map, SdpMap):
+        low, high = static_map.dead_zone
+        vn, vp = static_map.saturation_velocity
+        cn, cp = static_map.curvature
+        symmetric = math.isclose(-vn, vp, rel_tol=1e-6) and math.isclose(cn, cp, rel_tol=1e-6)
+        return Features(high > low, True, not symmetric)
+    return Features(True, True, True)
+
+
+class MapFamily:
+    """
+    Static maps with a chosen set of features, as functions of free parameters.
+
+    Parameters
+    ----------
+    features : Features
+        The features the maps have.
+    rest : float
+        Rest command, input units.
+    scale : float
+        Largest distance of a command from ``rest``, input units.
+
+    """
+
+    def __init__(self, features: Features, rest: float, scale: float) -> None:
+        self.dead_zone, self.saturation, self.asymmetric = features
+        self.rest, self.scale = rest, scale
+
+    def build(self, x: FloatArray) -> SdpMap | SdpDzMap:
+        """Return the map for free parameters ``x``."""
+        i = 0
+        if self.dead_zone:
+            # Edges stay inside the commands seen (a runaway edge explains nothing).
+            low = self.rest - min(math.exp(min(x[0], 50.0)), self.scale)
+            high = self.rest + min(math.exp(min(x[1], 50.0)), self.scale)
+            i = 2
+        else:
+            low = high = self.rest
+        x = np.clip(x, -50.0, 50.0)
+        if self.asymmetric:
+            a, b = math.exp(x[i]), math.exp(x[i + 1])
+            i += 2
+        else:
+            a = b = math.exp(x[i])
+            i += 1
+        if not self.saturation:
+            return SdpDzMap(dead_zone=(low, high), slope=(a, b))
+        if self.asymmetric:
+            cn, cp = math.exp(x[i]), math.exp(x[i + 1])
+        else:
+            cn = cp = math.exp(x[i])
+        return SdpMap(dead_zone=(low, high), saturation_velocity=(-a, b), curvature=(cn, cp))
+
+    def start(self, static_map: StaticMap) -> FloatArray:
+        """Free parameters near ``static_map`` (any kind), for a fit to start from."""
+        v = np.linspace(self.rest - self.scale, self.rest + self.scale, 41)
+        speeds = static_map.rate(v)
+        edge = 0.05 * self.scale
+        x: list[float] = []
+        if self.dead_zone:
+            zone = getattr(static_map, 'dead_zone', None)
+            low, high = zone if zone and zone[1] > zone[0] else \
+                (self.rest - edge, self.rest + edge)
+            x += [math.log(max(self.rest - low, 1e-3 * self.scale)),
+                  math.log(max(high - self.rest, 1e-3 * self.scale))]
+        top = max(abs(speeds[0]), 1e-6), max(abs(speeds[-1]), 1e-6)
+        curvature: list[float] | None
+        if self.saturation:
+            sizes = [1.2 * top[0], 1.2 * top[1]]
+            curvature = [2.0 / self.scale] * 2
+            if isinstance(static_map, SdpMap):
+                sizes = [-static_map.saturation_velocity[0], static_map.saturation_velocity[1]]
+                curvature = list(static_map.curvature)
+        else:
+            sizes = [top[0] / self.scale, top[1] / self.scale]
+            curvature = None
+            if isinstance(static_map, SdpDzMap):
+                sizes = list(static_map.slope)
+        x += [math.log(sizes[0]), math.log(sizes[1])] if self.asymmetric else \
+            [math.log(0.5 * (sizes[0] + sizes[1]))]
+        if curvature is not None:
+            x += [math.log(curvature[0]), math.log(curvature[1])] if self.asymmetric else \
+                [math.log(0.5 * (curvature[0] + curvature[1]))]
+        return np.array(x)
+
+
+def _fit_family(model: JointModel, family: MapFamily, data: FitData) -> SdpMap | SdpDzMap:
+    x0 = family.start(model.static_map)
+
+    def residuals(p: FloatArray) -> FloatArray:
+        return data.residuals(family.build(p[:-1]).rate, 1.0 / (1.0 + math.exp(-p[-1])))
+    result = least_squares(residuals, np.r_[x0, 0.0], method='lm')
+    return family.build(result.x[:-1])
+
+
+def refit_map(context: Context, features: Features, delay: float | None = None) -> JointModel:
+    """
+    Return the model under test with its map refitted to have ``features``.
+
+    Parameters
+    ----------
+    context : Context
+        The model under test and the data.
+    features : Features
+        The features the refitted map has.
+    delay : float or None
+        Delay to fit at, s (default: the model's).
+
+    Returns
+    -------
+    JointModel
+        The model with the refitted map.
+
+    """
+    model = context.model if delay is None else replace(context.model, delay=delay)
+    samples = model.delay_samples(context.dt)
+    data = context.fit_data(samples)
+    if all(features):
+        # The full eq. (5) map: identify's multi-start fit, started from the data's speeds.
+        points = level_speeds(data.experiments, samples, context.dt, rest=context.rest)
+        return replace(model, static_map=fit_sdp(data, points, context.rest).static_map)
+    family = MapFamily(features, rest=context.rest, scale=context.scale)
+    return replace(model, static_map=_fit_family(model, family, data))
+
+
+def map_parameters(model: JointModel) -> dict[str, Any]:
+    """Return the model's map as the parameters of a candidate."""
+    return dict(model.static_map.to_mapping())

@@ -1,0 +1,184 @@
+"""
+Runs, simulation error and the velocity residual of the discrepancy workflow.
+
+The velocity residual ``eps_k = dy_k - dy^_k`` (measured against the model's
+one-step increments, docs/methods.md section 8.1) localises a discrepancy in time
+without the drift of the simulation error. Two models are compared on it block by
+block: a paired t-test over one-second blocks, robust to the residuals'
+autocorrelation (section 8.3).
+
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+import math
+from typing import Sequence
+
+from hydro_sdp.core.arrays import FloatArray
+from hydro_sdp.core.effects import Backlash
+from hydro_sdp.core.experiments import check_record
+from hydro_sdp.core.model import JointModel
+from hydro_sdp.core.records import Record
+from hydro_sdp.core.simulation import one_step_increments, simulate
+import numpy as np
+
+#: A candidate is significant when its block-paired t statistic exceeds this...
+T_LIMIT = 3.0
+#: ...and it removes at least this share of the squared velocity residual.
+MIN_GAIN = 0.02
+#: Length of the blocks the t-test pairs, s.
+BLOCK_SECONDS = 1.0
+
+
+@dataclass(frozen=True, eq=False)
+class Run:
+    """
+    A record with the sample it is simulated from.
+
+    Parameters
+    ----------
+    record : Record
+        Measured record.
+    dt : float
+        Its sample period, s.
+    start : int
+        First sample at which the joint's state is settled.
+
+    """
+
+    record: Record
+    dt: float
+    start: int
+
+
+def _settled_start(record: Record, hold: int, fallback: int) -> int:
+    """First sample after the command has stayed the same for ``hold`` samples."""
+    changes = np.flatnonzero(np.diff(record.v)) + 1
+    starts = np.r_[0, changes]
+    ends = np.r_[changes, record.v.size]
+    long = np.flatnonzero(ends - starts > hold)
+    if long.size == 0:
+        return fallback
+    return min(int(starts[long[0]]) + hold, record.v.size - 2)
+
+
+def runs_of(records: Sequence[Record], max_delay: float) -> list[Run]:
+    """
+    Wrap records with the sample each is simulated from.
+
+    That is the first sample after the command has been held long enough for every
+    delay considered and for a valve lag to settle (1 s at least).
+
+    Parameters
+    ----------
+    records : sequence of Record
+        Measured records.
+    max_delay : float
+        Largest delay considered, s.
+
+    Returns
+    -------
+    list[Run]
+        One run per record.
+
+    """
+    runs = []
+    for record in records:
+        dt = check_record(record)
+        hold = int(round(max(1.0, max_delay) / dt))
+        fallback = min(int(round(max_delay / dt)) + 1, len(record) - 2)
+        runs.append(Run(record, dt, _settled_start(record, hold, fallback)))
+    return runs
+
+
+def simulate_record(model: JointModel, run: Run, backlash_offset: float = 0.0) -> FloatArray:
+    """
+    Simulate a record from the first sample at which the joint's state is settled.
+
+    Parameters
+    ----------
+    model : JointModel
+        The model.
+    run : Run
+        The record and its start.
+    backlash_offset : float
+        Initial offset of the play, degrees.
+
+    Returns
+    -------
+    FloatArray
+        Simulated angles, degrees (the measured ones before ``run.start``).
+
+    """
+    record = run.record
+    return simulate(model, record.v, run.dt, float(record.y[run.start]),
+                    v_before=float(record.v[run.start]), start=run.start,
+                    backlash_offset=backlash_offset)
+
+
+def _record_mae(model: JointModel, run: Run) -> float:
+    # Valve lag and delay are settled at the start; the side the play was taken up on is
+    # not known, so the best of the three play states is used.
+    play = model.effect(Backlash.name)
+    half = 0.5 * play.play if isinstance(play, Backlash) else 0.0
+    offsets = (0.0, -half, half) if half > 0.0 else (0.0,)
+    measured = run.record.y[run.start:]
+    return min(float(np.mean(np.abs(measured - simulate_record(model, run, o)[run.start:])))
+               for o in offsets)
+
+
+def mae(model: JointModel, runs: Sequence[Run]) -> float:
+    """Return the mean absolute simulation error over runs, sample-weighted, degrees."""
+    weights = [len(run.record) - run.start for run in runs]
+    return float(np.average([_record_mae(model, run) for run in runs], weights=weights))
+
+
+def velocity_residuals(model: JointModel, runs: Sequence[Run]) -> list[FloatArray]:
+    """Return ``dy - dy^`` per run: measured increments against one-step predictions, deg."""
+    out: list[FloatArray] = []
+    for run in runs:
+        record = run.record
+        predicted = one_step_increments(model, record.v, record.y, run.dt, start=run.start,
+                                        v_before=float(record.v[0]))
+        out.append(np.diff(record.y[run.start:]) - predicted)
+    return out
+
+
+def block_sums(residuals: Sequence[FloatArray], size: int) -> FloatArray:
+    """Return the squared residual summed over whole blocks of ``size`` samples, run by run."""
+    sums = []
+    for series in residuals:
+        squared = series * series
+        whole = squared.size // size
+        if whole:
+            sums.append(squared[:whole * size].reshape(whole, size).sum(axis=1))
+    return np.concatenate(sums) if sums else np.zeros(0)
+
+
+def compare(base: Sequence[FloatArray], candidate: Sequence[FloatArray],
+            size: int) -> tuple[float, float]:
+    """
+    Share of the squared residual removed, and its block-paired t statistic.
+
+    Parameters
+    ----------
+    base, candidate : sequence of FloatArray
+        Velocity residuals of the two models, run by run.
+    size : int
+        Samples per block.
+
+    Returns
+    -------
+    tuple[float, float]
+        ``(gain, t)``.
+
+    """
+    before, after = block_sums(base, size), block_sums(candidate, size)
+    if before.size < 3:
+        return 0.0, 0.0
+    difference = before - after
+    spread = float(np.std(difference, ddof=1))
+    t = float(np.mean(difference) / (spread / math.sqrt(difference.size))) if spread > 0 \
+        else (math.inf if np.mean(difference) > 0 else 0.0)
+    return float(1.0 - after.sum() / before.sum()), t

@@ -1,0 +1,173 @@
+"""What the discrepancy workflow returns: candidates, the gap ledger and the evidence."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+from hydro_sdp.core.arrays import FloatArray, IntArray
+from hydro_sdp.core.model import JointModel
+
+#: What a residual signature is drawn against: the delayed command or the angle (residual
+#: averaged in bins), or the samples after command changes or reversals (event average).
+Feature = Literal['command', 'angle', 'events', 'reversals']
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """
+    One effect tried on the data.
+
+    Parameters
+    ----------
+    effect : str
+        Vocabulary word.
+    applicable : bool
+        Whether the effect can be added to this model at all.
+    gain : float
+        Share of the squared velocity residual the effect removes (estimation data).
+    t : float
+        Block-paired t statistic of that reduction.
+    significant : bool
+        Whether ``t`` and ``gain`` pass the thresholds.
+    parameters : dict
+        Fitted parameters of the effect.
+    evidence : str
+        What in the data shows it.
+
+    """
+
+    effect: str
+    applicable: bool
+    gain: float = 0.0
+    t: float = 0.0
+    significant: bool = False
+    parameters: dict[str, Any] = field(default_factory=dict)
+    evidence: str = ''
+
+
+#: A detector's answer: the candidate, and the augmented model when there is one.
+Trial = tuple[Candidate, JointModel | None]
+
+
+@dataclass(frozen=True)
+class LedgerStep:
+    """
+    One iteration of the workflow.
+
+    Parameters
+    ----------
+    effect : str
+        The effect added.
+    parameters : dict
+        Its fitted parameters.
+    mae_before : float
+        Validation simulation MAE before adding it, degrees.
+    mae_after : float
+        The same after.
+
+    """
+
+    effect: str
+    parameters: dict[str, Any]
+    mae_before: float
+    mae_after: float
+
+
+@dataclass(frozen=True, eq=False)
+class Signature:
+    """
+    The residual signature that named an effect, before and after adding it.
+
+    Parameters
+    ----------
+    effect : str
+        Vocabulary word.
+    feature : Feature
+        What the residual is drawn against.
+    label : str
+        What the x axis shows.
+    dt : float
+        Sample period, s.
+    before, after : FloatArray
+        Velocity residuals (measured minus predicted increments) of the model given
+        and of the augmented model, degrees per sample.
+    x : FloatArray or None
+        Per-sample value of the feature (``command``, ``angle``), aligned with the
+        residuals; None for the event features.
+    triggers : IntArray
+        Residual indices of the events (``events``, ``reversals``); empty otherwise.
+    signs : FloatArray
+        Sign of each event (direction of the change or of the new motion).
+
+    """
+
+    effect: str
+    feature: Feature
+    label: str
+    dt: float
+    before: FloatArray
+    after: FloatArray
+    x: FloatArray | None
+    triggers: IntArray
+    signs: FloatArray
+
+
+@dataclass(frozen=True, eq=False)
+class Gap:
+    """
+    A validation record simulated with the model given and with the augmented model.
+
+    Parameters
+    ----------
+    t : FloatArray
+        Time, s.
+    measured, before, after : FloatArray
+        Measured angle and the two simulations, degrees.
+
+    """
+
+    t: FloatArray
+    measured: FloatArray
+    before: FloatArray
+    after: FloatArray
+
+
+@dataclass(frozen=True, eq=False)
+class Diagnosis:
+    """
+    What the workflow found.
+
+    Parameters
+    ----------
+    effect : str
+        The first (and largest) effect named, or ``none``.
+    model : JointModel
+        The model with every kept effect.
+    ledger : tuple[LedgerStep, ...]
+        The effects added in turn, with the validation MAE before and after each.
+    candidates : tuple[Candidate, ...]
+        Every effect tried in the first iteration, ranked.
+    rounds : tuple[tuple[Candidate, ...], ...]
+        The candidates of every iteration.
+    mae_before : float
+        Validation MAE of the model given, degrees.
+    mae_after : float
+        Validation MAE of the final model, degrees.
+    gap : Gap
+        The first validation record against both models.
+    signature : Signature or None
+        The residual signature of the first effect named, on the first estimation
+        record; None when nothing was named.
+
+    """
+
+    effect: str
+    model: JointModel
+    ledger: tuple[LedgerStep, ...]
+    candidates: tuple[Candidate, ...]
+    rounds: tuple[tuple[Candidate, ...], ...]
+    mae_before: float
+    mae_after: float
+    gap: Gap
+    signature: Signature | None

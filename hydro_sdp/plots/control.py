@@ -1,0 +1,168 @@
+"""Figures of control: the IDZ, closed-loop responses, recalibration (Figs. 6-7)."""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+from hydro_sdp.core.closed_loop import LoopTrace
+from hydro_sdp.core.idz import InverseDeadZone
+from hydro_sdp.core.model import JointModel
+from hydro_sdp.plots.figures import LIMIT, MEASURED, MODEL, new_figure
+from matplotlib.figure import Figure
+import numpy as np
+
+
+def plot_idz(model: JointModel, idz: InverseDeadZone, control_period: float, *,
+             u_limits: tuple[float, float] | None = None,
+             v_range: tuple[float, float] | None = None, command_unit: str = 'V') -> Figure:
+    """
+    IDZ approximation, as the paper's Fig. 6.
+
+    The model's increment per control sample against the steady command, the
+    chords the IDZ inverts, the dead-zone edges and the limits of ``u``.
+
+    Parameters
+    ----------
+    model : JointModel
+        The joint.
+    idz : InverseDeadZone
+        The inverse dead-zone of the controller.
+    control_period : float
+        Control period, s.
+    u_limits : tuple[float, float] or None
+        Limits of the controller's ``u``, drawn as dotted lines.
+    v_range : tuple[float, float] or None
+        Command range to draw; default: to where the model saturates (99 %).
+    command_unit : str
+        Unit of the command.
+
+    Returns
+    -------
+    Figure
+        The figure.
+
+    """
+    figure, (ax,) = new_figure(1, height=4.2, width=7.5)
+    low, high = idz.dead_zone
+    if v_range is None:
+        curvature = getattr(model.static_map, 'curvature', None)
+        if curvature is not None:
+            v_range = (low - np.log(100.0) / curvature[0], high + np.log(100.0) / curvature[1])
+        else:
+            width = max(high - low, 0.1 * max(abs(low), abs(high), 1.0))
+            v_range = (low - 2.0 * width, high + 2.0 * width)
+        if model.input_limits is not None:
+            v_range = (max(v_range[0], model.input_limits[0]),
+                       min(v_range[1], model.input_limits[1]))
+    v = np.linspace(v_range[0], v_range[1], 801)
+    ax.plot(v, model.rate(v) * control_period, color=MODEL, linewidth=1.2,
+            label=f'{model.kind} model')
+    chord = np.array([idz.increment(x) for x in v])
+    ax.plot(v, chord, color=MEASURED, linewidth=2.2, label='linearised (the IDZ inverts this)')
+    for edge in (low, high):
+        ax.axvline(edge, color=LIMIT, linestyle='--', linewidth=0.9)
+    ax.axvspan(low, high, color=LIMIT, alpha=0.12, linewidth=0, label='dead-zone')
+    if u_limits is not None:
+        for value in u_limits:
+            ax.axhline(value, color=LIMIT, linestyle=':', linewidth=1.0)
+        ax.text(1.0, u_limits[1], ' u limit', transform=ax.get_yaxis_transform(),
+                color=LIMIT, fontsize=8, va='center', ha='left', clip_on=False)
+    ax.axhline(0.0, color='black', linewidth=0.6)
+    ax.set_xlabel(f'steady command v ({command_unit})')
+    ax.set_ylabel(f'increment q (deg per {control_period:g} s sample)')
+    ax.legend(loc='upper left', fontsize=8, frameon=False)
+    figure.suptitle(f'IDZ approximation of joint {model.joint} '
+                    f'(slopes {idz.slopes[0]:.4g}, {idz.slopes[1]:.4g}; beta {idz.beta:g})',
+                    fontsize=11)
+    return figure
+
+
+def plot_closed_loop(traces: Sequence[LoopTrace], *, title: str = '',
+                     command_unit: str = 'V') -> Figure:
+    """
+    Closed-loop response, as the paper's Fig. 7: angle, u and v against time.
+
+    Parameters
+    ----------
+    traces : sequence of LoopTrace
+        One or more joints' traces.
+    title : str
+        Figure title.
+    command_unit : str
+        Unit of the valve command.
+
+    Returns
+    -------
+    Figure
+        The figure.
+
+    """
+    # Joints at different angles hide each other's errors: give them a panel of their own.
+    several = len(traces) > 1
+    figure, axes = new_figure(4 if several else 3, height=2.2)
+    angle_ax, u_ax, v_ax = axes[0], axes[-2], axes[-1]
+    colours = [MEASURED, MODEL, '#1b9e77', '#7570b3']
+    for index, trace in enumerate(traces):
+        colour = colours[index % len(colours)]
+        label = trace.joint
+        angle_ax.plot(trace.t, trace.setpoint, color=colour, linestyle='--', linewidth=1.0)
+        angle_ax.plot(trace.t, trace.y, color=colour, linewidth=1.4, label=label)
+        if several:
+            axes[1].plot(trace.t, trace.y - trace.setpoint, color=colour, linewidth=1.0)
+        u_ax.plot(trace.t, trace.u, color=colour, linewidth=1.0, drawstyle='steps-pre')
+        v_ax.plot(trace.t, trace.v, color=colour, linewidth=1.0, drawstyle='steps-pre')
+    if several:
+        axes[1].axhline(0.0, color='black', linewidth=0.6)
+        axes[1].set_ylabel('error y - d (deg)')
+    angle_ax.set_ylabel('angle y (deg)')
+    angle_ax.legend(loc='lower right', fontsize=8, frameon=False,
+                    title='dashed: set-point', title_fontsize=8)
+    u_ax.set_ylabel('PIP input u\n(deg/sample)')
+    v_ax.set_ylabel(f'valve v ({command_unit})')
+    v_ax.set_xlabel('time (s)')
+    figure.suptitle(title or 'PIP-IDZ closed loop', fontsize=11)
+    return figure
+
+
+def plot_recalibration(t: np.ndarray, angle: np.ndarray, setpoint: np.ndarray,
+                       command: np.ndarray, edges: np.ndarray, drift: float) -> Figure:
+    """
+    Draw a loop whose dead-zone drifts and whose IDZ the identifier recalibrates.
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        Time, s.
+    angle, setpoint : numpy.ndarray
+        Joint angle and set-point, degrees.
+    command : numpy.ndarray
+        Valve command, V.
+    edges : numpy.ndarray
+        ``(samples, 2)`` IDZ edges the controller used, V.
+    drift : float
+        Time the plant's dead-zone moved, s.
+
+    Returns
+    -------
+    Figure
+        The figure.
+
+    """
+    figure, (angle_ax, command_ax, edge_ax) = new_figure(3, height=2.3)
+    angle_ax.plot(t, setpoint, color=LIMIT, linestyle='--', linewidth=1.0, label='set-point')
+    angle_ax.plot(t, angle, color=MEASURED, linewidth=1.2, label='angle')
+    angle_ax.set_ylabel('angle (deg)')
+    angle_ax.legend(loc='upper right', fontsize=8, frameon=False)
+    command_ax.plot(t, command, color=MODEL, linewidth=0.8)
+    command_ax.set_ylabel('valve v (V)')
+    edge_ax.plot(t, edges[:, 0], color=MEASURED, linewidth=1.4, label='IDZ lower edge')
+    edge_ax.plot(t, edges[:, 1], color=MODEL, linewidth=1.4, label='IDZ upper edge')
+    edge_ax.set_ylabel('IDZ edges (V)')
+    edge_ax.set_xlabel('time (s)')
+    edge_ax.legend(loc='center right', fontsize=8, frameon=False)
+    for ax in (angle_ax, command_ax, edge_ax):
+        ax.axvline(drift, color='black', linestyle=':', linewidth=1.0)
+    angle_ax.text(drift, 1.0, ' dead-zone narrows by 0.3 V', fontsize=8, va='top',
+                  transform=angle_ax.get_xaxis_transform())
+    figure.suptitle('Wear, detected and recalibrated by the identifier node', fontsize=11)
+    return figure

@@ -1,0 +1,141 @@
+"""Figures of the discrepancy workflow: residual signature, gap, gap ledger."""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+from hydro_sdp.core.arrays import FloatArray, IntArray
+from hydro_sdp.core.diagnosis.results import LedgerStep, Signature
+from hydro_sdp.plots.figures import MEASURED, MODEL, new_figure
+from matplotlib.figure import Figure
+import numpy as np
+
+
+def _binned(x: FloatArray, values: FloatArray,
+            bins: int = 30) -> tuple[FloatArray, FloatArray]:
+    """Return bin centres of ``x`` and the mean of ``values`` in bins of more than 5."""
+    edges = np.linspace(np.min(x), np.max(x), bins + 1)
+    index = np.clip(np.digitize(x, edges) - 1, 0, bins - 1)
+    counts = np.bincount(index, minlength=bins)
+    sums = np.bincount(index, weights=values, minlength=bins)
+    keep = counts > 5
+    return 0.5 * (edges[1:] + edges[:-1])[keep], (sums / np.maximum(counts, 1))[keep]
+
+
+def _event_average(triggers: IntArray, values: FloatArray, span: int,
+                   signs: FloatArray) -> tuple[IntArray, FloatArray]:
+    """Return lags and the mean of ``values`` over the ``span`` samples after each trigger."""
+    # Each event's residual is flipped by the sign of its change, so that rising and
+    # falling changes add up instead of cancelling.
+    rows = [sign * values[k:k + span] for k, sign in zip(triggers, signs)
+            if k + span <= values.size]
+    if not rows:
+        return np.arange(span), np.zeros(span)
+    return np.arange(span), np.mean(rows, axis=0)
+
+
+def plot_signature(signature: Signature) -> Figure:
+    """
+    Draw the residual signature that named an effect, before and after adding it.
+
+    Against the delayed command or the angle, the residuals are averaged in bins;
+    after command changes or reversals, over the second after each event.
+
+    Parameters
+    ----------
+    signature : Signature
+        Residuals before and after, and what they are drawn against (from
+        :attr:`hydro_sdp.core.diagnosis.Diagnosis.signature`).
+
+    Returns
+    -------
+    Figure
+        The figure.
+
+    """
+    figure, (ax,) = new_figure(1, height=3.8, width=8.0)
+    dt = signature.dt
+    curves = ((signature.before, MODEL, 'before'), (signature.after, MEASURED, 'after'))
+    if signature.x is None:
+        span = int(round(1.0 / dt))
+        for values, colour, name in curves:
+            lags, mean = _event_average(signature.triggers, values / dt, span, signature.signs)
+            ax.plot(lags, mean, color=colour, linewidth=1.6, label=name)
+    else:
+        for values, colour, name in curves:
+            centres, means = _binned(signature.x, values / dt)
+            ax.plot(centres, means, 'o-', color=colour, markersize=3, linewidth=1.2, label=name)
+    ax.set_xlabel(signature.label)
+    ax.axhline(0.0, color='black', linewidth=0.6)
+    ax.set_ylabel('mean velocity residual (deg/s)')
+    ax.legend(loc='best', fontsize=8, frameon=False)
+    figure.suptitle(f'Residual signature of {signature.effect}', fontsize=11)
+    return figure
+
+
+def plot_gap(t: FloatArray, measured: FloatArray, before: FloatArray, after: FloatArray, *,
+             title: str = '') -> Figure:
+    """
+    Measured angle against the model before and after the named effects.
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        Time, s.
+    measured, before, after : numpy.ndarray
+        Angles, degrees.
+    title : str
+        Figure title.
+
+    Returns
+    -------
+    Figure
+        The figure.
+
+    """
+    figure, (angle_ax, error_ax) = new_figure(2, height=2.8)
+    time = t - t[0]
+    angle_ax.plot(time, measured, color='black', linewidth=1.6, label='measured')
+    angle_ax.plot(time, before, color=MODEL, linewidth=1.0, label='model before')
+    angle_ax.plot(time, after, color=MEASURED, linewidth=1.0, linestyle='--',
+                  label='model after')
+    angle_ax.set_ylabel('angle (deg)')
+    angle_ax.legend(loc='best', fontsize=8, frameon=False)
+    error_ax.plot(time, measured - before, color=MODEL, linewidth=0.9, label='before')
+    error_ax.plot(time, measured - after, color=MEASURED, linewidth=0.9, label='after')
+    error_ax.axhline(0.0, color='black', linewidth=0.6)
+    error_ax.set_ylabel('simulation error (deg)')
+    error_ax.set_xlabel('time (s)')
+    error_ax.legend(loc='best', fontsize=8, frameon=False)
+    figure.suptitle(title or 'The gap between model and measurement', fontsize=11)
+    return figure
+
+
+def plot_ledger(mae_start: float, steps: Sequence[LedgerStep]) -> Figure:
+    """
+    Draw the validation MAE after each effect added (the gap ledger).
+
+    Parameters
+    ----------
+    mae_start : float
+        MAE of the model given, degrees.
+    steps : sequence of LedgerStep
+        The effects added in turn.
+
+    Returns
+    -------
+    Figure
+        The figure.
+
+    """
+    figure, (ax,) = new_figure(1, height=3.2, width=7.0)
+    labels = ['model given'] + [f'+ {step.effect}' for step in steps]
+    values = [mae_start] + [step.mae_after for step in steps]
+    ax.bar(range(len(values)), values, color=[MODEL] + [MEASURED] * len(steps))
+    for index, value in enumerate(values):
+        ax.text(index, value, f'{value:.3g}', ha='center', va='bottom', fontsize=8)
+    ax.set_xticks(range(len(values)), labels, fontsize=8)
+    ax.set_yscale('log')
+    ax.set_ylabel('validation MAE (deg, log scale)')
+    figure.suptitle('Gap ledger', fontsize=11)
+    return figure

@@ -1,0 +1,96 @@
+"""
+Figure basics: the colours, a new figure with stacked axes, saving it whole.
+
+Figures are built on :class:`matplotlib.figure.Figure` directly (no pyplot
+global state), so they can be made from any thread and in tests, and saved
+whole or not at all with :func:`save_figure`.
+
+"""
+
+from __future__ import annotations
+
+import io
+import os
+from pathlib import Path
+
+from hydro_sdp.files import atomic_write_bytes
+from matplotlib.axes import Axes
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.colors import Colormap
+from matplotlib.figure import Figure
+
+#: Colours used throughout: measured data, model, limits.
+MEASURED = '#1f4e79'
+MODEL = '#d95f02'
+LIMIT = '#7f7f7f'
+
+
+def new_figure(rows: int = 1, *, height: float = 2.6, width: float = 9.0,
+               sharex: bool = True) -> tuple[Figure, list[Axes]]:
+    """
+    Create a figure with ``rows`` stacked axes sharing the time axis.
+
+    Parameters
+    ----------
+    rows : int
+        Number of stacked subplots.
+    height : float
+        Height of each subplot, inches.
+    width : float
+        Figure width, inches.
+    sharex : bool
+        Whether the subplots share their x axis.
+
+    Returns
+    -------
+    tuple
+        The figure and a list of its axes.
+
+    """
+    figure = Figure(figsize=(width, height * rows + 0.6), layout='constrained')
+    FigureCanvasAgg(figure)
+    axes = figure.subplots(rows, 1, sharex=sharex, squeeze=False)[:, 0]
+    for ax in axes:
+        ax.grid(True, color='#dddddd', linewidth=0.6)
+        ax.set_axisbelow(True)
+    return figure, list(axes)
+
+
+def save_figure(figure: Figure, path: str | os.PathLike[str], *, dpi: int = 130) -> Path:
+    """
+    Save a figure as PNG, whole or not at all.
+
+    Parameters
+    ----------
+    figure : Figure
+        The figure.
+    path : str or PathLike
+        Target PNG file.
+    dpi : int
+        Resolution.
+
+    Returns
+    -------
+    Path
+        The target path.
+
+    """
+    buffer = io.BytesIO()
+    figure.savefig(buffer, format='png', dpi=dpi)
+    return atomic_write_bytes(path, buffer.getvalue())
+
+
+def mark_limits(ax: Axes, limits: tuple[float, float] | None, label: str) -> None:
+    """Draw a pair of horizontal limits, dashed, labelled at the right edge."""
+    if limits is None:
+        return
+    for value in limits:
+        ax.axhline(value, color=LIMIT, linestyle='--', linewidth=0.9)
+    ax.text(1.0, limits[1], f' {label}', transform=ax.get_yaxis_transform(),
+            color=LIMIT, fontsize=8, va='center', ha='left', clip_on=False)
+
+
+def matplotlib_colormap() -> Colormap:
+    """Return the diverging colour map used for command levels."""
+    from matplotlib import colormaps
+    return colormaps['coolwarm']

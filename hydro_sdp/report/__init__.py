@@ -1,0 +1,1 @@
+"""Report folders: figures and a ``summary.md`` that a person reads."""

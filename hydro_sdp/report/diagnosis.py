@@ -1,0 +1,56 @@
+"""The discrepancy report: gap, residual signature, gap ledger and ``summary.md``."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from hydro_sdp.core.diagnosis import Diagnosis
+from hydro_sdp.files import atomic_write_text, dump_model
+from hydro_sdp.plots import plot_gap, plot_ledger, plot_signature, save_figure
+
+
+def write_report(folder: Path, result: Diagnosis) -> list[str]:
+    """
+    Write the figures and ``summary.md`` of a diagnosis.
+
+    Parameters
+    ----------
+    folder : Path
+        Report folder (created if missing).
+    result : Diagnosis
+        What :func:`hydro_sdp.core.diagnosis.diagnose` found, with its evidence.
+
+    Returns
+    -------
+    list[str]
+        The paths written: ``gap.png``, ``ledger.png``, ``signature.png`` when an
+        effect was named, and ``summary.md``.
+
+    """
+    gap = result.gap
+    figures = [save_figure(plot_gap(gap.t, gap.measured, gap.before, gap.after,
+                                    title='Validation run: model given and augmented'),
+                           folder / 'gap.png'),
+               save_figure(plot_ledger(result.mae_before, result.ledger), folder / 'ledger.png')]
+    if result.signature is not None:
+        figures.append(save_figure(plot_signature(result.signature), folder / 'signature.png'))
+    rows = [f'| {c.effect} | {"yes" if c.significant else "no"} | {100 * c.gain:.1f} | '
+            f'{c.t:.1f} | {c.evidence} |' for c in result.candidates if c.applicable]
+    ledger = [f'| {i} | {s.effect} | {s.mae_before:.4g} | {s.mae_after:.4g} |'
+              for i, s in enumerate(result.ledger, start=1)]
+    added = len(result.ledger)
+    summary = '\n'.join([
+        '# Discrepancy report', '',
+        f'**Named effect: `{result.effect}`.** Validation MAE {result.mae_before:.4g} deg '
+        f'before, {result.mae_after:.4g} deg after '
+        f'({added} effect{"s" if added != 1 else ""} added).', '',
+        '## Gap ledger', '', '| step | effect | MAE before (deg) | MAE after (deg) |',
+        '|---|---|---|---|', *(ledger or ['| - | none | - | - |']), '',
+        '## Candidates (first round)', '',
+        'Share of the squared velocity residual each effect removes, and the block-paired t '
+        'statistic (significant: t > 3 and at least 2 %).', '',
+        '| effect | significant | gain (%) | t | evidence |', '|---|---|---|---|---|', *rows,
+        '', '## Figures', '', *[f'![{Path(f).stem}]({Path(f).name})' for f in figures], '',
+        '## Augmented model', '', '```yaml', dump_model(result.model).rstrip(), '```', ''])
+    atomic_write_text(folder / 'summary.md', summary)
+    return [str(f) for f in figures] + [str(folder / 'summary.md')]
