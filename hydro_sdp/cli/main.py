@@ -16,11 +16,12 @@ import sys
 import traceback
 
 from hydro_sdp import __version__
-from hydro_sdp.cli import closed_loop, demo, design, diagnose, evaluate, identify, simulate
+from hydro_sdp.cli import (
+    closed_loop, demo, design, diagnose, evaluate, identify, import_csv, simulate)
 from hydro_sdp.cli.common import to_json
 from hydro_sdp.core.errors import HydroSdpError
 
-COMMANDS = (simulate, identify, evaluate, diagnose, design, closed_loop, demo)
+COMMANDS = (simulate, import_csv, identify, evaluate, diagnose, design, closed_loop, demo)
 
 DESCRIPTION = """\
 Identify, control and diagnose hydraulic manipulator joints with state-dependent
