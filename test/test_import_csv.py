@@ -276,3 +276,15 @@ def test_record_from_log_is_the_timing_rule():
     assert log.time_shift == 2.5
     with pytest.raises(DataError, match='1 rows; a log needs at least 2'):
         record_from_log(np.array([1.0]), np.zeros(1), np.zeros(1), joint='arm')
+
+
+def test_help_teaches_the_timing_with_an_example(capsys):
+    with pytest.raises(SystemExit) as exit_info:
+        main(['import', '--help'])
+    assert exit_info.value.code == 0
+    out = capsys.readouterr().out
+    assert 'examples:\n  hydro-sdp import run1.csv run2.csv --out bags --joint arm' in out
+    assert 'the angle of\n  the next row is the first that can show it' in out
+    assert 'shifted so the first row lands one sample period after t = 0' in out
+    for option in ('--angle-unit {deg,rad}', '--command-negative COL', '--delimiter D'):
+        assert option in out
