@@ -111,17 +111,17 @@ def _table(text: str, delimiter: str, source: str) -> list[tuple[int, list[str]]
             if any(stripped):
                 rows.append((reader.line_num, stripped))
     except csv.Error as error:
-        raise DataError(f'{source}: row {reader.line_num + 1}: not CSV ({error})') from None
+        raise DataError(f'{source}: row {reader.line_num}: not CSV ({error})') from None
     return rows
 
 
-def _resolve(spec: str, header: list[str] | None, width: int, source: str,
+def _resolve(spec: str, header: list[str] | None, header_row: int, width: int, source: str,
              option: str) -> _Column:
     """Find the column a ``--time``/``--angle``/... value names."""
     if header is not None and spec in header:
         if header.count(spec) > 1:
-            raise DataError(f'{source}: row 1: {header.count(spec)} columns are named {spec!r} '
-                            f'({option}); choose one by 0-based index')
+            raise DataError(f'{source}: row {header_row}: {header.count(spec)} columns are '
+                            f'named {spec!r} ({option}); choose one by 0-based index')
         index = header.index(spec)
         return _Column(index, f'{spec!r}')
     if spec.isdigit():
@@ -134,7 +134,8 @@ def _resolve(spec: str, header: list[str] | None, width: int, source: str,
         raise DataError(f'{source}: no column {spec!r} ({option}): the file has no header row, '
                         'choose columns by 0-based index')
     names = ', '.join(header)
-    raise DataError(f'{source}: row 1: no column {spec!r} ({option}); columns: {names}')
+    raise DataError(f'{source}: row {header_row}: no column {spec!r} ({option}); '
+                    f'columns: {names}')
 
 
 def _values(rows: list[tuple[int, list[str]]], column: _Column, source: str) -> FloatArray:
@@ -259,7 +260,7 @@ def parse_csv_log(text: str, *, joint: str, time: str, angle: str, command: str,
     specs = {'--time': time, '--angle': angle, '--command': command}
     if command_negative is not None:
         specs['--command-negative'] = command_negative
-    columns = {option: _resolve(spec, header, width, source, option)
+    columns = {option: _resolve(spec, header, rows[0][0], width, source, option)
                for option, spec in specs.items()}
     values = {option: _values(data, column, source) for option, column in columns.items()}
     _check_time(values['--time'], data, columns['--time'], source)

@@ -193,6 +193,9 @@ GOOD = 'time,angle,command\n0.1,1,0\n0.2,1,0\n'
                  id='missing_column'),
     pytest.param('0.1,1,0\n0.2,1,0\n', ['--time', '0', '--angle', '3'],
                  'no column 3 (--angle): the file has 3 columns, 0 to 2', id='index_too_large'),
+    pytest.param('\ntime,time,command\n0.1,1,0\n0.2,1,0\n', [],
+                 "row 2: 2 columns are named 'time' (--time); choose one by 0-based index",
+                 id='column_named_twice'),
     pytest.param('0.1,1,0\n0.2,1,0\n', [],
                  "no column 'time' (--time): the file has no header row, choose columns by "
                  '0-based index', id='name_without_header'),
