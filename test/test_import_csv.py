@@ -5,8 +5,8 @@ import json
 from hydro_sdp.bags import raw_messages, read_record, write_bag
 from hydro_sdp.cdr import decode_float64
 from hydro_sdp.cli.main import main
-from hydro_sdp.cli.simulate import experiment_record
 from hydro_sdp.core.errors import DataError
+from hydro_sdp.core.experiment_records import experiment_record
 from hydro_sdp.csv_logs import parse_csv_log, record_from_log
 import numpy as np
 import pytest
