@@ -114,7 +114,9 @@ def initial_pwl(layout: PwlLayout, points: Sequence[LevelSpeed]) -> FloatArray:
     """
     n_neg, n_pos = layout.negative, layout.positive
     target = np.interp(layout.knots, [p.level for p in points], [p.speed for p in points])
-    return np.r_[np.maximum(-np.diff(np.r_[target[:n_neg], 0.0])[::-1][::-1], 1e-6),
+    # Speeds rise towards the plateau on the negative side: each increment is the rise
+    # from one knot to the next (the last to the edge's 0).
+    return np.r_[np.maximum(np.diff(np.r_[target[:n_neg], 0.0]), 1e-6),
                  np.maximum(np.diff(np.r_[0.0, target[-n_pos:]]), 1e-6), 0.5]
 
 
