@@ -20,7 +20,7 @@ from typing import get_args, Literal
 
 from hydro_sdp.core.errors import ConfigurationError
 
-#: How the IDZ avoids chatter near ``u = 0`` (methods.md 5.2).
+#: How the IDZ avoids chatter near ``u = 0`` (docs/methods.md section 5.2).
 IdzMode = Literal['zero', 'smooth', 'hysteresis']
 IDZ_MODES: tuple[IdzMode, ...] = get_args(IdzMode)
 

@@ -250,7 +250,7 @@ def fit_sdp(data: FitData, points: Sequence[LevelSpeed], rest: float, *,
     if method == 'rr':
         x = _to_natural(result.x, rest)
         cost = float(result.cost)
-        jacobian = np.asarray(result.jac) / _natural_derivative(result.x)
+        jacobian: FloatArray = np.asarray(result.jac) / _natural_derivative(result.x)
     else:
         x = np.r_[result.x, 0.0]
         cost = 0.5 * float(np.sum(data.residuals(sdp_rate_function(x)) ** 2))
