@@ -313,12 +313,8 @@ def design_from_model(model: JointModel, *, control_period: float = 0.05,
         dominant poles 0.94 +- 0.05i at any delay).
     u_limits : tuple[float, float] or None
         Limits of ``u``; default :func:`default_u_limits`.
-    beta : float or None
-        IDZ chatter band (see :func:`idz_for_model`).
-    mode : str
-        IDZ mode.
-    v_range : tuple[float, float] or None
-        Chord ends of an ``sdp`` map (see :func:`idz_for_model`).
+    beta, mode, v_range
+        IDZ chatter band, mode and chord ends, as in :func:`idz_for_model`.
 
     Returns
     -------

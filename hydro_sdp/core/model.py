@@ -112,20 +112,7 @@ class JointModel:
         return self.static_map.rate(np.asarray(v, dtype=np.float64))
 
     def alpha(self, dt: float) -> tuple[float, float, float, float, float, float]:
-        """
-        Return the first paper's ``alpha_1..alpha_6`` at sample period ``dt`` (kind ``sdp``).
-
-        Parameters
-        ----------
-        dt : float
-            Sample period, s.
-
-        Returns
-        -------
-        tuple of six floats
-            ``(a1, a2, a3, a4, a5, a6)`` with ``a1``, ``a4`` in deg per sample.
-
-        """
+        """Return the first paper's ``alpha_1..alpha_6`` at ``dt`` s (``sdp``; SdpMap.alpha)."""
         if not isinstance(self.static_map, SdpMap):
             raise ConfigurationError(f'alpha is defined for kind sdp only, not {self.kind}')
         return self.static_map.alpha(check_sample_period(dt))
