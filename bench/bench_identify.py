@@ -20,25 +20,30 @@ import subprocess
 import sys
 import tempfile
 import time
+from typing import Callable, Sequence
 
 from bench_foundation import best_of, rosbags_baseline
 from hydro_sdp.bags import write_bag
+from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.delay import level_speeds
 from hydro_sdp.core.experiment_records import experiment_record
 from hydro_sdp.core.experiments import Experiment
-from hydro_sdp.core.map_fit import fit_sdp, FitData, initial_sdp, sdp_from_alpha_vector
+from hydro_sdp.core.map_fit import fit_sdp, FitData, initial_sdp, sdp_from_rate_vector
+from hydro_sdp.core.model import JointModel
 from hydro_sdp.core.programs import command_span
 from hydro_sdp.core.simulation import simulate
+from hydro_sdp.core.static_maps import SdpMap
 from hydro_sdp.files import default_model_path, load_model
 import numpy as np
 from scipy.optimize import minimize
 
 
-def paper_objective(experiments, delay, dt):
+def paper_objective(experiments: Sequence[Experiment], delay: int,
+                    dt: float) -> Callable[[FloatArray], float]:
     """Return West et al.'s objective: mean simulation SSE, simulated per sample in Python."""
     prepared = [(e.v.tolist(), e.y.tolist(), e.start) for e in experiments]
 
-    def objective(x):
+    def objective(x: FloatArray) -> float:
         v_neg, c_neg, low, v_pos, c_pos, high = x
         total = 0.0
         for v, y, start in prepared:
@@ -59,14 +64,16 @@ def paper_objective(experiments, delay, dt):
     return objective
 
 
-def relative_errors(static_map, truth):
+def relative_errors(static_map: SdpMap, truth: JointModel) -> float:
     """Return the largest relative error of the six coefficients."""
     got = np.array(static_map.alpha(0.01))
     want = np.array(truth.alpha(0.01))
     return float(np.max(np.abs((got - want) / want)))
 
 
-def step_experiments(model, rng, count=40, seconds=3.0, rest=0.5, dt=0.01, noise=0.03):
+def step_experiments(model: JointModel, rng: np.random.Generator, count: int = 40,
+                     seconds: float = 3.0, rest: float = 0.5, dt: float = 0.01,
+                     noise: float = 0.03) -> list[Experiment]:
     """Return ``count`` step experiments of ``seconds`` each, as in Fig. 1 of the paper."""
     (small_neg, large_neg), (small_pos, large_pos) = command_span(model)
     free = replace(model, angle_limits=None)     # each experiment starts from 0, as Fig. 1
@@ -81,7 +88,7 @@ def step_experiments(model, rng, count=40, seconds=3.0, rest=0.5, dt=0.01, noise
     return experiments
 
 
-def main():
+def main() -> None:
     """Run the benchmarks and print the figures."""
     model = load_model(default_model_path())
     experiments = step_experiments(model, np.random.default_rng(3))
@@ -94,15 +101,15 @@ def main():
     theirs, baseline = best_of(1, lambda: minimize(
         objective, start, method='Nelder-Mead',
         options={'maxiter': 4000, 'xatol': 1e-7, 'fatol': 1e-12, 'adaptive': True}))
-    baseline_map = sdp_from_alpha_vector(baseline.x)
+    baseline_map = sdp_from_rate_vector(baseline.x)
     print(f'fitting {len(experiments)} step experiments of 3 s '
           f'({sum(e.samples for e in experiments):,} samples at 100 Hz), same start')
     print(f'  hydro_sdp rr, 1 start:            {one_start:7.3f} s, max relative error '
-          f'{relative_errors(fit.static_map, model.static_map):.2e}')
+          f'{relative_errors(fit.static_map, model):.2e}')
     print(f'  hydro_sdp rr, 4 starts:           {four_starts:7.3f} s, max relative error '
-          f'{relative_errors(fit4.static_map, model.static_map):.2e}')
+          f'{relative_errors(fit4.static_map, model):.2e}')
     print(f'  Nelder-Mead, per-sample Python:   {theirs:7.3f} s, max relative error '
-          f'{relative_errors(baseline_map, model.static_map):.2e} ({baseline.nfev} evaluations)')
+          f'{relative_errors(baseline_map, model):.2e} ({baseline.nfev} evaluations)')
     print(f'  speed-up: {theirs / one_start:.0f}x with one start each (target >= 50x); '
           f'{theirs / four_starts:.0f}x against our four')
 

@@ -90,6 +90,28 @@ def require_ordered_pair(value: Any, key: str, *, strict: bool = True) -> tuple[
     return low, high
 
 
+def require_float_list(value: Any, key: str) -> tuple[float, ...]:
+    """
+    Return ``value`` as a tuple of finite floats, or raise naming ``key``.
+
+    Parameters
+    ----------
+    value : Any
+        Value read from the file; a list of numbers.
+    key : str
+        Key name used in the error message.
+
+    Returns
+    -------
+    tuple[float, ...]
+        The numbers.
+
+    """
+    if not isinstance(value, (list, tuple)):
+        raise ModelFileError(f'key {key!r}: expected a list of numbers')
+    return tuple(require_float(item, f'{key}[{i}]') for i, item in enumerate(value))
+
+
 def _describe(value: Any) -> str:
     text = repr(value)
     if len(text) > 40:

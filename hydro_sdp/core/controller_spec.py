@@ -13,24 +13,21 @@ and what the controller node loads.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-import math
 from typing import Any, Mapping, Sequence
 
-from hydro_sdp.core._validate import require_float, require_ordered_pair, require_pair
+from hydro_sdp.core._validate import (
+    require_float, require_float_list, require_ordered_pair, require_pair)
 from hydro_sdp.core.errors import ConfigurationError, ModelFileError
-from hydro_sdp.core.idz import IDZ_MODES, InverseDeadZone
+from hydro_sdp.core.idz import IDZ_MODES, IdzMode, InverseDeadZone
 from hydro_sdp.core.model import JointModel
 from hydro_sdp.core.pip_controller import ControllerSettings, PipIdzController
 from hydro_sdp.core.pip_design import (
     closed_loop_poles, DiscretePlant, lq_design, LqWeights, PipGains, pole_assignment)
-from hydro_sdp.core.programs import rest_command
-from hydro_sdp.core.static_maps import linearise, LinearMap, SdpDzMap, SdpMap
+from hydro_sdp.core.static_maps import chord_commands, linearise, LinearMap, SdpDzMap, SdpMap
 from hydro_sdp.core.timing import check_sample_period
 import numpy as np
 
 CONTROLLER_FORMAT = 'hydro_sdp/controller/v1'
-#: Fraction of the saturation speed where the IDZ chord meets an exponential map.
-CHORD_SPEED_FRACTION = 2.0 / 3.0
 #: Default u limits of an ``sdp`` model, as a multiple of its saturation speed.
 U_LIMIT_MARGIN = 1.25
 
@@ -158,9 +155,10 @@ class ControllerSpec:
             spec = cls(
                 joint=str(data['joint']),
                 control_period=require_float(data['control_period'], 'control_period'),
-                plant=DiscretePlant(_floats(plant['a'], 'plant.a'),
-                                    _floats(plant['b'], 'plant.b')),
-                gains=PipGains(_floats(data['f'], 'f'), _floats(data['g'], 'g'),
+                plant=DiscretePlant(require_float_list(plant['a'], 'plant.a'),
+                                    require_float_list(plant['b'], 'plant.b')),
+                gains=PipGains(require_float_list(data['f'], 'f'),
+                               require_float_list(data['g'], 'g'),
                                require_float(data['kI'], 'kI')),
                 idz=_idz_from_mapping(data.get('idz')),
                 u_limits=_optional_pair(data.get('u_limits'), 'u_limits'),
@@ -183,12 +181,6 @@ def format_pole(pole: complex) -> str:
     real = round(pole.real, 6) + 0.0
     imag = round(pole.imag, 6) + 0.0
     return f'{real:.6g}{imag:+.6g}j'
-
-
-def _floats(values: Any, key: str) -> tuple[float, ...]:
-    if not isinstance(values, (list, tuple)):
-        raise ModelFileError(f'key {key!r}: expected a list of numbers')
-    return tuple(require_float(value, f'{key}[{i}]') for i, value in enumerate(values))
 
 
 def _optional_pair(value: Any, key: str) -> tuple[float, float] | None:
@@ -218,32 +210,8 @@ def _idz_from_mapping(data: Any) -> InverseDeadZone | None:
         rest=require_float(data.get('rest', 0.0), 'idz.rest'))
 
 
-def chord_commands(sdp: SdpMap, fraction: float = CHORD_SPEED_FRACTION) -> tuple[float, float]:
-    """
-    Commands where an exponential map reaches ``fraction`` of its saturation speed.
-
-    Parameters
-    ----------
-    sdp : SdpMap
-        The map.
-    fraction : float
-        Fraction of the saturation speed, in (0, 1).
-
-    Returns
-    -------
-    tuple[float, float]
-        ``(v_min, v_max)``, the ends of the IDZ chords.
-
-    """
-    if not 0.0 < fraction < 1.0:
-        raise ConfigurationError(f'the chord speed fraction must be in (0, 1), got {fraction}')
-    distance = -math.log(1.0 - fraction)
-    return (sdp.dead_zone[0] - distance / sdp.curvature[0],
-            sdp.dead_zone[1] + distance / sdp.curvature[1])
-
-
 def idz_for_model(model: JointModel, control_period: float, *, beta: float | None = None,
-                  mode: str = 'zero',
+                  mode: IdzMode = 'zero',
                   v_range: tuple[float, float] | None = None) -> InverseDeadZone:
     """
     Inverse dead-zone of a model at the control period (docs/methods.md section 3.3).
@@ -285,7 +253,7 @@ def idz_for_model(model: JointModel, control_period: float, *, beta: float | Non
         beta = 0.0 if isinstance(static_map, LinearMap) else 0.05
     return InverseDeadZone(dead_zone=dead_zone,
                            slopes=(slopes[0] * period, slopes[1] * period),
-                           beta=beta, mode=mode, rest=rest_command(model))
+                           beta=beta, mode=mode, rest=model.rest_command)
 
 
 def default_u_limits(model: JointModel, idz: InverseDeadZone,
@@ -327,7 +295,7 @@ def design_from_model(model: JointModel, *, control_period: float = 0.05,
                       poles: Sequence[complex] | None = None,
                       weights: LqWeights | None = None,
                       u_limits: tuple[float, float] | None = None,
-                      beta: float | None = None, mode: str = 'zero',
+                      beta: float | None = None, mode: IdzMode = 'zero',
                       v_range: tuple[float, float] | None = None) -> ControllerSpec:
     """
     Design a PIP-IDZ controller for a joint model.
@@ -345,12 +313,8 @@ def design_from_model(model: JointModel, *, control_period: float = 0.05,
         dominant poles 0.94 +- 0.05i at any delay).
     u_limits : tuple[float, float] or None
         Limits of ``u``; default :func:`default_u_limits`.
-    beta : float or None
-        IDZ chatter band (see :func:`idz_for_model`).
-    mode : str
-        IDZ mode.
-    v_range : tuple[float, float] or None
-        Chord ends of an ``sdp`` map (see :func:`idz_for_model`).
+    beta, mode, v_range
+        IDZ chatter band, mode and chord ends, as in :func:`idz_for_model`.
 
     Returns
     -------

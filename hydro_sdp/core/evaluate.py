@@ -18,12 +18,12 @@ import math
 from typing import Sequence
 
 from hydro_sdp.core.arrays import FloatArray
-from hydro_sdp.core.controller_spec import chord_commands, CHORD_SPEED_FRACTION
 from hydro_sdp.core.experiments import check_record
 from hydro_sdp.core.model import JointModel
 from hydro_sdp.core.records import Record
 from hydro_sdp.core.simulation import simulate
-from hydro_sdp.core.static_maps import linearise, LinearMap, PwlMap, SdpDzMap, SdpMap
+from hydro_sdp.core.static_maps import (
+    chord_commands, CHORD_SPEED_FRACTION, linearise, LinearMap, PwlMap, SdpDzMap, SdpMap)
 import numpy as np
 from scipy.optimize import minimize_scalar
 

@@ -16,18 +16,23 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 import math
-from typing import Callable, Sequence
+from typing import Callable, get_args, Literal, Sequence
 
 from hydro_sdp.core.delay import DelayEstimate, estimate_delay, level_speeds, LevelSpeed
 from hydro_sdp.core.errors import DataError, HydroSdpError
 from hydro_sdp.core.experiments import (
     check_record, Experiment, segment_records, Segmentation, split_long, thin)
-from hydro_sdp.core.map_fit import fit_poly, fit_pwl, fit_sdp, FitData, MapFit
+from hydro_sdp.core.map_fit import (
+    FIT_METHODS, fit_poly, fit_pwl, fit_sdp, FitData, FitMethod, MapFit)
 from hydro_sdp.core.model import JointModel
 from hydro_sdp.core.records import Record
+from hydro_sdp.core.static_maps import StaticMap
 import numpy as np
 
-KINDS = ('sdp', 'pwl', 'poly')
+#: Map families ``identify`` can fit, and the choice among them.
+FittedKind = Literal['sdp', 'pwl', 'poly']
+KindChoice = Literal[FittedKind, 'auto']
+KINDS: tuple[FittedKind, ...] = get_args(FittedKind)
 #: Longest piece a fit sees, and the sample budgets of the multi-start search and the
 #: delay search: long records are cut and thinned there, and the best start is then
 #: refined on all the data.
@@ -46,7 +51,7 @@ class KindScore:
     Parameters
     ----------
     kind : str
-        Map family.
+        Map family (one of :data:`KINDS`).
     mae : float
         Mean absolute simulation error on held-out experiments, degrees (NaN if it
         could not be fitted).
@@ -55,7 +60,7 @@ class KindScore:
 
     """
 
-    kind: str
+    kind: FittedKind
     mae: float
     note: str = ''
 
@@ -91,7 +96,7 @@ class Identification:
     delay: DelayEstimate
     segmentation: Segmentation
     points: tuple[LevelSpeed, ...]
-    fit: MapFit
+    fit: MapFit[StaticMap]
     comparison: tuple[KindScore, ...]
     mae: float
 
@@ -103,8 +108,9 @@ class Identification:
         return self.model.alpha(self.sample_period)
 
 
-def _fit_kind(kind: str, data: FitData, points: Sequence[LevelSpeed], rest: float,
-              method: str, dead_zone: tuple[float, float] | None, starts: int = 4) -> MapFit:
+def _fit_kind(kind: FittedKind, data: FitData, points: Sequence[LevelSpeed], rest: float,
+              method: FitMethod, dead_zone: tuple[float, float] | None,
+              starts: int = 4) -> MapFit[StaticMap]:
     if kind == 'sdp':
         return fit_sdp(data, points, rest, method=method, starts=starts)
     if kind == 'pwl':
@@ -129,15 +135,13 @@ def _folds(experiments: Sequence[Experiment]) -> tuple[list[Experiment], list[Ex
         first.append(Experiment(experiment.v[:middle + 1], experiment.y[:middle + 1],
                                 experiment.start, experiment.kind, experiment.level,
                                 experiment.t0, experiment.source))
-        history = max(middle - (experiment.start + 1), 0)
         second.append(Experiment(experiment.v, experiment.y, middle, experiment.kind,
-                                 experiment.level, experiment.t0, experiment.source)
-                      if history >= 0 else experiment)
+                                 experiment.level, experiment.t0, experiment.source))
     return first, second
 
 
 def compare_kinds(experiments: Sequence[Experiment], delay: int, dt: float, rest: float,
-                  method: str, kinds: Sequence[str] = KINDS,
+                  method: FitMethod, kinds: Sequence[FittedKind] = KINDS,
                   dead_zone: tuple[float, float] | None = None) -> list[KindScore]:
     """
     Two-fold held-out simulation error of each map family.
@@ -184,7 +188,7 @@ def compare_kinds(experiments: Sequence[Experiment], delay: int, dt: float, rest
     return scores
 
 
-def choose_kind(scores: Sequence[KindScore]) -> str:
+def choose_kind(scores: Sequence[KindScore]) -> FittedKind:
     """Pick the family with the least held-out error, keeping ``sdp`` when it is close."""
     usable = [s for s in scores if math.isfinite(s.mae)]
     if not usable:
@@ -197,7 +201,7 @@ def choose_kind(scores: Sequence[KindScore]) -> str:
     return best.kind
 
 
-def identify(records: Sequence[Record], *, method: str = 'rr', kind: str = 'auto',
+def identify(records: Sequence[Record], *, method: FitMethod = 'rr', kind: KindChoice = 'auto',
              max_delay: float = 0.5, angle_limits: tuple[float, float] | None = None,
              input_limits: tuple[float, float] | None = None,
              progress: Callable[[str], None] | None = None) -> Identification:
@@ -229,7 +233,7 @@ def identify(records: Sequence[Record], *, method: str = 'rr', kind: str = 'auto
     """
     if kind not in KINDS + ('auto',):
         raise DataError(f"kind must be auto, {', '.join(KINDS)}; got {kind!r}")
-    if method not in ('rr', 'oe'):
+    if method not in FIT_METHODS:
         raise DataError(f"method must be 'rr' or 'oe', got {method!r}")
     if not records:
         raise DataError('no records to identify from')
@@ -244,14 +248,15 @@ def identify(records: Sequence[Record], *, method: str = 'rr', kind: str = 'auto
                         f'{max(periods):.4f} s); resample them first')
     step = (lambda name: progress(name)) if progress is not None else (lambda name: None)
     step('segmenting')
-    horizon = max(2, int(round(max_delay / dt)))
-    segmentation = segment_records(records, max_delay=horizon, angle_limits=angle_limits)
+    max_delay_samples = max(2, int(round(max_delay / dt)))
+    segmentation = segment_records(records, max_delay=max_delay_samples,
+                                   angle_limits=angle_limits)
     if not segmentation.experiments:
         reasons = '; '.join(sorted({d.reason for d in segmentation.dropped})) or 'none found'
         raise DataError(f'no usable experiments ({reasons})')
     step('estimating the delay')
-    pieces = split_long(segmentation.experiments, PIECE_SAMPLES, horizon)
-    delay = estimate_delay(thin(pieces, DELAY_SAMPLES), dt, max_delay=horizon,
+    pieces = split_long(segmentation.experiments, PIECE_SAMPLES, max_delay_samples)
+    delay = estimate_delay(thin(pieces, DELAY_SAMPLES), dt, max_delay=max_delay_samples,
                            rest=segmentation.rest, noise=segmentation.noise_std)
     points = tuple(level_speeds(pieces, delay.samples, dt, rest=segmentation.rest))
     data = FitData(pieces, delay.samples, dt)
@@ -261,17 +266,18 @@ def identify(records: Sequence[Record], *, method: str = 'rr', kind: str = 'auto
     sdp_fit = fit_sdp(search, points, segmentation.rest, method=method,
                       polish=None if search is data else data)
     comparison: tuple[KindScore, ...] = ()
-    chosen = kind
+    chosen: FittedKind = 'sdp' if kind == 'auto' else kind
     if kind == 'auto':
         step('comparing map families on held-out experiments')
         comparison = tuple(compare_kinds(sample, delay.samples, dt, segmentation.rest,
                                          method, dead_zone=sdp_fit.static_map.dead_zone))
         chosen = choose_kind(comparison)
-    fit = sdp_fit if chosen == 'sdp' else _fit_kind(
+    fit: MapFit[StaticMap] = sdp_fit if chosen == 'sdp' else _fit_kind(
         chosen, data, points, segmentation.rest, method, sdp_fit.static_map.dead_zone)
     limits = angle_limits
-    if limits is None and None not in segmentation.end_stops:
-        limits = segmentation.end_stops
+    low_stop, high_stop = segmentation.end_stops
+    if limits is None and low_stop is not None and high_stop is not None:
+        limits = (low_stop, high_stop)
     # Stamps are integer nanoseconds: round the delay there, not at float noise.
     model = JointModel(joint=next(iter(joints)) or 'joint', static_map=fit.static_map,
                        delay=round(delay.samples * dt, 9), angle_limits=limits,

@@ -16,10 +16,39 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 import math
+from typing import get_args, Literal
 
 from hydro_sdp.core.errors import ConfigurationError
 
-IDZ_MODES = ('zero', 'smooth', 'hysteresis')
+#: How the IDZ avoids chatter near ``u = 0`` (docs/methods.md section 5.2).
+IdzMode = Literal['zero', 'smooth', 'hysteresis']
+IDZ_MODES: tuple[IdzMode, ...] = get_args(IdzMode)
+
+
+def idz_mode(value: object) -> IdzMode:
+    """
+    Return ``value`` as an IDZ mode name, or raise.
+
+    Parameters
+    ----------
+    value : object
+        A mode name read from a file, a parameter or the command line.
+
+    Returns
+    -------
+    IdzMode
+        The same name, typed.
+
+    Raises
+    ------
+    ConfigurationError
+        If ``value`` is not one of :data:`IDZ_MODES`.
+
+    """
+    for mode in IDZ_MODES:
+        if value == mode:
+            return mode
+    raise ConfigurationError(f"IDZ mode must be one of {', '.join(IDZ_MODES)}, got {value!r}")
 
 
 @dataclass(frozen=True)
@@ -45,7 +74,7 @@ class InverseDeadZone:
     dead_zone: tuple[float, float]
     slopes: tuple[float, float]
     beta: float = 0.05
-    mode: str = 'zero'
+    mode: IdzMode = 'zero'
     rest: float = 0.0
 
     def __post_init__(self) -> None:
@@ -60,9 +89,7 @@ class InverseDeadZone:
             raise ConfigurationError(f'IDZ slopes must be > 0, got [{s_n}, {s_p}]')
         if self.beta < 0.0:
             raise ConfigurationError(f'IDZ chatter band beta must be >= 0, got {self.beta}')
-        if self.mode not in IDZ_MODES:
-            raise ConfigurationError(f"IDZ mode must be one of {', '.join(IDZ_MODES)}, "
-                                     f'got {self.mode!r}')
+        idz_mode(self.mode)
         if not low <= self.rest <= high:
             raise ConfigurationError(f'IDZ rest command {self.rest} lies outside the dead-zone '
                                      f'[{low}, {high}]')

@@ -18,7 +18,7 @@ from hydro_sdp.core._validate import require_float, require_ordered_pair
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.effects import Effect, effect_from_mapping, effect_to_mapping, EFFECT_TYPES
 from hydro_sdp.core.errors import ConfigurationError, ModelFileError
-from hydro_sdp.core.static_maps import MAP_KINDS, SdpMap, StaticMap
+from hydro_sdp.core.static_maps import MAP_KINDS, MapKind, SdpMap, StaticMap
 from hydro_sdp.core.timing import check_sample_period, delay_samples
 import numpy as np
 
@@ -69,7 +69,7 @@ class JointModel:
         order = list(EFFECT_TYPES)
         object.__setattr__(self, 'effects',
                            tuple(sorted(self.effects, key=lambda e: order.index(e.name))))
-        dead_zone = getattr(self.static_map, 'dead_zone', None)
+        dead_zone = self.static_map.dead_zone
         if dead_zone is not None and self.input_limits is not None:
             low, high = self.input_limits
             if dead_zone[0] < low or dead_zone[1] > high:
@@ -77,7 +77,7 @@ class JointModel:
                                      f'input_limits [{low}, {high}]')
 
     @property
-    def kind(self) -> str:
+    def kind(self) -> MapKind:
         """Model kind: the map family (``sdp``, ``sdp_dz``, ``linear``, ``pwl`` or ``poly``)."""
         return self.static_map.kind
 
@@ -85,6 +85,14 @@ class JointModel:
     def dead_zone(self) -> tuple[float, float] | None:
         """Dead-zone edges in input units, or ``None`` for a map without one."""
         return self.static_map.dead_zone
+
+    @property
+    def rest_command(self) -> float:
+        """Command that holds the joint, input units: 0 inside the dead-zone, else its middle."""
+        dead_zone = self.dead_zone
+        if dead_zone is None or dead_zone[0] <= 0.0 <= dead_zone[1]:
+            return 0.0
+        return 0.5 * (dead_zone[0] + dead_zone[1])
 
     def rate(self, v: FloatArray | float) -> FloatArray:
         """
@@ -104,20 +112,7 @@ class JointModel:
         return self.static_map.rate(np.asarray(v, dtype=np.float64))
 
     def alpha(self, dt: float) -> tuple[float, float, float, float, float, float]:
-        """
-        Return the first paper's ``alpha_1..alpha_6`` at sample period ``dt`` (kind ``sdp``).
-
-        Parameters
-        ----------
-        dt : float
-            Sample period, s.
-
-        Returns
-        -------
-        tuple of six floats
-            ``(a1, a2, a3, a4, a5, a6)`` with ``a1``, ``a4`` in deg per sample.
-
-        """
+        """Return the first paper's ``alpha_1..alpha_6`` at ``dt`` s (``sdp``; SdpMap.alpha)."""
         if not isinstance(self.static_map, SdpMap):
             raise ConfigurationError(f'alpha is defined for kind sdp only, not {self.kind}')
         return self.static_map.alpha(check_sample_period(dt))

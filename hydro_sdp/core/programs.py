@@ -27,24 +27,8 @@ _USABLE_RANGE = 0.8
 
 
 def rest_command(model: JointModel) -> float:
-    """
-    Command that keeps the joint at rest: 0 if it is inside the dead-zone.
-
-    Parameters
-    ----------
-    model : JointModel
-        The joint.
-
-    Returns
-    -------
-    float
-        Rest command, input units.
-
-    """
-    dead_zone = model.dead_zone
-    if dead_zone is None or dead_zone[0] <= 0.0 <= dead_zone[1]:
-        return 0.0
-    return 0.5 * (dead_zone[0] + dead_zone[1])
+    """Return :attr:`JointModel.rest_command` (kept for callers not yet moved to the property)."""
+    return model.rest_command
 
 
 def command_span(model: JointModel, *, saturation: float = 0.99
@@ -71,7 +55,7 @@ def command_span(model: JointModel, *, saturation: float = 0.99
         ``((small_neg, large_neg), (small_pos, large_pos))`` as signed commands.
 
     """
-    rest = rest_command(model)
+    rest = model.rest_command
     static_map = model.static_map
     limits = model.input_limits
     spans = []
@@ -151,7 +135,7 @@ def step_program(model: JointModel, dt: float, *, steps: int = 40, hold: float =
     per_side = (steps + 1) // 2
     magnitudes = np.linspace(0.0, 1.0, per_side)
     low, high = _travel_band(model, y0)
-    base = rest_command(model)
+    base = model.rest_command
     y = float(y0)
     rest_samples = max(1, round(rest / dt))
     pieces = [np.full(rest_samples, base)]
@@ -218,7 +202,7 @@ def random_program(model: JointModel, dt: float, duration: float, *, seed: int =
         raise ConfigurationError(f'duration must be > 0 s, got {duration}')
     rng = np.random.default_rng(seed)
     (small_neg, large_neg), (small_pos, large_pos) = command_span(model, saturation=0.9)
-    base = rest_command(model)
+    base = model.rest_command
     low, high = _travel_band(model, y0)
     total = max(1, round(duration / dt))
     levels = np.empty(total)

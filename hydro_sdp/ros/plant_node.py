@@ -16,15 +16,14 @@ a test can run the machine in lockstep.
 
 from __future__ import annotations
 
-from dataclasses import replace
 from functools import partial
 import math
 from typing import Any
 
 from hydro_sdp.core.errors import ConfigurationError, HydroSdpError
-from hydro_sdp.core.programs import rest_command, start_angle
+from hydro_sdp.core.programs import start_angle
 from hydro_sdp.core.simulation import JointSimulator
-from hydro_sdp.core.static_maps import SdpDzMap, SdpMap
+from hydro_sdp.core.static_maps import shifted_map
 from hydro_sdp.files import default_model_path, load_model
 from hydro_sdp.ros import conversions, qos
 from hydro_sdp.ros.params import declare, pair
@@ -35,32 +34,6 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64
-
-
-def shifted_map(static_map: Any, shift: tuple[float, float]) -> Any:
-    """
-    Return ``static_map`` with its dead-zone edges moved by ``shift`` (input units).
-
-    Parameters
-    ----------
-    static_map : StaticMap
-        A map with a dead-zone (``sdp`` or ``sdp_dz``).
-    shift : tuple[float, float]
-        Added to the lower and upper edge.
-
-    Returns
-    -------
-    StaticMap
-        The moved map.
-
-    """
-    if shift == (0.0, 0.0):
-        return static_map
-    if not isinstance(static_map, (SdpMap, SdpDzMap)):
-        raise ConfigurationError(f'dead_zone_shift needs an sdp or sdp_dz model, not '
-                                 f'{static_map.kind}')
-    low, high = static_map.dead_zone
-    return replace(static_map, dead_zone=(low + shift[0], high + shift[1]))
 
 
 class PlantNode(Node):
@@ -112,7 +85,7 @@ class PlantNode(Node):
             else:
                 limits = model.angle_limits
                 y0 = 0.0 if limits is None or limits[0] < 0.0 < limits[1] else start_angle(model)
-            rest = rest_command(model)
+            rest = model.rest_command
             self._simulators.append(JointSimulator(model, period, y0, v_before=rest))
             self._commands.append(rest)
         self.ticks = 0

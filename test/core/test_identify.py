@@ -7,7 +7,7 @@ from hydro_sdp.core.evaluate import evaluate
 from hydro_sdp.core.experiment_records import experiment_record
 from hydro_sdp.core.experiments import Experiment, segment_record
 from hydro_sdp.core.identify import identify
-from hydro_sdp.core.map_fit import fit_sdp, FitData
+from hydro_sdp.core.map_fit import fit_sdp, FitData, initial_pwl, pwl_layout
 from hydro_sdp.core.model import JointModel
 from hydro_sdp.core.records import Record
 from hydro_sdp.core.riv import sriv
@@ -91,6 +91,33 @@ def test_identify_recovers_a_step_test_bag(tmp_path):
     assert result.segmentation.steps == 40 and not result.segmentation.dropped
     assert result.mae < 0.05                       # the noise is 0.03 deg
     assert {score.kind for score in result.comparison} == {'sdp', 'pwl', 'poly'}
+
+
+def test_pwl_starts_at_the_per_level_speeds_on_both_sides(tmp_path):
+    truth = j2_like()
+    record = experiment_record(truth, 'steps', seed=4, noise=0.03)
+    record = read_record(write_bag(tmp_path / 'steps', [record]))
+    segmentation = segment_record(record, max_delay=50)
+    experiments = segmentation.experiments
+    points = level_speeds(experiments, 12, 0.01, rest=segmentation.rest)
+    layout = pwl_layout(FitData(experiments, 12, 0.01).levels, truth.dead_zone)
+    x0 = initial_pwl(layout, points)
+    start = layout.speeds(x0)
+    levels = np.array([p.level for p in points])
+    speeds = np.array([p.speed for p in points])
+    measured = np.interp(layout.knots, levels, speeds)
+    # The outermost knots are the extreme levels: the start is their measured speed,
+    # near the saturation speeds -25 and 42 deg/s (the old start was -4e-6 on the negative side).
+    assert layout.knots[0] == levels.min() and layout.knots[-1] == levels.max()
+    assert start[0] == pytest.approx(speeds[np.argmin(levels)], rel=1e-9)
+    assert start[0] == pytest.approx(-25.0, rel=0.05)
+    assert start[-1] == pytest.approx(speeds[np.argmax(levels)], rel=1e-9)
+    assert start[-1] == pytest.approx(42.0, rel=0.05)
+    # Every knot beyond the plateau starts at the measured speed there; the plateau at 0.
+    outer = np.r_[np.arange(layout.negative), np.arange(layout.positive) - layout.positive]
+    np.testing.assert_allclose(start[outer], measured[outer], rtol=1e-9, atol=1e-5)
+    np.testing.assert_array_equal(start[layout.negative:-layout.positive], 0.0)
+    assert x0[-1] == 0.5
 
 
 def test_evaluate_orders_the_models_as_table_2(tmp_path):

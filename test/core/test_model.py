@@ -1,12 +1,17 @@
 """The joint model: the paper's numbers, validation and model-file round trips."""
 
 import math
+from typing import get_args
 
+from hydro_sdp.core._validate import require_float_list
 from hydro_sdp.core.effects import (
     AngleDependentVelocity, Backlash, DirectionDependentDelay, ValveLag)
 from hydro_sdp.core.errors import ConfigurationError, ModelFileError
+from hydro_sdp.core.idz import idz_mode, IDZ_MODES, InverseDeadZone
 from hydro_sdp.core.model import delay_samples, JointModel
-from hydro_sdp.core.static_maps import linearise, LinearMap, SdpDzMap, SdpMap
+from hydro_sdp.core.static_maps import (
+    chord_commands, linearise, LinearMap, MAP_KINDS, MapKind, PolyMap, PwlMap, sdp_rate, SdpDzMap,
+    SdpMap, shifted_map)
 from hydro_sdp.files import dump_model, load_model, save_model
 import numpy as np
 import pytest
@@ -196,3 +201,84 @@ def test_model_file_that_is_a_directory_or_missing(tmp_path):
         load_model(tmp_path)
     with pytest.raises(ModelFileError, match='no such file'):
         load_model(tmp_path / 'absent.yaml')
+
+
+EXAMPLE_MAPS = (
+    SdpMap((-1.3298, 1.3124), (-29.51, 38.87), (1.356, 1.771)),
+    SdpDzMap((-1.0, 2.0), (10.0, 20.0)),
+    LinearMap(12.0),
+    PwlMap((-8.0, -1.0, 1.5, 8.0), (-30.0, 0.0, 0.0, 30.0)),
+    PolyMap((2.0, 0.1), (3.0,), (-5.0, 5.0)),
+)
+
+
+def test_every_kind_is_registered_once_and_round_trips():
+    assert tuple(MAP_KINDS) == get_args(MapKind)
+    assert [m.kind for m in EXAMPLE_MAPS] == list(MAP_KINDS)
+    for static_map in EXAMPLE_MAPS:
+        cls = MAP_KINDS[static_map.kind]
+        assert type(static_map) is cls
+        assert set(static_map.to_mapping()) == set(cls.keys)
+        assert cls.from_mapping(static_map.to_mapping()) == static_map
+
+
+def test_sdp_equation_in_rates_and_in_the_papers_alpha(j2):
+    v = np.array([-1e3, -2.2, -1.3298, 0.0, 1.3124, 1.75, 1e3])
+    want = [-29.51, -20.442, 0.0, 0.0, 0.0, 20.962, 38.87]
+    np.testing.assert_allclose(sdp_rate(v, -29.51, 1.356, -1.3298, 38.87, 1.771, 1.3124), want,
+                               atol=5e-4)
+    np.testing.assert_array_equal(j2.rate(v), sdp_rate(v, -29.51, 1.356, -1.3298, 38.87, 1.771,
+                                                       1.3124))
+    # With alpha_1 and alpha_4 (deg per sample) the same function gives the increment q(v).
+    np.testing.assert_allclose(sdp_rate(v, *J2_ALPHA), 0.01 * j2.rate(v), rtol=1e-12)
+    assert float(sdp_rate(-2.2, *J2_ALPHA)) == pytest.approx(-0.20442, abs=5e-6)
+
+
+def test_chord_commands_at_two_thirds_of_saturation(j2):
+    v_min, v_max = chord_commands(j2.static_map)
+    assert v_min == pytest.approx(-1.3298 - math.log(3.0) / 1.356, rel=1e-12)
+    assert v_min == pytest.approx(-2.14, abs=0.01)
+    assert v_max == pytest.approx(1.3124 + math.log(3.0) / 1.771, rel=1e-12)
+    assert v_max == pytest.approx(1.93, abs=0.01)
+    np.testing.assert_allclose(j2.rate(np.array([v_min, v_max])), [-29.51 * 2 / 3, 38.87 * 2 / 3],
+                               rtol=1e-12)
+    with pytest.raises(ConfigurationError, match='in \\(0, 1\\)'):
+        chord_commands(j2.static_map, 1.0)
+
+
+def test_shifted_map_moves_the_edges_only():
+    sdp = EXAMPLE_MAPS[0]
+    moved = shifted_map(sdp, (0.5, -0.25))
+    assert isinstance(moved, SdpMap)
+    assert moved.dead_zone == pytest.approx((-0.8298, 1.0624), abs=1e-12)
+    assert (moved.saturation_velocity, moved.curvature) == ((-29.51, 38.87), (1.356, 1.771))
+    assert shifted_map(EXAMPLE_MAPS[1], (1.0, 1.0)) == SdpDzMap((0.0, 3.0), (10.0, 20.0))
+    assert shifted_map(EXAMPLE_MAPS[2], (0.0, 0.0)) is EXAMPLE_MAPS[2]
+    for static_map in EXAMPLE_MAPS[2:]:
+        with pytest.raises(ConfigurationError, match='needs an sdp or sdp_dz model'):
+            shifted_map(static_map, (0.1, 0.1))
+
+
+@pytest.mark.parametrize(('static_map', 'rest'), [
+    (SdpMap((-1.33, 1.31), (-29.5, 38.9), (1.36, 1.77)), 0.0),
+    (SdpMap((40.0, 58.0), (-12.0, 15.0), (0.08, 0.1)), 49.0),
+    (SdpDzMap((-3.0, -1.0), (10.0, 20.0)), -2.0),
+    (LinearMap(12.0), 0.0),
+    (PwlMap((20.0, 45.0, 55.0, 80.0), (-30.0, 0.0, 0.0, 30.0)), 50.0),
+])
+def test_rest_command_is_a_property_of_the_model(static_map, rest):
+    assert JointModel('j', static_map, 0.1).rest_command == rest
+
+
+def test_names_of_modes_and_lists():
+    assert IDZ_MODES == ('zero', 'smooth', 'hysteresis')
+    assert [idz_mode(name) for name in IDZ_MODES] == list(IDZ_MODES)
+    with pytest.raises(ConfigurationError, match="one of zero, smooth, hysteresis, got 'soft'"):
+        idz_mode('soft')
+    with pytest.raises(ConfigurationError, match="got 'soft'"):
+        InverseDeadZone((-1.0, 1.0), (1.0, 1.0), mode='soft')  # type: ignore[arg-type]
+    assert require_float_list([1, 2.5], 'knots') == (1.0, 2.5)
+    with pytest.raises(ModelFileError, match="key 'knots': expected a list of numbers"):
+        require_float_list(3.0, 'knots')
+    with pytest.raises(ModelFileError, match="key 'knots\\[1\\]': expected a number"):
+        require_float_list([1.0, 'x'], 'knots')
