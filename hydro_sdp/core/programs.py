@@ -26,11 +26,6 @@ import numpy as np
 _USABLE_RANGE = 0.8
 
 
-def rest_command(model: JointModel) -> float:
-    """Return :attr:`JointModel.rest_command` (kept for callers not yet moved to the property)."""
-    return model.rest_command
-
-
 def command_span(model: JointModel, *, saturation: float = 0.99
                  ) -> tuple[tuple[float, float], tuple[float, float]]:
     """

@@ -28,7 +28,7 @@ from typing import Any
 
 from hydro_sdp.core.controller_spec import ControllerSpec, design_from_model
 from hydro_sdp.core.errors import DataError, HydroSdpError
-from hydro_sdp.core.idz import IDZ_MODES, InverseDeadZone
+from hydro_sdp.core.idz import idz_mode, IDZ_MODES, InverseDeadZone
 from hydro_sdp.core.pip_controller import PipIdzController
 from hydro_sdp.core.pip_design import PipGains
 from hydro_sdp.core.safety import check_controller_fits, clamp_setpoint, SETPOINT_MARGIN, \
@@ -217,7 +217,7 @@ class PipControllerNode(Node):
                                'idz.dead_zone'),
                 slopes=pair(value_of(parameters, 'idz.slopes', current.slopes), 'idz.slopes'),
                 beta=float(value_of(parameters, 'idz.beta', current.beta)),
-                mode=str(value_of(parameters, 'idz.mode', current.mode)),
+                mode=idz_mode(value_of(parameters, 'idz.mode', current.mode)),
                 rest=current.rest)
             spec = replace(spec, idz=idz)    # checks the IDZ against the valve range
         if names & set(GAIN_PARAMETERS):

@@ -3,7 +3,7 @@
 from hydro_sdp.core.errors import ConfigurationError
 from hydro_sdp.core.model import JointModel
 from hydro_sdp.core.programs import (
-    command_span, random_program, rest_command, start_angle, step_program)
+    command_span, random_program, start_angle, step_program)
 from hydro_sdp.core.simulation import simulate
 from hydro_sdp.core.static_maps import LinearMap, SdpDzMap, SdpMap
 import numpy as np
@@ -55,7 +55,7 @@ def test_random_program_is_seeded_and_varied(j2):
 
 
 def test_percent_duty_valve(rng):
-    assert rest_command(DUTY) == pytest.approx(49.0)
+    assert DUTY.rest_command == pytest.approx(49.0)
     (small_neg, large_neg), (small_pos, large_pos) = command_span(DUTY)
     assert 40.0 < small_neg < 49.0 < small_pos < 58.0
     assert 0.0 <= large_neg < 40.0 and 58.0 < large_pos <= 100.0

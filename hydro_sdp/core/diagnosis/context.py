@@ -11,7 +11,6 @@ from hydro_sdp.core.diagnosis.results import Candidate, Trial
 from hydro_sdp.core.experiments import segment_records, split_long, thin
 from hydro_sdp.core.map_fit import FitData
 from hydro_sdp.core.model import JointModel
-from hydro_sdp.core.programs import rest_command
 import numpy as np
 from scipy.optimize import minimize_scalar
 
@@ -40,7 +39,7 @@ class Context:
         self.base = velocity_residuals(model, runs)
         self.segmentation = segment_records([r.record for r in runs], max_delay=max_delay)
         levels = np.concatenate([r.record.v for r in runs])
-        self.rest = rest_command(model) if model.dead_zone is not None else \
+        self.rest = model.rest_command if model.dead_zone is not None else \
             self.segmentation.rest
         self.scale = max(float(np.max(np.abs(levels - self.rest))), 1e-9)
 
