@@ -6,6 +6,7 @@ import argparse
 
 from hydro_sdp.cli.common import finite_float, non_negative_float, Outcome, positive_float, table
 from hydro_sdp.core.controller_spec import ControllerSpec, design_from_model, format_pole
+from hydro_sdp.core.errors import ConfigurationError
 from hydro_sdp.core.idz import IDZ_MODES
 from hydro_sdp.core.pip_design import LqWeights
 from hydro_sdp.files import load_model, save_controller
@@ -99,6 +100,8 @@ def run(args: argparse.Namespace) -> Outcome:
     if args.out:
         payload['controller'] = str(save_controller(spec, args.out))
     if args.plot:
+        if spec.idz is None:
+            raise ConfigurationError('--plot draws the inverse dead-zone, and this model has none')
         payload['plot'] = str(save_figure(plot_idz(model, spec.idz, spec.control_period,
                                                    u_limits=spec.u_limits),
                                           args.plot))
