@@ -208,6 +208,9 @@ def test_bad_or_read_only_values_are_refused_and_change_nothing(ros):
     assert not result.successful
     assert identifier.recalibration.policy.cooldown == 5.0
     assert identifier.recalibration.policy.significance == 3.0
+    # An integer for a double, as ``ros2 param set /sdp_identifier cooldown 9`` sends it.
+    assert _set(ros, 'sdp_identifier', ('cooldown', 9))[0].successful
+    assert identifier.recalibration.policy.cooldown == 9.0
 
 
 NOISE_LEVELS = (0.01, 0.02, 0.05)
