@@ -17,6 +17,7 @@ from __future__ import annotations
 from collections import deque
 from dataclasses import dataclass, replace
 import math
+from typing import Any
 
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import ConfigurationError
@@ -34,6 +35,9 @@ class OnlineSettings:
     """
     Tuning of the online identifier (defaults from docs/methods.md 7.2, for +-10 V commands).
 
+    Every command-side setting is in input units, used as given; for another command
+    range build the settings with :meth:`for_input_limits`, which scales them once.
+
     Parameters
     ----------
     noise_std : float
@@ -41,7 +45,7 @@ class OnlineSettings:
     kappa : float
         Width of the soft edges of the gradient, input units (0.05 V).
     change_gate : float
-        Command change that suspends updates, input units.
+        Command change that suspends updates, input units (0.5 V).
     hold_off : int
         Samples skipped after such a change.
     margin : float
@@ -49,7 +53,8 @@ class OnlineSettings:
     outlier : float
         Normalised innovation beyond which a sample is an outlier.
     input_scale : float
-        Size of the command range relative to +-10 V (1 for volts); scales the defaults.
+        Size of the command range relative to +-10 V (1 for volts); scales the start
+        covariance, the random walk and the box of the edges and curvatures.
     change_level : float
         Mean normalised innovation squared (about 1 while the model holds) above
         which the joint is taken to have changed and the covariance is reset.
@@ -83,6 +88,100 @@ class OnlineSettings:
                 raise ConfigurationError(f'{name} must be a positive number, got {value}')
         if self.hold_off < 0:
             raise ConfigurationError(f'hold_off must be >= 0, got {self.hold_off}')
+
+    @classmethod
+    def for_input_limits(cls, input_limits: tuple[float, float] | None,
+                         **overrides: Any) -> OnlineSettings:
+        """
+        Return the defaults scaled to a command range (the one place they are scaled).
+
+        Parameters
+        ----------
+        input_limits : tuple[float, float] or None
+            The valve's command range, input units (e.g. ``(0, 100)`` % duty: scale 10);
+            None for +-10 V.
+        **overrides : Any
+            Other settings (``noise_std``...), in input units where they are commands.
+
+        Returns
+        -------
+        OnlineSettings
+            ``kappa`` 0.05 and ``change_gate`` 0.5 times the scale, and ``input_scale``.
+
+        """
+        scale = input_scale(input_limits)
+        values: dict[str, Any] = {'kappa': cls.kappa * scale,
+                                  'change_gate': cls.change_gate * scale,
+                                  'input_scale': scale}
+        values.update(overrides)
+        return cls(**values)
+
+
+def input_scale(input_limits: tuple[float, float] | None) -> float:
+    """
+    Size of a command range relative to +-10 V.
+
+    Parameters
+    ----------
+    input_limits : tuple[float, float] or None
+        Command range, input units; None for +-10 V.
+
+    Returns
+    -------
+    float
+        The largest command magnitude over 10 (1 for +-10 V, 10 for 0..100 %).
+
+    """
+    if input_limits is None:
+        return 1.0
+    scale = max(abs(input_limits[0]), abs(input_limits[1])) / 10.0
+    if not (math.isfinite(scale) and scale > 0.0):
+        raise ConfigurationError(f'input_limits must hold a non-zero finite command, '
+                                 f'got {list(input_limits)}')
+    return scale
+
+
+@dataclass(frozen=True)
+class SdpEstimate:
+    """
+    The online estimate of an SDP map by name, with standard deviations.
+
+    Parameters
+    ----------
+    dead_zone_lower, dead_zone_upper : float
+        Dead-zone edges, input units.
+    saturation_negative, saturation_positive : float
+        Saturation speeds, deg/s.
+    curvature_negative, curvature_positive : float
+        Curvatures, 1/input unit.
+    dead_zone_lower_std, dead_zone_upper_std, saturation_negative_std, \
+saturation_positive_std, curvature_negative_std, curvature_positive_std : float
+        Their standard deviations, same units.
+
+    """
+
+    dead_zone_lower: float
+    dead_zone_upper: float
+    saturation_negative: float
+    saturation_positive: float
+    curvature_negative: float
+    curvature_positive: float
+    dead_zone_lower_std: float
+    dead_zone_upper_std: float
+    saturation_negative_std: float
+    saturation_positive_std: float
+    curvature_negative_std: float
+    curvature_positive_std: float
+
+    @property
+    def edges(self) -> tuple[float, float]:
+        """Return the dead-zone edges, input units."""
+        return self.dead_zone_lower, self.dead_zone_upper
+
+    @property
+    def edges_std(self) -> tuple[float, float]:
+        """Return the standard deviations of the edges, input units."""
+        return self.dead_zone_lower_std, self.dead_zone_upper_std
 
 
 def _softplus(x: float, kappa: float) -> float:
@@ -133,10 +232,11 @@ class OnlineSdpIdentifier:
         self.r = 2.0 * settings.noise_std ** 2
         self._r_min = 0.25 * self.r
         a1, a4 = self.theta[0], self.theta[3]
-        self._lower = np.array([5.0 * a1, 0.1 / s, -4.0 * s * max(1.0, abs(model.dead_zone[0])),
-                                0.0, 0.1 / s, model.dead_zone[0]])
-        self._upper = np.array([0.0, 10.0 / s, model.dead_zone[1], 5.0 * a4, 10.0 / s,
-                                4.0 * s * max(1.0, abs(model.dead_zone[1]))])
+        low, high = model.static_map.dead_zone
+        self._lower = np.array([5.0 * a1, 0.1 / s, -4.0 * s * max(1.0, abs(low)),
+                                0.0, 0.1 / s, low])
+        self._upper = np.array([0.0, 10.0 / s, high, 5.0 * a4, 10.0 / s,
+                                4.0 * s * max(1.0, abs(high))])
         self._commands: deque[float] = deque(maxlen=self.delay + 2)
         self._last_angle: float | None = None
         self._quiet = 0
@@ -156,6 +256,13 @@ class OnlineSdpIdentifier:
         """Return the model with the current estimate of its map."""
         return replace(self.model, static_map=self.static_map())
 
+    def named_estimate(self) -> SdpEstimate:
+        """Return the current estimate and its standard deviations by name."""
+        a1, a2, a3, a4, a5, a6 = (float(a) for a in self.theta)
+        s1, s2, s3, s4, s5, s6 = (float(s) for s in self.standard_errors)
+        dt = self.dt
+        return SdpEstimate(a3, a6, a1 / dt, a4 / dt, a2, a5, s3, s6, s1 / dt, s4 / dt, s2, s5)
+
     def _q(self, u: float) -> float:
         a1, a2, a3, a4, a5, a6 = self.theta
         if u < a3:
@@ -167,7 +274,7 @@ class OnlineSdpIdentifier:
     def _gradient(self, u: float) -> FloatArray:
         """Gradient of the soft-edged map: smooth min/max replace the kinks at the edges."""
         a1, a2, a3, a4, a5, a6 = self.theta
-        kappa = self.settings.kappa * self.settings.input_scale
+        kappa = self.settings.kappa
         below = -_softplus(-(u - a3), kappa)            # smooth min(u - a3, 0)
         above = _softplus(u - a6, kappa)                # smooth max(u - a6, 0)
         e = math.exp(a2 * below)
@@ -204,8 +311,7 @@ class OnlineSdpIdentifier:
         if previous is None or len(self._commands) < self.delay + 2:
             return False
         u = self._commands[-1 - self.delay]
-        if abs(u - self._commands[-2 - self.delay]) > \
-                self.settings.change_gate * self.settings.input_scale:
+        if abs(u - self._commands[-2 - self.delay]) > self.settings.change_gate:
             self._quiet = self.settings.hold_off
             return False
         if self._quiet > 0:
@@ -241,8 +347,8 @@ class OnlineSdpIdentifier:
             # Dead-zone edges are what wear moves: forget the edge of the side that changed;
             # its speed and curvature, poorly excited while a set-point is held, keep most
             # of what they know, and the other side keeps everything.
-            side = np.array([0.01, 0.01, 1.0])
-            forget = np.r_[side * lower, side * upper]
+            weights = np.array([0.01, 0.01, 1.0])
+            forget = np.r_[weights * lower, weights * upper]
             P = P + self._P0 @ np.diag(forget)
             Ppsi = P @ psi
             spread = float(psi @ Ppsi)

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 import math
-from typing import Sequence
+from typing import Any, Mapping, Sequence
 
 from hydro_sdp.ros.controller_node import PipControllerNode
 from hydro_sdp.ros.identifier_node import IdentifierNode
@@ -40,6 +40,8 @@ class WearRun:
         When the dead-zone moved, s.
     recalibrations : int
         IDZ updates the identifier made.
+    recalibration_times : tuple of float
+        When the accepted updates were requested, s.
 
     """
 
@@ -50,11 +52,20 @@ class WearRun:
     edges: np.ndarray
     drift_time: float
     recalibrations: int
+    recalibration_times: tuple[float, ...] = ()
+
+    @property
+    def time_to_recalibration(self) -> float:
+        """Return the time from the drift to the first update after it, s (inf: none)."""
+        after = [t for t in self.recalibration_times if t >= self.drift_time]
+        return min(after) - self.drift_time if after else math.inf
 
 
 def wear_and_recalibration(*, holds: int = 20, steps: int = 400, drift_at: int = 5,
                            shift: Sequence[float] = (0.3, -0.3), seed: int = 1,
-                           levels: Sequence[float] = (20.0, 35.0, 15.0, 30.0)) -> WearRun:
+                           levels: Sequence[float] = (20.0, 35.0, 15.0, 30.0),
+                           noise_std: float = 0.01,
+                           identifier: Mapping[str, Any] | None = None) -> WearRun:
     """
     Track set-points while the plant's dead-zone moves; the identifier recalibrates.
 
@@ -72,6 +83,10 @@ def wear_and_recalibration(*, holds: int = 20, steps: int = 400, drift_at: int =
         Seed of the measurement noise.
     levels : sequence of float
         Set-points, degrees, used in turn.
+    noise_std : float
+        Angle measurement noise of the plant, and the identifier's ``noise_std``, deg.
+    identifier : mapping or None
+        More identifier parameters (``significance``, ``cooldown``...).
 
     Returns
     -------
@@ -81,13 +96,13 @@ def wear_and_recalibration(*, holds: int = 20, steps: int = 400, drift_at: int =
     """
     rows = []
     with RosHarness() as ros:
-        plant = ros.add(PlantNode, parameters={'noise_std': 0.01, 'seed': seed})
+        plant = ros.add(PlantNode, parameters={'noise_std': noise_std, 'seed': seed})
         controller = ros.add(PipControllerNode)
-        identifier = ros.add(IdentifierNode, parameters={'auto_recalibrate': True,
-                                                         'noise_std': 0.01})
+        identifier_node = ros.add(IdentifierNode, parameters={
+            'auto_recalibrate': True, 'noise_std': noise_std, **(identifier or {})})
         helper = ros.helper('scenario_setpoints')
         publisher = helper.create_publisher(Float64, 'j2/setpoint', 10)
-        loop = Lockstep(ros, plant, controllers=[controller], observers=[identifier])
+        loop = Lockstep(ros, plant, controllers=[controller], observers=[identifier_node])
         ros.spin_until(lambda: publisher.get_subscription_count() >= 1)
         for hold in range(holds):
             if hold == drift_at:
@@ -101,8 +116,10 @@ def wear_and_recalibration(*, holds: int = 20, steps: int = 400, drift_at: int =
                 rows.append((loop.steps * plant.sample_period, plant.last_angles[0], level,
                              controller.last_command,
                              *controller.controller.settings.idz.dead_zone))
-        recalibrations = identifier.recalibrations
+        recalibrations = identifier_node.recalibrations
+        times = tuple(identifier_node.recalibration_times)
     table = np.array(rows)
     return WearRun(t=table[:, 0], angle=table[:, 1], setpoint=table[:, 2],
                    command=table[:, 3], edges=table[:, 4:6],
-                   drift_time=drift_at * steps * 0.01, recalibrations=recalibrations)
+                   drift_time=drift_at * steps * 0.01, recalibrations=recalibrations,
+                   recalibration_times=times)

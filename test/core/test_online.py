@@ -4,10 +4,10 @@ from dataclasses import replace
 
 from hydro_sdp.core.errors import ConfigurationError
 from hydro_sdp.core.model import JointModel
-from hydro_sdp.core.online import OnlineSdpIdentifier, OnlineSettings
+from hydro_sdp.core.online import input_scale, OnlineSdpIdentifier, OnlineSettings
 from hydro_sdp.core.programs import random_program
 from hydro_sdp.core.simulation import simulate
-from hydro_sdp.core.static_maps import LinearMap
+from hydro_sdp.core.static_maps import LinearMap, SdpMap
 import numpy as np
 import pytest
 
@@ -72,3 +72,52 @@ def test_needs_an_sdp_model():
         OnlineSdpIdentifier(JointModel('j', LinearMap(1.0), 0.1), 0.01)
     with pytest.raises(ConfigurationError, match='noise_std'):
         OnlineSettings(noise_std=0.0)
+
+
+def test_scales_the_settings_once_for_a_percent_duty_valve():
+    assert input_scale(None) == 1.0 and input_scale((0.0, 100.0)) == 10.0
+    settings = OnlineSettings.for_input_limits((0.0, 100.0), noise_std=0.02)
+    # 0.05 V and 0.5 V on a +-10 V valve are 0.5 % and 5 % on a 0..100 % one.
+    assert (settings.kappa, settings.change_gate, settings.input_scale) == (0.5, 5.0, 10.0)
+    assert settings.noise_std == 0.02
+    assert OnlineSettings.for_input_limits((-10.0, 10.0)) == OnlineSettings()
+    with pytest.raises(ConfigurationError, match='input_limits'):
+        input_scale((0.0, 0.0))
+
+
+def test_tracks_a_dead_zone_change_on_a_percent_duty_valve(rng):
+    # A valve driven in % duty, at rest at 50 %: the J2 joint with another command axis.
+    valve = JointModel('valve', SdpMap(dead_zone=(43.0, 57.0),
+                                       saturation_velocity=(-29.51, 38.87),
+                                       curvature=(0.27, 0.35)),
+                       0.15, angle_limits=(-13.8, 63.6), input_limits=(0.0, 100.0))
+    worn = replace(valve, static_map=replace(valve.static_map, dead_zone=(45.5, 55.5)))
+    v = random_program(valve, 0.01, 240.0, seed=2, y0=25.0)
+    half = v.size // 2
+    y1 = simulate(valve, v[:half], 0.01, 25.0, v_before=50.0)
+    y2 = simulate(worn, v[half:], 0.01, y1[-1], v_before=v[half - 1])
+    y = np.r_[y1, y2] + rng.normal(0.0, 0.03, v.size)
+    estimator = OnlineSdpIdentifier(
+        valve, 0.01, OnlineSettings.for_input_limits(valve.input_limits, noise_std=0.03))
+    _run(estimator, v[:half], y[:half])
+    # Scaled twice (soft edges 5 %, gate 50 %) the filter raised false changes and lost
+    # both edges; scaled once it holds them to 0.2 % (0.02 V on a +-10 V valve).
+    assert estimator.resets == 0
+    np.testing.assert_allclose(estimator.theta[[2, 5]], (43.0, 57.0), atol=0.2)
+    _run(estimator, v[half:], y[half:])
+    assert estimator.resets >= 1
+    np.testing.assert_allclose(estimator.theta[[2, 5]], (45.5, 55.5), atol=0.2)
+
+
+def test_names_the_estimate_in_model_units(j2):
+    estimator = OnlineSdpIdentifier(j2, 0.01)
+    estimate = estimator.named_estimate()
+    assert estimate.edges == (-1.3298, 1.3124)
+    assert estimate.saturation_negative == pytest.approx(-29.51)
+    assert estimate.saturation_positive == pytest.approx(38.87)
+    assert (estimate.curvature_negative, estimate.curvature_positive) == (1.356, 1.771)
+    # The start covariance of methods.md 7.2: edge variance 0.5, speed variance 0.01 per
+    # sample squared.
+    assert estimate.edges_std == pytest.approx((0.5 ** 0.5, 0.5 ** 0.5))
+    assert estimate.saturation_negative_std == pytest.approx(0.1 / 0.01)
+    assert estimate.curvature_positive_std == pytest.approx(1.0)
