@@ -161,7 +161,7 @@ def check_record(record: Record, *, min_samples: int = 50, max_gap: float = 3.0)
     return period
 
 
-def rest_command(v: FloatArray, y: FloatArray | None = None) -> float:
+def estimate_rest_command(v: FloatArray, y: FloatArray | None = None) -> float:
     """
     Return the command the record rests at.
 
@@ -285,7 +285,7 @@ def segment_record(record: Record, *, max_delay: int, rest: float | None = None,
 
     """
     v, y = record.v, record.y
-    rest = rest_command(v, y) if rest is None else rest
+    rest = estimate_rest_command(v, y) if rest is None else rest
     noise = noise_level(record, rest, max_delay)
     blocks = _blocks(v, rest)
     extremes = (float(np.min(y)), float(np.max(y)))
@@ -419,8 +419,8 @@ def segment_records(records: Sequence[Record], *, max_delay: int,
     """
     if not records:
         raise DataError('no records to identify from')
-    rest = rest_command(np.concatenate([r.v for r in records]),
-                        np.concatenate([r.y for r in records]))
+    rest = estimate_rest_command(np.concatenate([r.v for r in records]),
+                                 np.concatenate([r.y for r in records]))
     parts = [segment_record(r, max_delay=max_delay, rest=rest, angle_limits=angle_limits)
              for r in records]
     lows = [p.end_stops[0] for p in parts if p.end_stops[0] is not None]
