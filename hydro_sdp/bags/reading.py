@@ -195,7 +195,8 @@ class BagData:
         if not keep.any():
             raise DataError(f'{self.path}: no {topic} message arrives before the last '
                             f'{self.state_topic} sample')
-        return Record(t[keep], command[index[keep]], y[keep], joint=joint, source=str(self.path))
+        return Record(t[keep], command[index[keep]], y[keep], joint=joint, source=str(self.path),
+                      origin=float(self.t[0]))
 
 
 def read_bag(path: str | os.PathLike[str], *, state_topic: str | None = None,
