@@ -241,6 +241,7 @@ def speed_profile(model: JointModel, v: FloatArray, dt: float, *,
     rates = _rate_of_levels(model, v)
     rate_before = float(model.rate(np.array([v_before]))[0])
     split = model.effect(DirectionDependentDelay.name)
+    speed: FloatArray
     if isinstance(split, DirectionDependentDelay):
         speed = (delayed(np.maximum(rates, 0.0), delay_samples(split.positive, dt),
                          max(rate_before, 0.0))
