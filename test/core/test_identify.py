@@ -16,6 +16,7 @@ from hydro_sdp.core.records import Record
 from hydro_sdp.core.riv import sriv
 from hydro_sdp.core.simulation import simulate
 from hydro_sdp.core.static_maps import PwlMap, SdpMap
+from hydro_sdp.files import save_model
 import numpy as np
 import pytest
 
@@ -262,3 +263,9 @@ def test_a_bag_with_a_stalled_timer_is_cut_at_the_hole_and_identified(tmp_path, 
     assert {row['bag'] for row in scores['records']} == {str(tmp_path / 'holed')}
     assert sum(row['samples'] for row in scores['records']) > 0.95 * keep.sum()
     assert scores['mae']['model'] < 0.05            # the noise is 0.03 deg
+    # The diagnosis takes the holed bag too and finds nothing missing from the true model.
+    truth_file = save_model(truth, tmp_path / 'truth.yaml')
+    assert main(['diagnose', str(tmp_path / 'holed'), '--model', str(truth_file),
+                 '--iterations', '1', '--json']) == 0
+    diagnosis = json.loads(capsys.readouterr().out)
+    assert diagnosis['effect'] == 'none' and diagnosis['mae_before'] < 0.05
