@@ -156,9 +156,9 @@ def decode_joint_states(raws: Sequence[bytes]) -> DecodedJointStates:
     lengths = np.fromiter((len(raw) for raw in raws), dtype=np.int64, count=count)
     for length in np.unique(lengths):
         index = np.flatnonzero(lengths == length)
-        first = raws[index[0]]
+        first = raws[int(index[0])]
         layout = joint_state_layout(first)
-        block = np.frombuffer(b''.join([raws[i] for i in index]), dtype=np.uint8)
+        block = np.frombuffer(b''.join([raws[i] for i in index.tolist()]), dtype=np.uint8)
         block = block.reshape(index.size, int(length))
         template = np.frombuffer(first, dtype=np.uint8)
         fixed = np.r_[0:4, 12:layout.position_offset]
@@ -187,7 +187,7 @@ def decode_joint_states(raws: Sequence[bytes]) -> DecodedJointStates:
         if len(message_names) != values.shape[1]:
             raise BagFormatError(f'JointState message has {len(message_names)} names but '
                                  f'{values.shape[1]} positions')
-        columns = [names[name] for name in message_names]
+        columns = np.array([names[name] for name in message_names], dtype=np.int64)
         positions_out[np.ix_(index, columns)] = values
         present[np.ix_(index, columns)] = True
     return DecodedJointStates(stamps, tuple(names), positions_out, present)

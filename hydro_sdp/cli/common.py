@@ -118,7 +118,7 @@ def table(rows: list[list[str]], header: list[str]) -> list[str]:
 def read_records(bags: list[str], joint: str | None, command_topic: str | None,
                  label: str = 'reading bags') -> list:
     """
-    Read one joint's record from each bag, with a progress bar.
+    Read one joint's record from each bag, cut at gaps in its time stamps, with a progress bar.
 
     Parameters
     ----------
@@ -134,16 +134,18 @@ def read_records(bags: list[str], joint: str | None, command_topic: str | None,
     Returns
     -------
     list of Record
-        One per bag.
+        One per bag, or several where a stalled recording left a hole
+        (:func:`hydro_sdp.core.records.split_at_gaps`).
 
     """
     from hydro_sdp.bags import read_bag
     from hydro_sdp.cli.progress import ProgressBar
+    from hydro_sdp.core.records import split_at_gaps
 
-    records = []
+    records: list = []
     with ProgressBar(label, len(bags)) as bar:
         for done, bag in enumerate(bags, start=1):
-            records.append(read_bag(bag).record(joint, command_topic))
+            records.extend(split_at_gaps(read_bag(bag).record(joint, command_topic)).records)
             bar.update(done)
     return records
 

@@ -5,13 +5,16 @@ from __future__ import annotations
 import argparse
 import math
 from pathlib import Path
+from typing import Any, Iterator
 
 from hydro_sdp.cli.common import (
     add_bag_options, finite_float, json_number, Outcome, positive_float, read_records, table)
 from hydro_sdp.cli.progress import ProgressBar
 from hydro_sdp.core.identify import Identification, identify, KINDS
+from hydro_sdp.core.model import JointModel
 from hydro_sdp.files import save_model
 from hydro_sdp.plots import plot_gains, plot_step_responses, plot_velocity_map, save_figure
+import numpy as np
 
 HELP = 'identify a joint model from step or random-level bags'
 DESCRIPTION = """\
@@ -95,6 +98,8 @@ def run(args: argparse.Namespace) -> Outcome:
             input_limits=tuple(args.input_limits) if args.input_limits else None,
             progress=lambda name: bar.update(stages.index(name)))
     payload = describe(result)
+    # Stalled recordings are cut at their gaps on reading: one piece per stretch.
+    payload['pieces'] = len(records)
     model = result.model
     if args.out:
         payload['model'] = str(save_model(model, args.out))
@@ -110,17 +115,19 @@ def run(args: argparse.Namespace) -> Outcome:
                                        rest=segmentation.rest), folder / 'gains.png')),
             str(save_figure(plot_velocity_map(
                 model, v_range=_command_range(result),
-                points=([p.level for p in moving], [p.speed for p in moving]),
+                points=(np.array([p.level for p in moving]), np.array([p.speed for p in moving])),
                 title=f'Velocity map of joint {model.joint} (West et al. 2018, Fig. 3)'),
                 folder / 'velocity_map.png')),
         ]
     segmentation = result.segmentation
-    lines = [f'joint {model.joint}: {len(segmentation.experiments)} experiments '
-             f'({segmentation.steps} steps, {segmentation.runs} runs), '
-             f'{len(segmentation.dropped)} segments dropped, sample period '
-             f'{result.sample_period:g} s, noise {segmentation.noise_std:.3g} deg']
+    lines = [] if len(records) == len(args.bags) else [
+        f'{len(args.bags)} bags read as {len(records)} pieces (cut at gaps in the time stamps)']
+    lines.append(f'joint {model.joint}: {len(segmentation.experiments)} experiments '
+                 f'({segmentation.steps} steps, {segmentation.runs} runs), '
+                 f'{len(segmentation.dropped)} segments dropped, sample period '
+                 f'{result.sample_period:g} s, noise {segmentation.noise_std:.3g} deg')
     for dropped in segmentation.dropped[:5]:
-        lines.append(f'  dropped at t = {dropped.t0:.2f} s: {dropped.reason}')
+        lines.append(f'  dropped {dropped.since_start:.2f} s from the start: {dropped.reason}')
     delay = result.delay
     lines.append(f'delay: {delay.samples} samples = {delay.seconds:g} s (fit; onset '
                  f'{delay.onset}, cross-correlation {delay.xcorr})')
@@ -144,7 +151,7 @@ def _command_range(result: Identification) -> tuple[float, float]:
     return min(levels) - 0.1 * span, max(levels) + 0.1 * span
 
 
-def _parameter_rows(model):
+def _parameter_rows(model: JointModel) -> Iterator[tuple[str, Any, str]]:
     mapping = model.static_map.to_mapping()
     for key, value in mapping.items():
         if isinstance(value, list):

@@ -21,9 +21,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Sequence
 
-from hydro_sdp.core.arrays import FloatArray
+from hydro_sdp.core.arrays import FloatArray, IntArray
 from hydro_sdp.core.errors import DataError
 from hydro_sdp.core.experiments import Experiment
+from hydro_sdp.core.timing import delayed_at
 import numpy as np
 
 
@@ -63,7 +64,8 @@ class DelayEstimate:
         return all(abs(d - self.fit) <= 1 for d in others)
 
 
-def level_groups(experiments: Sequence[Experiment], delay: int):
+def level_groups(experiments: Sequence[Experiment],
+                 delay: int) -> tuple[FloatArray, IntArray, FloatArray]:
     """
     Differenced angles grouped by experiment and delayed command level.
 
@@ -85,7 +87,7 @@ def level_groups(experiments: Sequence[Experiment], delay: int):
     offset = 0
     for experiment in experiments:
         k = np.arange(experiment.start + 1, experiment.y.size)
-        delayed = experiment.v[np.maximum(k - delay, 0)]
+        delayed = delayed_at(experiment.v, k, delay)
         values, inverse = np.unique(delayed, return_inverse=True)
         increments.append(experiment.y[k] - experiment.y[k - 1])
         groups.append(inverse + offset)
@@ -241,7 +243,7 @@ def level_speeds(experiments: Sequence[Experiment], delay: int, dt: float, *,
     points = []
     for experiment in experiments:
         k = np.arange(experiment.start + 1, experiment.y.size)
-        delayed = experiment.v[np.maximum(k - delay, 0)]
+        delayed = delayed_at(experiment.v, k, delay)
         dy = experiment.y[k] - experiment.y[k - 1]
         changed = np.r_[True, delayed[1:] != delayed[:-1]]
         since_change = np.arange(k.size) - np.maximum.accumulate(

@@ -78,12 +78,15 @@ class Dropped:
         Why it was not used.
     source : str
         Where the record came from.
+    since_start : float
+        The same time counted from the start of the record's bag, s (for messages).
 
     """
 
     t0: float
     reason: str
     source: str = ''
+    since_start: float = math.nan
 
 
 @dataclass(frozen=True, eq=False)
@@ -144,7 +147,9 @@ def check_record(record: Record, *, min_samples: int = 50, max_gap: float = 3.0)
     Raises
     ------
     DataError
-        Naming the problem: too few samples, or a gap in the time stamps.
+        Naming the problem: too few samples, or a gap in the time stamps
+        (records are cut at gaps by :func:`hydro_sdp.core.records.split_at_gaps`
+        when they are read from bags).
 
     """
     label = record.source or 'record'
@@ -155,19 +160,20 @@ def check_record(record: Record, *, min_samples: int = 50, max_gap: float = 3.0)
     gaps = np.flatnonzero(steps > max_gap * period)
     if gaps.size:
         k = int(gaps[0])
-        raise DataError(f'{label}: gap of {steps[k]:.3f} s in the time stamps at '
-                        f't = {record.t[k]:.3f} s (sample period {period:.4f} s); split the '
-                        'record there')
+        raise DataError(f'{label}: gap of {steps[k]:.3f} s in the time stamps '
+                        f'{record.since_start(record.t[k]):.3f} s from the start (sample period '
+                        f'{period:.4f} s); cut the record there (split_at_gaps)')
     return period
 
 
-def rest_command(v: FloatArray, y: FloatArray | None = None) -> float:
+def estimate_rest_command(v: FloatArray, y: FloatArray | None = None) -> float:
     """
-    Return the command the record rests at.
+    Estimate from data the command a record rests at.
 
     Among the commands held for at least 5 % of the samples, the one during
     which the joint moves least (with angles given), else the most frequent;
-    0 when no command is held that often.
+    0 when no command is held that often. (The rest command a model implies
+    is :func:`hydro_sdp.core.programs.rest_command`.)
 
     Parameters
     ----------
@@ -285,7 +291,7 @@ def segment_record(record: Record, *, max_delay: int, rest: float | None = None,
 
     """
     v, y = record.v, record.y
-    rest = rest_command(v, y) if rest is None else rest
+    rest = estimate_rest_command(v, y) if rest is None else rest
     noise = noise_level(record, rest, max_delay)
     blocks = _blocks(v, rest)
     extremes = (float(np.min(y)), float(np.max(y)))
@@ -300,7 +306,7 @@ def segment_record(record: Record, *, max_delay: int, rest: float | None = None,
         if block_stop - start - 1 < min_samples:
             dropped.append(Dropped(float(record.t[start]),
                                    f'too short ({max(block_stop - start - 1, 0)} samples)',
-                                   record.source))
+                                   record.source, record.since_start(record.t[start])))
             continue
         # A block may meet the end stops several times: cut out each stretch the joint
         # is held, and go on where it leaves the stop.
@@ -324,7 +330,7 @@ def segment_record(record: Record, *, max_delay: int, rest: float | None = None,
                 if changed.size else block_stop
             stops[int(clamp[1] > np.mean(extremes))].append(float(np.median(y[stop:released])))
             dropped.append(Dropped(float(record.t[stop]), 'clamped by an end stop',
-                                   record.source))
+                                   record.source, record.since_start(record.t[stop])))
             start = released
     end_stops = (float(np.median(stops[0])) if stops[0] else None,
                  float(np.median(stops[1])) if stops[1] else None)
@@ -419,8 +425,8 @@ def segment_records(records: Sequence[Record], *, max_delay: int,
     """
     if not records:
         raise DataError('no records to identify from')
-    rest = rest_command(np.concatenate([r.v for r in records]),
-                        np.concatenate([r.y for r in records]))
+    rest = estimate_rest_command(np.concatenate([r.v for r in records]),
+                                 np.concatenate([r.y for r in records]))
     parts = [segment_record(r, max_delay=max_delay, rest=rest, angle_limits=angle_limits)
              for r in records]
     lows = [p.end_stops[0] for p in parts if p.end_stops[0] is not None]

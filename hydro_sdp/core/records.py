@@ -3,17 +3,30 @@ Records: aligned samples of one joint (time, command, angle).
 
 A :class:`Record` is what a bag becomes once a joint and its command topic are
 chosen: ``t`` in seconds, ``v`` in the command's own units (volts, percent
-duty...) and ``y`` in degrees, one entry per angle sample.
+duty...) and ``y`` in degrees, one entry per angle sample. Messages give
+times relative to the record's ``origin`` (the start of its bag), never in
+epoch seconds.
+
+A recording whose timer stalled has a hole in its time stamps; the samples
+either side are not one sample period apart, so no fit or simulation may run
+across it. :func:`split_at_gaps` cuts a record there into pieces that each
+keep the origin of the whole.
 
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+import math
+
+from typing import Sequence
 
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import DataError
 import numpy as np
+
+#: Fewest samples a piece cut at a gap must have to be kept (what identification needs).
+MIN_PIECE_SAMPLES = 50
 
 
 @dataclass(frozen=True, eq=False)
@@ -33,6 +46,8 @@ class Record:
         Joint name.
     source : str
         Where the record came from (a bag path), for messages.
+    origin : float or None
+        Time messages count from, s (the start of the bag); default: ``t[0]``.
 
     """
 
@@ -41,6 +56,7 @@ class Record:
     y: FloatArray
     joint: str = ''
     source: str = ''
+    origin: float | None = None
 
     def __post_init__(self) -> None:
         arrays = {}
@@ -50,6 +66,8 @@ class Record:
                 raise DataError(f'{self._label()}: {name} must be 1-D, got shape {values.shape}')
             arrays[name] = values
             object.__setattr__(self, name, values)
+        if self.origin is not None and not math.isfinite(self.origin):
+            raise DataError(f'{self._label()}: origin must be finite, got {self.origin}')
         lengths = {name: values.size for name, values in arrays.items()}
         if len(set(lengths.values())) != 1:
             raise DataError(f'{self._label()}: lengths differ (t, v, y: '
@@ -64,8 +82,28 @@ class Record:
         if backwards.size:
             k = int(backwards[0])
             kind = 'repeat' if steps[k] == 0.0 else 'go backwards'
+            since = arrays['t'][k + 1] - (arrays['t'][0] if self.origin is None else self.origin)
             raise DataError(f'{self._label()}: time stamps {kind} at sample {k + 1} '
-                            f'(t = {arrays["t"][k + 1]:.6f} s), {backwards.size} times in all')
+                            f'({since:.6f} s from the start), {backwards.size} times in all')
+
+    def since_start(self, t: float) -> float:
+        """
+        Time ``t`` counted from the record's origin, for messages.
+
+        Parameters
+        ----------
+        t : float
+            Record time, s.
+
+        Returns
+        -------
+        float
+            Seconds after the origin (the start of the bag).
+
+        """
+        if self.origin is not None:
+            return float(t - self.origin)
+        return float(t - self.t[0]) if self.t.size else float(t)
 
     def _label(self) -> str:
         parts = [part for part in (self.source, self.joint and f'joint {self.joint}') if part]
@@ -90,4 +128,150 @@ class Record:
     def window(self, start: int, stop: int) -> Record:
         """Return samples ``start:stop`` as a new record."""
         return Record(self.t[start:stop], self.v[start:stop], self.y[start:stop],
-                      self.joint, self.source)
+                      self.joint, self.source, self._origin())
+
+    def _origin(self) -> float | None:
+        if self.origin is not None:
+            return self.origin
+        return float(self.t[0]) if self.t.size else None
+
+
+@dataclass(frozen=True)
+class Gap:
+    """
+    A hole in a record's time stamps.
+
+    Parameters
+    ----------
+    t : float
+        Time of the last sample before the hole, s from the start of the record's bag.
+    length : float
+        Spacing of the samples either side, s.
+    sample : int
+        Index of the first sample after the hole, in the record that was split.
+
+    """
+
+    t: float
+    length: float
+    sample: int
+
+
+@dataclass(frozen=True, eq=False)
+class Pieces:
+    """
+    A record cut at the holes in its time stamps.
+
+    Parameters
+    ----------
+    records : tuple[Record, ...]
+        The pieces kept, in time order.
+    gaps : tuple[Gap, ...]
+        Where it was cut.
+    dropped : int
+        Samples left out in pieces too short to keep.
+
+    """
+
+    records: tuple[Record, ...]
+    gaps: tuple[Gap, ...]
+    dropped: int = 0
+
+    @property
+    def count(self) -> int:
+        """Return the number of pieces kept."""
+        return len(self.records)
+
+    def describe(self) -> str:
+        """One line for reports: how many pieces, and where the holes were."""
+        holes = ', '.join(f'{gap.length:.3f} s at {gap.t:.3f} s' for gap in self.gaps)
+        text = f'{self.count} piece{"s" if self.count != 1 else ""}'
+        if self.gaps:
+            text += f' (gaps of {holes})'
+        if self.dropped:
+            text += f', {self.dropped} samples in too short pieces left out'
+        return text
+
+
+def split_at_gaps(record: Record, *, max_gap: float = 3.0,
+                  min_samples: int = MIN_PIECE_SAMPLES) -> Pieces:
+    """
+    Cut a record where its time stamps jump by more than ``max_gap`` sample periods.
+
+    The sample period is the median spacing of the whole record. Each piece
+    keeps the record's joint, source and origin, so its messages still count
+    time from the start of the bag. A record without gaps comes back whole,
+    however short; of a cut record, the pieces shorter than ``min_samples``
+    are left out (and counted).
+
+    Parameters
+    ----------
+    record : Record
+        The record.
+    max_gap : float
+        Largest spacing kept inside one piece, in sample periods (> 1).
+    min_samples : int
+        Fewest samples a piece cut from the record needs to be kept (>= 1).
+
+    Returns
+    -------
+    Pieces
+        The pieces (the record itself when it has no gap) and the gaps.
+
+    Raises
+    ------
+    DataError
+        When every piece is too short.
+
+    """
+    if not (math.isfinite(max_gap) and max_gap > 1.0):
+        raise DataError(f'max_gap must be a number of sample periods above 1, got {max_gap}')
+    if min_samples < 1:
+        raise DataError(f'min_samples must be at least 1, got {min_samples}')
+    if len(record) < 3:
+        return Pieces((record,), ())
+    steps = np.diff(record.t)
+    period = float(np.median(steps))
+    cuts = np.flatnonzero(steps > max_gap * period) + 1
+    if cuts.size == 0:
+        return Pieces((record,), ())
+    gaps = tuple(Gap(record.since_start(float(record.t[k - 1])), float(steps[k - 1]), int(k))
+                 for k in cuts.tolist())
+    bounds = [0] + cuts.tolist() + [len(record)]
+    kept = []
+    dropped = 0
+    for start, stop in zip(bounds[:-1], bounds[1:]):
+        if stop - start >= min_samples:
+            kept.append(record.window(start, stop))
+        else:
+            dropped += stop - start
+    pieces = Pieces(tuple(kept), gaps, dropped)
+    if not kept:
+        raise DataError(f'{record._label()}: cut at {len(gaps)} gaps in the time stamps, every '
+                        f'piece is shorter than {min_samples} samples ({pieces.describe()})')
+    return pieces
+
+
+def split_records(records: Sequence[Record], *, max_gap: float = 3.0,
+                  min_samples: int = MIN_PIECE_SAMPLES) -> tuple[list[Record], list[Pieces]]:
+    """
+    Cut every record at its gaps (:func:`split_at_gaps`) and pool the pieces.
+
+    Parameters
+    ----------
+    records : sequence of Record
+        The records.
+    max_gap : float
+        Largest spacing kept inside one piece, in sample periods.
+    min_samples : int
+        Fewest samples a piece needs to be kept.
+
+    Returns
+    -------
+    tuple
+        All pieces in order, and the split of each record.
+
+    """
+    splits = [split_at_gaps(record, max_gap=max_gap, min_samples=min_samples)
+              for record in records]
+    return [piece for split in splits for piece in split.records], splits

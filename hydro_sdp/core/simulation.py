@@ -19,7 +19,6 @@ ROS nodes, and ``tau = delay / dt`` (15 at 0.01 s, 3 at 0.05 s for J2).
 
 from __future__ import annotations
 
-from collections import deque
 from dataclasses import replace
 import math
 
@@ -28,7 +27,8 @@ from hydro_sdp.core.effects import (
     AngleDependentVelocity, Backlash, DirectionDependentDelay, ValveLag)
 from hydro_sdp.core.errors import DataError
 from hydro_sdp.core.model import JointModel
-from hydro_sdp.core.timing import check_sample_period, delay_samples
+from hydro_sdp.core.static_maps import StaticMap
+from hydro_sdp.core.timing import check_sample_period, delay_samples, delayed, DelayLine
 import numpy as np
 from scipy.signal import lfilter
 
@@ -146,15 +146,6 @@ def _limits(model: JointModel) -> tuple[float, float]:
     return model.angle_limits
 
 
-def _delayed(values: FloatArray, tau: int, before: float) -> FloatArray:
-    if tau == 0:
-        return values.copy()
-    out = np.empty_like(values)
-    out[:tau] = before
-    out[tau:] = values[:values.size - tau] if tau < values.size else values[:0]
-    return out[:values.size]
-
-
 def _check_commands(v: FloatArray) -> FloatArray:
     v = np.asarray(v, dtype=np.float64)
     if v.ndim != 1:
@@ -250,13 +241,14 @@ def speed_profile(model: JointModel, v: FloatArray, dt: float, *,
     rates = _rate_of_levels(model, v)
     rate_before = float(model.rate(np.array([v_before]))[0])
     split = model.effect(DirectionDependentDelay.name)
+    speed: FloatArray
     if isinstance(split, DirectionDependentDelay):
-        speed = (_delayed(np.maximum(rates, 0.0), delay_samples(split.positive, dt),
-                          max(rate_before, 0.0))
-                 + _delayed(np.minimum(rates, 0.0), delay_samples(split.negative, dt),
-                            min(rate_before, 0.0)))
+        speed = (delayed(np.maximum(rates, 0.0), delay_samples(split.positive, dt),
+                         max(rate_before, 0.0))
+                 + delayed(np.minimum(rates, 0.0), delay_samples(split.negative, dt),
+                           min(rate_before, 0.0)))
     else:
-        speed = _delayed(rates, model.delay_samples(dt), rate_before)
+        speed = delayed(rates, model.delay_samples(dt), rate_before)
     lag = model.effect(ValveLag.name)
     if isinstance(lag, ValveLag):
         p = math.exp(-dt / lag.time_constant)
@@ -360,9 +352,8 @@ class JointSimulator:
         else:
             self._tau_pos = self._tau_neg = model.delay_samples(self.dt)
         rate_before = float(model.rate(np.array([v_before]))[0])
-        depth = max(self._tau_pos, self._tau_neg) + 1
-        # Speeds of v_{k+1}, v_k, ... newest last: index -1-tau is rate(v_{k+1-tau}).
-        self._rates: deque[float] = deque([rate_before] * depth, maxlen=depth)
+        # Speeds of v_{k+1}, v_k, ...: delayed(tau) is rate(v_{k+1-tau}).
+        self._rates = DelayLine(max(self._tau_pos, self._tau_neg), rate_before)
         lag = model.effect(ValveLag.name)
         self._lag_p = math.exp(-self.dt / lag.time_constant) if isinstance(lag, ValveLag) else None
         self._lag_state = rate_before
@@ -374,7 +365,7 @@ class JointSimulator:
         self._offset = 0.0
         self.samples = 0
 
-    def set_static_map(self, static_map) -> None:
+    def set_static_map(self, static_map: StaticMap) -> None:
         """
         Swap the command-to-speed map from now on (valve wear or replacement).
 
@@ -410,12 +401,12 @@ class JointSimulator:
         """
         if not math.isfinite(v):
             raise DataError(f'command must be finite, got {v}')
-        self._rates.append(float(self.model.rate(np.array([v]))[0]))
+        self._rates.push(float(self.model.rate(np.array([v]))[0]))
         if self._tau_pos == self._tau_neg:
-            speed = self._rates[-1 - self._tau_pos]
+            speed = self._rates.delayed(self._tau_pos)
         else:
-            speed = (max(self._rates[-1 - self._tau_pos], 0.0)
-                     + min(self._rates[-1 - self._tau_neg], 0.0))
+            speed = (max(self._rates.delayed(self._tau_pos), 0.0)
+                     + min(self._rates.delayed(self._tau_neg), 0.0))
         if self._lag_p is not None:
             # Same arithmetic as lfilter's transposed direct form, so results agree exactly.
             self._lag_state = (1.0 - self._lag_p) * speed + self._lag_p * self._lag_state

@@ -1,6 +1,9 @@
 """Identification of joints: the paper's Table 1, step bags, delay, map families, bad data."""
 
+import json
+
 from hydro_sdp.bags import read_record, write_bag
+from hydro_sdp.cli.main import main
 from hydro_sdp.core.delay import estimate_delay, level_speeds
 from hydro_sdp.core.errors import DataError
 from hydro_sdp.core.evaluate import evaluate
@@ -13,6 +16,7 @@ from hydro_sdp.core.records import Record
 from hydro_sdp.core.riv import sriv
 from hydro_sdp.core.simulation import simulate
 from hydro_sdp.core.static_maps import PwlMap, SdpMap
+from hydro_sdp.files import save_model
 import numpy as np
 import pytest
 
@@ -224,3 +228,44 @@ def test_other_bad_records():
                   Record(t, np.zeros(100), np.zeros(100), joint='b')])
     with pytest.raises(DataError, match="method must be 'rr' or 'oe'"):
         identify([Record(t, np.zeros(100), np.zeros(100))], method='lsq')
+
+
+def test_a_bag_with_a_stalled_timer_is_cut_at_the_hole_and_identified(tmp_path, capsys):
+    truth = j2_like()
+    record = experiment_record(truth, 'steps', seed=4, noise=0.03)
+    write_bag(tmp_path / 'whole', [record])
+    # The timer stalls for 0.4 s in the middle of the record: no samples, the joint moves on.
+    keep = ~((record.t > 30.0) & (record.t < 30.4))
+    write_bag(tmp_path / 'holed', [Record(record.t[keep], record.v[keep], record.y[keep],
+                                          joint=record.joint)])
+    with pytest.raises(DataError, match=r'gap of 0\.400 s in the time stamps 29\.99\d s from '
+                                        'the start'):
+        identify([read_record(tmp_path / 'holed')])
+    payloads = {}
+    for name in ('whole', 'holed'):
+        assert main(['identify', str(tmp_path / name), '--json']) == 0
+        payloads[name] = json.loads(capsys.readouterr().out)
+    assert payloads['whole']['pieces'] == 1 and payloads['holed']['pieces'] == 2
+    whole, holed = payloads['whole'], payloads['holed']
+    assert holed['kind'] == whole['kind'] == 'sdp' and holed['delay'] == whole['delay'] == 0.12
+    for key in ('dead_zone', 'saturation_velocity', 'curvature'):
+        np.testing.assert_allclose(holed[key], whole[key], rtol=0.005, atol=0.002)
+        np.testing.assert_allclose(holed[key], getattr(truth.static_map, key), rtol=0.01,
+                                   atol=0.01)
+    assert main(['identify', str(tmp_path / 'holed')]) == 0
+    assert capsys.readouterr().out.startswith('1 bags read as 2 pieces (cut at gaps')
+    model = tmp_path / 'model.yaml'
+    assert main(['identify', str(tmp_path / 'whole'), '--out', str(model), '--json']) == 0
+    capsys.readouterr()
+    assert main(['evaluate', str(tmp_path / 'holed'), '--model', str(model), '--json']) == 0
+    scores = json.loads(capsys.readouterr().out)
+    assert scores['pieces'] == 2 and len(scores['records']) == 2
+    assert {row['bag'] for row in scores['records']} == {str(tmp_path / 'holed')}
+    assert sum(row['samples'] for row in scores['records']) > 0.95 * keep.sum()
+    assert scores['mae']['model'] < 0.05            # the noise is 0.03 deg
+    # The diagnosis takes the holed bag too and finds nothing missing from the true model.
+    truth_file = save_model(truth, tmp_path / 'truth.yaml')
+    assert main(['diagnose', str(tmp_path / 'holed'), '--model', str(truth_file),
+                 '--iterations', '1', '--json']) == 0
+    diagnosis = json.loads(capsys.readouterr().out)
+    assert diagnosis['effect'] == 'none' and diagnosis['mae_before'] < 0.05
