@@ -14,7 +14,6 @@ recalibrate itself after wear or a part replacement, the first paper's promise.
 
 from __future__ import annotations
 
-from collections import deque
 from dataclasses import dataclass, replace
 import math
 from typing import Any
@@ -22,8 +21,8 @@ from typing import Any
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import ConfigurationError
 from hydro_sdp.core.model import JointModel
-from hydro_sdp.core.static_maps import SdpMap
-from hydro_sdp.core.timing import check_sample_period
+from hydro_sdp.core.static_maps import sdp_rate, SdpMap
+from hydro_sdp.core.timing import check_sample_period, DelayLine
 import numpy as np
 
 #: Process noise of the random walk, as a ratio to the measurement noise variance.
@@ -237,7 +236,9 @@ class OnlineSdpIdentifier:
                                 0.0, 0.1 / s, low])
         self._upper = np.array([0.0, 10.0 / s, high, 5.0 * a4, 10.0 / s,
                                 4.0 * s * max(1.0, abs(high))])
-        self._commands: deque[float] = deque(maxlen=self.delay + 2)
+        # v_{k-tau} and v_{k-tau-1}: the gate needs the command before the delayed one too.
+        self._commands = DelayLine(self.delay + 1, before=math.nan)
+        self._pushed = 0
         self._last_angle: float | None = None
         self._quiet = 0
         self.samples = 0
@@ -264,12 +265,9 @@ class OnlineSdpIdentifier:
         return SdpEstimate(a3, a6, a1 / dt, a4 / dt, a2, a5, s3, s6, s1 / dt, s4 / dt, s2, s5)
 
     def _q(self, u: float) -> float:
+        # theta is eq. (5) in per-sample form: (a1, a2, a3) below, (a4, a5, a6) above.
         a1, a2, a3, a4, a5, a6 = self.theta
-        if u < a3:
-            return a1 * -math.expm1(a2 * (u - a3))
-        if u > a6:
-            return a4 * -math.expm1(-a5 * (u - a6))
-        return 0.0
+        return float(sdp_rate(u, a1, a2, a3, a4, a5, a6))
 
     def _gradient(self, u: float) -> FloatArray:
         """Gradient of the soft-edged map: smooth min/max replace the kinks at the edges."""
@@ -306,12 +304,13 @@ class OnlineSdpIdentifier:
         if not (math.isfinite(v) and math.isfinite(y)):
             self._quiet = self.settings.hold_off
             return False
-        self._commands.append(float(v))
+        self._commands.push(v)
+        self._pushed += 1
         previous, self._last_angle = self._last_angle, float(y)
-        if previous is None or len(self._commands) < self.delay + 2:
+        if previous is None or self._pushed < self.delay + 2:
             return False
-        u = self._commands[-1 - self.delay]
-        if abs(u - self._commands[-2 - self.delay]) > self.settings.change_gate:
+        u = self._commands.delayed(self.delay)
+        if abs(u - self._commands.delayed(self.delay + 1)) > self.settings.change_gate:
             self._quiet = self.settings.hold_off
             return False
         if self._quiet > 0:
