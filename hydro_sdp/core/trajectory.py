@@ -244,6 +244,10 @@ class TrajectorySampler:
                 return piece.sample(t)
         return self._hold[joint], 0.0
 
+    def sample_all(self, t: float) -> dict[str, tuple[float, float]]:
+        """Return ``(setpoint, rate)`` of every joint at time ``t`` (s): deg and deg/s."""
+        return {joint: self.sample(joint, t) for joint in self._hold}
+
     def setpoint(self, joint: str, t: float) -> float:
         """Return the set-point of ``joint`` at time ``t`` (s), degrees."""
         return self.sample(joint, t)[0]

@@ -77,6 +77,10 @@ def test_linear_sampling_holds_before_blends_from_the_held_setpoint_and_holds_af
     assert sampler.sample('boom', 16.0) == (35.0, 0.0)            # the end: held, rate 0
     assert sampler.sample('boom', 100.0) == (35.0, 0.0)
     assert sampler.end_time('boom') == 16.0
+    assert sampler.end_time('dipper') == 16.0
+    assert sampler.sample_all(14.0) == {'boom': pytest.approx((25.0, 5.0)),
+                                        'dipper': pytest.approx((-70.0, 10.0))}
+    assert TrajectorySampler({'boom': 1.0}).end_time('boom') == -math.inf
 
 
 def test_a_first_point_at_time_zero_is_a_jump():
