@@ -9,6 +9,7 @@ import sys
 from hydro_sdp.bags import STORAGES, write_bag
 from hydro_sdp.cli.common import finite_float, non_negative_float, Outcome, positive_float, table
 from hydro_sdp.cli.progress import ProgressBar
+from hydro_sdp.cli.trajectory_loop import add_trajectory_options, run_trajectory
 from hydro_sdp.core.closed_loop import LoopJoint, run_closed_loop, step_metrics, step_setpoints
 from hydro_sdp.core.controller_spec import design_from_model
 from hydro_sdp.core.errors import ConfigurationError
@@ -28,9 +29,23 @@ the controller node does. The bag gets
 /joint_states, /<joint>/valve_command and /<joint>/setpoint; the report gives the
 settling time (into +-band), overshoot and steady error of every step.
 
-example:
+With --trajectory FILE instead of --setpoints, one model per joint follows a
+trajectory from --start-at seconds on, interpolated as ROS's
+JointTrajectoryController does: a YAML file (format: hydro_sdp/trajectory/v1)
+with joint_names and points ({time_from_start: s, positions: [deg, ...],
+velocities: [deg/s, ...] optional}), or with kinematics: FILE and line:
+{start: [x, z], end: [x, z], speed: m/s or duration: s} for a straight line
+of the bucket tip; or a CSV with the header time,<joint>,... (s, deg). Joints
+start at its first point. The set-point rate is fed forward through the IDZ
+(--no-feedforward: the PIP alone). The report gives the RMS tracking error
+during the motion and the final error per joint, and for a line the distance
+of the tip from it (path_error_mm); --plot draws the tip path and that distance.
+
+examples:
   hydro-sdp closed-loop config/brokk_j2.yaml --setpoints 20 -10 50 --hold 10 \\
       --out loop_bag --plot loop.png
+  hydro-sdp closed-loop config/lucie_boom.yaml config/lucie_dipper.yaml \\
+      --trajectory config/lucie_line.yaml --out line_bag --plot line.png
 """
 
 
@@ -38,11 +53,15 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the ``closed-loop`` command to the command line."""
     parser = subparsers.add_parser('closed-loop', help=HELP, description=DESCRIPTION,
                                    formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument('model', help='model file of the simulated joint')
-    parser.add_argument('--controller',
-                        help='controller file from `design` (default: designed from the model)')
-    parser.add_argument('--setpoints', nargs='+', type=finite_float, required=True,
+    parser.add_argument('model', nargs='+',
+                        help='model file of the simulated joint (one per joint with '
+                             '--trajectory)')
+    parser.add_argument('--controller', nargs='+',
+                        help='controller file from `design`, one per model (default: designed '
+                             'from the model)')
+    parser.add_argument('--setpoints', nargs='+', type=finite_float,
                         metavar='DEG', help='set-points in degrees, each held --hold seconds')
+    add_trajectory_options(parser)
     parser.add_argument('--hold', type=positive_float, default=10.0,
                         help='time each set-point is held, s (default: 10)')
     parser.add_argument('--out', required=True, help='bag folder to write')
@@ -73,9 +92,16 @@ def _finite_or_none(value: float) -> float | None:
 
 def run(args: argparse.Namespace) -> Outcome:
     """Run ``closed-loop``."""
-    model = load_model(args.model)
+    if (args.setpoints is None) == (args.trajectory is None):
+        raise ConfigurationError('give --setpoints or --trajectory, one of them')
+    if args.trajectory is not None:
+        return run_trajectory(args)
+    if len(args.model) != 1 or (args.controller and len(args.controller) != 1):
+        raise ConfigurationError('--setpoints drives one joint: give one model (and at most '
+                                 'one controller)')
+    model = load_model(args.model[0])
     if args.controller:
-        spec = load_controller(args.controller)
+        spec = load_controller(args.controller[0])
         check_controller_fits(spec, model)
     else:
         spec = design_from_model(model, control_period=args.control_period)

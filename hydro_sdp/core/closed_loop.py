@@ -45,6 +45,9 @@ class LoopJoint:
         Desired angle at every plant sample, degrees.
     y0 : float
         Starting angle, degrees.
+    feedforward : FloatArray or None
+        Feed-forward at every plant sample, degrees per control sample (used at
+        the control instants, see :meth:`PipIdzController.step`); ``None``: none.
 
     """
 
@@ -52,6 +55,7 @@ class LoopJoint:
     controller: PipIdzController
     setpoint: FloatArray
     y0: float = 0.0
+    feedforward: FloatArray | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -127,6 +131,9 @@ def run_closed_loop(joints: Sequence[LoopJoint], *, dt: float, control_period: f
     samples = len(joints[0].setpoint)
     if any(len(joint.setpoint) != samples for joint in joints):
         raise ConfigurationError('every joint needs a set-point for every sample')
+    if any(joint.feedforward is not None and len(joint.feedforward) != samples
+           for joint in joints):
+        raise ConfigurationError('a feed-forward needs a value for every sample')
     if not noise_std >= 0.0 or not math.isfinite(noise_std):
         raise ConfigurationError(f'noise_std must be >= 0, got {noise_std}')
     # One stream per joint, seeded [seed, index]: the plant node draws the same numbers
@@ -139,6 +146,8 @@ def run_closed_loop(joints: Sequence[LoopJoint], *, dt: float, control_period: f
     for index, joint in enumerate(joints):
         simulator = JointSimulator(joint.model, dt, joint.y0, v_before=joint.controller.last_v)
         setpoint = np.asarray(joint.setpoint, dtype=np.float64)
+        feedforward = (None if joint.feedforward is None
+                       else np.asarray(joint.feedforward, dtype=np.float64))
         y = np.empty(samples)
         measured = np.empty(samples)
         # The controller acts at the node's control instants; offline the valve is never
@@ -152,7 +161,11 @@ def run_closed_loop(joints: Sequence[LoopJoint], *, dt: float, control_period: f
             y[j] = simulator.angle
             measured[j] = y[j] + noise[index, j]
             if schedule.tick(int(stamps[j])) != 'wait':
-                answer = joint.controller.step(float(setpoint[j]), measured[j])
+                if feedforward is None:
+                    answer = joint.controller.step(float(setpoint[j]), measured[j])
+                else:
+                    answer = joint.controller.step(float(setpoint[j]), measured[j],
+                                                   float(feedforward[j]))
                 schedule.stepped(int(stamps[j]))
                 issued.append(int(stamps[j]))
                 answers.append(answer)

@@ -13,6 +13,20 @@ that was really applied: the clamped value, or, when the valve range cut the
 command, the increment that the cut command produces (back-calculation). The
 integral action lives only in that history, so it cannot wind up (docs/methods.md section 6).
 
+With a feed-forward (``step(setpoint, y, feedforward)``, for trajectories) the
+controller works on the deviation from the set-point's own motion: the
+feed-forward ``w_k`` (the set-point increment per control sample, taken ``tau``
+control samples ahead, see
+:meth:`~hydro_sdp.core.trajectory.TrajectorySampler.feedforward`) is added to
+``u`` before the limits and the IDZ, the ``f`` terms act on
+``(y_{k-i} - y_{k-i-1}) - (d_{k-i} - d_{k-i-1})`` and the history keeps the
+controller's own part, ``u`` less ``w_k`` (bounded as the comment in the code
+says when the limits cut the command). For the delayed integrator
+``y_k = y_{k-1} + u_{k-tau}`` the error then obeys the same closed loop as a
+regulator, so a ramp of ``r`` degrees per sample is tracked without the lag
+``sum(f) r / k_I`` the PIP alone leaves (its incremental law balances
+``k_I e`` against ``f_0 r`` when ``u`` is steady).
+
 """
 
 from __future__ import annotations
@@ -86,6 +100,8 @@ class PipIdzController:
         self._y: list[float] = []       # y_k, y_{k-1}, ..., newest first (n + 1 values)
         self._u: list[float] = []       # u_{k-1}, u_{k-2}, ..., newest first (m values)
         self._branch = 0
+        self._d: list[float] = []       # d_{k-1}, d_{k-2}, ..., newest first (feed-forward only)
+        self._d_steps = -1              # value of ``steps`` when ``_d`` was last written
         self.last_u = 0.0
         self.last_v = settings.idz.rest if settings.idz is not None else 0.0
         self.steps = 0
@@ -105,9 +121,11 @@ class PipIdzController:
         self._y = [] if y is None else [float(y)] * (self._n + 1)
         self._u = [float(u)] * self._m
         self._branch = 0
+        self._d = []
         self.last_u = float(u)
 
-    def step(self, setpoint: float, y: float) -> tuple[float, float]:
+    def step(self, setpoint: float, y: float,
+             feedforward: float | None = None) -> tuple[float, float]:
         """
         Compute one control sample.
 
@@ -117,6 +135,11 @@ class PipIdzController:
             Desired angle ``d_k``, degrees.
         y : float
             Measured angle ``y_k``, degrees.
+        feedforward : float or None
+            Set-point increment ``w_k`` the plant should make, degrees per
+            control sample, taken ``tau`` control samples ahead (module
+            docstring); ``None``: the plain PIP law (the increments of ``d``
+            are then not used).
 
         Returns
         -------
@@ -127,9 +150,12 @@ class PipIdzController:
         Raises
         ------
         DataError
-            If ``setpoint`` or ``y`` is not finite; the state is left unchanged.
+            If ``setpoint``, ``y`` or ``feedforward`` is not finite; the state
+            is left unchanged.
 
         """
+        if feedforward is not None:
+            return self._step_feedforward(float(setpoint), float(y), float(feedforward))
         if not (math.isfinite(setpoint) and math.isfinite(y)):
             raise DataError(f'set-point and angle must be finite, got {setpoint} and {y}')
         settings = self.settings
@@ -160,6 +186,59 @@ class PipIdzController:
         self._u = [u] + us[:self._m - 1]
         self.last_u, self.last_v = u, v
         self.steps += 1
+        return u, v
+
+    def _step_feedforward(self, setpoint: float, y: float,
+                          feedforward: float) -> tuple[float, float]:
+        """:meth:`step` with a feed-forward: the law on the deviation from the set-point."""
+        if not (math.isfinite(setpoint) and math.isfinite(y) and math.isfinite(feedforward)):
+            raise DataError(f'set-point, angle and feed-forward must be finite, got {setpoint}, '
+                            f'{y} and {feedforward}')
+        settings = self.settings
+        gains = settings.gains
+        ys = [y] + (self._y[:self._n] if self._y else [y] * self._n)
+        # Past set-points kept by feed-forward steps only; after a plain step or a reset
+        # the set-point is taken as having stood still (bumpless, as for y).
+        fresh = self._d and self._d_steps == self.steps
+        ds = [setpoint] + (self._d[:self._n] if fresh else [setpoint] * self._n)
+        us = self._u if self._u else [0.0] * self._m
+        u = us[0] + gains.k_i * (setpoint - y)
+        for j, g_j in enumerate(gains.g, start=1):
+            u -= g_j * (us[j - 1] - us[j])
+        for i, f_i in enumerate(gains.f):
+            u -= f_i * ((ys[i] - ys[i + 1]) - (ds[i] - ds[i + 1]))
+        own = u
+        u += feedforward
+        wanted = u
+        if not math.isfinite(u):
+            raise DataError('the controller output is not finite (gains or inputs too large)')
+        if settings.u_limits is not None:
+            u = min(max(u, settings.u_limits[0]), settings.u_limits[1])
+        if settings.idz is not None:
+            v, branch = settings.idz.command(u, self._branch)
+        else:
+            v, branch = u, 0
+        if settings.v_limits is not None:
+            limited = min(max(v, settings.v_limits[0]), settings.v_limits[1])
+            if limited != v:
+                u = settings.idz.increment(limited) if settings.idz is not None else limited
+                v = limited
+        self._branch = branch
+        self._y = ys[:self._n + 1]
+        # The history keeps the controller's own part, not the feed-forward (the law would
+        # integrate it). When the limits cut the command, that part is kept no further
+        # beyond the limit than the applied command itself (as without feed-forward), nor
+        # than the full back-calculation ``u - feedforward``: it neither winds up nor is
+        # pushed against the motion by a feed-forward the valve cannot deliver.
+        if wanted > u:
+            own = min(own, max(u - feedforward, u))
+        elif wanted < u:
+            own = max(own, min(u - feedforward, u))
+        self._u = [own] + us[:self._m - 1]
+        self._d = ds[:self._n]
+        self.last_u, self.last_v = u, v
+        self.steps += 1
+        self._d_steps = self.steps
         return u, v
 
     def update_idz(self, idz: InverseDeadZone) -> None:
