@@ -45,7 +45,9 @@ def interrupts_deferred() -> Iterator[None]:
     half-removed. Only the main thread can receive KeyboardInterrupt; elsewhere
     the block runs as is.
     """
-    if threading.current_thread() is not threading.main_thread():
+    # None: a handler installed outside Python, which could not be put back.
+    if threading.current_thread() is not threading.main_thread() or \
+            signal.getsignal(signal.SIGINT) is None:
         yield
         return
     caught: list[int] = []

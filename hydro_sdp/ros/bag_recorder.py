@@ -19,6 +19,7 @@ the end how many messages were written.
 from __future__ import annotations
 
 import importlib
+import sys
 from typing import Any, Callable
 
 from hydro_sdp.bag_sqlite import Sqlite3BagWriter
@@ -201,8 +202,12 @@ class BagRecorderNode(Node):
         counts = ', '.join(f'{t.name} {t.count}' for t in summary.topics) or 'no topics'
         never = f"; never advertised: {', '.join(sorted(self._waiting))}" \
             if self._waiting else ''
-        self.get_logger().info(f'wrote {summary.count} messages to {self.output} '
-                               f'({counts}){never}')
+        text = f'wrote {summary.count} messages to {self.output} ({counts}){never}'
+        if self.context.ok():
+            self.get_logger().info(text)
+        else:
+            # After Ctrl-C the context is down and the logger could not reach /rosout.
+            sys.stderr.write(f'[INFO] [{self.get_name()}]: {text}\n')
 
     def destroy_node(self) -> None:
         """Finish the bag, then destroy the node."""
