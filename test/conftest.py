@@ -1,6 +1,7 @@
 """Shared fixtures of the hydro_sdp test suite."""
 
 import importlib.util
+import os
 from pathlib import Path
 
 from hydro_sdp.files import default_model_path, load_model
@@ -8,7 +9,10 @@ import numpy as np
 import pytest
 
 REPO = Path(__file__).resolve().parent.parent
-FIXTURES = REPO.parent / 'shared' / 'data' / 'rosbag2_fixtures'
+# Real rosbag2 bags (rosbag2's own test resources) live beside the repository, not in it;
+# HYDRO_SDP_FIXTURES names another place. Tests that need them skip, saying where they looked.
+FIXTURES = Path(os.environ.get('HYDRO_SDP_FIXTURES')
+                or REPO.parent / 'shared' / 'data' / 'rosbag2_fixtures')
 
 # The ROS tests need rclpy; without it they are left out (test_ros_available reports a skip).
 collect_ignore_glob = [] if importlib.util.find_spec('rclpy') else ['ros/*']

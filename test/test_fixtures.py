@@ -1,4 +1,10 @@
-"""Every real rosbag2 layout in ../shared/data/rosbag2_fixtures is read or refused clearly."""
+"""
+Every real rosbag2 layout in ../shared/data/rosbag2_fixtures is read or refused clearly.
+
+The fixtures are not part of the repository: without them (a plain clone, a colcon
+workspace) this module is skipped with the path it looked in; HYDRO_SDP_FIXTURES
+points it at another copy.
+"""
 
 from conftest import FIXTURES
 from hydro_sdp.bags import EmptyBagError, inspect_bag, read_bag
@@ -6,7 +12,8 @@ from hydro_sdp.core.errors import BagFormatError, TopicNotFoundError
 import pytest
 
 if not FIXTURES.is_dir():  # pragma: no cover - the fixtures live beside the repository
-    pytest.skip(f'no rosbag2 fixtures at {FIXTURES}', allow_module_level=True)
+    pytest.skip(f'no rosbag2 fixtures at {FIXTURES} (set HYDRO_SDP_FIXTURES to their folder)',
+                allow_module_level=True)
 
 
 def _bags():

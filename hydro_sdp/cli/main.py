@@ -5,23 +5,28 @@ Exit codes (docs/interfaces.md section 4.1): 0 success; 2 bad input, with one li
 ``error: ...`` on stderr and no traceback; 1 internal failure; 130 when
 interrupted (nothing half-written is left behind: files are written atomically).
 
+This module imports only the standard library at the top: the commands, and
+numpy, scipy and rclpy with them, are imported inside :func:`main`, where a
+Ctrl-C in the first second of a command ends it with exit code 130 and one
+line, not a traceback.
+
 """
 
 from __future__ import annotations
 
 import argparse
+import importlib
 import json
 import os
 import sys
 import traceback
+from typing import Any
 
 from hydro_sdp import __version__
-from hydro_sdp.cli import (
-    closed_loop, demo, design, diagnose, evaluate, identify, import_csv, simulate)
-from hydro_sdp.cli.common import to_json
-from hydro_sdp.core.errors import HydroSdpError
 
-COMMANDS = (simulate, import_csv, identify, evaluate, diagnose, design, closed_loop, demo)
+#: Command modules of hydro_sdp.cli, in the order of ``--help``.
+COMMANDS = ('simulate', 'import_csv', 'identify', 'evaluate', 'diagnose', 'design',
+            'closed_loop', 'demo', 'reindex')
 
 DESCRIPTION = """\
 Identify, control and diagnose hydraulic manipulator joints with state-dependent
@@ -56,13 +61,13 @@ def build_parser() -> argparse.ArgumentParser:
     subparsers = parser.add_subparsers(dest='command', metavar='COMMAND', required=True)
     original = subparsers.add_parser
 
-    def add_parser(name: str, **kwargs):
+    def add_parser(name: str, **kwargs: Any) -> argparse.ArgumentParser:
         kwargs.setdefault('parents', [common])
         return original(name, **kwargs)
 
-    subparsers.add_parser = add_parser  # every command gets --json
+    subparsers.add_parser = add_parser  # type: ignore[method-assign]  # all get --json
     for command in COMMANDS:
-        command.register(subparsers)
+        importlib.import_module(f'hydro_sdp.cli.{command}').register(subparsers)
     return parser
 
 
@@ -86,10 +91,17 @@ def main(argv: list[str] | None = None) -> int:
         Exit code.
 
     """
-    parser = build_parser()
-    args = parser.parse_args(argv)
+    try:
+        parser = build_parser()
+        args = parser.parse_args(argv)
+        from hydro_sdp.cli.common import to_json
+        from hydro_sdp.core.errors import HydroSdpError
+    except KeyboardInterrupt:
+        return _fail('interrupted', 130)
     try:
         outcome = args.run(args)
+        text = json.dumps(to_json(outcome.payload)) + '\n' if args.json else \
+            ''.join(line + '\n' for line in outcome.lines)
     except KeyboardInterrupt:
         return _fail('interrupted; nothing partial was written', 130)
     except (HydroSdpError, OSError) as error:
@@ -99,14 +111,18 @@ def main(argv: list[str] | None = None) -> int:
             traceback.print_exc()
         return _fail(f'internal failure ({type(error).__name__}: {error}); '
                      'set HYDRO_SDP_DEBUG=1 for a traceback', 1)
-    if args.json:
-        sys.stdout.write(json.dumps(to_json(outcome.payload)) + '\n')
-    else:
-        for line in outcome.lines:
-            sys.stdout.write(line + '\n')
+    try:
+        sys.stdout.write(text)
+    except KeyboardInterrupt:
+        return _fail('interrupted', 130)
     return 0
 
 
 def entry_point() -> None:
     """Console-script wrapper: exit with :func:`main`'s code."""
-    sys.exit(main())
+    try:
+        code = main()
+    except KeyboardInterrupt:
+        # Between two handlers above (a Ctrl-C while one is being handled).
+        code = _fail('interrupted', 130)
+    sys.exit(code)

@@ -4,6 +4,8 @@ Replay a bag's JointState and Float64 topics (``ros2 run hydro_sdp bag_player``)
 Messages go out in recorded order at the recorded timing times ``rate``; with
 ``publish_clock`` the bag time is published on ``/clock`` first, so nodes with
 ``use_sim_time`` (an identifier fed from a recording) follow the bag's time.
+When the last message is out the node shuts its context down, so the process
+ends (as ``ros2 bag play`` does); with ``loop`` it starts over instead.
 Tests can drive the player without a wall clock through :meth:`play_until`.
 
 """
@@ -19,7 +21,7 @@ from hydro_sdp.core.errors import ConfigurationError
 from hydro_sdp.ros.params import declare
 from hydro_sdp.ros.runner import run_node
 from rclpy.node import Node
-from rosgraph_msgs.msg import Clock
+from rosgraph_msgs.msg import Clock  # type: ignore[import-untyped, unused-ignore]
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64
 
@@ -46,6 +48,8 @@ class BagPlayerNode(Node):
                             low=1e-3, high=1e3, read_only=True)
         self.publish_clock = declare(self, 'publish_clock', False,
                                      'publish the bag time on /clock', read_only=True)
+        self.loop = declare(self, 'loop', False, 'play the bag again from its start when it '
+                            'ends, instead of exiting', read_only=True)
         autostart = declare(self, 'autostart', True,
                             'start playing on a wall-clock timer at once', read_only=True)
         if not bag:
@@ -55,7 +59,7 @@ class BagPlayerNode(Node):
             raise EmptyBagError(f'{bag}: no JointState or Float64 messages to play')
         messages.sort(key=lambda m: m[2])
         self._messages = messages
-        self._topic_pubs = {}
+        self._topic_pubs: dict[str, Any] = {}
         for topic, msgtype, _, _ in messages:
             if topic not in self._topic_pubs:
                 # Bag topics are absolute; drop the slash so a namespace still applies.
@@ -65,6 +69,8 @@ class BagPlayerNode(Node):
             else None
         self.start_ns = messages[0][2]
         self.published = 0
+        #: Times the whole bag was played.
+        self.loops = 0
         self._started: float | None = None
         self._timer = self.create_timer(0.001, self._on_timer) if autostart else None
 
@@ -113,9 +119,17 @@ class BagPlayerNode(Node):
         if self._started is None:
             self._started = now
         self.play_until(self.start_ns + int((now - self._started) * self.rate * 1e9))
-        if self.finished:
-            self._timer.cancel()
-            self.get_logger().info(f'played {self.published} messages')
+        if not self.finished:
+            return
+        self.loops += 1
+        if self.loop:
+            self.published, self._started = 0, None
+            return
+        assert self._timer is not None
+        self._timer.cancel()
+        self.get_logger().info(f'played {len(self._messages)} messages; done')
+        # Ends rclpy.spin in main(): the process exits with code 0.
+        self.context.try_shutdown()
 
 
 def main(args: list[str] | None = None) -> None:

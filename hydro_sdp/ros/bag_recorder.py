@@ -1,42 +1,84 @@
 """
 Record topics into a rosbag2 bag without rosbag2 (``ros2 run hydro_sdp bag_recorder``).
 
-Subscribes to the chosen topics as serialised messages and writes them with
-``rosbags``, stamped with the node's clock at receipt (simulated time when
-``use_sim_time`` is set). The bag is built under a temporary name and moved
-to ``output`` when the node shuts down, so a crash leaves no partial bag where
-``identify`` or ``diagnose`` would read it.
+As ``ros2 bag record`` does, the recorder writes ``output/output_0.db3`` (sqlite3,
+rosbag2's schema) while it runs and ``output/metadata.yaml`` when it stops. It
+commits at least every ``flush_period`` seconds, so a recorder that is killed
+outright loses at most that much; ``hydro-sdp reindex output`` then writes the
+missing ``metadata.yaml``. An ``output`` that exists is refused and left as it is.
+
+Each topic is recorded with the type its publishers advertise in the ROS graph
+(a ``std_msgs/msg/Bool`` stays a Bool), stamped with the node's clock at
+receipt (simulated time when ``use_sim_time`` is set). A topic nobody publishes
+yet is looked up again every ``discovery_period`` seconds and recorded from
+when it appears; the log says what is recorded, what is still awaited, and at
+the end how many messages were written.
 
 """
 
 from __future__ import annotations
 
-from contextlib import ExitStack
-from pathlib import Path
-from typing import Any
+import importlib
+import sys
+from typing import Any, Callable
 
-from hydro_sdp.bags import STORAGES
+from hydro_sdp.bag_sqlite import Sqlite3BagWriter
 from hydro_sdp.core.errors import ConfigurationError
-from hydro_sdp.files import atomic_directory
 from hydro_sdp.ros.params import declare
 from hydro_sdp.ros.runner import run_node
+from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 from rclpy.parameter import Parameter
-from sensor_msgs.msg import JointState
-from std_msgs.msg import Float64
-
-TYPES = {'sensor_msgs/msg/JointState': JointState, 'std_msgs/msg/Float64': Float64}
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rclpy.topic_endpoint_info import TopicEndpointInfo
 
 
-def topic_type(topic: str) -> str:
-    """Return the message type hydro_sdp records on ``topic``: JointState or Float64."""
-    return 'sensor_msgs/msg/JointState' if topic.rstrip('/').endswith('joint_states') \
-        else 'std_msgs/msg/Float64'
+def message_class(msgtype: str) -> Any:
+    """
+    Import the Python class of a ROS message type.
+
+    Parameters
+    ----------
+    msgtype : str
+        ``package/msg/Name``.
+
+    Returns
+    -------
+    type
+        The message class.
+
+    Raises
+    ------
+    ImportError
+        If the type's package is not installed.
+
+    """
+    package, kind, name = msgtype.split('/')
+    return getattr(importlib.import_module(f'{package}.{kind}'), name)
+
+
+def _seconds(duration: Any) -> dict[str, int]:
+    sec, nsec = divmod(int(duration.nanoseconds), 1_000_000_000)
+    return {'sec': sec, 'nsec': nsec}
+
+
+def qos_text(endpoints: list[TopicEndpointInfo]) -> str:
+    """Return the publishers' QoS as rosbag2 stores it with metadata version 8 (YAML text)."""
+    import yaml
+
+    profiles = [{
+        'history': int(q.history), 'depth': int(q.depth), 'reliability': int(q.reliability),
+        'durability': int(q.durability), 'deadline': _seconds(q.deadline),
+        'lifespan': _seconds(q.lifespan), 'liveliness': int(q.liveliness),
+        'liveliness_lease_duration': _seconds(q.liveliness_lease_duration),
+        'avoid_ros_namespace_conventions': bool(q.avoid_ros_namespace_conventions),
+    } for q in (e.qos_profile for e in endpoints)]
+    return yaml.safe_dump(profiles, sort_keys=False).strip() if profiles else ''
 
 
 class BagRecorderNode(Node):
     """
-    Write chosen topics to a bag (``joint_states`` as JointState, others as Float64).
+    Write chosen topics to a new bag, each with its advertised type.
 
     Parameters
     ----------
@@ -49,57 +91,123 @@ class BagRecorderNode(Node):
 
     def __init__(self, *, node_name: str = 'bag_recorder', **kwargs: Any) -> None:
         super().__init__(node_name, **kwargs)
-        from rosbags.rosbag2 import StoragePlugin, Writer
-        from rosbags.typesys import get_typestore, Stores
-
-        output = declare(self, 'output', '', 'bag folder to write (required)', read_only=True)
+        output = declare(self, 'output', '', 'bag folder to create (required; must not exist)',
+                         read_only=True)
         topics = declare(self, 'topics', Parameter.Type.STRING_ARRAY,
                          'topics to record (default: joint_states and every valve_command '
                          'and setpoint of the joints in joint_names)', read_only=True)
         joints = declare(self, 'joint_names', ['j2'], 'joints whose command and set-point '
                          'topics are recorded by default', read_only=True)
-        storage = declare(self, 'storage', 'sqlite3', f"storage: {', '.join(STORAGES)}",
-                          read_only=True)
+        storage = declare(self, 'storage', 'sqlite3', 'storage: sqlite3 (the only one '
+                          'written while recording)', read_only=True)
+        flush_period = declare(self, 'flush_period', 1.0, 'longest time between commits to '
+                               'disk, s: what a crash can lose', low=0.01, high=60.0,
+                               read_only=True)
+        discovery_period = declare(self, 'discovery_period', 0.2, 'how often topics not yet '
+                                   'advertised are looked up in the graph, s', low=0.01,
+                                   high=10.0, read_only=True)
         if not output:
             raise ConfigurationError("parameter 'output' (the bag folder) is required")
-        if storage not in STORAGES:
-            raise ConfigurationError(f"parameter 'storage' must be one of "
-                                     f"{', '.join(STORAGES)}, got {storage!r}")
+        if storage != 'sqlite3':
+            raise ConfigurationError(f"parameter 'storage' must be sqlite3 (committed while "
+                                     f'recording, so a crash loses at most flush_period), '
+                                     f'got {storage!r}')
         if not topics:
             topics = ['joint_states'] + [f'{j}/{t}' for j in joints
                                          for t in ('valve_command', 'setpoint')]
-        self.output = Path(output)
         self.messages = 0
         self.closed = False
-        self._stack = ExitStack()
-        building = self._stack.enter_context(atomic_directory(self.output))
-        plugin = StoragePlugin.MCAP if storage == 'mcap' else StoragePlugin.SQLITE3
-        self._writer = self._stack.enter_context(Writer(building, version=8,
-                                                        storage_plugin=plugin))
-        typestore = get_typestore(Stores.ROS2_JAZZY)
-        self._recorded = []
-        for topic in topics:
-            msgtype = topic_type(topic)
-            subscription = self.create_subscription(
-                TYPES[msgtype], topic, lambda raw, t=topic: self._on_message(t, raw), 100,
-                raw=True)
-            name = subscription.topic_name
-            connection = self._writer.add_connection(name, msgtype, typestore=typestore)
-            self._recorded.append((subscription, connection))
-        self._connections = {topic: connection for topic, (_, connection) in
-                             zip(topics, self._recorded)}
+        # Refuses an existing output before anything is subscribed.
+        self._writer = Sqlite3BagWriter(output, flush_period=flush_period)
+        self.output = self._writer.folder
+        from rosbags.typesys import get_typestore, Stores
+        self._typestore = get_typestore(Stores.ROS2_JAZZY)
+        self._ids: dict[str, int] = {}
+        self.recorded: dict[str, str] = {}     # topic -> type
+        self._waiting = {self.resolve_topic_name(t) for t in topics}
+        self._announced = False
+        steady = Clock(clock_type=ClockType.STEADY_TIME)
+        self._flush_timer = self.create_timer(flush_period, self._flush, clock=steady)
+        self._discovery_timer = self.create_timer(discovery_period, self._discover,
+                                                  clock=steady)
+        self._discover()
+        waiting = f"; waiting for {', '.join(sorted(self._waiting))} to be advertised" \
+            if self._waiting else ''
+        self.get_logger().info(
+            f'recording to {self.output} (committed every {flush_period:g} s): '
+            f"{', '.join(f'{t} ({m})' for t, m in self.recorded.items()) or 'nothing yet'}"
+            f'{waiting}')
+        self._announced = True
+
+    @property
+    def waiting(self) -> set[str]:
+        """Topics asked for that nobody has advertised yet."""
+        return set(self._waiting)
+
+    def _discover(self) -> None:
+        if self.closed or not self._waiting:
+            return
+        advertised = dict(self.get_topic_names_and_types())
+        for topic in sorted(self._waiting & advertised.keys()):
+            types = advertised[topic]
+            if len(types) > 1:
+                self.get_logger().warning(f'{topic} is advertised with several types '
+                                          f"({', '.join(types)}); recording {types[0]}")
+            self._waiting.discard(topic)
+            try:
+                self._subscribe(topic, types[0])
+            except (ImportError, AttributeError, ValueError) as error:
+                self.get_logger().error(f'cannot record {topic}: type {types[0]} is not '
+                                        f'available here ({error})')
+        if not self._waiting:
+            self._discovery_timer.cancel()
+
+    def _subscribe(self, topic: str, msgtype: str) -> None:
+        cls = message_class(msgtype)
+        publishers = self.get_publishers_info_by_topic(topic)
+        qos = QoSProfile(depth=100)
+        if any(p.qos_profile.reliability == ReliabilityPolicy.BEST_EFFORT for p in publishers):
+            qos.reliability = ReliabilityPolicy.BEST_EFFORT    # a reliable reader would miss them
+        msgdef, digest = '', ''
+        if msgtype in self._typestore.fielddefs:
+            msgdef, _ = self._typestore.generate_msgdef(msgtype, ros_version=2)
+            digest = self._typestore.hash_rihs01(msgtype)
+        self._ids[topic] = self._writer.add_topic(topic, msgtype, msgdef=msgdef,
+                                                  type_hash=digest,
+                                                  offered_qos_profiles=qos_text(publishers))
+        self.recorded[topic] = msgtype
+        self.create_subscription(cls, topic, self._recorder_for(topic), qos, raw=True)
+        if self._announced:
+            self.get_logger().info(f'now recording {topic} ({msgtype})')
+
+    def _recorder_for(self, topic: str) -> Callable[[bytes], None]:
+        return lambda raw: self._on_message(topic, raw)
 
     def _on_message(self, topic: str, raw: bytes) -> None:
         if self.closed:
             return
-        self._writer.write(self._connections[topic], self.get_clock().now().nanoseconds, raw)
+        self._writer.write(self._ids[topic], self.get_clock().now().nanoseconds, raw)
         self.messages += 1
 
-    def close(self) -> None:
-        """Finish the bag and move it into place."""
+    def _flush(self) -> None:
         if not self.closed:
-            self.closed = True
-            self._stack.close()
+            self._writer.flush()
+
+    def close(self) -> None:
+        """Commit the last messages and write ``metadata.yaml``."""
+        if self.closed:
+            return
+        self.closed = True
+        summary = self._writer.close()
+        counts = ', '.join(f'{t.name} {t.count}' for t in summary.topics) or 'no topics'
+        never = f"; never advertised: {', '.join(sorted(self._waiting))}" \
+            if self._waiting else ''
+        text = f'wrote {summary.count} messages to {self.output} ({counts}){never}'
+        if self.context.ok():
+            self.get_logger().info(text)
+        else:
+            # After Ctrl-C the context is down and the logger could not reach /rosout.
+            sys.stderr.write(f'[INFO] [{self.get_name()}]: {text}\n')
 
     def destroy_node(self) -> None:
         """Finish the bag, then destroy the node."""
