@@ -1,0 +1,291 @@
+"""
+From a machine's recordings to a checked controller (the ``calibrate`` command).
+
+:func:`calibrate` chains what the other commands do one at a time: identify the
+joint (held-out choice of the map family), evaluate the model on validation
+records, diagnose what it misses and add the named effects, design the PIP-IDZ
+controller from the final model, and check it in closed loop on that final
+model with its effects (:mod:`.loop_check`); when the check fails the dominant
+poles move toward 1 and the controller is designed again, and the result says
+so. Without validation records, whole records are held out (never a piece of a
+record), and the result says which.
+
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+import inspect
+import math
+from typing import Any, Callable, Sequence
+
+from hydro_sdp.core.controller_spec import ControllerSpec, design_from_model, format_pole
+from hydro_sdp.core.diagnosis import DETECTORS, diagnose, Diagnosis
+from hydro_sdp.core.errors import ConfigurationError, DataError, HydroSdpError
+from hydro_sdp.core.evaluate import evaluate, RecordScore, sdp_dz_benchmark
+from hydro_sdp.core.identify import Identification, identify
+from hydro_sdp.core.loop_check import CheckSettings, check_loop, LoopCheck, slower_poles
+from hydro_sdp.core.model import JointModel
+from hydro_sdp.core.records import Record
+from hydro_sdp.core.static_maps import SdpDzMap, SdpMap
+import numpy as np
+
+#: The stages, in order, as :func:`calibrate` reports them.
+STAGES = ('identify', 'evaluate', 'diagnose', 'design', 'closed-loop check')
+#: Most re-designs with slower poles after a failed check.
+REDESIGNS = 4
+
+#: Progress: ``on_stage(stage, done, total)``.
+StageCallback = Callable[[str, float, float], None]
+
+
+@dataclass(frozen=True)
+class CalibrationSettings:
+    """
+    Choices of a calibration.
+
+    Parameters
+    ----------
+    rest : float or None
+        Rest command to identify with (default: what ``identify`` finds).
+    input_limits : tuple[float, float] or None
+        Command range of the valve, written to the model.
+    angle_limits : tuple[float, float] or None
+        Known end stops, degrees (default: those seen in the data).
+    control_period : float
+        Control period, s.
+    poles : tuple[complex, ...] or None
+        Closed-loop poles to start from (default: the LQ design).
+    iterations : int
+        Most effects the diagnosis adds.
+    check : CheckSettings or None
+        The closed-loop check (default: :class:`CheckSettings` at the records'
+        sample period).
+
+    """
+
+    rest: float | None = None
+    input_limits: tuple[float, float] | None = None
+    angle_limits: tuple[float, float] | None = None
+    control_period: float = 0.05
+    poles: tuple[complex, ...] | None = None
+    iterations: int = 4
+    check: CheckSettings | None = None
+
+
+@dataclass(frozen=True, eq=False)
+class CalibrationResult:
+    """
+    Everything a calibration found.
+
+    Parameters
+    ----------
+    identification : Identification
+        The identification and its evidence.
+    validation_note : str
+        Which records the MAE is measured on (given, held out, or in-sample).
+    estimation, validation : tuple[Record, ...]
+        The records identified from and evaluated on.
+    scores_identified, scores_final : tuple[RecordScore, ...]
+        Table-2 scores of the identified and the final model on the validation records.
+    diagnosis : Diagnosis
+        The named effects.
+    spec : ControllerSpec
+        The controller written (the last design tried).
+    check : LoopCheck
+        Its closed-loop check on the final model.
+    designs : tuple[tuple[str, ...], ...]
+        Poles of every design tried, first to last.
+    stroke : tuple[float, float]
+        Angle range the check stepped across, degrees.
+    warnings : tuple[str, ...]
+        What the user should know, one line each.
+
+    """
+
+    identification: Identification
+    validation_note: str
+    estimation: tuple[Record, ...]
+    validation: tuple[Record, ...]
+    scores_identified: tuple[RecordScore, ...]
+    scores_final: tuple[RecordScore, ...]
+    diagnosis: Diagnosis
+    spec: ControllerSpec
+    check: LoopCheck
+    designs: tuple[tuple[str, ...], ...]
+    stroke: tuple[float, float]
+    warnings: tuple[str, ...] = field(default=())
+
+    @property
+    def model(self) -> JointModel:
+        """The final model: identified, with the named effects."""
+        return self.diagnosis.model
+
+    @property
+    def mae_identified(self) -> float:
+        """Mean per-record validation MAE of the identified model, degrees."""
+        return float(np.mean([s.model for s in self.scores_identified]))
+
+    @property
+    def mae_final(self) -> float:
+        """Mean per-record validation MAE of the final model, degrees."""
+        return float(np.mean([s.model for s in self.scores_final]))
+
+
+def split_records(records: Sequence[Record]) -> tuple[list[Record], list[Record], str]:
+    """
+    Hold out whole records for validation: every third one, at least one of two.
+
+    Parameters
+    ----------
+    records : sequence of Record
+        The inputs, in the order given.
+
+    Returns
+    -------
+    tuple
+        ``(estimation, validation, note)``; with one record both are that record
+        and the note says the MAE is in-sample.
+
+    """
+    if len(records) < 2:
+        return list(records), list(records), ('in-sample: one record given, nothing to hold '
+                                              'out (give --validation for a held-out MAE)')
+    held = set(range(2, len(records), 3)) or {len(records) - 1}
+    estimation = [r for i, r in enumerate(records) if i not in held]
+    validation = [r for i, r in enumerate(records) if i in held]
+    names = ', '.join(str(i + 1) for i in sorted(held))
+    return estimation, validation, (f'held out: input record{"s" if len(held) > 1 else ""} '
+                                    f'{names} of {len(records)} (whole records)')
+
+
+def _identify(records: Sequence[Record], settings: CalibrationSettings,
+              progress: Callable[[str], None]) -> Identification:
+    options: dict[str, Any] = {'angle_limits': settings.angle_limits,
+                               'input_limits': settings.input_limits, 'progress': progress}
+    if settings.rest is not None:
+        if 'rest' not in inspect.signature(identify).parameters:
+            raise ConfigurationError('this version of identify chooses the rest command '
+                                     'itself; leave out --rest')
+        options['rest'] = settings.rest
+    return identify(records, **options)
+
+
+def _design_model(model: JointModel, warnings: list[str]) -> JointModel:
+    """Return the model the IDZ is designed from: the model, or its SDP-DZ chord."""
+    if isinstance(model.static_map, (SdpMap, SdpDzMap)):
+        return model
+    chord = sdp_dz_benchmark(model)
+    if chord is None:
+        raise DataError(f'no inverse dead-zone can be designed for a {model.kind} map without '
+                        'a dead-zone')
+    warnings.append(f'the IDZ inverts the chord of the {model.kind} map (SDP-DZ), as '
+                    '`design` does for sdp maps')
+    return replace(model, static_map=chord.static_map)
+
+
+def _clean(poles: Sequence[complex]) -> list[complex]:
+    """Round away the scatter of computed eigenvalues, so that pairs stay conjugate."""
+    return [complex(round(p.real, 9), round(p.imag, 9)) for p in (complex(x) for x in poles)]
+
+
+def _stroke(model: JointModel, records: Sequence[Record]) -> tuple[float, float]:
+    if model.angle_limits is not None:
+        return model.angle_limits
+    low = min(float(np.min(r.y)) for r in records)
+    high = max(float(np.max(r.y)) for r in records)
+    if not high - low > 1.0:
+        raise DataError(f'the joint moved only {high - low:.2f} deg in the records; the '
+                        'closed-loop check needs the stroke (give --angle-limits)')
+    return low, high
+
+
+def calibrate(records: Sequence[Record], validation: Sequence[Record] | None = None,
+              settings: CalibrationSettings | None = None, *,
+              on_stage: StageCallback | None = None) -> CalibrationResult:
+    """
+    Identify, evaluate, diagnose, design and check a joint's controller.
+
+    Parameters
+    ----------
+    records : sequence of Record
+        Recordings of one joint (step experiments, full-stroke runs, random levels).
+    validation : sequence of Record or None
+        Held-out recordings; default: whole records held out of ``records``.
+    settings : CalibrationSettings or None
+        Choices; default :class:`CalibrationSettings`.
+    on_stage : callable or None
+        Progress, called as ``on_stage(stage, done, total)`` with a stage of
+        :data:`STAGES`.
+
+    Returns
+    -------
+    CalibrationResult
+        The models, the controller, the check and the warnings.
+
+    """
+    settings = settings if settings is not None else CalibrationSettings()
+    if not records:
+        raise DataError('no records to calibrate from')
+    report: StageCallback = on_stage if on_stage is not None else (lambda s, d, t: None)
+    warnings: list[str] = []
+    if validation:
+        estimation, checks = list(records), list(validation)
+        note = f'given: {len(checks)} validation record{"s" if len(checks) > 1 else ""}'
+    else:
+        estimation, checks, note = split_records(records)
+        if len(records) < 2:
+            warnings.append('one record: the validation MAE is in-sample')
+    stages = ['segmenting', 'estimating the delay', 'fitting the static map',
+              'comparing map families on held-out experiments']
+    report('identify', 0, len(stages))
+    identified = _identify(estimation, settings,
+                           lambda name: report('identify', stages.index(name), len(stages)))
+    model = identified.model
+    report('evaluate', 0, 2)
+    scores = tuple(evaluate(checks, model))
+    report('evaluate', 1, 2)
+    words = max(1, settings.iterations)
+    done = [0]
+
+    def tick(_: str) -> None:
+        done[0] += 1
+        report('diagnose', done[0], len(DETECTORS) * words)
+    report('diagnose', 0, len(DETECTORS) * words)
+    diagnosis = diagnose(estimation, model, validation=checks, max_iterations=settings.iterations,
+                         progress=tick)
+    final = diagnosis.model
+    final_scores = tuple(evaluate(checks, final))
+    report('design', 0, 1)
+    design_model = _design_model(final, warnings)
+    poles = list(settings.poles) if settings.poles is not None else None
+    spec = design_from_model(design_model, control_period=settings.control_period, poles=poles)
+    stroke = _stroke(final, list(records) + list(checks))
+    check_settings = settings.check if settings.check is not None else CheckSettings(
+        dt=identified.sample_period)
+    designs: list[tuple[str, ...]] = []
+    check: LoopCheck | None = None
+    for attempt in range(REDESIGNS + 1):
+        designs.append(tuple(format_pole(p) for p in spec.poles))
+        report('closed-loop check', attempt, REDESIGNS + 1)
+        check = check_loop(final, spec, stroke, settings=check_settings)
+        if check.passed or attempt == REDESIGNS:
+            break
+        try:
+            slower = design_from_model(design_model, control_period=settings.control_period,
+                                       poles=slower_poles(_clean(spec.poles)))
+        except HydroSdpError as error:
+            warnings.append(f'no slower design could be made: {error}')
+            break
+        warnings.append(f'closed-loop check failed ({"; ".join(check.failures)}); designed '
+                        f'again with slower poles {", ".join(format_pole(p) for p in slower.poles)}')
+        spec = slower
+    assert check is not None  # the loop runs at least once
+    if not check.passed:
+        warnings.append('the controller still fails the closed-loop check: '
+                        + '; '.join(check.failures))
+    if not all(math.isfinite(s.model) for s in final_scores):
+        warnings.append('the final model diverges on a validation record')
+    return CalibrationResult(identified, note, tuple(estimation), tuple(checks), scores,
+                             final_scores, diagnosis, spec, check, tuple(designs), stroke,
+                             tuple(warnings))
