@@ -26,7 +26,7 @@ from hydro_sdp import __version__
 
 #: Command modules of hydro_sdp.cli, in the order of ``--help``.
 COMMANDS = ('simulate', 'import_csv', 'identify', 'evaluate', 'diagnose', 'design',
-            'closed_loop', 'demo', 'reindex')
+            'closed_loop', 'calibrate', 'demo', 'reindex')
 
 DESCRIPTION = """\
 Identify, control and diagnose hydraulic manipulator joints with state-dependent

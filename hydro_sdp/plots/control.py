@@ -8,13 +8,15 @@ from hydro_sdp.core.closed_loop import LoopTrace
 from hydro_sdp.core.idz import InverseDeadZone
 from hydro_sdp.core.model import JointModel
 from hydro_sdp.plots.figures import LIMIT, MEASURED, MODEL, new_figure
+from hydro_sdp.plots.units import command_unit_of, UNKNOWN_UNIT
 from matplotlib.figure import Figure
 import numpy as np
 
 
 def plot_idz(model: JointModel, idz: InverseDeadZone, control_period: float, *,
              u_limits: tuple[float, float] | None = None,
-             v_range: tuple[float, float] | None = None, command_unit: str = 'V') -> Figure:
+             v_range: tuple[float, float] | None = None,
+             command_unit: str | None = None) -> Figure:
     """
     IDZ approximation, as the paper's Fig. 6.
 
@@ -33,8 +35,8 @@ def plot_idz(model: JointModel, idz: InverseDeadZone, control_period: float, *,
         Limits of the controller's ``u``, drawn as dotted lines.
     v_range : tuple[float, float] or None
         Command range to draw; default: to where the model saturates (99 %).
-    command_unit : str
-        Unit of the command.
+    command_unit : str or None
+        Unit of the command; default: from the model's input range.
 
     Returns
     -------
@@ -68,7 +70,7 @@ def plot_idz(model: JointModel, idz: InverseDeadZone, control_period: float, *,
         ax.text(1.0, u_limits[1], ' u limit', transform=ax.get_yaxis_transform(),
                 color=LIMIT, fontsize=8, va='center', ha='left', clip_on=False)
     ax.axhline(0.0, color='black', linewidth=0.6)
-    ax.set_xlabel(f'steady command v ({command_unit})')
+    ax.set_xlabel(f'steady command v ({command_unit_of(model, command_unit)})')
     ax.set_ylabel(f'increment q (deg per {control_period:g} s sample)')
     ax.legend(loc='upper left', fontsize=8, frameon=False)
     figure.suptitle(f'IDZ approximation of joint {model.joint} '
@@ -78,7 +80,7 @@ def plot_idz(model: JointModel, idz: InverseDeadZone, control_period: float, *,
 
 
 def plot_closed_loop(traces: Sequence[LoopTrace], *, title: str = '',
-                     command_unit: str = 'V') -> Figure:
+                     command_unit: str | None = None) -> Figure:
     """
     Closed-loop response, as the paper's Fig. 7: angle, u and v against time.
 
@@ -88,8 +90,9 @@ def plot_closed_loop(traces: Sequence[LoopTrace], *, title: str = '',
         One or more joints' traces.
     title : str
         Figure title.
-    command_unit : str
-        Unit of the valve command.
+    command_unit : str or None
+        Unit of the valve command (default: ``input units``; see
+        :func:`~hydro_sdp.plots.units.command_unit_of` for a model's).
 
     Returns
     -------
@@ -118,14 +121,15 @@ def plot_closed_loop(traces: Sequence[LoopTrace], *, title: str = '',
     angle_ax.legend(loc='lower right', fontsize=8, frameon=False,
                     title='dashed: set-point', title_fontsize=8)
     u_ax.set_ylabel('PIP input u\n(deg/sample)')
-    v_ax.set_ylabel(f'valve v ({command_unit})')
+    v_ax.set_ylabel(f'valve v ({command_unit or UNKNOWN_UNIT})')
     v_ax.set_xlabel('time (s)')
     figure.suptitle(title or 'PIP-IDZ closed loop', fontsize=11)
     return figure
 
 
 def plot_recalibration(t: np.ndarray, angle: np.ndarray, setpoint: np.ndarray,
-                       command: np.ndarray, edges: np.ndarray, drift: float) -> Figure:
+                       command: np.ndarray, edges: np.ndarray, drift: float, *,
+                       command_unit: str = 'V') -> Figure:
     """
     Draw a loop whose dead-zone drifts and whose IDZ the identifier recalibrates.
 
@@ -136,11 +140,13 @@ def plot_recalibration(t: np.ndarray, angle: np.ndarray, setpoint: np.ndarray,
     angle, setpoint : numpy.ndarray
         Joint angle and set-point, degrees.
     command : numpy.ndarray
-        Valve command, V.
+        Valve command, input units.
     edges : numpy.ndarray
-        ``(samples, 2)`` IDZ edges the controller used, V.
+        ``(samples, 2)`` IDZ edges the controller used, input units.
     drift : float
         Time the plant's dead-zone moved, s.
+    command_unit : str
+        Unit of the command (the recalibration scenario runs the J2 joint, in V).
 
     Returns
     -------
@@ -154,15 +160,15 @@ def plot_recalibration(t: np.ndarray, angle: np.ndarray, setpoint: np.ndarray,
     angle_ax.set_ylabel('angle (deg)')
     angle_ax.legend(loc='upper right', fontsize=8, frameon=False)
     command_ax.plot(t, command, color=MODEL, linewidth=0.8)
-    command_ax.set_ylabel('valve v (V)')
+    command_ax.set_ylabel(f'valve v ({command_unit})')
     edge_ax.plot(t, edges[:, 0], color=MEASURED, linewidth=1.4, label='IDZ lower edge')
     edge_ax.plot(t, edges[:, 1], color=MODEL, linewidth=1.4, label='IDZ upper edge')
-    edge_ax.set_ylabel('IDZ edges (V)')
+    edge_ax.set_ylabel(f'IDZ edges ({command_unit})')
     edge_ax.set_xlabel('time (s)')
     edge_ax.legend(loc='center right', fontsize=8, frameon=False)
     for ax in (angle_ax, command_ax, edge_ax):
         ax.axvline(drift, color='black', linestyle=':', linewidth=1.0)
-    angle_ax.text(drift, 1.0, ' dead-zone narrows by 0.3 V', fontsize=8, va='top',
+    angle_ax.text(drift, 1.0, f' dead-zone narrows by 0.3 {command_unit}', fontsize=8, va='top',
                   transform=angle_ax.get_xaxis_transform())
     figure.suptitle('Wear, detected and recalibrated by the identifier node', fontsize=11)
     return figure

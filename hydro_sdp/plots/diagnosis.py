@@ -7,6 +7,7 @@ from typing import Sequence
 from hydro_sdp.core.arrays import FloatArray, IntArray
 from hydro_sdp.core.diagnosis.results import LedgerStep, Signature
 from hydro_sdp.plots.figures import MEASURED, MODEL, new_figure
+from hydro_sdp.plots.units import UNKNOWN_UNIT
 from matplotlib.figure import Figure
 import numpy as np
 
@@ -34,7 +35,7 @@ def _event_average(triggers: IntArray, values: FloatArray, span: int,
     return np.arange(span), np.mean(rows, axis=0)
 
 
-def plot_signature(signature: Signature) -> Figure:
+def plot_signature(signature: Signature, *, command_unit: str | None = None) -> Figure:
     """
     Draw the residual signature that named an effect, before and after adding it.
 
@@ -46,6 +47,9 @@ def plot_signature(signature: Signature) -> Figure:
     signature : Signature
         Residuals before and after, and what they are drawn against (from
         :attr:`hydro_sdp.core.diagnosis.Diagnosis.signature`).
+    command_unit : str or None
+        Unit of the command, added to the label when the residual is drawn
+        against it (default: ``input units``).
 
     Returns
     -------
@@ -65,7 +69,10 @@ def plot_signature(signature: Signature) -> Figure:
         for values, colour, name in curves:
             centres, means = _binned(signature.x, values / dt)
             ax.plot(centres, means, 'o-', color=colour, markersize=3, linewidth=1.2, label=name)
-    ax.set_xlabel(signature.label)
+    label = signature.label
+    if signature.feature == 'command':
+        label = f'{label} ({command_unit or UNKNOWN_UNIT})'
+    ax.set_xlabel(label)
     ax.axhline(0.0, color='black', linewidth=0.6)
     ax.set_ylabel('mean velocity residual (deg/s)')
     ax.legend(loc='best', fontsize=8, frameon=False)

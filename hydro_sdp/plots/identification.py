@@ -10,13 +10,14 @@ from hydro_sdp.core.model import JointModel
 from hydro_sdp.core.records import Record
 from hydro_sdp.plots.figures import (
     LIMIT, mark_limits, matplotlib_colormap, MEASURED, MODEL, new_figure)
+from hydro_sdp.plots.units import command_unit_of
 from matplotlib.figure import Figure
 import numpy as np
 
 
 def plot_record(record: Record, model: JointModel | None = None, *,
                 simulated: np.ndarray | None = None, title: str = '',
-                command_unit: str = 'V') -> Figure:
+                command_unit: str | None = None) -> Figure:
     """
     Angle (upper) and command (lower) against time, as the paper's Fig. 4.
 
@@ -30,8 +31,9 @@ def plot_record(record: Record, model: JointModel | None = None, *,
         Model response to overlay on the angle, degrees.
     title : str
         Figure title.
-    command_unit : str
-        Unit of the command, for the axis label.
+    command_unit : str or None
+        Unit of the command, for the axis label; default: from the model's input
+        range (:func:`~hydro_sdp.plots.units.command_unit_of`).
 
     Returns
     -------
@@ -48,7 +50,7 @@ def plot_record(record: Record, model: JointModel | None = None, *,
         angle_ax.legend(loc='upper right', fontsize=8, frameon=False)
     angle_ax.set_ylabel('joint angle y (deg)')
     command_ax.step(time, record.v, where='post', color=MEASURED, linewidth=0.9)
-    command_ax.set_ylabel(f'command v ({command_unit})')
+    command_ax.set_ylabel(f'command v ({command_unit_of(model, command_unit)})')
     command_ax.set_xlabel('time (s)')
     if model is not None:
         mark_limits(angle_ax, model.angle_limits, 'end stops')
@@ -62,7 +64,7 @@ def plot_record(record: Record, model: JointModel | None = None, *,
 
 
 def plot_velocity_map(model: JointModel, *, v_range: tuple[float, float] | None = None,
-                      title: str = '', command_unit: str = 'V',
+                      title: str = '', command_unit: str | None = None,
                       points: tuple[np.ndarray, np.ndarray] | None = None) -> Figure:
     """
     Angular velocity against steady command, as the paper's Fig. 3.
@@ -75,8 +77,8 @@ def plot_velocity_map(model: JointModel, *, v_range: tuple[float, float] | None 
         Command range; default: the input limits, or +-5 units.
     title : str
         Figure title.
-    command_unit : str
-        Unit of the command.
+    command_unit : str or None
+        Unit of the command; default: from the model's input range.
     points : tuple of numpy.ndarray or None
         Per-experiment ``(v, velocity)`` estimates to show as circles.
 
@@ -101,7 +103,7 @@ def plot_velocity_map(model: JointModel, *, v_range: tuple[float, float] | None 
     if saturation is not None:
         for speed in saturation:
             ax.axhline(speed, color=LIMIT, linestyle=':', linewidth=0.9)
-    ax.set_xlabel(f'steady command v ({command_unit})')
+    ax.set_xlabel(f'steady command v ({command_unit_of(model, command_unit)})')
     ax.set_ylabel('angular velocity (deg/s)')
     ax.legend(loc='center left', fontsize=8, frameon=False)
     figure.suptitle(title or f'velocity map of joint {model.joint}', fontsize=11)
@@ -154,7 +156,7 @@ def plot_step_responses(experiments: Sequence[Experiment], delay: int, dt: float
 
 
 def plot_gains(points: Sequence[LevelSpeed], model: JointModel, dt: float, *, rest: float = 0.0,
-               command_unit: str = 'V') -> Figure:
+               command_unit: str | None = None) -> Figure:
     """
     State-dependent gain against command, as the paper's Fig. 2.
 
@@ -168,8 +170,8 @@ def plot_gains(points: Sequence[LevelSpeed], model: JointModel, dt: float, *, re
         Sample period, s.
     rest : float
         Rest command.
-    command_unit : str
-        Unit of the command.
+    command_unit : str or None
+        Unit of the command; default: from the model's input range.
 
     Returns
     -------
@@ -187,7 +189,7 @@ def plot_gains(points: Sequence[LevelSpeed], model: JointModel, dt: float, *, re
     v = v[np.abs(v - rest) > 1e-9 * span]
     ax.plot(v, dt * model.rate(v) / (v - rest), color=MODEL, linewidth=1.8,
             label=f'{model.kind} model')
-    ax.set_xlabel(f'steady command v ({command_unit})')
+    ax.set_xlabel(f'steady command v ({command_unit_of(model, command_unit)})')
     ax.set_ylabel('b_tau (deg per sample per unit)')
     ax.legend(loc='upper left', fontsize=8, frameon=False)
     figure.suptitle(f'State-dependent gain of joint {model.joint} (West et al. 2018, Fig. 2)',

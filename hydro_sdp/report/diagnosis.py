@@ -6,10 +6,10 @@ from pathlib import Path
 
 from hydro_sdp.core.diagnosis import Diagnosis
 from hydro_sdp.files import atomic_write_text, dump_model
-from hydro_sdp.plots import plot_gap, plot_ledger, plot_signature, save_figure
+from hydro_sdp.plots import command_unit_of, plot_gap, plot_ledger, plot_signature, save_figure
 
 
-def write_report(folder: Path, result: Diagnosis) -> list[str]:
+def write_report(folder: Path, result: Diagnosis, *, command_unit: str | None = None) -> list[str]:
     """
     Write the figures and ``summary.md`` of a diagnosis.
 
@@ -19,6 +19,8 @@ def write_report(folder: Path, result: Diagnosis) -> list[str]:
         Report folder (created if missing).
     result : Diagnosis
         What :func:`hydro_sdp.core.diagnosis.diagnose` found, with its evidence.
+    command_unit : str or None
+        Unit of the command for the labels; default: from the model's input range.
 
     Returns
     -------
@@ -33,7 +35,9 @@ def write_report(folder: Path, result: Diagnosis) -> list[str]:
                            folder / 'gap.png'),
                save_figure(plot_ledger(result.mae_before, result.ledger), folder / 'ledger.png')]
     if result.signature is not None:
-        figures.append(save_figure(plot_signature(result.signature), folder / 'signature.png'))
+        unit = command_unit_of(result.model, command_unit)
+        figures.append(save_figure(plot_signature(result.signature, command_unit=unit),
+                                   folder / 'signature.png'))
     rows = [f'| {c.effect} | {"yes" if c.significant else "no"} | {100 * c.gain:.1f} | '
             f'{c.t:.1f} | {c.evidence} |' for c in result.candidates if c.applicable]
     ledger = [f'| {i} | {s.effect} | {s.mae_before:.4g} | {s.mae_after:.4g} |'

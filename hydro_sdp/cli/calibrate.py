@@ -1,0 +1,270 @@
+"""``hydro-sdp calibrate``: from a machine's recordings to a checked controller and a report."""
+
+from __future__ import annotations
+
+import argparse
+import math
+from pathlib import Path
+from typing import Any
+
+from hydro_sdp.bags import read_record, STORAGE_SUFFIXES
+from hydro_sdp.cli.common import (
+    add_bag_options, finite_float, json_number, Outcome, positive_float, table)
+from hydro_sdp.cli.design import complex_pole
+from hydro_sdp.cli.progress import ProgressBar
+from hydro_sdp.core.calibration import calibrate, CalibrationResult, CalibrationSettings
+from hydro_sdp.core.errors import ConfigurationError
+from hydro_sdp.core.records import Record
+from hydro_sdp.csv_logs import ANGLE_UNITS, read_csv_log
+from hydro_sdp.files import atomic_directory, atomic_write_text, save_controller, save_model
+from hydro_sdp.plots import command_unit_of
+from hydro_sdp.report.calibration import write_report
+import yaml
+
+HELP = 'identify, diagnose, design and check a joint in one go, with a report'
+DESCRIPTION = """\
+From a machine's recordings to a working controller, in one command:
+
+  1. identify the joint (map family chosen on held-out experiments);
+  2. evaluate it on the --validation recordings, or, without them, on whole
+     input recordings held out (every third one; the second of two); with one
+     recording the error is in-sample, and a warning says so;
+  3. diagnose what the model misses and add the named effects (valve lag, angle
+     factor...);
+  4. design the PIP-IDZ controller from that final model;
+  5. check it in closed loop on the final model, effects included: steps from
+     20 % of the stroke to 50 %, 80 %, 50 %, 20 % and a ramp. Every step must
+     settle into +-0.5 deg within 6 s plus its travel at a quarter of full speed,
+     overshoot at most 10 %, and no hold may end in a limit cycle; otherwise the
+     dominant poles move toward 1 and the controller is designed again (up to 4
+     times), and the warnings say so.
+
+Written to --out DIR, all at once (built beside it and renamed when complete;
+an existing non-empty DIR is refused unless --force, and replaced only at the
+end): model.yaml, controller.yaml, params.yaml (a ROS 2 parameter file for
+pip_controller, hydro_plant and sdp_identifier with these files' absolute
+paths; only values that differ from the nodes' defaults) and report/
+(summary.md, velocity map with the level speeds, evaluation, closed-loop
+check, and diagnosis/ with the residual signature and the gap).
+
+Inputs are bags or CSV logs: a plain file that is not a .db3 or .mcap storage
+file is read as a CSV log (one row per sample; the command on a row acts until
+the next row; see `hydro-sdp import --help`), and needs --joint, --time,
+--angle and --command (column names or 0-based indices).
+
+Labels give the command in the model's own unit: % for input limits [0, 100]
+or [-100, 100], V for [-10, 10] or [0, 10], otherwise --command-unit.
+
+examples:
+  hydro-sdp calibrate steps_bag random_1 --validation random_2 --out j2_calibrated
+  hydro-sdp calibrate run1.csv run2.csv run3.csv --joint arm --time t \\
+      --angle arm_deg --command duty --input-limits -100 100 --out arm
+  ros2 run hydro_sdp controller_node --ros-args --params-file arm/params.yaml
+"""
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    """Add the ``calibrate`` command to the command line."""
+    parser = subparsers.add_parser('calibrate', help=HELP, description=DESCRIPTION,
+                                   formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument('inputs', nargs='+', metavar='BAG_OR_CSV',
+                        help='recordings of one joint: bags or CSV logs')
+    parser.add_argument('--validation', nargs='+', metavar='BAG_OR_CSV', default=[],
+                        help='held-out recordings for the MAE (default: whole input '
+                             'recordings held out)')
+    add_bag_options(parser)
+    parser.add_argument('--rest', type=finite_float, metavar='V',
+                        help='command that holds the joint still (default: found by identify)')
+    parser.add_argument('--input-limits', nargs=2, type=finite_float, metavar=('LOW', 'HIGH'),
+                        help='command range of the valve, written to the model')
+    parser.add_argument('--angle-limits', nargs=2, type=finite_float, metavar=('LOW', 'HIGH'),
+                        help='known end stops, deg (default: those seen in the data)')
+    parser.add_argument('--control-period', type=positive_float, default=0.05,
+                        help='control period, s (default: 0.05)')
+    parser.add_argument('--poles', nargs='+', type=complex_pole, metavar='P',
+                        help='closed-loop poles to start from (default: LQ design)')
+    parser.add_argument('--iterations', type=int, default=4,
+                        help='most effects the diagnosis adds (default: 4)')
+    parser.add_argument('--command-unit',
+                        help='unit of the command in labels (default: from the input limits)')
+    parser.add_argument('--out', required=True, metavar='DIR', help='folder to write')
+    parser.add_argument('--force', action='store_true',
+                        help='replace DIR if it exists and is not empty')
+    csv = parser.add_argument_group('CSV logs')
+    csv.add_argument('--time', metavar='COL', help='time column, s')
+    csv.add_argument('--angle', metavar='COL', help='angle column')
+    csv.add_argument('--angle-unit', choices=ANGLE_UNITS, default='deg',
+                     help='unit of the angle column (default: deg)')
+    csv.add_argument('--command', metavar='COL', help='command column')
+    csv.add_argument('--command-negative', metavar='COL',
+                     help='column subtracted from --command (one valve per direction)')
+    csv.add_argument('--delimiter', default=',', help="cell delimiter (default: ',')")
+    parser.set_defaults(run=run)
+
+
+def is_csv(path: str) -> bool:
+    """Whether an input is read as a CSV log: a plain file that is no bag storage file."""
+    source = Path(path)
+    return (source.is_file() and source.suffix not in STORAGE_SUFFIXES
+            and source.name != 'metadata.yaml')
+
+
+def read_inputs(paths: list[str], args: argparse.Namespace, label: str) -> list[Record]:
+    """Read bags and CSV logs as records of one joint, with a progress bar."""
+    records = []
+    with ProgressBar(label, len(paths)) as bar:
+        for done, path in enumerate(paths, start=1):
+            if is_csv(path):
+                missing = [f'--{name}' for name in ('joint', 'time', 'angle', 'command')
+                           if not getattr(args, name)]
+                if missing:
+                    raise ConfigurationError(f'{path} is read as a CSV log and needs '
+                                             f'{", ".join(missing)}')
+                records.append(read_csv_log(
+                    path, joint=args.joint, time=args.time, angle=args.angle,
+                    command=args.command, command_negative=args.command_negative,
+                    angle_unit=args.angle_unit, delimiter=args.delimiter).record)
+            else:
+                records.append(read_record(path, args.joint, args.command_topic))
+            bar.update(done)
+    return records
+
+
+def check_out(out: Path, force: bool) -> None:
+    """Refuse an existing non-empty output folder unless ``force``."""
+    if out.exists() and not out.is_dir():
+        raise ConfigurationError(f'{out} exists and is not a folder')
+    if out.is_dir() and any(out.iterdir()) and not force:
+        raise ConfigurationError(f'{out} exists and is not empty; use --force to replace it')
+
+
+def ros_parameters(result: CalibrationResult, folder: Path) -> dict[str, Any]:
+    """
+    Return the ROS 2 parameter file for this joint's nodes.
+
+    Parameters
+    ----------
+    result : CalibrationResult
+        The calibration.
+    folder : Path
+        Final (absolute) output folder, where model.yaml and controller.yaml live.
+
+    Returns
+    -------
+    dict
+        ``/**/pip_controller``, ``/**/hydro_plant`` and, for an ``sdp`` model,
+        ``/**/sdp_identifier``, with the values that differ from the defaults.
+
+    """
+    model_file = str(folder / 'model.yaml')
+    dt = result.identification.sample_period
+    plant: dict[str, Any] = {'model_file': model_file}
+    identifier: dict[str, Any] = {'model_file': model_file}
+    if not math.isclose(dt, 0.01):
+        plant['sample_period'] = identifier['sample_period'] = dt
+    noise = result.identification.segmentation.noise_std
+    if math.isfinite(noise) and noise > 1e-6 and not math.isclose(noise, 0.03, rel_tol=0.05):
+        identifier['noise_std'] = float(f'{noise:.3g}')
+    if not math.isclose(result.spec.control_period, 0.05):
+        identifier['control_period'] = result.spec.control_period
+    parameters = {
+        '/**/pip_controller': {'ros__parameters': {
+            'model_file': model_file, 'controller_file': str(folder / 'controller.yaml')}},
+        '/**/hydro_plant': {'ros__parameters': plant}}
+    if result.model.kind == 'sdp':
+        parameters['/**/sdp_identifier'] = {'ros__parameters': identifier}
+    return parameters
+
+
+def describe(result: CalibrationResult, folder: Path) -> dict[str, Any]:
+    """Return the ``--json`` object of a calibration written to ``folder``."""
+    check = result.check
+    warnings = list(result.warnings)
+    if result.model.kind != 'sdp':
+        warnings.append(f'params.yaml has no sdp_identifier: the online identifier tracks '
+                        f'sdp models, not {result.model.kind}')
+    return {
+        'model': str(folder / 'model.yaml'),
+        'controller': str(folder / 'controller.yaml'),
+        'params': str(folder / 'params.yaml'),
+        'report': str(folder / 'report'),
+        'joint': result.model.joint,
+        'kind': result.model.kind,
+        'effect': result.diagnosis.effect,
+        'effects': [step.effect for step in result.diagnosis.ledger],
+        'mae': {'identified': json_number(result.mae_identified),
+                'final': json_number(result.mae_final), 'validation': result.validation_note},
+        'closed_loop': {
+            'passed': check.passed,
+            'step_size': [m.size for m in check.steps],
+            'settling_time': [json_number(m.settling_time) for m in check.steps],
+            'overshoot': [m.overshoot for m in check.steps],
+            'ramp_error': check.ramp_error,
+            'ramp_settling': json_number(check.ramp_settling),
+            'limit_cycles': check.cycles,
+            'designs': [list(poles) for poles in result.designs]},
+        'warnings': warnings,
+    }
+
+
+class _StageBars:
+    """One progress bar per stage of the calibration."""
+
+    def __init__(self) -> None:
+        self.stage = ''
+        self.bar: ProgressBar | None = None
+
+    def __call__(self, stage: str, done: float, total: float) -> None:
+        if stage != self.stage:
+            self.close()
+            self.stage, self.bar = stage, ProgressBar(f'calibrate: {stage}', total)
+        if self.bar is not None:
+            self.bar.update(done)
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+            self.bar = None
+
+
+def run(args: argparse.Namespace) -> Outcome:
+    """Run ``calibrate``."""
+    out = Path(args.out).resolve()
+    check_out(out, args.force)
+    if args.iterations < 0:
+        raise ConfigurationError(f'--iterations must be >= 0, got {args.iterations}')
+    records = read_inputs(args.inputs, args, 'reading recordings')
+    validation = read_inputs(args.validation, args, 'reading validation recordings') \
+        if args.validation else []
+    settings = CalibrationSettings(
+        rest=args.rest, input_limits=tuple(args.input_limits) if args.input_limits else None,
+        angle_limits=tuple(args.angle_limits) if args.angle_limits else None,
+        control_period=args.control_period,
+        poles=tuple(args.poles) if args.poles else None, iterations=args.iterations)
+    bars = _StageBars()
+    try:
+        result = calibrate(records, validation or None, settings, on_stage=bars)
+    finally:
+        bars.close()
+    unit = command_unit_of(result.model, args.command_unit)
+    with atomic_directory(out) as building:
+        building.mkdir()
+        save_model(result.model, building / 'model.yaml')
+        save_controller(result.spec, building / 'controller.yaml')
+        atomic_write_text(building / 'params.yaml', yaml.safe_dump(
+            ros_parameters(result, out), sort_keys=False, default_flow_style=False))
+        write_report(building / 'report', result, unit)
+    payload = describe(result, out)
+    rows = [[f'{m.size:+.2f}', 'never' if not math.isfinite(m.settling_time)
+             else f'{m.settling_time:.2f}', f'{m.overshoot:.1f}']
+            for m in result.check.steps]
+    lines = [f'joint {result.model.joint}: {result.model.kind} model, named effect '
+             f'{result.diagnosis.effect}; validation MAE {result.mae_identified:.4g} -> '
+             f'{result.mae_final:.4g} deg ({result.validation_note})',
+             f'closed-loop check on the final model: '
+             f'{"passed" if result.check.passed else "FAILED"}']
+    lines += table(rows, ['step (deg)', 'settling (s)', 'overshoot (%)'])
+    lines += [f'warning: {w}' for w in payload['warnings']]
+    lines += [f'wrote {payload[key]}' for key in ('model', 'controller', 'params')]
+    lines.append(f'report: {out / "report" / "summary.md"}')
+    return Outcome(payload, lines)

@@ -1,0 +1,145 @@
+"""The calibration report: velocity map, evaluation, diagnosis, closed-loop check, summary.md."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+from hydro_sdp.core.calibration import CalibrationResult
+from hydro_sdp.core.evaluate import simulated_angles
+from hydro_sdp.files import atomic_write_text, dump_model
+from hydro_sdp.plots import (
+    plot_closed_loop, plot_record, plot_velocity_map, save_figure)
+from hydro_sdp.report.diagnosis import write_report as write_diagnosis
+
+#: Figures of the report, by file name.
+FIGURES = ('velocity_map.png', 'evaluation.png', 'closed_loop.png', 'ramp.png')
+
+
+def _seconds(value: float) -> str:
+    return 'never' if not math.isfinite(value) else f'{value:.2f}'
+
+
+def _velocity_map(folder: Path, result: CalibrationResult, unit: str) -> Path:
+    identified = result.identification
+    rest = identified.segmentation.rest
+    moving = [p for p in identified.points if p.level != rest]
+    levels = [p.level for p in moving] or [rest - 1.0, rest + 1.0]
+    span = max(max(levels) - min(levels), 1e-6)
+    return save_figure(plot_velocity_map(
+        result.model, v_range=(min(levels) - 0.1 * span, max(levels) + 0.1 * span),
+        points=([p.level for p in moving], [p.speed for p in moving]), command_unit=unit,
+        title=f'Velocity map of joint {result.model.joint} and the level speeds'),
+        folder / 'velocity_map.png')
+
+
+def summary_lines(result: CalibrationResult, unit: str, figures: list[str]) -> list[str]:
+    """
+    Return the lines of ``summary.md``.
+
+    Parameters
+    ----------
+    result : CalibrationResult
+        The calibration.
+    unit : str
+        Unit of the command.
+    figures : list of str
+        Figure paths relative to the report folder.
+
+    Returns
+    -------
+    list of str
+        Markdown lines.
+
+    """
+    model, spec, check = result.model, result.spec, result.check
+    identified = result.identification
+    diagnosis = result.diagnosis
+    segmentation = identified.segmentation
+    dead_zone = model.dead_zone
+    steps = [f'| {m.size:+.2f} | {_seconds(m.settling_time)} | {bound:.1f} | '
+             f'{m.overshoot:.1f} | {m.steady_error:+.3f} |'
+             for m, bound in zip(check.steps, check.bounds)]
+    ledger = [f'| {i} | {s.effect} | {s.mae_before:.4g} | {s.mae_after:.4g} |'
+              for i, s in enumerate(diagnosis.ledger, start=1)]
+    designs = [f'{i}. {", ".join(poles)}' for i, poles in enumerate(result.designs, start=1)]
+    return [
+        f'# Calibration of joint `{model.joint}`', '',
+        f'Model `{model.kind}` with delay {model.delay:g} s'
+        + (f', dead-zone [{dead_zone[0]:.4g}, {dead_zone[1]:.4g}] {unit}' if dead_zone else '')
+        + f'; named effect **{diagnosis.effect}**; controller at {spec.control_period:g} s; '
+        f'closed-loop check **{"passed" if check.passed else "FAILED"}**.', '',
+        '## Warnings', '', *([f'- {w}' for w in result.warnings] or ['none']), '',
+        '## Identification', '',
+        f'{len(result.estimation)} record(s): {len(segmentation.experiments)} experiments '
+        f'({segmentation.steps} steps, {segmentation.runs} runs), {len(segmentation.dropped)} '
+        f'segments dropped, rest command {segmentation.rest:g} {unit}, sample period '
+        f'{identified.sample_period:g} s, noise {segmentation.noise_std:.3g} deg. Delay '
+        f'{identified.delay.samples} samples. Map family chosen on held-out experiments:', '',
+        '| kind | held-out MAE (deg) |', '|---|---|',
+        *[f'| {s.kind} | {s.mae:.4g} |' for s in identified.comparison], '',
+        '## Evaluation', '',
+        f'Validation records ({result.validation_note}): mean per-record simulation MAE '
+        f'{result.mae_identified:.4g} deg for the identified model, {result.mae_final:.4g} deg '
+        'for the final model (the diagnosis keeps an effect only if this MAE shrinks, so '
+        'the final figure is not independent of them).', '',
+        '## Diagnosis', '',
+        '| step | effect | MAE before (deg) | MAE after (deg) |', '|---|---|---|---|',
+        *(ledger or ['| - | none | - | - |']), '',
+        'The full discrepancy report is in `diagnosis/summary.md`.', '',
+        '## Controller and closed-loop check', '',
+        'Designs tried (closed-loop poles, first to last):', '', *designs, '',
+        f'The controller runs on the final model, with its effects, from 20 % of the stroke '
+        f'[{result.stroke[0]:.4g}, {result.stroke[1]:.4g}] deg to 50 %, 80 %, 50 % and 20 %, '
+        'then along a ramp from 20 % to 80 % at a quarter of full speed. Settling into '
+        f'+-0.5 deg within the bound (6 s plus the travel at a quarter of full speed), '
+        'overshoot at most 10 %, no limit cycle.', '',
+        '| step (deg) | settling (s) | bound (s) | overshoot (%) | steady error (deg) |',
+        '|---|---|---|---|---|', *steps, '',
+        f'Ramp: largest tracking error {check.ramp_error:.3g} deg, settled '
+        f'{_seconds(check.ramp_settling)} s after its end; holds ending in a limit cycle: '
+        f'{check.cycles}.', '',
+        *[f'- {failure}' for failure in check.failures], '',
+        '## Figures', '', *[f'![{Path(f).stem}]({f})' for f in figures], '',
+        '## Final model', '', '```yaml', dump_model(model).rstrip(), '```', '']
+
+
+def write_report(folder: Path, result: CalibrationResult, unit: str) -> list[str]:
+    """
+    Write the figures and ``summary.md`` of a calibration.
+
+    Parameters
+    ----------
+    folder : Path
+        Report folder (created if missing).
+    result : CalibrationResult
+        What :func:`hydro_sdp.core.calibration.calibrate` found.
+    unit : str
+        Unit of the command, for every label.
+
+    Returns
+    -------
+    list of str
+        The paths written.
+
+    """
+    record = result.validation[0]
+    written = [
+        _velocity_map(folder, result, unit),
+        save_figure(plot_record(record, result.model,
+                                simulated=simulated_angles(result.model, record),
+                                command_unit=unit,
+                                title=f'Final model on a validation record ({record.source or "first"})'),
+                    folder / 'evaluation.png'),
+        save_figure(plot_closed_loop([result.check.steps_trace], command_unit=unit,
+                                     title='Closed-loop check: steps across the stroke '
+                                           '(final model)'), folder / 'closed_loop.png'),
+        save_figure(plot_closed_loop([result.check.ramp_trace], command_unit=unit,
+                                     title='Closed-loop check: ramp (final model)'),
+                    folder / 'ramp.png')]
+    diagnosis = write_diagnosis(folder / 'diagnosis', result.diagnosis, command_unit=unit)
+    figures = [f'{Path(p).name}' for p in written] + [
+        f'diagnosis/{Path(p).name}' for p in diagnosis if p.endswith('.png')]
+    summary = atomic_write_text(folder / 'summary.md',
+                                '\n'.join(summary_lines(result, unit, figures)))
+    return [str(p) for p in written] + diagnosis + [str(summary)]
