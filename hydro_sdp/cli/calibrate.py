@@ -82,7 +82,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument('--control-period', type=positive_float, default=0.05,
                         help='control period, s (default: 0.05)')
     parser.add_argument('--poles', nargs='+', type=complex_pole, metavar='P',
-                        help='closed-loop poles to start from (default: LQ design)')
+                        help='closed-loop poles to start from, the dominant ones first; '
+                             'the rest of the 1 + delay poles are 0 (default: LQ design)')
     parser.add_argument('--iterations', type=int, default=4,
                         help='most effects the diagnosis adds (default: 4)')
     parser.add_argument('--command-unit',

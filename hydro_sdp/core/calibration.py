@@ -24,7 +24,7 @@ from hydro_sdp.core.diagnosis import DETECTORS, diagnose, Diagnosis
 from hydro_sdp.core.errors import ConfigurationError, DataError, HydroSdpError
 from hydro_sdp.core.evaluate import evaluate, RecordScore, sdp_dz_benchmark
 from hydro_sdp.core.identify import Identification, identify
-from hydro_sdp.core.loop_check import CheckSettings, check_loop, LoopCheck, slower_poles
+from hydro_sdp.core.loop_check import check_loop, CheckSettings, LoopCheck, slower_poles
 from hydro_sdp.core.model import JointModel
 from hydro_sdp.core.records import Record
 from hydro_sdp.core.static_maps import SdpDzMap, SdpMap
@@ -55,7 +55,9 @@ class CalibrationSettings:
     control_period : float
         Control period, s.
     poles : tuple[complex, ...] or None
-        Closed-loop poles to start from (default: the LQ design).
+        Closed-loop poles to start from (default: the LQ design); fewer than the
+        design needs (``1 +`` the delay in control samples) are completed with
+        poles at 0.
     iterations : int
         Most effects the diagnosis adds.
     check : CheckSettings or None
@@ -118,7 +120,7 @@ class CalibrationResult:
 
     @property
     def model(self) -> JointModel:
-        """The final model: identified, with the named effects."""
+        """Return the final model: identified, with the named effects."""
         return self.diagnosis.model
 
     @property
@@ -258,8 +260,12 @@ def calibrate(records: Sequence[Record], validation: Sequence[Record] | None = N
     final_scores = tuple(evaluate(checks, final))
     report('design', 0, 1)
     design_model = _design_model(final, warnings)
-    poles = list(settings.poles) if settings.poles is not None else None
-    spec = design_from_model(design_model, control_period=settings.control_period, poles=poles)
+    spec = design_from_model(design_model, control_period=settings.control_period)
+    if settings.poles is not None:
+        # The number of poles depends on the delay found: the rest are deadbeat (at 0).
+        poles = list(settings.poles) + [0j] * max(0, len(spec.poles) - len(settings.poles))
+        spec = design_from_model(design_model, control_period=settings.control_period,
+                                 poles=poles)
     stroke = _stroke(final, list(records) + list(checks))
     check_settings = settings.check if settings.check is not None else CheckSettings(
         dt=identified.sample_period)
@@ -273,12 +279,13 @@ def calibrate(records: Sequence[Record], validation: Sequence[Record] | None = N
             break
         try:
             slower = design_from_model(design_model, control_period=settings.control_period,
-                                       poles=slower_poles(_clean(spec.poles)))
+                                       poles=slower_poles(_clean(list(spec.poles))))
         except HydroSdpError as error:
             warnings.append(f'no slower design could be made: {error}')
             break
+        listed = ', '.join(format_pole(p) for p in slower.poles)
         warnings.append(f'closed-loop check failed ({"; ".join(check.failures)}); designed '
-                        f'again with slower poles {", ".join(format_pole(p) for p in slower.poles)}')
+                        f'again with slower poles {listed}')
         spec = slower
     assert check is not None  # the loop runs at least once
     if not check.passed:

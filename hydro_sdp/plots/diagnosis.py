@@ -7,7 +7,6 @@ from typing import Sequence
 from hydro_sdp.core.arrays import FloatArray, IntArray
 from hydro_sdp.core.diagnosis.results import LedgerStep, Signature
 from hydro_sdp.plots.figures import MEASURED, MODEL, new_figure
-from hydro_sdp.plots.units import UNKNOWN_UNIT
 from matplotlib.figure import Figure
 import numpy as np
 
@@ -49,7 +48,7 @@ def plot_signature(signature: Signature, *, command_unit: str | None = None) -> 
         :attr:`hydro_sdp.core.diagnosis.Diagnosis.signature`).
     command_unit : str or None
         Unit of the command, added to the label when the residual is drawn
-        against it (default: ``input units``).
+        against it (default: none added).
 
     Returns
     -------
@@ -70,8 +69,8 @@ def plot_signature(signature: Signature, *, command_unit: str | None = None) -> 
             centres, means = _binned(signature.x, values / dt)
             ax.plot(centres, means, 'o-', color=colour, markersize=3, linewidth=1.2, label=name)
     label = signature.label
-    if signature.feature == 'command':
-        label = f'{label} ({command_unit or UNKNOWN_UNIT})'
+    if signature.feature == 'command' and command_unit:
+        label = f'{label} ({command_unit})'
     ax.set_xlabel(label)
     ax.axhline(0.0, color='black', linewidth=0.6)
     ax.set_ylabel('mean velocity residual (deg/s)')

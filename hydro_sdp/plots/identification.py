@@ -13,6 +13,7 @@ from hydro_sdp.plots.figures import (
 from hydro_sdp.plots.units import command_unit_of
 from matplotlib.figure import Figure
 import numpy as np
+from numpy.typing import ArrayLike
 
 
 def plot_record(record: Record, model: JointModel | None = None, *,
@@ -65,7 +66,7 @@ def plot_record(record: Record, model: JointModel | None = None, *,
 
 def plot_velocity_map(model: JointModel, *, v_range: tuple[float, float] | None = None,
                       title: str = '', command_unit: str | None = None,
-                      points: tuple[np.ndarray, np.ndarray] | None = None) -> Figure:
+                      points: tuple[ArrayLike, ArrayLike] | None = None) -> Figure:
     """
     Angular velocity against steady command, as the paper's Fig. 3.
 
@@ -79,7 +80,7 @@ def plot_velocity_map(model: JointModel, *, v_range: tuple[float, float] | None 
         Figure title.
     command_unit : str or None
         Unit of the command; default: from the model's input range.
-    points : tuple of numpy.ndarray or None
+    points : tuple of array_like or None
         Per-experiment ``(v, velocity)`` estimates to show as circles.
 
     Returns

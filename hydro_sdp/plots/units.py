@@ -20,7 +20,7 @@ UNKNOWN_UNIT = 'input units'
 
 
 def command_unit_of(model: JointModel | tuple[float, float] | None,
-                 given: str | None = None) -> str:
+                    given: str | None = None) -> str:
     """
     Return the label of a joint's command unit.
 

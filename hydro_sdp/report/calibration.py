@@ -11,6 +11,7 @@ from hydro_sdp.files import atomic_write_text, dump_model
 from hydro_sdp.plots import (
     plot_closed_loop, plot_record, plot_velocity_map, save_figure)
 from hydro_sdp.report.diagnosis import write_report as write_diagnosis
+import numpy as np
 
 #: Figures of the report, by file name.
 FIGURES = ('velocity_map.png', 'evaluation.png', 'closed_loop.png', 'ramp.png')
@@ -28,7 +29,8 @@ def _velocity_map(folder: Path, result: CalibrationResult, unit: str) -> Path:
     span = max(max(levels) - min(levels), 1e-6)
     return save_figure(plot_velocity_map(
         result.model, v_range=(min(levels) - 0.1 * span, max(levels) + 0.1 * span),
-        points=([p.level for p in moving], [p.speed for p in moving]), command_unit=unit,
+        points=(np.array([p.level for p in moving]), np.array([p.speed for p in moving])),
+        command_unit=unit,
         title=f'Velocity map of joint {result.model.joint} and the level speeds'),
         folder / 'velocity_map.png')
 
@@ -124,12 +126,13 @@ def write_report(folder: Path, result: CalibrationResult, unit: str) -> list[str
 
     """
     record = result.validation[0]
+    name = record.source or 'first'
     written = [
         _velocity_map(folder, result, unit),
         save_figure(plot_record(record, result.model,
                                 simulated=simulated_angles(result.model, record),
                                 command_unit=unit,
-                                title=f'Final model on a validation record ({record.source or "first"})'),
+                                title=f'Final model on a validation record ({name})'),
                     folder / 'evaluation.png'),
         save_figure(plot_closed_loop([result.check.steps_trace], command_unit=unit,
                                      title='Closed-loop check: steps across the stroke '
