@@ -1,19 +1,24 @@
 """hydro-sdp calibrate: from recordings of a lagged joint to a controller that holds on it."""
 
+from contextlib import redirect_stdout
+from dataclasses import replace
+import io
 import json
 from pathlib import Path
 
 from hydro_sdp.bags import write_bag
 from hydro_sdp.cli.calibrate import read_inputs
 from hydro_sdp.cli.main import build_parser, main
-from hydro_sdp.core.calibration import calibrate, CalibrationSettings, split_records
+from hydro_sdp.core.calibration import (
+    calibrate, CalibrationSettings, chord_map, split_records)
 from hydro_sdp.core.closed_loop import LoopJoint, run_closed_loop, step_metrics, step_setpoints
-from hydro_sdp.core.controller_spec import design_from_model
+from hydro_sdp.core.controller_spec import chord_commands, design_from_model
 from hydro_sdp.core.diagnosis.results import Signature
 from hydro_sdp.core.effects import ValveLag
 from hydro_sdp.core.experiment_records import experiment_record
 from hydro_sdp.core.loop_check import check_loop, slower_poles, stroke_levels
 from hydro_sdp.core.records import Record
+from hydro_sdp.core.static_maps import linearise, PwlMap
 from hydro_sdp.files import load_controller, load_model, load_yaml
 from hydro_sdp.plots import (
     command_unit_of, plot_closed_loop, plot_record, plot_signature, plot_velocity_map)
@@ -52,14 +57,22 @@ def bags(records, tmp_path_factory):
             for name, record in zip(('steps', 'random_1', 'random_2'), records)]
 
 
+@pytest.fixture(scope='module')
+def calibrated(bags, tmp_path_factory):
+    """Run calibrate on the bags; return the output folder and the JSON object."""
+    out = tmp_path_factory.mktemp('calibrated') / 'arm'
+    stdout = io.StringIO()
+    with redirect_stdout(stdout):
+        code = main(['calibrate', bags[0], bags[1], '--validation', bags[2],
+                     '--input-limits', '-10', '10', '--out', str(out), '--json'])
+    assert code == 0
+    return out, json.loads(stdout.getvalue())
+
+
 @pytest.mark.slow
 def test_calibrate_names_the_lag_and_its_controller_holds_on_the_true_joint(
-        bags, truth, tmp_path, capsys):
-    out = tmp_path / 'arm'
-    code, stdout, err = run(capsys, 'calibrate', bags[0], bags[1], '--validation', bags[2],
-                            '--input-limits', -10, 10, '--out', out, '--json')
-    assert code == 0, err
-    payload = json.loads(stdout)
+        calibrated, bags, truth, capsys):
+    out, payload = calibrated
     assert set(payload) >= {'model', 'controller', 'params', 'report', 'effect', 'mae',
                             'closed_loop', 'warnings'}
     assert payload['effect'] == 'valve_lag'
@@ -95,12 +108,38 @@ def test_calibrate_names_the_lag_and_its_controller_holds_on_the_true_joint(
         assert (report / name).is_file(), name
     summary = (report / 'summary.md').read_text()
     assert 'valve_lag' in summary and 'dead-zone [' in summary and '] V;' in summary
-    assert sorted(p.name for p in tmp_path.iterdir()) == ['arm']  # no temporary left
+    assert sorted(p.name for p in out.parent.iterdir()) == ['arm']  # no temporary left
     # A second run into the same folder is refused, and leaves it as it was.
     before = sorted(p.name for p in out.iterdir())
     code, _, err = run(capsys, 'calibrate', bags[0], '--out', out)
     assert code == 2 and 'use --force' in err and err.count('\n') == 1
     assert sorted(p.name for p in out.iterdir()) == before
+
+
+@pytest.mark.slow
+def test_csv_logs_calibrate_as_their_bags_do(records, calibrated, tmp_path, capsys):
+    paths = []
+    for name, record in zip(('steps', 'random_1', 'random_2'), records):
+        # The logger's command on row k acts after it: it is the record's v_{k+1}.
+        command = np.r_[record.v[1:], record.v[-1]]
+        rows = ['time,angle_deg,duty'] + [
+            f'{t!r},{y!r},{v!r}'
+            for t, y, v in zip(record.t.tolist(), record.y.tolist(), command.tolist())]
+        path = tmp_path / f'{name}.csv'
+        path.write_text('\n'.join(rows) + '\n')
+        paths.append(path)
+    code, stdout, err = run(capsys, 'calibrate', paths[0], paths[1], '--validation', paths[2],
+                            '--joint', 'j2', '--time', 'time', '--angle', 'angle_deg',
+                            '--command', 'duty', '--input-limits', -10, 10,
+                            '--out', tmp_path / 'from_csv', '--json')
+    assert code == 0, err
+    payload = json.loads(stdout)
+    reference = calibrated[1]
+    assert payload['effect'] == reference['effect'] == 'valve_lag'
+    assert payload['mae']['final'] == pytest.approx(reference['mae']['final'], rel=1e-3)
+    model, expected = load_model(payload['model']), load_model(reference['model'])
+    assert model.delay == expected.delay and model.kind == expected.kind
+    assert model.dead_zone == pytest.approx(expected.dead_zone, rel=1e-3)
 
 
 @pytest.mark.slow
@@ -201,3 +240,16 @@ def test_figures_label_the_command_in_the_models_unit(j2):
     trace = run_closed_loop([LoopJoint(j2, spec.controller(), np.full(20, 1.0), 0.0)],
                             dt=0.01, control_period=0.05)
     assert plot_closed_loop(trace, command_unit='%').axes[-1].get_ylabel() == 'valve v (%)'
+
+
+def test_the_idz_of_any_map_inverts_its_chords(j2):
+    pwl = replace(j2, static_map=PwlMap(knots=(-10.0, -2.0, 2.0, 10.0),
+                                        speeds=(-24.0, 0.0, 0.0, 30.0)), input_limits=None)
+    chord = chord_map(pwl, (-10.0, 10.0))
+    assert chord.dead_zone == pytest.approx((-2.0, 2.0), abs=0.02)
+    assert chord.slope == pytest.approx((3.0, 3.75), rel=0.01)
+    # On an sdp map the chords are those `design` inverts.
+    chord = chord_map(j2, (-10.0, 10.0))
+    expected = linearise(j2.static_map, *chord_commands(j2.static_map))
+    assert chord.dead_zone == pytest.approx(j2.dead_zone, abs=0.02)
+    assert chord.slope == pytest.approx(expected.slope, rel=0.01)

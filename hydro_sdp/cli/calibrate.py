@@ -37,7 +37,12 @@ From a machine's recordings to a working controller, in one command:
      settle into +-0.5 deg within 6 s plus its travel at a quarter of full speed,
      overshoot at most 10 %, and no hold may end in a limit cycle; otherwise the
      dominant poles move toward 1 and the controller is designed again (up to 4
-     times), and the warnings say so.
+     times), and the warnings say so. If no design passes, the last one is
+     written, the check reads FAILED and the warnings give every failure.
+
+A pwl or poly map has no dead-zone of its own: the IDZ then inverts chords of
+the map (edges where the speed leaves zero, chords to two thirds of the speed
+at the largest command measured), and a warning gives them.
 
 Written to --out DIR, all at once (built beside it and renamed when complete;
 an existing non-empty DIR is refused unless --force, and replaced only at the

@@ -19,15 +19,17 @@ import inspect
 import math
 from typing import Any, Callable, Sequence
 
-from hydro_sdp.core.controller_spec import ControllerSpec, design_from_model, format_pole
+from hydro_sdp.core.controller_spec import (
+    CHORD_SPEED_FRACTION, ControllerSpec, design_from_model, format_pole)
 from hydro_sdp.core.diagnosis import DETECTORS, diagnose, Diagnosis
 from hydro_sdp.core.errors import ConfigurationError, DataError, HydroSdpError
-from hydro_sdp.core.evaluate import evaluate, RecordScore, sdp_dz_benchmark
+from hydro_sdp.core.evaluate import evaluate, RecordScore
 from hydro_sdp.core.identify import Identification, identify
 from hydro_sdp.core.loop_check import check_loop, CheckSettings, LoopCheck, slower_poles
 from hydro_sdp.core.model import JointModel
+from hydro_sdp.core.programs import rest_command
 from hydro_sdp.core.records import Record
-from hydro_sdp.core.static_maps import SdpDzMap, SdpMap
+from hydro_sdp.core.static_maps import LinearMap, SdpDzMap, SdpMap
 import numpy as np
 
 #: The stages, in order, as :func:`calibrate` reports them.
@@ -173,17 +175,57 @@ def _identify(records: Sequence[Record], settings: CalibrationSettings,
     return identify(records, **options)
 
 
-def _design_model(model: JointModel, warnings: list[str]) -> JointModel:
-    """Return the model the IDZ is designed from: the model, or its SDP-DZ chord."""
-    if isinstance(model.static_map, (SdpMap, SdpDzMap)):
+def chord_map(model: JointModel, span: tuple[float, float]) -> SdpDzMap:
+    """
+    SDP-DZ chords of any monotone map, as the IDZ of an ``sdp`` map (docs/methods.md 3.3).
+
+    On each side of rest the edge is where the speed first exceeds 0.1 % of its
+    value at the end of ``span``, and the chord ends where the speed reaches two
+    thirds of that value.
+
+    Parameters
+    ----------
+    model : JointModel
+        The joint (any map family).
+    span : tuple[float, float]
+        Commands the map is trusted over (the measured levels), input units.
+
+    Returns
+    -------
+    SdpDzMap
+        Dead-zone edges and chord slopes.
+
+    """
+    rest = rest_command(model)
+    edges, slopes = [], []
+    for end, sign in ((span[0], -1.0), (span[1], 1.0)):
+        v = np.linspace(rest, end, 2001)
+        speed = sign * model.rate(v)
+        top = float(speed[-1])
+        if not (sign * (end - rest) > 0.0 and top > 0.0):
+            raise DataError(f'the {model.kind} map does not move the joint '
+                            f'{"down" if sign < 0 else "up"} within the commands measured')
+        edge = float(v[max(int(np.argmax(speed > 1e-3 * top)) - 1, 0)])
+        reach = float(v[int(np.argmax(speed >= CHORD_SPEED_FRACTION * top))])
+        edges.append(edge)
+        slopes.append(CHORD_SPEED_FRACTION * top / max(abs(reach - edge), 1e-12))
+    return SdpDzMap(dead_zone=(edges[0], edges[1]), slope=(slopes[0], slopes[1]))
+
+
+def _design_model(model: JointModel, identified: Identification,
+                  warnings: list[str]) -> JointModel:
+    """Return the model the IDZ is designed from: the model, or its SDP-DZ chords."""
+    if isinstance(model.static_map, (SdpMap, SdpDzMap, LinearMap)):
         return model
-    chord = sdp_dz_benchmark(model)
-    if chord is None:
-        raise DataError(f'no inverse dead-zone can be designed for a {model.kind} map without '
-                        'a dead-zone')
-    warnings.append(f'the IDZ inverts the chord of the {model.kind} map (SDP-DZ), as '
-                    '`design` does for sdp maps')
-    return replace(model, static_map=chord.static_map)
+    levels = [p.level for p in identified.points]
+    span = (min(levels), max(levels))
+    if model.input_limits is not None:
+        span = (max(span[0], model.input_limits[0]), min(span[1], model.input_limits[1]))
+    chord = chord_map(model, span)
+    warnings.append(f'the IDZ inverts chords of the {model.kind} map: dead-zone '
+                    f'[{chord.dead_zone[0]:.4g}, {chord.dead_zone[1]:.4g}], slopes '
+                    f'{chord.slope[0]:.4g}, {chord.slope[1]:.4g} deg/s per unit')
+    return replace(model, static_map=chord)
 
 
 def _clean(poles: Sequence[complex]) -> list[complex]:
@@ -259,7 +301,7 @@ def calibrate(records: Sequence[Record], validation: Sequence[Record] | None = N
     final = diagnosis.model
     final_scores = tuple(evaluate(checks, final))
     report('design', 0, 1)
-    design_model = _design_model(final, warnings)
+    design_model = _design_model(final, identified, warnings)
     spec = design_from_model(design_model, control_period=settings.control_period)
     if settings.poles is not None:
         # The number of poles depends on the delay found: the rest are deadbeat (at 0).

@@ -215,10 +215,11 @@ def check_loop(model: JointModel, spec: ControllerSpec, stroke: tuple[float, flo
     failures = []
     for m, bound in zip(metrics, bounds):
         if not m.settling_time <= bound:
-            failures.append(f'the {m.size:+.1f} deg step does not settle into +-{settings.band:g}'
-                            f' deg within {bound:.1f} s')
+            failures.append(f'the {m.size:+.1f} deg step at {m.start:.0f} s does not settle into '
+                            f'+-{settings.band:g} deg within {bound:.1f} s')
         if m.overshoot > MAX_OVERSHOOT:
-            failures.append(f'the {m.size:+.1f} deg step overshoots by {m.overshoot:.1f} %')
+            failures.append(f'the {m.size:+.1f} deg step at {m.start:.0f} s overshoots by '
+                            f'{m.overshoot:.1f} %')
     ramp_bound = settings.settling
     if not ramp_settling <= ramp_bound:
         failures.append(f'the ramp does not settle within {ramp_bound:.1f} s of its end')
