@@ -12,13 +12,13 @@ from hydro_sdp.cli.main import build_parser, main
 from hydro_sdp.core.calibration import (
     calibrate, CalibrationSettings, chord_map, split_records)
 from hydro_sdp.core.closed_loop import LoopJoint, run_closed_loop, step_metrics, step_setpoints
-from hydro_sdp.core.controller_spec import chord_commands, design_from_model
+from hydro_sdp.core.controller_spec import design_from_model
 from hydro_sdp.core.diagnosis.results import Signature
 from hydro_sdp.core.effects import ValveLag
 from hydro_sdp.core.experiment_records import experiment_record
 from hydro_sdp.core.loop_check import check_loop, slower_poles, stroke_levels
 from hydro_sdp.core.records import Record
-from hydro_sdp.core.static_maps import linearise, PwlMap
+from hydro_sdp.core.static_maps import chord_commands, linearise, PwlMap
 from hydro_sdp.files import load_controller, load_model, load_yaml
 from hydro_sdp.plots import (
     command_unit_of, plot_closed_loop, plot_record, plot_signature, plot_velocity_map)

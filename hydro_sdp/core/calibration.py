@@ -19,17 +19,15 @@ import inspect
 import math
 from typing import Any, Callable, Sequence
 
-from hydro_sdp.core.controller_spec import (
-    CHORD_SPEED_FRACTION, ControllerSpec, design_from_model, format_pole)
+from hydro_sdp.core.controller_spec import ControllerSpec, design_from_model, format_pole
 from hydro_sdp.core.diagnosis import DETECTORS, diagnose, Diagnosis
 from hydro_sdp.core.errors import ConfigurationError, DataError, HydroSdpError
 from hydro_sdp.core.evaluate import evaluate, RecordScore
 from hydro_sdp.core.identify import Identification, identify
 from hydro_sdp.core.loop_check import check_loop, CheckSettings, LoopCheck, slower_poles
 from hydro_sdp.core.model import JointModel
-from hydro_sdp.core.programs import rest_command
 from hydro_sdp.core.records import Record
-from hydro_sdp.core.static_maps import LinearMap, SdpDzMap, SdpMap
+from hydro_sdp.core.static_maps import CHORD_SPEED_FRACTION, LinearMap, SdpDzMap, SdpMap
 import numpy as np
 
 #: The stages, in order, as :func:`calibrate` reports them.
@@ -196,7 +194,7 @@ def chord_map(model: JointModel, span: tuple[float, float]) -> SdpDzMap:
         Dead-zone edges and chord slopes.
 
     """
-    rest = rest_command(model)
+    rest = model.rest_command
     edges, slopes = [], []
     for end, sign in ((span[0], -1.0), (span[1], 1.0)):
         v = np.linspace(rest, end, 2001)

@@ -21,7 +21,6 @@ from hydro_sdp.core.closed_loop import (
 from hydro_sdp.core.controller_spec import ControllerSpec
 from hydro_sdp.core.errors import ConfigurationError
 from hydro_sdp.core.model import JointModel
-from hydro_sdp.core.programs import rest_command
 import numpy as np
 
 #: Fractions of the stroke (between the end stops) the check steps between.
@@ -124,7 +123,7 @@ def full_speed(model: JointModel) -> float:
         return float(min(abs(saturation[0]), abs(saturation[1])))
     limits = model.input_limits
     if limits is None:
-        rest = rest_command(model)
+        rest = model.rest_command
         span = 10.0 if model.dead_zone is None else 4.0 * max(
             abs(model.dead_zone[0] - rest), abs(model.dead_zone[1] - rest), 1e-3)
         limits = (rest - span, rest + span)
@@ -176,7 +175,7 @@ def check_loop(model: JointModel, spec: ControllerSpec, stroke: tuple[float, flo
     settings = settings if settings is not None else CheckSettings()
     low, middle, high = stroke_levels(stroke)
     speed = full_speed(model)
-    rest = rest_command(model)
+    rest = model.rest_command
     levels = [middle, high, middle, low]
     hold = max(settings.hold, settings.settling + settings.tail
                + abs(high - middle) / (0.25 * speed))
