@@ -7,6 +7,7 @@ import json
 from pathlib import Path
 
 from hydro_sdp.bags import write_bag
+from hydro_sdp.cli import calibrate as cli_calibrate
 from hydro_sdp.cli.calibrate import read_inputs
 from hydro_sdp.cli.main import build_parser, main
 from hydro_sdp.core.calibration import (
@@ -142,20 +143,58 @@ def test_csv_logs_calibrate_as_their_bags_do(records, calibrated, tmp_path, caps
     assert model.dead_zone == pytest.approx(expected.dead_zone, rel=1e-3)
 
 
+#: Dominant poles too fast for the lagged joint.
+FAST = (0.75 + 0.1j, 0.75 - 0.1j)
+
+
+@pytest.fixture(scope='module')
+def redesigned(records):
+    """Calibrate from poles too fast for the lag (one diagnosis round, to be quick)."""
+    return calibrate(records[:2], [records[2]], CalibrationSettings(poles=FAST, iterations=1))
+
+
 @pytest.mark.slow
-def test_a_failed_check_designs_again_with_slower_poles(records, truth):
-    fast = (0.75 + 0.1j, 0.75 - 0.1j)
-    result = calibrate(records[:2], [records[2]],
-                       CalibrationSettings(poles=fast, iterations=1))
+def test_a_failed_check_designs_again_with_slower_poles(redesigned):
+    result = redesigned
     assert result.diagnosis.effect == 'valve_lag'
     assert len(result.designs) >= 2 and result.designs[0][:2] == ('0.75+0.1j', '0.75-0.1j')
     assert result.check.passed
     assert any('designed again with slower poles' in w for w in result.warnings)
     first = design_from_model(result.model,
-                              poles=list(fast) + [0.0] * (len(result.spec.poles) - 2))
+                              poles=list(FAST) + [0.0] * (len(result.spec.poles) - 2))
     assert not check_loop(result.model, first, result.stroke).passed
     # The dominant poles of the design kept are slower than the ones asked for.
     assert min(abs(p) for p in result.spec.poles if abs(p) > 0.5) > 0.76
+
+
+@pytest.mark.slow
+def test_a_failure_while_writing_leaves_nothing(redesigned, bags, tmp_path, capsys,
+                                                monkeypatch):
+    monkeypatch.setattr(cli_calibrate, 'calibrate', lambda *args, **kwargs: redesigned)
+
+    def full_disk(folder, result, unit):
+        (folder / 'summary.md').parent.mkdir(parents=True)
+        (folder / 'summary.md').write_text('half')
+        raise OSError('No space left on device')
+    monkeypatch.setattr(cli_calibrate, 'write_report', full_disk)
+    out = tmp_path / 'out'
+    code, _, err = run(capsys, 'calibrate', bags[0], '--out', out)
+    assert code == 2 and 'No space left' in err
+    assert list(tmp_path.iterdir()) == []
+    # With --force an existing folder is replaced, whole, only once the new one is complete.
+    out.mkdir()
+    (out / 'old.txt').write_text('old')
+    code, _, _ = run(capsys, 'calibrate', bags[0], '--out', out, '--force')
+    assert code == 2 and (out / 'old.txt').read_text() == 'old'
+    monkeypatch.undo()
+    monkeypatch.setattr(cli_calibrate, 'calibrate', lambda *args, **kwargs: redesigned)
+    code, stdout, err = run(capsys, 'calibrate', bags[0], '--out', out, '--force', '--json')
+    assert code == 0, err
+    assert sorted(p.name for p in out.iterdir()) == ['controller.yaml', 'model.yaml',
+                                                     'params.yaml', 'report']
+    assert sorted(p.name for p in tmp_path.iterdir()) == ['out']
+    warnings = json.loads(stdout)['warnings']
+    assert any('designed again with slower poles' in w for w in warnings)
 
 
 def test_slower_poles_move_the_dominant_poles_toward_one():
