@@ -292,3 +292,37 @@ def test_the_idz_of_any_map_inverts_its_chords(j2):
     expected = linearise(j2.static_map, *chord_commands(j2.static_map))
     assert chord.dead_zone == pytest.approx(j2.dead_zone, abs=0.02)
     assert chord.slope == pytest.approx(expected.slope, rel=0.01)
+
+
+@pytest.mark.ros
+@pytest.mark.slow
+def test_the_nodes_run_the_loop_from_the_parameter_file(calibrated):
+    pytest.importorskip('rclpy')
+    from hydro_sdp.ros.controller_node import PipControllerNode
+    from hydro_sdp.ros.identifier_node import IdentifierNode
+    from hydro_sdp.ros.plant_node import PlantNode
+    from hydro_sdp.ros.testing import Lockstep, RosHarness
+    from sensor_msgs.msg import JointState
+    from std_msgs.msg import Float64
+
+    out, payload = calibrated
+    args = ['--ros-args', '--params-file', payload['params']]
+    with RosHarness() as ros:
+        plant = ros.add(PlantNode, cli_args=args)
+        controller = ros.add(PipControllerNode, cli_args=args)
+        identifier = ros.add(IdentifierNode, cli_args=args)
+        assert plant.models == [load_model(out / 'model.yaml')]
+        assert controller.spec == load_controller(out / 'controller.yaml')
+        assert identifier.model == plant.models[0]
+        helper = ros.helper('calibrated')
+        states = []
+        helper.create_subscription(JointState, 'joint_states', states.append, 100)
+        publisher = helper.create_publisher(Float64, 'j2/setpoint', 10)
+        loop = Lockstep(ros, plant, controllers=[controller], observers=[identifier])
+        assert ros.spin_until(lambda: publisher.get_subscription_count() >= 1)
+        publisher.publish(Float64(data=np.radians(20.0)))
+        assert ros.spin_until(lambda: controller.setpoints_received == 1)
+        loop.run(600)
+        assert ros.spin_until(lambda: len(states) >= 600)
+    angles = np.degrees([state.position[0] for state in states[:600]])
+    assert abs(angles[-1] - 20.0) < 0.5 and np.max(angles) < 22.0
