@@ -22,7 +22,6 @@ from typing import Sequence
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import ConfigurationError
 import numpy as np
-from scipy.linalg import solve_discrete_are
 
 # Closed-loop poles must land within this distance of the requested ones.
 POLE_TOLERANCE = 1e-6
@@ -360,6 +359,7 @@ def lq_design(plant: DiscretePlant, weights: LqWeights = LqWeights()) -> PipGain
         The gains; the closed loop is checked to be stable.
 
     """
+    from scipy.linalg import solve_discrete_are   # here: only LQ designs need scipy
     model = nmss(plant)
     n, m = plant.n, plant.m
     q = np.r_[np.full(n, weights.w_y / n), np.full(m - 1, weights.w_u / m), weights.w_e]

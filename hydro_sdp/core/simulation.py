@@ -30,7 +30,6 @@ from hydro_sdp.core.model import JointModel
 from hydro_sdp.core.static_maps import StaticMap
 from hydro_sdp.core.timing import check_sample_period, delay_samples, delayed, DelayLine
 import numpy as np
-from scipy.signal import lfilter
 
 # Samples handled per reflection pass; bounds the cost of each switch between stops.
 _CHUNK = 8192
@@ -251,6 +250,7 @@ def speed_profile(model: JointModel, v: FloatArray, dt: float, *,
         speed = delayed(rates, model.delay_samples(dt), rate_before)
     lag = model.effect(ValveLag.name)
     if isinstance(lag, ValveLag):
+        from scipy.signal import lfilter   # here: importing scipy.signal takes seconds
         p = math.exp(-dt / lag.time_constant)
         speed, _ = lfilter([1.0 - p], [1.0, -p], speed, zi=[p * rate_before])
     return speed
