@@ -36,7 +36,8 @@ from hydro_sdp.core.safety import check_controller_fits, clamp_setpoint, SETPOIN
 from hydro_sdp.core.scheduling import ControlSchedule, FeedbackGate, seconds_to_ns, \
     watchdog_period_ns
 from hydro_sdp.files import default_model_path, load_controller, load_model
-from hydro_sdp.ros import conversions, qos
+from hydro_sdp.ros import qos
+from hydro_sdp.ros.conversions import joint_angle
 from hydro_sdp.ros.params import declare, pair, value_of
 from hydro_sdp.ros.runner import run_node
 from rcl_interfaces.msg import SetParametersResult
@@ -108,7 +109,8 @@ class PipControllerNode(Node):
         self._rest = idz.rest if idz is not None else 0.0
         self.schedule = ControlSchedule(seconds_to_ns(spec.control_period))
         timeout_ns = seconds_to_ns(self.feedback_timeout)
-        self.gate = FeedbackGate(timeout_ns, self.get_clock().now().nanoseconds)
+        self._clock_handle = self.get_clock().handle
+        self.gate = FeedbackGate(timeout_ns, self._now_ns())
         self._setpoint: float | None = None
         self.samples = 0
         self.outputs = 0
@@ -159,46 +161,62 @@ class PipControllerNode(Node):
                        f'{self.setpoint_margin:g} deg; using {safe:.2f} deg')
         return safe
 
+    def _now_ns(self) -> int:
+        # The node clock's reading without building an rclpy Time: it is read for every sample.
+        handle = self._clock_handle
+        with handle:
+            return handle.get_now().nanoseconds
+
     def _on_state(self, message: JointState) -> None:
+        # Every sample comes through here: the rare paths (refusals, warnings) go to methods.
         self.samples += 1
-        now = self.get_clock().now().nanoseconds
         try:
-            stamp, angle = conversions.joint_angle(message, self.joint)
-            admission = self.gate.admit(stamp, now)
+            stamp, angle = joint_angle(message, self.joint)
+            admission = self.gate.admit(stamp, self._now_ns())
         except DataError as error:
-            self.refused += 1
-            self._warn(f'refused feedback ({error}); valve closed')
-            self._close_valve()
+            self._refuse(error)
             return
-        if admission == 'ignored':
-            # A duplicate or a sample overtaken by a newer one: the command in force was
-            # computed from fresher feedback, so it stays; the sample is only dropped.
-            self.refused += 1
-            self._warn(f'ignored JointState stamp {stamp * 1e-9:.6f} s: it is not after '
-                       f'the last one ({(self.gate.last_stamp or 0) * 1e-9:.6f} s)')
-            return
-        if admission == 'resumed':
+        if admission != 'accepted':
+            if admission == 'ignored':
+                self._ignore(stamp)
+                return
             self.get_logger().info('feedback is back; control resumes')
-        tick = self.schedule.tick(stamp)
+        schedule = self.schedule
+        tick = schedule.tick(stamp)
         if tick == 'wait':
             return
+        controller = self.controller
         if tick == 'resume':
             # Resume bumplessly: the valve was closed, so the last applied increment is 0.
-            self.controller.reset(u=0.0)
-        if self._setpoint is None:
-            self._setpoint = angle        # hold where the joint is until told otherwise
+            controller.reset(u=0.0)
+        setpoint = self._setpoint
+        if setpoint is None:
+            setpoint = self._setpoint = angle   # hold where the joint is until told otherwise
         try:
-            _, command = self.controller.step(self._setpoint, angle)
+            _, command = controller.step(setpoint, angle)
         except HydroSdpError as error:
             self._warn(f'controller refused the sample ({error}); valve closed')
             self._close_valve()
             return
-        self._publish(command)
+        self.last_command = command
+        self._command_pub.publish(Float64(data=float(command)))
         self.outputs += 1
-        self.schedule.stepped(stamp)
+        schedule.stepped(stamp)
+
+    def _refuse(self, error: DataError) -> None:
+        self.refused += 1
+        self._warn(f'refused feedback ({error}); valve closed')
+        self._close_valve()
+
+    def _ignore(self, stamp: int) -> None:
+        # A duplicate or a sample overtaken by a newer one: the command in force was
+        # computed from fresher feedback, so it stays; the sample is only dropped.
+        self.refused += 1
+        self._warn(f'ignored JointState stamp {stamp * 1e-9:.6f} s: it is not after '
+                   f'the last one ({(self.gate.last_stamp or 0) * 1e-9:.6f} s)')
 
     def _on_watchdog(self) -> None:
-        now = self.get_clock().now().nanoseconds
+        now = self._now_ns()
         state = self.gate.watchdog(now)
         if state == 'lost':
             self._warn(f'no valid feedback for {self.gate.silence_ns(now) * 1e-9:.2f} s; '

@@ -10,6 +10,7 @@ deserialised messages alike.
 from __future__ import annotations
 
 import math
+from math import degrees, isfinite
 from typing import Any, Sequence
 
 from hydro_sdp.core.errors import DataError
@@ -43,18 +44,20 @@ def joint_angle(message: Any, joint: str) -> tuple[int, float]:
         position is not finite.
 
     """
-    names = list(message.name)
+    # The controller calls this for every sample: attributes are read once, nothing copied.
+    names = message.name
     positions = message.position
     if len(names) != len(positions):
         raise DataError(f'JointState has {len(names)} names but {len(positions)} positions')
     try:
         index = names.index(joint)
     except ValueError:
-        raise DataError(f'joint {joint!r} is not in JointState (names: {names})') from None
+        raise DataError(f'joint {joint!r} is not in JointState (names: {list(names)})') from None
     value = float(positions[index])
-    if not math.isfinite(value):
+    if not isfinite(value):
         raise DataError(f'position of joint {joint!r} is not finite ({value})')
-    return stamp_to_ns(message.header.stamp), math.degrees(value)
+    stamp = message.header.stamp
+    return int(stamp.sec) * 1_000_000_000 + int(stamp.nanosec), degrees(value)
 
 
 def fill_joint_state(message: Any, stamp_ns: int, names: Sequence[str],
