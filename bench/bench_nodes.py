@@ -1,14 +1,21 @@
 """
 Benchmark the ROS nodes.
 
-Run with ``make bench`` or ``python bench/bench_nodes.py [--minutes 10]``. Prints:
+Run with ``make bench`` or ``python bench/bench_nodes.py [--rounds 5] [--minutes 10]``.
+Prints:
 
 * the in-process lockstep loop (plant, controller and identifier nodes, simulated
   time) against real time (target: at least 20x faster);
 * one update of the online identifier, per sample (target: under 50 us);
 * feedback-to-command latency of ``controller_node`` in its own process against a
-  minimal rclpy echo node in its own process, measured in the same run (target:
-  median at most 1.5x the echo's, p99 under 2 ms);
+  minimal rclpy echo node (JointState in, Float64 out) in its own process, measured by
+  this process as an outside client: the two run alternately, each run in a fresh
+  ``ROS_DOMAIN_ID``, for several rounds; medians and p99 of each, and the ratio of
+  the medians (target: at most 1.2, p99 under 2 ms);
+* start-up, from spawning the process to its first message (measured the same way in
+  the same rounds): ``plant_node`` to its first ``joint_states``, ``controller_node``
+  (fed ``joint_states``) to its first ``valve_command``, and the echo node (fed the
+  same) to its first output; the ratios to the echo node's;
 * a long run (default 10 minutes) of a 100 Hz ``plant_node`` and a 20 Hz
   ``controller_node`` in their own processes: missed control instants (target: none).
 
@@ -21,8 +28,8 @@ from pathlib import Path
 import shutil
 import subprocess
 import sys
-import tempfile
 import time
+from typing import Any, NamedTuple
 
 from hydro_sdp.core.online import OnlineSdpIdentifier, OnlineSettings
 from hydro_sdp.core.programs import random_program
@@ -45,6 +52,8 @@ try:
 except KeyboardInterrupt:
     pass
 """
+# Fast DDS maps a domain to UDP ports; domains up to 232 are usable.
+FIRST_DOMAIN, LAST_DOMAIN = 120, 232
 
 
 def lockstep_speed(steps: int) -> float:
@@ -77,7 +86,7 @@ def identifier_update() -> float:
     return (time.perf_counter() - started) / len(pairs) * 1e6
 
 
-def _context(domain: int):
+def _context(domain: int) -> tuple[Any, Any]:
     import rclpy
     from rclpy.context import Context
     # The in-process harness turned discovery off for this process; these nodes need the host.
@@ -87,55 +96,168 @@ def _context(domain: int):
     return rclpy, context
 
 
-def latency(command: list[str], domain: int, samples: int = 2000) -> np.ndarray:
-    """Return publish-to-command latencies (s) of a node started by ``command``."""
+class Run(NamedTuple):
+    """One process measured: start-up (s) and publish-to-command latencies (s)."""
+
+    startup: float
+    latencies: np.ndarray
+
+
+def _stop(process: subprocess.Popen) -> None:
+    process.terminate()
+    try:
+        process.wait(timeout=10)
+    except subprocess.TimeoutExpired:
+        process.kill()
+        process.wait()
+
+
+def _joint_state(stamp_ns: int) -> Any:
+    from sensor_msgs.msg import JointState
+    message = JointState()
+    message.header.stamp.sec, message.header.stamp.nanosec = divmod(stamp_ns, 10**9)
+    message.name = ['j2']
+    message.position = [math.radians(10.0)]
+    return message
+
+
+def measure(command: list[str], domain: int, samples: int, *, output: str = 'j2/valve_command',
+            feed: bool = True, settle: float = 0.0, timeout: float = 60.0) -> Run:
+    """
+    Spawn ``command`` in ``domain`` and time its start-up and, if ``feed``, its latency.
+
+    The probe node is ready (subscribed, publishing) before the process is spawned.
+    Start-up is the time from the spawn to the first message on ``output``; with
+    ``feed`` the probe publishes a JointState every 5 ms meanwhile. Latency is then
+    the time from publishing one JointState to receiving the command it caused
+    (``samples`` of them after 20 not counted), taken ``settle`` seconds after the
+    first message; stamps advance 50 ms a message, so every sample is a control
+    instant of a 20 Hz controller.
+    """
     from rclpy.executors import SingleThreadedExecutor
     from rclpy.node import Node
     from sensor_msgs.msg import JointState
     from std_msgs.msg import Float64
     environment = dict(os.environ, ROS_DOMAIN_ID=str(domain),
                        ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST')
-    process = subprocess.Popen(command, env=environment, stdout=subprocess.DEVNULL,
-                               stderr=subprocess.DEVNULL)
     rclpy, context = _context(domain)
     node = Node('latency_probe', context=context)
     executor = SingleThreadedExecutor(context=context)
     executor.add_node(node)
-    received = []
-    node.create_subscription(Float64, 'j2/valve_command',
+    received: list[float] = []
+    output_type = Float64 if output.endswith('valve_command') else JointState
+    node.create_subscription(output_type, output,
                              lambda message: received.append(time.perf_counter()), 100)
     publisher = node.create_publisher(JointState, 'joint_states', 10)
+    stamp = 10**9
+    process = None
     try:
-        deadline = time.monotonic() + 30.0
-        while (publisher.get_subscription_count() < 1 or
-               node.count_publishers('j2/valve_command') < 1) and time.monotonic() < deadline:
-            executor.spin_once(timeout_sec=0.05)
-        if publisher.get_subscription_count() < 1:
-            raise RuntimeError(f'{command[0]} did not start or was not discovered')
-        executor.spin_once(timeout_sec=1.0)
+        started = time.perf_counter()
+        process = subprocess.Popen(command, env=environment, stdout=subprocess.DEVNULL,
+                                   stderr=subprocess.DEVNULL)
+        fed = started
+        while not received and time.perf_counter() - started < timeout:
+            if feed and time.perf_counter() - fed >= 0.005:
+                stamp += 50_000_000
+                publisher.publish(_joint_state(stamp))
+                fed = time.perf_counter()
+            executor.spin_once(timeout_sec=0.001)
+        if not received:
+            raise RuntimeError(f'{command[0]} sent nothing on {output} in {timeout:g} s')
+        startup = received[0] - started
+        settled = time.perf_counter()
+        while time.perf_counter() - settled < settle:
+            executor.spin_once(timeout_sec=0.01)
         delays = []
-        stamp = 10**9
-        for _ in range(samples):
-            message = JointState()
-            stamp += 50_000_000          # every sample is a control instant
-            message.header.stamp.sec, message.header.stamp.nanosec = divmod(stamp, 10**9)
-            message.name = ['j2']
-            message.position = [math.radians(10.0)]
+        for index in range(samples + 20 if feed else 0):
+            stamp += 50_000_000
+            message = _joint_state(stamp)
             count = len(received)
             sent = time.perf_counter()
             publisher.publish(message)
             while len(received) == count and time.perf_counter() - sent < 0.5:
                 executor.spin_once(timeout_sec=0.0005)
-            if len(received) > count:
+            if len(received) > count and index >= 20:
                 delays.append(received[-1] - sent)
             time.sleep(0.002)
-        return np.array(delays)
+        return Run(startup, np.array(delays))
     finally:
-        process.terminate()
-        process.wait(timeout=10)
+        if process is not None:
+            _stop(process)
         executor.shutdown()
         node.destroy_node()
         rclpy.try_shutdown(context=context)
+
+
+def _range(values: list[float], scale: float = 1.0, digits: int = 3) -> str:
+    scaled = np.asarray(values) * scale
+    return f'[{np.min(scaled):.{digits}f}..{np.max(scaled):.{digits}f}]'
+
+
+def _spread(values: list[float], scale: float = 1.0, digits: int = 3) -> str:
+    return f'{np.median(values) * scale:.{digits}f} {_range(values, scale, digits)}'
+
+
+def process_rounds(rounds: int, samples: int, settle: float = 0.0) -> dict[str, list[Run]]:
+    """
+    Measure the echo node, ``controller_node`` and ``plant_node`` alternately.
+
+    Each run gets a fresh ``ROS_DOMAIN_ID``; the order of the three turns every round,
+    so no node is always the first after a quiet spell.
+    """
+    bin_dir = Path(sys.executable).parent
+    commands = {
+        'echo': ([sys.executable, '-c', ECHO], True, 'j2/valve_command'),
+        # The probe's stamps run 20x faster than the wall clock; on simulated time that
+        # never starts, the controller takes them without comparing them with its clock.
+        'controller': ([str(bin_dir / 'controller_node'), '--ros-args',
+                        '-p', 'control_period:=0.05', '-p', 'use_sim_time:=true'],
+                       True, 'j2/valve_command'),
+        'plant': ([str(bin_dir / 'plant_node')], False, 'joint_states'),
+    }
+    order = list(commands)
+    span = LAST_DOMAIN - FIRST_DOMAIN + 1
+    domain = FIRST_DOMAIN + (os.getpid() * 7) % (span - 1)
+    runs: dict[str, list[Run]] = {name: [] for name in order}
+    # Not counted: the probe's first DDS participant and a cold file cache.
+    measure(commands['echo'][0], domain, 20)
+    domain += 1
+    for index in range(rounds):
+        for name in order[index % 3:] + order[:index % 3]:
+            command, feed, output = commands[name]
+            runs[name].append(measure(command, domain, samples, output=output, feed=feed,
+                                      settle=settle))
+            domain = FIRST_DOMAIN + (domain - FIRST_DOMAIN + 1) % span
+    return runs
+
+
+def report_processes(runs: dict[str, list[Run]]) -> None:
+    """Print latency and start-up figures, with the spread over rounds, and both ratios."""
+    echo, ours, plant = runs['echo'], runs['controller'], runs['plant']
+    rounds = len(echo)
+    print(f'feedback-to-command latency, each node in its own process, {rounds} rounds '
+          f'alternating, fresh ROS_DOMAIN_ID per run, {echo[0].latencies.size} samples a run; '
+          'median of all samples [round medians min..max], ms:')
+    for name, these in (('rclpy echo node', echo), ('controller_node', ours)):
+        pooled = np.concatenate([run.latencies for run in these])
+        print(f'  {name:16s} median {1e3 * np.median(pooled):6.3f} '
+              f'{_range([np.median(r.latencies) for r in these], 1e3)}, '
+              f'p99 {1e3 * np.percentile(pooled, 99):6.3f}')
+    ratio = (np.median(np.concatenate([r.latencies for r in ours])) /
+             np.median(np.concatenate([r.latencies for r in echo])))
+    per_round = [np.median(o.latencies) / np.median(e.latencies) for o, e in zip(ours, echo)]
+    print(f'  latency ratio controller/echo (medians): {ratio:.2f}; per round '
+          f'{_spread(per_round, digits=2)} (target <= 1.2; p99 target < 2 ms)')
+    print('start-up, spawn to first message, median [min..max] of the rounds, s:')
+    for name, these in (('rclpy echo node (first output, fed joint_states)', echo),
+                        ('controller_node (first valve_command, fed joint_states)', ours),
+                        ('plant_node (first joint_states)', plant)):
+        print(f'  {name:56s} {_spread([r.startup for r in these])}')
+    for name, these in (('controller/echo', ours), ('plant/echo', plant)):
+        paired = [run.startup / base.startup for run, base in zip(these, echo)]
+        print(f'  start-up ratio {name}: '
+              f'{np.median([r.startup for r in these]) / np.median([r.startup for r in echo]):.2f}'
+              f' (medians); per round {_spread(paired, digits=2)}')
 
 
 def long_run(minutes: float, domain: int) -> tuple[int, int, int, float]:
@@ -156,12 +278,15 @@ def long_run(minutes: float, domain: int) -> tuple[int, int, int, float]:
     node = Node('long_run_monitor', context=context)
     executor = SingleThreadedExecutor(context=context)
     executor.add_node(node)
-    commands, states = [], []
+    commands: list[float] = []
+    states: list[int] = []
+
+    def on_state(message: Any) -> None:
+        states.append(message.header.stamp.sec * 10**9 + message.header.stamp.nanosec)
+
     node.create_subscription(Float64, 'j2/valve_command',
                              lambda message: commands.append(time.monotonic()), 100)
-    node.create_subscription(JointState, 'joint_states',
-                             lambda message: states.append(message.header.stamp.sec * 10**9 +
-                                                           message.header.stamp.nanosec), 1000)
+    node.create_subscription(JointState, 'joint_states', on_state, 1000)
     setpoints = node.create_publisher(Float64, 'j2/setpoint', 10)
     try:
         deadline = time.monotonic() + 30.0
@@ -191,38 +316,36 @@ def long_run(minutes: float, domain: int) -> tuple[int, int, int, float]:
         rclpy.try_shutdown(context=context)
 
 
-def main():
+def main() -> None:
     """Run the benchmarks and print the figures."""
     parser = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
+    parser.add_argument('--rounds', type=int, default=5,
+                        help='rounds of the alternating process runs (default: 5)')
+    parser.add_argument('--samples', type=int, default=500,
+                        help='latency samples per process run (default: 500)')
+    parser.add_argument('--settle', type=float, default=0.0,
+                        help='seconds between the first message of a node and the latency '
+                             'samples (default: 0, right after start-up)')
     parser.add_argument('--minutes', type=float, default=10.0,
-                        help='length of the long run (default: 10)')
+                        help='length of the long run (default: 10; 0 skips it)')
+    parser.add_argument('--processes-only', action='store_true',
+                        help='skip the in-process figures')
     args = parser.parse_args()
-    speed = lockstep_speed(3000)
-    print(f'in-process lockstep loop (plant 100 Hz, controller, identifier): '
-          f'{speed:.1f}x real time (target >= 20x)')
-    print(f'online identifier update: {identifier_update():.1f} us per sample (target < 50 us)')
-    controller_script = shutil.which('controller_node', path=str(Path(sys.executable).parent))
-    if controller_script is None:
+    if not args.processes_only:
+        speed = lockstep_speed(3000)
+        print(f'in-process lockstep loop (plant 100 Hz, controller, identifier): '
+              f'{speed:.1f}x real time (target >= 20x)')
+        print(f'online identifier update: {identifier_update():.1f} us per sample '
+              '(target < 50 us)')
+    if shutil.which('controller_node', path=str(Path(sys.executable).parent)) is None:
         print('console scripts not installed: skipping the process benchmarks')
         return
-    domain = 150 + os.getpid() % 50
-    with tempfile.TemporaryDirectory():
-        # The probe's stamps run 20x faster than the wall clock; on simulated time that never
-        # starts, the controller takes them without comparing them with its clock.
-        ours = latency([controller_script, '--ros-args', '-p', 'control_period:=0.05',
-                        '-p', 'use_sim_time:=true'], domain)
-        echo = latency([sys.executable, '-c', ECHO], domain + 1)
-    print('feedback-to-command latency, each node in its own process '
-          f'({ours.size} and {echo.size} samples):')
-    for name, values in (('controller_node', ours), ('rclpy echo node', echo)):
-        print(f'  {name:16s} median {1e3 * np.median(values):6.3f} ms, '
-              f'p99 {1e3 * np.percentile(values, 99):6.3f} ms')
-    print(f'  ratio of medians: {np.median(ours) / np.median(echo):.2f} (target <= 1.5); '
-          f'p99 target < 2 ms')
-    ticks, sent, missed, worst = long_run(args.minutes, domain + 2)
-    print(f'{args.minutes:g}-minute run, plant 100 Hz and controller 20 Hz in their own '
-          f'processes: {ticks} plant samples, {sent} commands, {missed} missed control '
-          f'instants (largest gap {1e3 * worst:.1f} ms; target: none missed)')
+    report_processes(process_rounds(args.rounds, args.samples, args.settle))
+    if args.minutes > 0:
+        ticks, sent, missed, worst = long_run(args.minutes, 100 + os.getpid() % 20)
+        print(f'{args.minutes:g}-minute run, plant 100 Hz and controller 20 Hz in their own '
+              f'processes: {ticks} plant samples, {sent} commands, {missed} missed control '
+              f'instants (largest gap {1e3 * worst:.1f} ms; target: none missed)')
 
 
 if __name__ == '__main__':
