@@ -11,7 +11,8 @@ Prints:
   minimal rclpy echo node (JointState in, Float64 out) in its own process, measured by
   this process as an outside client: the two run alternately, each run in a fresh
   ``ROS_DOMAIN_ID``, for several rounds; medians and p99 of each, and the ratio of
-  the medians (target: at most 1.2, p99 under 2 ms);
+  the medians (target: at most 1.2, p99 under 2 ms), from ``--settle`` seconds (3)
+  after each node's first message;
 * start-up, from spawning the process to its first message (measured the same way in
   the same rounds): ``plant_node`` to its first ``joint_states``, ``controller_node``
   (fed ``joint_states``) to its first ``valve_command``, and the echo node (fed the
@@ -323,9 +324,10 @@ def main() -> None:
                         help='rounds of the alternating process runs (default: 5)')
     parser.add_argument('--samples', type=int, default=500,
                         help='latency samples per process run (default: 500)')
-    parser.add_argument('--settle', type=float, default=0.0,
+    parser.add_argument('--settle', type=float, default=3.0,
                         help='seconds between the first message of a node and the latency '
-                             'samples (default: 0, right after start-up)')
+                             'samples (default: 3, once discovery and the start-up are over; '
+                             '0 measures right after start-up)')
     parser.add_argument('--minutes', type=float, default=10.0,
                         help='length of the long run (default: 10; 0 skips it)')
     parser.add_argument('--processes-only', action='store_true',
