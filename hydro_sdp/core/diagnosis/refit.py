@@ -16,6 +16,8 @@ from typing import Any, NamedTuple
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.delay import level_speeds
 from hydro_sdp.core.diagnosis.context import Context
+from hydro_sdp.core.diagnosis.residuals import velocity_residuals
+from hydro_sdp.core.errors import HydroSdpError
 from hydro_sdp.core.map_fit import fit_sdp, FitData
 from hydro_sdp.core.model import JointModel
 from hydro_sdp.core.static_maps import LinearMap, SdpDzMap, SdpMap, StaticMap
@@ -134,9 +136,24 @@ def _fit_family(model: JointModel, family: MapFamily, data: FitData) -> SdpMap |
     return family.build(result.x[:-1])
 
 
+def _polish(context: Context, model: JointModel, family: MapFamily) -> JointModel:
+    """Fit the family's parameters on the one-step velocity residuals the score uses."""
+    def residuals(x: FloatArray) -> FloatArray:
+        candidate = replace(model, static_map=family.build(x))
+        return np.concatenate(velocity_residuals(candidate, context.runs))
+    x0 = family.start(model.static_map)
+    result = least_squares(residuals, x0, method='trf', x_scale='jac', max_nfev=40 * x0.size)
+    return replace(model, static_map=family.build(result.x))
+
+
 def refit_map(context: Context, features: Features, delay: float | None = None) -> JointModel:
     """
     Return the model under test with its map refitted to have ``features``.
+
+    The map is fitted by regret-regression on the experiments of the data, then
+    polished on the velocity residuals of whole records, starting from that fit or
+    from the model's own map, whichever predicts better (segmentation of records
+    that run into end stops may give poor experiments; the records themselves do not).
 
     Parameters
     ----------
@@ -155,13 +172,21 @@ def refit_map(context: Context, features: Features, delay: float | None = None) 
     """
     model = context.model if delay is None else replace(context.model, delay=delay)
     samples = model.delay_samples(context.dt)
-    data = context.fit_data(samples)
-    if all(features):
-        # The full eq. (5) map: identify's multi-start fit, started from the data's speeds.
-        points = level_speeds(data.experiments, samples, context.dt, rest=context.rest)
-        return replace(model, static_map=fit_sdp(data, points, context.rest).static_map)
     family = MapFamily(features, rest=context.rest, scale=context.scale)
-    return replace(model, static_map=_fit_family(model, family, data))
+    starts = [replace(model, static_map=family.build(family.start(model.static_map)))]
+    try:
+        data = context.fit_data(samples)
+        if all(features):
+            # The full eq. (5) map: identify's multi-start fit, started from the data's speeds.
+            points = level_speeds(data.experiments, samples, context.dt, rest=context.rest)
+            fitted = fit_sdp(data, points, context.rest).static_map
+        else:
+            fitted = _fit_family(model, family, data)
+        starts.append(replace(model, static_map=fitted))
+    except (HydroSdpError, np.linalg.LinAlgError, ValueError):
+        pass  # The experiments do not support a fit: start from the model's own map.
+    best = min(starts, key=context.squared_residual)
+    return _polish(context, best, family)
 
 
 def map_parameters(model: JointModel) -> dict[str, Any]:

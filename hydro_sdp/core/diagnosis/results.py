@@ -27,13 +27,17 @@ class Candidate:
     gain : float
         Share of the squared velocity residual the effect removes (estimation data).
     t : float
-        Block-paired t statistic of that reduction.
+        Block sign-test statistic of that reduction (blocks better minus blocks worse
+        over the square root of their sum).
     significant : bool
         Whether ``t`` and ``gain`` pass the thresholds.
     parameters : dict
         Fitted parameters of the effect.
     evidence : str
         What in the data shows it.
+    signature_match : bool
+        Whether the data show the effect's own signature, which no other word
+        explains (a significant candidate with it is tried first).
 
     """
 
@@ -44,6 +48,7 @@ class Candidate:
     significant: bool = False
     parameters: dict[str, Any] = field(default_factory=dict)
     evidence: str = ''
+    signature_match: bool = False
 
 
 #: A detector's answer: the candidate, and the augmented model when there is one.

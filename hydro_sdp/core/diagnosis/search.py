@@ -25,7 +25,11 @@ import numpy as np
 
 
 def _round(context: Context, progress: Callable[[str], None] | None) -> list[Trial]:
-    """Try every detector on the model under test, ranked: significant first, by gain."""
+    """Try every detector on the model under test, ranked: significant first, by gain.
+
+    A significant candidate whose signature the data show (motion ending at one angle
+    whenever it is driven there: a stop) goes before the others.
+    """
     results: list[Trial] = []
     for each in DETECTORS:
         if progress is not None:
@@ -35,7 +39,8 @@ def _round(context: Context, progress: Callable[[str], None] | None) -> list[Tri
         except (HydroSdpError, np.linalg.LinAlgError, ValueError) as error:
             results.append((Candidate(each.word, False, evidence=f'could not be fitted: '
                                       f'{error}'), None))
-    return sorted(results, key=lambda item: (not item[0].significant, -item[0].gain))
+    return sorted(results, key=lambda item: (not item[0].significant,
+                                             not item[0].signature_match, -item[0].gain))
 
 
 def _gap(model: JointModel, augmented: JointModel, run: Run) -> Gap:

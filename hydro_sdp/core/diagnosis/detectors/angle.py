@@ -16,6 +16,61 @@ import numpy as np
 from scipy.optimize import least_squares
 
 
+#: Shortest contact that shows a stop: the joint held still while driven, s.
+MIN_CONTACT = 0.3
+
+
+def noise_of(angles: FloatArray) -> float:
+    """Robust angle noise from second differences (motion is mostly steady), degrees."""
+    second = np.diff(angles, 2)
+    return float(1.4826 * np.median(np.abs(second)) / math.sqrt(6.0)) if second.size else 0.0
+
+
+def held_at_stops(context: Context) -> tuple[float | None, float | None, int]:
+    """
+    Return the angles the joint is held still at while driven on, low and high side.
+
+    A stop shows as motion that ends at one angle each time the command drives the
+    joint towards it: samples where the model moves the joint at least ten noise
+    levels per sample and the measured angle stays still, near the extreme angle of
+    the data on that side.
+
+    Parameters
+    ----------
+    context : Context
+        The model under test and the data.
+
+    Returns
+    -------
+    tuple
+        ``(low, high, samples)``: the stop angles (None where there is no contact for
+        at least :data:`MIN_CONTACT` s) and the contact samples.
+
+    """
+    angles, steps, moves = [], [], []
+    for run in context.runs:
+        record = run.record
+        speed = speed_profile(context.model, record.v, run.dt, v_before=float(record.v[0]))
+        angles.append(record.y[run.start:-1])
+        steps.append(np.diff(record.y[run.start:]))
+        moves.append(run.dt * speed[run.start + 1:])
+    y, dy, move = np.concatenate(angles), np.concatenate(steps), np.concatenate(moves)
+    noise = max(float(np.median([noise_of(r.record.y) for r in context.runs])), 1e-6)
+    band = max(0.5, 10.0 * noise)
+    still = (np.abs(move) > 10.0 * noise) & (np.abs(dy) < 0.2 * np.abs(move))
+    needed = int(round(MIN_CONTACT / context.dt))
+    stops: list[float | None] = []
+    contact = 0
+    for sign, extreme in ((-1.0, float(np.min(y))), (1.0, float(np.max(y)))):
+        held = still & (np.sign(move) == sign) & (np.abs(y - extreme) < band)
+        if np.count_nonzero(held) >= needed:
+            stops.append(float(np.median(y[held])))
+            contact += int(np.count_nonzero(held))
+        else:
+            stops.append(None)
+    return stops[0], stops[1], contact
+
+
 class AngleLimits(Detector):
     """The joint stops at end stops the model lacks: take the stops seen in the data."""
 
@@ -25,21 +80,29 @@ class AngleLimits(Detector):
     feature = 'angle'
 
     def fit(self, context: Context) -> Trial:
-        """Give the model the stops the segmentation found, and score it."""
-        low, high = context.segmentation.end_stops
+        """Give the model the stops the joint is held at while driven, and score it."""
+        low, high, contact = held_at_stops(context)
         if low is None and high is None:
             return Candidate(self.word, True, evidence='the joint is never held still while '
                              'driven'), None
+        current = context.model.angle_limits
+        # A side without contact keeps the model's stop, or lies beyond every angle seen.
         angles = np.concatenate([r.record.y for r in context.runs])
-        low = float(np.min(angles)) - 1e-6 if low is None else low
-        high = float(np.max(angles)) + 1e-6 if high is None else high
-        if context.model.angle_limits is not None and \
-                np.allclose(context.model.angle_limits, (low, high), atol=0.1):
+        spare = current or (float(np.min(angles)) - 1.0, float(np.max(angles)) + 1.0)
+        stops = (spare[0] if low is None else min(low, spare[1] - 1e-6),
+                 spare[1] if high is None else max(high, spare[0] + 1e-6))
+        if current is not None and np.allclose(current, stops, atol=0.1):
             return Candidate(self.word, True), None
-        candidate = replace(context.model, angle_limits=(low, high))
-        return context.score(self.word, candidate, {'angle_limits': [low, high]},
-                             f'the joint is held still at {low:.3g} and {high:.3g} deg '
-                             'although the command drives it on')
+        candidate = replace(context.model, angle_limits=stops)
+        trial, augmented = context.score(
+            self.word, candidate, {'angle_limits': list(stops)},
+            f'the joint is held still at {stops[0]:.3g} and {stops[1]:.3g} deg although the '
+            f'command drives it on ({contact * context.dt:.3g} s of contact)')
+        # Motion that ends at one angle whenever it is driven there is a stop, whatever
+        # else could shrink the residual there; a stop where the model has one is not new.
+        new = (current is None) or (low is not None and low > current[0] + 0.1) or \
+            (high is not None and high < current[1] - 0.1)
+        return replace(trial, signature_match=new and trial.significant), augmented
 
 
 class AngleDependentVelocity(Detector):

@@ -40,7 +40,7 @@ class TimeDelay(Detector):
 
 
 class DirectionDependentDelay(Detector):
-    """The two directions start after different delays: grid search over both."""
+    """The two directions start after different delays: search each over the whole range."""
 
     word = 'direction_dependent_delay'
     description = 'the delay differs between directions'
@@ -48,22 +48,23 @@ class DirectionDependentDelay(Detector):
     feature = 'events'
 
     def fit(self, context: Context) -> Trial:
-        """Search both delays within 10 samples of the model's and score the best pair."""
+        """Search each direction's delay in turn over every delay considered; score the pair."""
         current = context.model.delay_samples(context.dt)
-        best: tuple[float, int, int] | None = None
-        span = range(max(1, current - 10), current + 11)
+        span = range(0, context.max_delay + 1)
+
+        def cost(positive: int, negative: int) -> float:
+            return context.squared_residual(context.model.with_effect(
+                Split(positive * context.dt, negative * context.dt)))
+        # A delay of one direction moves only that direction's speeds, so the search
+        # separates: two passes of one direction at a time find the pair.
+        positive = negative = current
+        for _ in range(2):
+            positive = min(span, key=lambda d: cost(d, negative))
+            negative = min(span, key=lambda d: cost(positive, d))
         base = float(block_sums(context.base, context.block).sum())
-        for positive in span:
-            for negative in span:
-                if positive == negative:
-                    continue
-                total = context.squared_residual(context.model.with_effect(
-                    Split(positive * context.dt, negative * context.dt)))
-                if best is None or total < best[0]:
-                    best = (total, positive, negative)
-        if best is None or best[0] >= base:
-            return Candidate(self.word, True), None
-        _, positive, negative = best
+        if positive == negative or cost(positive, negative) >= base:
+            return Candidate(self.word, True, evidence='both directions start after the same '
+                             'delay'), None
         effect = Split(round(positive * context.dt, 9), round(negative * context.dt, 9))
         return context.score(self.word, context.model.with_effect(effect),
                              {'positive': effect.positive, 'negative': effect.negative},
