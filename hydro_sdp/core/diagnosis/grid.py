@@ -162,8 +162,9 @@ def hide(word: str, rng: np.random.Generator, units: str) -> tuple[JointModel, J
             static_map.dead_zone[1] + 2.0 / static_map.curvature[1])
     if word == 'dead_zone':
         # A linear nominal model (or one with no width about the rest) of a dead-zone joint.
-        chords = replace(truth, static_map=linearise(static_map, *span))
-        return chords, replace(chords, static_map=_without_dead_zone(chords.static_map, rest))
+        chords = linearise(static_map, *span)
+        return replace(truth, static_map=chords), replace(
+            truth, static_map=_without_dead_zone(chords, rest))
     if word == 'velocity_saturation':
         return truth, replace(truth, static_map=linearise(static_map, *span))
     if word == 'asymmetry':
@@ -174,7 +175,8 @@ def hide(word: str, rng: np.random.Generator, units: str) -> tuple[JointModel, J
             round(truth.delay + abs(shift), 2)
         return truth, replace(truth, delay=wrong)
     if word == 'direction_dependent_delay':
-        slower = round(min(truth.delay + max(0.05, rng.uniform(0.4, 0.8) * truth.delay), 0.45), 2)
+        later = truth.delay + max(0.05, rng.uniform(0.4, 0.8) * truth.delay)
+        slower = round(min(later, 0.45), 2)
         split = (truth.delay, slower) if rng.random() < 0.5 else (slower, truth.delay)
         return truth.with_effect(DirectionDependentDelay(*split)), truth
     if word == 'angle_limits':
@@ -191,7 +193,7 @@ def hide(word: str, rng: np.random.Generator, units: str) -> tuple[JointModel, J
 
 def _levels(rng: np.random.Generator, truth: JointModel, sign: float,
             smallest: float) -> float:
-    """A command driving ``truth`` in direction ``sign`` at a random share of its range."""
+    """Return a command driving ``truth`` towards ``sign`` at a random share of its range."""
     static_map = truth.static_map
     assert static_map.dead_zone is not None and truth.input_limits is not None
     side = 1 if sign > 0 else 0

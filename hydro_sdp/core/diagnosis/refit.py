@@ -176,6 +176,7 @@ def refit_map(context: Context, features: Features, delay: float | None = None) 
     starts = [replace(model, static_map=family.build(family.start(model.static_map)))]
     try:
         data = context.fit_data(samples)
+        fitted: SdpMap | SdpDzMap
         if all(features):
             # The full eq. (5) map: identify's multi-start fit, started from the data's speeds.
             points = level_speeds(data.experiments, samples, context.dt, rest=context.rest)

@@ -17,12 +17,13 @@ import math
 from typing import Sequence
 
 from hydro_sdp.core.arrays import FloatArray
-from hydro_sdp.core.effects import Backlash
+from hydro_sdp.core.effects import AngleDependentVelocity, Backlash
 from hydro_sdp.core.evaluate import simulated_angles
 from hydro_sdp.core.experiments import check_record
 from hydro_sdp.core.model import JointModel
 from hydro_sdp.core.records import Record
-from hydro_sdp.core.simulation import one_step_increments, simulate
+from hydro_sdp.core.simulation import (
+    bounded_cumsum, one_step_increments, simulate, speed_profile)
 import numpy as np
 
 #: A candidate is significant when its block sign-test statistic exceeds this...
@@ -166,10 +167,37 @@ def velocity_residuals(model: JointModel, runs: Sequence[Run]) -> list[FloatArra
     out: list[FloatArray] = []
     for run in runs:
         record = run.record
-        predicted = one_step_increments(model, record.v, record.y, run.dt, start=run.start,
-                                        v_before=float(record.v[0]))
+        if _plays_at_stops(model):
+            predicted = _play_at_stops(model, run)
+        else:
+            predicted = one_step_increments(model, record.v, record.y, run.dt,
+                                            start=run.start, v_before=float(record.v[0]))
         out.append(np.diff(record.y[run.start:]) - predicted)
     return out
+
+
+def _plays_at_stops(model: JointModel) -> bool:
+    return model.angle_limits is not None and isinstance(model.effect(Backlash.name), Backlash) \
+        and model.effect(AngleDependentVelocity.name) is None
+
+
+def _play_at_stops(model: JointModel, run: Run) -> FloatArray:
+    """One-step increments with backlash where the actuator, not the sensor, meets the stops."""
+    record = run.record
+    play = model.effect(Backlash.name)
+    assert isinstance(play, Backlash) and model.angle_limits is not None
+    half = 0.5 * play.play
+    speed = speed_profile(model, record.v, run.dt, v_before=float(record.v[0]))[run.start + 1:]
+    increment = run.dt * speed
+    offset = bounded_cumsum(0.0, -increment, -half, half)
+    previous = record.y[run.start:-1]
+    # The sensor reads the actuator plus the play's offset, and the actuator stops at the
+    # stops: pushed against one, the sensor stays the offset short of it.
+    low, high = model.angle_limits
+    after = offset[1:]
+    predicted = np.clip(previous + increment + np.diff(offset), np.maximum(low, low + after),
+                        np.minimum(high, high + after))
+    return predicted - previous
 
 
 def block_sums(residuals: Sequence[FloatArray], size: int) -> FloatArray:

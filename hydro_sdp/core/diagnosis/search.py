@@ -25,7 +25,8 @@ import numpy as np
 
 
 def _round(context: Context, progress: Callable[[str], None] | None) -> list[Trial]:
-    """Try every detector on the model under test, ranked: significant first, by gain.
+    """
+    Try every detector on the model under test, ranked: significant first, by gain.
 
     A significant candidate whose signature the data show (motion ending at one angle
     whenever it is driven there: a stop) goes before the others.

@@ -31,9 +31,9 @@ def held_at_stops(context: Context) -> tuple[float | None, float | None, int]:
     Return the angles the joint is held still at while driven on, low and high side.
 
     A stop shows as motion that ends at one angle each time the command drives the
-    joint towards it: samples where the model moves the joint at least ten noise
-    levels per sample and the measured angle stays still, near the extreme angle of
-    the data on that side.
+    joint towards it: samples from which the model moves the joint at least ten noise
+    levels within 0.2 s while the measured angle moves less than a fifth of that,
+    near the extreme angle of the data on that side.
 
     Parameters
     ----------
@@ -47,13 +47,20 @@ def held_at_stops(context: Context) -> tuple[float | None, float | None, int]:
         at least :data:`MIN_CONTACT` s) and the contact samples.
 
     """
+    # Over a fifth of a second, so that slow motion stands out of the noise.
+    window = max(2, int(round(0.2 / context.dt)))
     angles, steps, moves = [], [], []
     for run in context.runs:
         record = run.record
         speed = speed_profile(context.model, record.v, run.dt, v_before=float(record.v[0]))
-        angles.append(record.y[run.start:-1])
-        steps.append(np.diff(record.y[run.start:]))
-        moves.append(run.dt * speed[run.start + 1:])
+        travel = np.cumsum(np.r_[0.0, run.dt * speed[run.start + 1:]])
+        y = record.y[run.start:]
+        if y.size > window:
+            angles.append(y[:-window])
+            steps.append(y[window:] - y[:-window])
+            moves.append(travel[window:] - travel[:-window])
+    if not angles:
+        return None, None, 0
     y, dy, move = np.concatenate(angles), np.concatenate(steps), np.concatenate(moves)
     noise = max(float(np.median([noise_of(r.record.y) for r in context.runs])), 1e-6)
     band = max(0.5, 10.0 * noise)
@@ -99,10 +106,9 @@ class AngleLimits(Detector):
             f'the joint is held still at {stops[0]:.3g} and {stops[1]:.3g} deg although the '
             f'command drives it on ({contact * context.dt:.3g} s of contact)')
         # Motion that ends at one angle whenever it is driven there is a stop, whatever
-        # else could shrink the residual there; a stop where the model has one is not new.
-        new = (current is None) or (low is not None and low > current[0] + 0.1) or \
-            (high is not None and high < current[1] - 0.1)
-        return replace(trial, signature_match=new and trial.significant), augmented
+        # else could shrink the residual there; stops moved (backlash shifts where the
+        # sensor stops) compete on gain like any other word.
+        return replace(trial, signature_match=current is None and trial.significant), augmented
 
 
 class AngleDependentVelocity(Detector):

@@ -55,12 +55,14 @@ class DirectionDependentDelay(Detector):
         def cost(positive: int, negative: int) -> float:
             return context.squared_residual(context.model.with_effect(
                 Split(positive * context.dt, negative * context.dt)))
-        # A delay of one direction moves only that direction's speeds, so the search
-        # separates: two passes of one direction at a time find the pair.
-        positive = negative = current
-        for _ in range(2):
-            positive = min(span, key=lambda d: cost(d, negative))
+        # Each direction's delay alone, from the model's; the one that helps more is kept
+        # and the other searched again with it (the two interact where motion reverses).
+        positive = min(span, key=lambda d: cost(d, current))
+        negative = min(span, key=lambda d: cost(current, d))
+        if cost(positive, current) <= cost(current, negative):
             negative = min(span, key=lambda d: cost(positive, d))
+        else:
+            positive = min(span, key=lambda d: cost(d, negative))
         base = float(block_sums(context.base, context.block).sum())
         if positive == negative or cost(positive, negative) >= base:
             return Candidate(self.word, True, evidence='both directions start after the same '
