@@ -8,7 +8,9 @@ from typing import Any, Callable, Sequence
 from hydro_sdp.core.diagnosis.residuals import (
     BLOCK_SECONDS, block_sums, compare, MIN_GAIN, Run, T_LIMIT, velocity_residuals)
 from hydro_sdp.core.diagnosis.results import Candidate, Trial
-from hydro_sdp.core.experiments import segment_records, split_long, thin
+from hydro_sdp.core.errors import DataError, HydroSdpError
+from hydro_sdp.core.experiments import (
+    estimate_rest_command, segment_records, Segmentation, split_long, thin)
 from hydro_sdp.core.map_fit import FitData
 from hydro_sdp.core.model import JointModel
 import numpy as np
@@ -37,14 +39,27 @@ class Context:
         self.max_delay = max_delay
         self.block = max(2, int(round(BLOCK_SECONDS / self.dt)))
         self.base = velocity_residuals(model, runs)
-        self.segmentation = segment_records([r.record for r in runs], max_delay=max_delay)
+        records = [r.record for r in runs]
+        self.segmentation: Segmentation | None
+        try:
+            self.segmentation = segment_records(records, max_delay=max_delay)
+        except HydroSdpError:
+            # Records that never rest hold no experiments; the candidates that start from
+            # them start from the model instead.
+            self.segmentation = None
         levels = np.concatenate([r.record.v for r in runs])
-        self.rest = model.rest_command if model.dead_zone is not None else \
-            self.segmentation.rest
+        if model.dead_zone is not None:
+            self.rest = model.rest_command
+        elif self.segmentation is not None:
+            self.rest = self.segmentation.rest
+        else:
+            self.rest = estimate_rest_command(levels, np.concatenate([r.y for r in records]))
         self.scale = max(float(np.max(np.abs(levels - self.rest))), 1e-9)
 
     def fit_data(self, delay: int) -> FitData:
         """Return the experiments as regret-regression data at ``delay`` samples."""
+        if self.segmentation is None or not self.segmentation.experiments:
+            raise DataError('the records hold no experiments (the command never rests)')
         pieces = split_long(self.segmentation.experiments, 3000, self.max_delay)
         return FitData(thin(pieces, 60_000), delay, self.dt)
 

@@ -128,7 +128,7 @@ def _symmetric(static_map: SdpMap, rest: float) -> SdpMap:
 
 
 def _without_dead_zone(static_map: SdpDzMap, rest: float) -> StaticMap:
-    slope = 0.5 * (static_map.slope[0] + static_map.slope[1])
+    slope = static_map.slope[1]
     if rest == 0.0:
         return LinearMap(slope)
     # A linear map turns about 0; about another rest it is an sdp_dz map with no width.
@@ -161,8 +161,10 @@ def hide(word: str, rng: np.random.Generator, units: str) -> tuple[JointModel, J
     span = (static_map.dead_zone[0] - 2.0 / static_map.curvature[0],
             static_map.dead_zone[1] + 2.0 / static_map.curvature[1])
     if word == 'dead_zone':
-        # A linear nominal model (or one with no width about the rest) of a dead-zone joint.
+        # A linear nominal model (or one with no width about the rest) of a dead-zone joint
+        # whose sides have one slope (a linear model cannot tell the sides apart either).
         chords = linearise(static_map, *span)
+        chords = replace(chords, slope=(chords.slope[1], chords.slope[1]))
         return replace(truth, static_map=chords), replace(
             truth, static_map=_without_dead_zone(chords, rest))
     if word == 'velocity_saturation':
@@ -232,7 +234,7 @@ def program(truth: JointModel, kind: str, rng: np.random.Generator, seconds: flo
     """
     assert truth.angle_limits is not None and truth.dead_zone is not None
     low, high = truth.angle_limits
-    rest = 0.5 * (truth.dead_zone[0] + truth.dead_zone[1])
+    rest = truth.rest_command
     total = int(round(seconds / dt))
     pieces: list[FloatArray] = []
     filled = 0

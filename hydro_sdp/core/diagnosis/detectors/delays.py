@@ -14,7 +14,7 @@ from hydro_sdp.core.experiments import thin
 
 
 class TimeDelay(Detector):
-    """The delay is wrong: re-estimate it by cross-correlation."""
+    """The delay is wrong: re-estimate it by cross-correlation and by search on the records."""
 
     word = 'time_delay'
     description = 'the delay is wrong'
@@ -22,21 +22,34 @@ class TimeDelay(Detector):
     feature = 'events'
 
     def fit(self, context: Context) -> Trial:
-        """Re-estimate the delay from the experiments and score the model with it."""
-        experiments = thin(context.segmentation.experiments, 100_000)
-        estimate = estimate_delay(experiments, context.dt, max_delay=context.max_delay,
-                                  rest=context.segmentation.rest,
-                                  noise=context.segmentation.noise_std)
+        """Take the delay that predicts the records best; score the model with it."""
         current = context.model.delay_samples(context.dt)
-        if estimate.samples == current:
+
+        def cost(samples: int) -> float:
+            return context.squared_residual(replace(context.model,
+                                                    delay=samples * context.dt))
+        # Every delay considered, and the cross-correlation estimate of the experiments
+        # when there are any (it may lie beyond the search when the records are short).
+        tried = list(range(0, context.max_delay + 1))
+        estimated = None
+        segmentation = context.segmentation
+        if segmentation is not None and segmentation.experiments:
+            experiments = thin(segmentation.experiments, 100_000)
+            estimate = estimate_delay(experiments, context.dt, max_delay=context.max_delay,
+                                      rest=segmentation.rest, noise=segmentation.noise_std)
+            estimated = estimate.samples
+            tried.append(estimated)
+        best = min(dict.fromkeys(tried), key=cost)
+        how = 'as the experiments say' if best == estimated else 'the records say'
+
+        if best == current:
             return Candidate(self.word, True, evidence=f'the data agree with the delay of '
                              f'{current} samples'), None
-        delay = round(estimate.samples * context.dt, 9)
+        delay = round(best * context.dt, 9)
         candidate = replace(context.model, delay=delay)
         return context.score(self.word, candidate, {'delay': delay},
-                             f'speed changes follow command changes after '
-                             f'{estimate.samples} samples, not {current} (cross-correlation '
-                             f'{estimate.xcorr})')
+                             f'speed changes follow command changes after {best} samples, '
+                             f'not {current} ({how})')
 
 
 class DirectionDependentDelay(Detector):
