@@ -24,8 +24,9 @@ disagreement. Every effect of the vocabulary is added in turn and fitted:
 
 {_WORDS}
 
-An effect is named when it removes a significant share of the residual (block-
-paired t-test over one-second blocks, t > 3, at least 2 %), the largest first;
+An effect is named when it removes a significant share of the residual (sign
+test over one-second blocks, z > 3, at least 2 %), the largest first (a stop the
+model lacks, seen as motion ending at one angle whenever driven there, first);
 it is kept only if the simulation error on the validation bags shrinks; the
 search repeats until nothing significant is left. `none` when the model already
 explains the data within the noise. The augmented model is a normal model file.

@@ -7,6 +7,7 @@ from pathlib import Path
 from hydro_sdp.core.diagnosis import Diagnosis
 from hydro_sdp.files import atomic_write_text, dump_model
 from hydro_sdp.plots import command_unit_of, plot_gap, plot_ledger, plot_signature, save_figure
+from hydro_sdp.plots.diagnosis import plot_candidates
 
 
 def write_report(folder: Path, result: Diagnosis, *, command_unit: str | None = None) -> list[str]:
@@ -25,8 +26,8 @@ def write_report(folder: Path, result: Diagnosis, *, command_unit: str | None = 
     Returns
     -------
     list[str]
-        The paths written: ``gap.png``, ``ledger.png``, ``signature.png`` when an
-        effect was named, and ``summary.md``.
+        The paths written: ``gap.png``, ``ledger.png``, ``signature.png`` and
+        ``candidates.png`` when an effect was named, and ``summary.md``.
 
     """
     gap = result.gap
@@ -38,6 +39,8 @@ def write_report(folder: Path, result: Diagnosis, *, command_unit: str | None = 
         unit = command_unit_of(result.model, command_unit)
         figures.append(save_figure(plot_signature(result.signature, command_unit=unit),
                                    folder / 'signature.png'))
+        figures.append(save_figure(plot_candidates(result.candidates, result.effect),
+                                   folder / 'candidates.png'))
     rows = [f'| {c.effect} | {"yes" if c.significant else "no"} | {100 * c.gain:.1f} | '
             f'{c.t:.1f} | {c.evidence} |' for c in result.candidates if c.applicable]
     ledger = [f'| {i} | {s.effect} | {s.mae_before:.4g} | {s.mae_after:.4g} |'
@@ -51,9 +54,10 @@ def write_report(folder: Path, result: Diagnosis, *, command_unit: str | None = 
         '## Gap ledger', '', '| step | effect | MAE before (deg) | MAE after (deg) |',
         '|---|---|---|---|', *(ledger or ['| - | none | - | - |']), '',
         '## Candidates (first round)', '',
-        'Share of the squared velocity residual each effect removes, and the block-paired t '
-        'statistic (significant: t > 3 and at least 2 %).', '',
-        '| effect | significant | gain (%) | t | evidence |', '|---|---|---|---|---|', *rows,
+        'Share of the squared velocity residual each effect removes, and the sign-test '
+        'statistic over one-second blocks, (better - worse) / sqrt(better + worse) '
+        '(significant: z > 3 and at least 2 %).', '',
+        '| effect | significant | gain (%) | z | evidence |', '|---|---|---|---|---|', *rows,
         '', '## Figures', '', *[f'![{Path(f).stem}]({Path(f).name})' for f in figures], '',
         '## Augmented model', '', '```yaml', dump_model(result.model).rstrip(), '```', ''])
     atomic_write_text(folder / 'summary.md', summary)

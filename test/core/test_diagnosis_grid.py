@@ -1,6 +1,6 @@
 """The discrepancy workflow on joints unlike J2: sign test, stops, both delays, a grid."""
 
-from hydro_sdp.core.diagnosis import compare, mae, runs_of
+from hydro_sdp.core.diagnosis import compare, diagnose, mae, runs_of
 from hydro_sdp.core.diagnosis.context import Context
 from hydro_sdp.core.diagnosis.detectors.angle import held_at_stops
 from hydro_sdp.core.diagnosis.grid import confusion_table, GridResult, make_case, run_case
@@ -83,3 +83,32 @@ def test_a_grid_case_is_named_and_its_gap_halves(word, kind, units):
         assert result.mae_after <= 0.5 * result.mae_before
     else:
         assert result.mae_after == result.mae_before
+
+
+def test_the_candidates_figure_draws_every_applicable_word(tmp_path):
+    from hydro_sdp.core.diagnosis import Candidate
+    from hydro_sdp.plots.diagnosis import plot_candidates
+    candidates = [Candidate('valve_lag', True, 0.5, 6.0, True),
+                  Candidate('backlash', True, 0.1, 1.0, False),
+                  Candidate('time_delay', False)]
+    gain_ax, z_ax = plot_candidates(candidates, 'valve_lag').axes
+    assert [p.get_height() for p in gain_ax.patches] == pytest.approx([50.0, 10.0])
+    assert [p.get_height() for p in z_ax.patches] == pytest.approx([6.0, 1.0])
+    assert [t.get_text() for t in z_ax.get_xticklabels()] == ['valve_lag\n(named)', 'backlash']
+    assert z_ax.get_lines()[0].get_ydata()[0] == pytest.approx(3.0)
+    dark, grey = (p.get_facecolor() for p in gain_ax.patches)
+    assert dark != grey
+
+
+def test_a_report_with_an_effect_shows_the_candidates(tmp_path):
+    from hydro_sdp.report.diagnosis import write_report
+    case = make_case('valve_lag', 'random', 'volt', 0)
+    result = diagnose(case.estimation, case.model, validation=case.validation,
+                      max_iterations=1)
+    assert result.effect == 'valve_lag'
+    written = write_report(tmp_path, result)
+    assert written == [str(tmp_path / name) for name in (
+        'gap.png', 'ledger.png', 'signature.png', 'candidates.png', 'summary.md')]
+    summary = (tmp_path / 'summary.md').read_text()
+    assert '![candidates](candidates.png)' in summary
+    assert '| effect | significant | gain (%) | z | evidence |' in summary

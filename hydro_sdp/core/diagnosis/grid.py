@@ -106,17 +106,18 @@ def _joint(rng: np.random.Generator, units: str) -> JointModel:
     """Return a random true joint in ``units``: sdp map, asymmetric, with end stops."""
     (low, high), rest = UNITS[units]
     half = min(rest - low, high - rest)
-    width = rng.uniform(0.03, 0.25) * half
-    edges = (rest - width * rng.uniform(0.7, 1.3), rest + width * rng.uniform(0.7, 1.3))
-    speed = rng.uniform(10.0, 70.0)
+    width = float(rng.uniform(0.03, 0.25)) * half
+    edges = (rest - width * float(rng.uniform(0.7, 1.3)),
+             rest + width * float(rng.uniform(0.7, 1.3)))
+    speed = float(rng.uniform(10.0, 70.0))
     # The speed saturates within the command range: 95 % at 40-90 % of the span.
-    reach = (half - width) * rng.uniform(0.4, 0.9, 2)
+    reach = [(half - width) * float(r) for r in rng.uniform(0.4, 0.9, 2)]
     curvature = (3.0 / reach[0], 3.0 / reach[1])
-    static_map = SdpMap(edges, (-speed * rng.uniform(0.7, 1.0), speed * rng.uniform(0.9, 1.3)),
-                        curvature)
-    bottom = rng.uniform(-60.0, 10.0)
-    return JointModel('joint', static_map, delay=round(rng.uniform(0.03, 0.3), 2),
-                      angle_limits=(bottom, bottom + rng.uniform(50.0, 120.0)),
+    static_map = SdpMap(edges, (-speed * float(rng.uniform(0.7, 1.0)),
+                                speed * float(rng.uniform(0.9, 1.3))), curvature)
+    bottom = float(rng.uniform(-60.0, 10.0))
+    return JointModel('joint', static_map, delay=round(float(rng.uniform(0.03, 0.3)), 2),
+                      angle_limits=(bottom, bottom + float(rng.uniform(50.0, 120.0))),
                       input_limits=(low, high))
 
 
@@ -172,24 +173,24 @@ def hide(word: str, rng: np.random.Generator, units: str) -> tuple[JointModel, J
     if word == 'asymmetry':
         return truth, replace(truth, static_map=_symmetric(static_map, rest))
     if word == 'time_delay':
-        shift = max(0.03, 0.5 * truth.delay) * rng.choice([-1.0, 1.0])
+        shift = max(0.03, 0.5 * truth.delay) * float(rng.choice([-1.0, 1.0]))
         wrong = round(truth.delay + shift, 2) if truth.delay + shift >= 0.01 else \
             round(truth.delay + abs(shift), 2)
         return truth, replace(truth, delay=wrong)
     if word == 'direction_dependent_delay':
-        later = truth.delay + max(0.05, rng.uniform(0.4, 0.8) * truth.delay)
+        later = truth.delay + max(0.05, float(rng.uniform(0.4, 0.8)) * truth.delay)
         slower = round(min(later, 0.45), 2)
         split = (truth.delay, slower) if rng.random() < 0.5 else (slower, truth.delay)
         return truth.with_effect(DirectionDependentDelay(*split)), truth
     if word == 'angle_limits':
         return truth, replace(truth, angle_limits=None)
     if word == 'valve_lag':
-        return truth.with_effect(ValveLag(rng.uniform(0.05, 0.3))), truth
+        return truth.with_effect(ValveLag(float(rng.uniform(0.05, 0.3)))), truth
     if word == 'backlash':
-        return truth.with_effect(Backlash(rng.uniform(1.0, 3.0))), truth
+        return truth.with_effect(Backlash(float(rng.uniform(1.0, 3.0)))), truth
     if word == 'angle_dependent_velocity':
-        return truth.with_effect(AngleDependentVelocity(rng.uniform(0.2, 0.4),
-                                                        rng.uniform(0.0, 360.0))), truth
+        return truth.with_effect(AngleDependentVelocity(float(rng.uniform(0.2, 0.4)),
+                                                        float(rng.uniform(0.0, 360.0)))), truth
     return truth, truth
 
 
