@@ -2,6 +2,7 @@
 
 from hydro_sdp.core.diagnosis import compare, diagnose, mae, runs_of
 from hydro_sdp.core.diagnosis.context import Context
+from hydro_sdp.core.diagnosis.detectors import detector
 from hydro_sdp.core.diagnosis.detectors.angle import held_at_stops
 from hydro_sdp.core.diagnosis.grid import confusion_table, GridResult, make_case, run_case
 from hydro_sdp.core.evaluate import evaluate
@@ -53,6 +54,24 @@ def test_the_stops_are_where_motion_ends_whenever_driven_there():
     inside = make_case('angle_limits', 'random', 'percent', 0)
     context = Context(inside.model, runs_of(inside.estimation, 0.5), 50)
     assert held_at_stops(context) == (None, None, 0)
+
+
+def test_a_stop_the_model_lacks_goes_first_and_both_delays_are_found():
+    case = make_case('angle_limits', 'stroke', 'percent', 0)
+    context = Context(case.model, runs_of(case.estimation, 0.5), 50)
+    stops, augmented = detector('angle_limits').fit(context)
+    angle, _ = detector('angle_dependent_velocity').fit(context)
+    # The angle factor removes residual too, but only the stop matches the signature.
+    assert stops.significant and stops.signature_match and not angle.signature_match
+    assert augmented.angle_limits == pytest.approx(case.truth.angle_limits, abs=0.05)
+    split = make_case('direction_dependent_delay', 'random', 'percent', 0)
+    true_split, = split.truth.effects
+    assert split.model.delay == true_split.positive != true_split.negative
+    context = Context(split.model, runs_of(split.estimation, 0.5), 50)
+    found, augmented = detector('direction_dependent_delay').fit(context)
+    assert (found.parameters['positive'], found.parameters['negative']) == pytest.approx(
+        (true_split.positive, true_split.negative))
+    assert found.gain > 0.5 and augmented.effects == (true_split,)
 
 
 def test_the_confusion_table_counts_hidden_against_named():
