@@ -29,7 +29,8 @@ import os
 from pathlib import Path
 from typing import Any, Mapping
 
-from hydro_sdp.core._validate import require_float, require_pair
+from hydro_sdp.core._validate import (
+    read_document, require_float, require_mapping, require_pair)
 from hydro_sdp.core.errors import DataError, ModelFileError
 from hydro_sdp.core.kinematics import line_trajectory, TwoLinkArm
 from hydro_sdp.core.trajectory import JointTrajectory
@@ -148,15 +149,8 @@ def _from_csv(source: Path) -> JointTrajectory:
 
 def _from_yaml(source: Path, data: Any,
                kinematics: str | os.PathLike[str] | None) -> TrajectoryFile:
-    if not isinstance(data, Mapping):
-        raise ModelFileError(
-            f'a trajectory file must be a mapping of keys, got {type(data).__name__}')
-    for key in data:
-        if key not in ('format', 'joint_names', 'points', 'kinematics', 'line'):
-            raise ModelFileError(f'unknown key {key!r}')
-    if data.get('format') != TRAJECTORY_FORMAT:
-        raise ModelFileError(
-            f"key 'format': expected {TRAJECTORY_FORMAT!r}, got {data.get('format')!r}")
+    data = read_document(data, 'a trajectory file', TRAJECTORY_FORMAT,
+                         known=('format', 'joint_names', 'points', 'kinematics', 'line'))
     if 'line' in data:
         for key in ('joint_names', 'points'):
             if key in data:
@@ -174,14 +168,8 @@ def _from_yaml(source: Path, data: Any,
     times, positions, velocities = [], [], []
     for index, point in enumerate(points):
         where = f'points[{index}]'
-        if not isinstance(point, Mapping):
-            raise ModelFileError(f'key {where!r}: expected a mapping')
-        for key in point:
-            if key not in ('time_from_start', 'positions', 'velocities'):
-                raise ModelFileError(f'unknown key {where}.{key}')
-        for key in ('time_from_start', 'positions'):
-            if key not in point:
-                raise ModelFileError(f'missing required key {where}.{key}')
+        point = require_mapping(point, where, ('time_from_start', 'positions', 'velocities'),
+                                ('time_from_start', 'positions'), expected='a mapping')
         times.append(require_float(point['time_from_start'], f'{where}.time_from_start'))
         positions.append(_numbers(point['positions'], f'{where}.positions', len(names)))
         if 'velocities' in point:
@@ -201,16 +189,10 @@ def _numbers(value: Any, key: str, count: int) -> list[float]:
 
 def _line(source: Path, data: Mapping[str, Any],
           kinematics: str | os.PathLike[str] | None) -> TrajectoryFile:
-    line = data['line']
-    if not isinstance(line, Mapping):
-        raise ModelFileError("key 'line': expected a mapping with start, end and speed "
-                             'or duration')
-    for key in line:
-        if key not in ('start', 'end', 'speed', 'duration', 'point_period', 'elbow'):
-            raise ModelFileError(f'unknown key line.{key}')
-    for key in ('start', 'end'):
-        if key not in line:
-            raise ModelFileError(f'missing required key line.{key}')
+    line = require_mapping(data['line'], 'line',
+                           ('start', 'end', 'speed', 'duration', 'point_period', 'elbow'),
+                           ('start', 'end'),
+                           expected='a mapping with start, end and speed or duration')
     start, end = require_pair(line['start'], 'line.start'), require_pair(line['end'], 'line.end')
     timing = {key: require_float(line[key], f'line.{key}')
               for key in ('speed', 'duration', 'point_period') if key in line}

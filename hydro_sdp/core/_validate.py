@@ -8,6 +8,7 @@ reason, so that a user can fix the file from the message alone.
 
 from __future__ import annotations
 
+from collections.abc import Collection, Mapping
 import math
 from typing import Any
 
@@ -110,6 +111,85 @@ def require_float_list(value: Any, key: str) -> tuple[float, ...]:
     if not isinstance(value, (list, tuple)):
         raise ModelFileError(f'key {key!r}: expected a list of numbers')
     return tuple(require_float(item, f'{key}[{i}]') for i, item in enumerate(value))
+
+
+def read_document(data: Any, what: str, file_format: str, known: Collection[str],
+                  required: Collection[str] = ()) -> Mapping[str, Any]:
+    """
+    Return a parsed file as a mapping with known keys, the required ones and the right format.
+
+    Parameters
+    ----------
+    data : Any
+        The parsed YAML document.
+    what : str
+        What the file is, for the message, e.g. ``'a model file'``.
+    file_format : str
+        The value the ``format`` key must have.
+    known : collection of str
+        The keys the file may have.
+    required : collection of str
+        The keys it must have (a missing ``format`` not named here is reported
+        as a wrong format).
+
+    Returns
+    -------
+    Mapping[str, Any]
+        The document, now known to be a mapping of the file's keys.
+
+    """
+    if not isinstance(data, Mapping):
+        raise ModelFileError(f'{what} must be a mapping of keys, got {type(data).__name__}')
+    _check_keys(data, known, required)
+    found = data.get('format')
+    if found != file_format:
+        raise ModelFileError(f"key 'format': expected {file_format!r}, got {found!r}")
+    return data
+
+
+def require_mapping(value: Any, where: str, known: Collection[str],
+                    required: Collection[str] = (), *,
+                    expected: str = 'a mapping of keys') -> Mapping[str, Any]:
+    """
+    Return a nested ``value`` as a mapping with known keys and the required ones.
+
+    Parameters
+    ----------
+    value : Any
+        Value read from the file.
+    where : str
+        Dotted key name of ``value``, e.g. ``'links[0]'``.
+    known, required : collection of str
+        The keys ``value`` may have, and those it must have.
+    expected : str
+        What the message says is expected when ``value`` is not a mapping.
+
+    Returns
+    -------
+    Mapping[str, Any]
+        ``value``.
+
+    """
+    if not isinstance(value, Mapping):
+        raise ModelFileError(f'key {where!r}: expected {expected}')
+    _check_keys(value, known, required, where)
+    return value
+
+
+def _check_keys(data: Mapping[Any, Any], known: Collection[str], required: Collection[str],
+                where: str = '') -> None:
+    """Refuse a key not in ``known``, then a missing ``required`` one; ``where`` names ``data``."""
+    for key in data:
+        if not isinstance(key, str) or key not in known:
+            raise ModelFileError(f'unknown key {_key_name(key, where)}')
+    for key in required:
+        if key not in data:
+            raise ModelFileError(f'missing required key {_key_name(key, where)}')
+
+
+def _key_name(key: Any, where: str) -> str:
+    # Top-level keys are quoted, nested ones are written as a dotted path.
+    return f'{where}.{key}' if where else repr(key)
 
 
 def _describe(value: Any) -> str:

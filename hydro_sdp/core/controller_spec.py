@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 from typing import Any, Mapping, Sequence
 
 from hydro_sdp.core._validate import (
-    require_float, require_float_list, require_ordered_pair, require_pair)
+    read_document, require_float, require_float_list, require_ordered_pair, require_pair)
 from hydro_sdp.core.errors import ConfigurationError, ModelFileError
 from hydro_sdp.core.idz import IDZ_MODES, IdzMode, InverseDeadZone
 from hydro_sdp.core.model import JointModel
@@ -135,19 +135,11 @@ class ControllerSpec:
             The spec; its closed loop is checked to be stable.
 
         """
-        if not isinstance(data, Mapping):
-            raise ModelFileError('a controller file must be a mapping of keys')
         known = ('format', 'joint', 'control_period', 'delay_samples', 'plant', 'f', 'g', 'kI',
                  'poles', 'design', 'idz', 'u_limits', 'v_limits')
-        for key in data:
-            if key not in known:
-                raise ModelFileError(f'unknown key {key!r}')
-        for key in ('format', 'joint', 'control_period', 'plant', 'f', 'g', 'kI'):
-            if key not in data:
-                raise ModelFileError(f'missing required key {key!r}')
-        if data['format'] != CONTROLLER_FORMAT:
-            raise ModelFileError(f"key 'format': expected {CONTROLLER_FORMAT!r}, "
-                                 f"got {data['format']!r}")
+        data = read_document(data, 'a controller file', CONTROLLER_FORMAT, known=known,
+                             required=('format', 'joint', 'control_period', 'plant', 'f', 'g',
+                                       'kI'))
         plant = data['plant']
         if not isinstance(plant, Mapping) or set(plant) != {'a', 'b'}:
             raise ModelFileError("key 'plant': expected a mapping with keys 'a' and 'b'")

@@ -22,9 +22,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 import math
-from typing import Any, Mapping
+from typing import Any
 
-from hydro_sdp.core._validate import require_float
+from hydro_sdp.core._validate import read_document, require_float, require_mapping
 from hydro_sdp.core.errors import DataError, ModelFileError
 from hydro_sdp.core.trajectory import JointTrajectory
 import numpy as np
@@ -93,33 +93,17 @@ class TwoLinkArm:
             Naming the key and the reason.
 
         """
-        if not isinstance(data, Mapping):
-            raise ModelFileError(
-                f'a kinematics file must be a mapping of keys, got {type(data).__name__}')
-        for key in data:
-            if key not in ('format', 'links'):
-                raise ModelFileError(f'unknown key {key!r}')
-        for key in ('format', 'links'):
-            if key not in data:
-                raise ModelFileError(f'missing required key {key!r}')
-        if data['format'] != KINEMATICS_FORMAT:
-            raise ModelFileError(
-                f"key 'format': expected {KINEMATICS_FORMAT!r}, got {data['format']!r}")
+        data = read_document(data, 'a kinematics file', KINEMATICS_FORMAT,
+                             known=('format', 'links'), required=('format', 'links'))
         links = data['links']
         if not isinstance(links, list) or len(links) != 2:
             raise ModelFileError("key 'links': expected a list of two links (boom, dipper)")
         joints, lengths, offsets = [], [], []
         for index, link in enumerate(links):
             where = f'links[{index}]'
-            if not isinstance(link, Mapping):
-                raise ModelFileError(f'key {where!r}: expected a mapping with joint, length '
-                                     'and offset')
-            for key in link:
-                if key not in ('joint', 'length', 'offset'):
-                    raise ModelFileError(f'unknown key {where}.{key}')
-            for key in ('joint', 'length'):
-                if key not in link:
-                    raise ModelFileError(f'missing required key {where}.{key}')
+            link = require_mapping(link, where, ('joint', 'length', 'offset'),
+                                   ('joint', 'length'),
+                                   expected='a mapping with joint, length and offset')
             if not isinstance(link['joint'], str) or not link['joint']:
                 raise ModelFileError(f"key '{where}.joint': expected a name, "
                                      f"got {link['joint']!r}")

@@ -14,7 +14,7 @@ from dataclasses import dataclass, field, replace
 import math
 from typing import Any, Mapping
 
-from hydro_sdp.core._validate import require_float, require_ordered_pair
+from hydro_sdp.core._validate import read_document, require_float, require_ordered_pair
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.effects import Effect, effect_from_mapping, effect_to_mapping, EFFECT_TYPES
 from hydro_sdp.core.errors import ConfigurationError, ModelFileError
@@ -180,18 +180,9 @@ class JointModel:
             Naming the key and the reason when anything is missing, unknown or invalid.
 
         """
-        if not isinstance(data, Mapping):
-            raise ModelFileError(
-                f'a model file must be a mapping of keys, got {type(data).__name__}')
-        for key in data:
-            if not isinstance(key, str) or key not in _COMMON_KEYS + _ALL_MAP_KEYS + ('effects',):
-                raise ModelFileError(f'unknown key {key!r}')
-        for key in ('format', 'joint', 'kind', 'delay'):
-            if key not in data:
-                raise ModelFileError(f'missing required key {key!r}')
-        if data['format'] != MODEL_FORMAT:
-            raise ModelFileError(
-                f"key 'format': expected {MODEL_FORMAT!r}, got {data['format']!r}")
+        data = read_document(data, 'a model file', MODEL_FORMAT,
+                             known=_COMMON_KEYS + _ALL_MAP_KEYS + ('effects',),
+                             required=('format', 'joint', 'kind', 'delay'))
         kind = data['kind']
         if kind not in MAP_KINDS:
             raise ModelFileError(

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import math
 from typing import Any, Mapping
 
-from hydro_sdp.core._validate import require_float, require_ordered_pair
+from hydro_sdp.core._validate import require_float, require_mapping, require_ordered_pair
 from hydro_sdp.core.errors import ModelFileError
 
 
@@ -42,13 +42,7 @@ def section(data: Mapping[str, Any], key: str, where: str,
     name = f'{where}.{key}' if where else key
     if key not in data:
         raise ModelFileError(f'missing required key {name!r}')
-    section = data[key]
-    if not isinstance(section, Mapping):
-        raise ModelFileError(f'key {name!r}: expected a mapping of keys')
-    for inner in section:
-        if inner not in keys:
-            raise ModelFileError(f'unknown key {name}.{inner}')
-    return section
+    return require_mapping(data[key], name, keys)
 
 
 @dataclass(frozen=True)

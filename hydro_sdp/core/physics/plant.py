@@ -13,8 +13,9 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 import math
 import os
-from typing import Any, Mapping
+from typing import Any
 
+from hydro_sdp.core._validate import read_document, require_mapping
 from hydro_sdp.core.errors import ModelFileError
 from hydro_sdp.core.physics.parameters import (
     Cylinder, Linkage, Load, number, Pump, section, Valve)
@@ -58,11 +59,7 @@ class Joint:
     @classmethod
     def from_mapping(cls, data: Any, where: str) -> Joint:
         """Build from one entry of the ``joints`` list."""
-        if not isinstance(data, Mapping):
-            raise ModelFileError(f'key {where!r}: expected a mapping of keys')
-        for key in data:
-            if key not in cls.keys:
-                raise ModelFileError(f'unknown key {where}.{key}')
+        data = require_mapping(data, where, cls.keys)
         name = data.get('name')
         if not isinstance(name, str) or not name.strip():
             raise ModelFileError(f'key {where + ".name"!r}: expected a non-empty name, '
@@ -135,15 +132,8 @@ class Machine:
             Naming the key when anything is missing, unknown or invalid.
 
         """
-        if not isinstance(data, Mapping):
-            raise ModelFileError(
-                f'a physics file must be a mapping of keys, got {type(data).__name__}')
-        for key in data:
-            if key not in ('format', 'pump', 'joints'):
-                raise ModelFileError(f'unknown key {key!r}')
-        if data.get('format') != PHYSICS_FORMAT:
-            raise ModelFileError(f"key 'format': expected {PHYSICS_FORMAT!r}, "
-                                 f"got {data.get('format')!r}")
+        data = read_document(data, 'a physics file', PHYSICS_FORMAT,
+                             known=('format', 'pump', 'joints'))
         pump = Pump.from_mapping(section(data, 'pump', '', Pump.keys))
         joints = data.get('joints')
         if not isinstance(joints, list) or not joints:
