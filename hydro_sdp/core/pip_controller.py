@@ -158,17 +158,63 @@ class PipIdzController:
             return self._step_feedforward(float(setpoint), float(y), float(feedforward))
         if not (math.isfinite(setpoint) and math.isfinite(y)):
             raise DataError(f'set-point and angle must be finite, got {setpoint} and {y}')
-        settings = self.settings
-        gains = settings.gains
         ys = [float(y)] + (self._y[:self._n] if self._y else [float(y)] * self._n)
         us = self._u if self._u else [0.0] * self._m
+        u, v, branch = self._limited(self._law(setpoint, y, ys, us))
+        self._commit(ys, [u] + us[:self._m - 1], u, v, branch)
+        return u, v
+
+    def _step_feedforward(self, setpoint: float, y: float,
+                          feedforward: float) -> tuple[float, float]:
+        """:meth:`step` with a feed-forward: the law on the deviation from the set-point."""
+        if not (math.isfinite(setpoint) and math.isfinite(y) and math.isfinite(feedforward)):
+            raise DataError(f'set-point, angle and feed-forward must be finite, got {setpoint}, '
+                            f'{y} and {feedforward}')
+        ys = [y] + (self._y[:self._n] if self._y else [y] * self._n)
+        # Past set-points kept by feed-forward steps only; after a plain step or a reset
+        # the set-point is taken as having stood still (bumpless, as for y).
+        fresh = self._d and self._d_steps == self.steps
+        ds = [setpoint] + (self._d[:self._n] if fresh else [setpoint] * self._n)
+        us = self._u if self._u else [0.0] * self._m
+        own = self._law(setpoint, y, ys, us, ds)
+        wanted = own + feedforward
+        u, v, branch = self._limited(wanted)
+        # The history keeps the controller's own part, not the feed-forward (the law would
+        # integrate it). When the limits cut the command, that part is kept no further
+        # beyond the limit than the applied command itself (as without feed-forward), nor
+        # than the full back-calculation ``u - feedforward``: it neither winds up nor is
+        # pushed against the motion by a feed-forward the valve cannot deliver.
+        if wanted > u:
+            own = min(own, max(u - feedforward, u))
+        elif wanted < u:
+            own = max(own, min(u - feedforward, u))
+        self._commit(ys, [own] + us[:self._m - 1], u, v, branch)
+        self._d = ds[:self._n]
+        self._d_steps = self.steps
+        return u, v
+
+    def _law(self, setpoint: float, y: float, ys: list[float], us: list[float],
+             ds: list[float] | None = None) -> float:
+        """
+        Return the PIP increment ``u`` before limits.
+
+        The proportional terms act on the output's differences ``ys``, less
+        those of the set-point ``ds`` when given (the feed-forward form).
+        """
+        gains = self.settings.gains
         u = us[0] + gains.k_i * (setpoint - y)
         for j, g_j in enumerate(gains.g, start=1):
             u -= g_j * (us[j - 1] - us[j])
         for i, f_i in enumerate(gains.f):
-            u -= f_i * (ys[i] - ys[i + 1])
+            change = ys[i] - ys[i + 1]
+            u -= f_i * (change if ds is None else change - (ds[i] - ds[i + 1]))
+        return u
+
+    def _limited(self, u: float) -> tuple[float, float, int]:
+        """Apply the ``u`` limits, the IDZ and the valve limits: ``(u, v, branch)``."""
         if not math.isfinite(u):
             raise DataError('the controller output is not finite (gains or inputs too large)')
+        settings = self.settings
         if settings.u_limits is not None:
             u = min(max(u, settings.u_limits[0]), settings.u_limits[1])
         if settings.idz is not None:
@@ -181,65 +227,16 @@ class PipIdzController:
                 # Store the increment the valve can really give, not the one asked for.
                 u = settings.idz.increment(limited) if settings.idz is not None else limited
                 v = limited
-        self._branch = branch
-        self._y = ys[:self._n + 1]
-        self._u = [u] + us[:self._m - 1]
-        self.last_u, self.last_v = u, v
-        self.steps += 1
-        return u, v
+        return u, v, branch
 
-    def _step_feedforward(self, setpoint: float, y: float,
-                          feedforward: float) -> tuple[float, float]:
-        """:meth:`step` with a feed-forward: the law on the deviation from the set-point."""
-        if not (math.isfinite(setpoint) and math.isfinite(y) and math.isfinite(feedforward)):
-            raise DataError(f'set-point, angle and feed-forward must be finite, got {setpoint}, '
-                            f'{y} and {feedforward}')
-        settings = self.settings
-        gains = settings.gains
-        ys = [y] + (self._y[:self._n] if self._y else [y] * self._n)
-        # Past set-points kept by feed-forward steps only; after a plain step or a reset
-        # the set-point is taken as having stood still (bumpless, as for y).
-        fresh = self._d and self._d_steps == self.steps
-        ds = [setpoint] + (self._d[:self._n] if fresh else [setpoint] * self._n)
-        us = self._u if self._u else [0.0] * self._m
-        u = us[0] + gains.k_i * (setpoint - y)
-        for j, g_j in enumerate(gains.g, start=1):
-            u -= g_j * (us[j - 1] - us[j])
-        for i, f_i in enumerate(gains.f):
-            u -= f_i * ((ys[i] - ys[i + 1]) - (ds[i] - ds[i + 1]))
-        own = u
-        u += feedforward
-        wanted = u
-        if not math.isfinite(u):
-            raise DataError('the controller output is not finite (gains or inputs too large)')
-        if settings.u_limits is not None:
-            u = min(max(u, settings.u_limits[0]), settings.u_limits[1])
-        if settings.idz is not None:
-            v, branch = settings.idz.command(u, self._branch)
-        else:
-            v, branch = u, 0
-        if settings.v_limits is not None:
-            limited = min(max(v, settings.v_limits[0]), settings.v_limits[1])
-            if limited != v:
-                u = settings.idz.increment(limited) if settings.idz is not None else limited
-                v = limited
+    def _commit(self, ys: list[float], us: list[float], u: float, v: float,
+                branch: int) -> None:
+        """Keep the new histories and outputs once the step can no longer fail."""
         self._branch = branch
         self._y = ys[:self._n + 1]
-        # The history keeps the controller's own part, not the feed-forward (the law would
-        # integrate it). When the limits cut the command, that part is kept no further
-        # beyond the limit than the applied command itself (as without feed-forward), nor
-        # than the full back-calculation ``u - feedforward``: it neither winds up nor is
-        # pushed against the motion by a feed-forward the valve cannot deliver.
-        if wanted > u:
-            own = min(own, max(u - feedforward, u))
-        elif wanted < u:
-            own = max(own, min(u - feedforward, u))
-        self._u = [own] + us[:self._m - 1]
-        self._d = ds[:self._n]
+        self._u = us
         self.last_u, self.last_v = u, v
         self.steps += 1
-        self._d_steps = self.steps
-        return u, v
 
     def update_idz(self, idz: InverseDeadZone) -> None:
         """
