@@ -38,6 +38,7 @@ from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import ConfigurationError, DataError
 from hydro_sdp.core.records import Record
 from hydro_sdp.core.timing import delayed
+from hydro_sdp.files import read_text
 import numpy as np
 
 #: Units of the angle column.
@@ -291,14 +292,7 @@ def read_csv_log(path: str | os.PathLike[str], *, joint: str, time: str, angle: 
 
     """
     source = Path(path)
-    if source.is_dir():
-        raise DataError(f'{source} is a directory, not a CSV file')
-    try:
-        text = source.read_text(encoding='utf-8-sig')
-    except FileNotFoundError:
-        raise DataError(f'{source}: no such file') from None
-    except UnicodeDecodeError as error:
-        raise DataError(f'{source}: not UTF-8 text (byte {error.start})') from None
+    text = read_text(source, DataError, kind='a CSV file', byte_order_mark=True)
     return parse_csv_log(text, joint=joint, time=time, angle=angle, command=command,
                          command_negative=command_negative, angle_unit=angle_unit,
                          delimiter=delimiter, source=str(source))

@@ -17,10 +17,10 @@ import shutil
 import signal
 import tempfile
 import threading
-from typing import Any, Callable, Iterator
+from typing import Any, Callable, Iterator, Mapping
 
 from hydro_sdp.core.controller_spec import ControllerSpec
-from hydro_sdp.core.errors import ModelFileError
+from hydro_sdp.core.errors import HydroSdpError, ModelFileError
 from hydro_sdp.core.model import JointModel
 import yaml
 
@@ -153,6 +153,47 @@ def atomic_directory(path: str | os.PathLike[str]) -> Iterator[Path]:
                 shutil.rmtree(work, ignore_errors=True)
 
 
+def read_text(path: str | os.PathLike[str], error: type[HydroSdpError] = ModelFileError, *,
+              kind: str = 'a file', byte_order_mark: bool = False) -> str:
+    """
+    Read a whole UTF-8 text file; each failure is one line naming the file.
+
+    Parameters
+    ----------
+    path : str or PathLike
+        File to read.
+    error : type of HydroSdpError
+        The error raised.
+    kind : str
+        What the file should be, for the message on a directory.
+    byte_order_mark : bool
+        Whether a leading byte-order mark is dropped.
+
+    Returns
+    -------
+    str
+        The text.
+
+    Raises
+    ------
+    HydroSdpError
+        Of type ``error``, if the file is missing, a directory, unreadable or
+        not UTF-8.
+
+    """
+    source = Path(path)
+    if source.is_dir():
+        raise error(f'{source} is a directory, not {kind}')
+    try:
+        return source.read_text(encoding='utf-8-sig' if byte_order_mark else 'utf-8')
+    except FileNotFoundError:
+        raise error(f'{source}: no such file') from None
+    except UnicodeDecodeError as failure:
+        raise error(f'{source}: not UTF-8 text (byte {failure.start})') from None
+    except OSError as failure:
+        raise error(f'{source}: cannot read: {failure}') from None
+
+
 def load_yaml(path: str | os.PathLike[str]) -> Any:
     """
     Read a YAML document with safe loading.
@@ -174,14 +215,7 @@ def load_yaml(path: str | os.PathLike[str]) -> Any:
 
     """
     source = Path(path)
-    if source.is_dir():
-        raise ModelFileError(f'{source} is a directory, not a file')
-    try:
-        text = source.read_text(encoding='utf-8')
-    except FileNotFoundError:
-        raise ModelFileError(f'{source}: no such file') from None
-    except (OSError, UnicodeDecodeError) as error:
-        raise ModelFileError(f'{source}: cannot read: {error}') from None
+    text = read_text(source)
     if not text.strip():
         raise ModelFileError(f'{source}: file is empty')
     try:
@@ -226,7 +260,12 @@ def load_model(path: str | os.PathLike[str]) -> JointModel:
 
 def dump_model(model: JointModel) -> str:
     """Return the YAML text of a model file."""
-    return yaml.safe_dump(model.to_mapping(), sort_keys=False, default_flow_style=None)
+    return _yaml_text(model.to_mapping())
+
+
+def _yaml_text(data: Mapping[str, Any]) -> str:
+    """YAML text of a model or controller file: keys in their order, lists inline."""
+    return yaml.safe_dump(data, sort_keys=False, default_flow_style=None)
 
 
 def save_model(model: JointModel, path: str | os.PathLike[str]) -> Path:
@@ -320,5 +359,4 @@ def save_controller(spec: ControllerSpec, path: str | os.PathLike[str]) -> Path:
         The target path.
 
     """
-    text = yaml.safe_dump(spec.to_mapping(), sort_keys=False, default_flow_style=None)
-    return atomic_write_text(path, text)
+    return atomic_write_text(path, _yaml_text(spec.to_mapping()))
