@@ -7,8 +7,9 @@ from typing import Sequence
 from hydro_sdp.core.closed_loop import LoopTrace
 from hydro_sdp.core.idz import InverseDeadZone
 from hydro_sdp.core.model import JointModel
-from hydro_sdp.plots.figures import LIMIT, MEASURED, MODEL, new_figure
-from hydro_sdp.plots.units import command_unit_of, UNKNOWN_UNIT
+from hydro_sdp.plots.figures import (
+    label_command_axes, LIMIT, mark_dead_zone, MEASURED, MODEL, new_figure)
+from hydro_sdp.plots.units import UNKNOWN_UNIT
 from matplotlib.figure import Figure
 import numpy as np
 
@@ -61,18 +62,15 @@ def plot_idz(model: JointModel, idz: InverseDeadZone, control_period: float, *,
             label=f'{model.kind} model')
     chord = np.array([idz.increment(x) for x in v])
     ax.plot(v, chord, color=MEASURED, linewidth=2.2, label='linearised (the IDZ inverts this)')
-    for edge in (low, high):
-        ax.axvline(edge, color=LIMIT, linestyle='--', linewidth=0.9)
-    ax.axvspan(low, high, color=LIMIT, alpha=0.12, linewidth=0, label='dead-zone')
+    mark_dead_zone(ax, (low, high))
     if u_limits is not None:
         for value in u_limits:
             ax.axhline(value, color=LIMIT, linestyle=':', linewidth=1.0)
         ax.text(1.0, u_limits[1], ' u limit', transform=ax.get_yaxis_transform(),
                 color=LIMIT, fontsize=8, va='center', ha='left', clip_on=False)
     ax.axhline(0.0, color='black', linewidth=0.6)
-    ax.set_xlabel(f'steady command v ({command_unit_of(model, command_unit)})')
-    ax.set_ylabel(f'increment q (deg per {control_period:g} s sample)')
-    ax.legend(loc='upper left', fontsize=8, frameon=False)
+    label_command_axes(ax, model, command_unit,
+                       f'increment q (deg per {control_period:g} s sample)', 'upper left')
     figure.suptitle(f'IDZ approximation of joint {model.joint} '
                     f'(slopes {idz.slopes[0]:.4g}, {idz.slopes[1]:.4g}; beta {idz.beta:g})',
                     fontsize=11)

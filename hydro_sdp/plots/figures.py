@@ -12,8 +12,11 @@ from __future__ import annotations
 import io
 import os
 from pathlib import Path
+from typing import Literal
 
+from hydro_sdp.core.model import JointModel
 from hydro_sdp.files import atomic_write_bytes
+from hydro_sdp.plots.units import command_unit_of
 from matplotlib.axes import Axes
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.colors import Colormap
@@ -23,6 +26,10 @@ from matplotlib.figure import Figure
 MEASURED = '#1f4e79'
 MODEL = '#d95f02'
 LIMIT = '#7f7f7f'
+
+#: Where a legend may go (matplotlib's names).
+LegendPlace = Literal['best', 'upper left', 'upper right', 'lower left', 'lower right',
+                      'center left', 'center right']
 
 
 def new_figure(rows: int = 1, *, height: float = 2.6, width: float = 9.0,
@@ -88,6 +95,21 @@ def mark_limits(ax: Axes, limits: tuple[float, float] | None, label: str) -> Non
         ax.axhline(value, color=LIMIT, linestyle='--', linewidth=0.9)
     ax.text(1.0, limits[1], f' {label}', transform=ax.get_yaxis_transform(),
             color=LIMIT, fontsize=8, va='center', ha='left', clip_on=False)
+
+
+def mark_dead_zone(ax: Axes, dead_zone: tuple[float, float]) -> None:
+    """Draw a dead-zone against the command: its edges dashed, the band between them shaded."""
+    for edge in dead_zone:
+        ax.axvline(edge, color=LIMIT, linestyle='--', linewidth=0.9)
+    ax.axvspan(*dead_zone, color=LIMIT, alpha=0.12, linewidth=0, label='dead-zone')
+
+
+def label_command_axes(ax: Axes, model: JointModel, command_unit: str | None, ylabel: str,
+                       legend: LegendPlace) -> None:
+    """Label axes whose x is the steady command, in its unit; put the legend at ``legend``."""
+    ax.set_xlabel(f'steady command v ({command_unit_of(model, command_unit)})')
+    ax.set_ylabel(ylabel)
+    ax.legend(loc=legend, fontsize=8, frameon=False)
 
 
 def matplotlib_colormap() -> Colormap:

@@ -9,7 +9,8 @@ from hydro_sdp.core.experiments import Experiment
 from hydro_sdp.core.model import JointModel
 from hydro_sdp.core.records import Record
 from hydro_sdp.plots.figures import (
-    LIMIT, mark_limits, matplotlib_colormap, MEASURED, MODEL, new_figure)
+    label_command_axes, LIMIT, mark_dead_zone, mark_limits, matplotlib_colormap, MEASURED, MODEL,
+    new_figure)
 from hydro_sdp.plots.units import command_unit_of
 from matplotlib.figure import Figure
 import numpy as np
@@ -97,16 +98,12 @@ def plot_velocity_map(model: JointModel, *, v_range: tuple[float, float] | None 
         ax.plot(points[0], points[1], 'o', color=MEASURED, markersize=4,
                 markerfacecolor='none', label='experiments')
     if model.dead_zone is not None:
-        for edge in model.dead_zone:
-            ax.axvline(edge, color=LIMIT, linestyle='--', linewidth=0.9)
-        ax.axvspan(*model.dead_zone, color=LIMIT, alpha=0.12, linewidth=0, label='dead-zone')
+        mark_dead_zone(ax, model.dead_zone)
     saturation = getattr(model.static_map, 'saturation_velocity', None)
     if saturation is not None:
         for speed in saturation:
             ax.axhline(speed, color=LIMIT, linestyle=':', linewidth=0.9)
-    ax.set_xlabel(f'steady command v ({command_unit_of(model, command_unit)})')
-    ax.set_ylabel('angular velocity (deg/s)')
-    ax.legend(loc='center left', fontsize=8, frameon=False)
+    label_command_axes(ax, model, command_unit, 'angular velocity (deg/s)', 'center left')
     figure.suptitle(title or f'velocity map of joint {model.joint}', fontsize=11)
     return figure
 
@@ -190,9 +187,7 @@ def plot_gains(points: Sequence[LevelSpeed], model: JointModel, dt: float, *, re
     v = v[np.abs(v - rest) > 1e-9 * span]
     ax.plot(v, dt * model.rate(v) / (v - rest), color=MODEL, linewidth=1.8,
             label=f'{model.kind} model')
-    ax.set_xlabel(f'steady command v ({command_unit_of(model, command_unit)})')
-    ax.set_ylabel('b_tau (deg per sample per unit)')
-    ax.legend(loc='upper left', fontsize=8, frameon=False)
+    label_command_axes(ax, model, command_unit, 'b_tau (deg per sample per unit)', 'upper left')
     figure.suptitle(f'State-dependent gain of joint {model.joint} (West et al. 2018, Fig. 2)',
                     fontsize=11)
     return figure
