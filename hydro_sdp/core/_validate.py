@@ -1,8 +1,9 @@
 """
-Small checks shared by the model-file and configuration readers.
+Small checks shared by the model-file and configuration readers and by settings objects.
 
-Each helper raises :class:`ModelFileError` whose message names the key and the
-reason, so that a user can fix the file from the message alone.
+Each file helper raises :class:`ModelFileError` whose message names the key and
+the reason, so that a user can fix the file from the message alone; the
+settings helper raises :class:`ConfigurationError` naming the field.
 
 """
 
@@ -12,7 +13,7 @@ from collections.abc import Collection, Mapping
 import math
 from typing import Any
 
-from hydro_sdp.core.errors import ModelFileError
+from hydro_sdp.core.errors import ConfigurationError, ModelFileError
 
 
 def require_float(value: Any, key: str) -> float:
@@ -190,6 +191,33 @@ def _check_keys(data: Mapping[Any, Any], known: Collection[str], required: Colle
 def _key_name(key: Any, where: str) -> str:
     # Top-level keys are quoted, nested ones are written as a dotted path.
     return f'{where}.{key}' if where else repr(key)
+
+
+def require_positive_fields(settings: Any, names: Collection[str], *,
+                            zero_allowed: bool = False) -> None:
+    """
+    Refuse a field of ``settings`` that is not a finite number above 0 (or at least 0).
+
+    Parameters
+    ----------
+    settings : Any
+        The settings object, e.g. a frozen dataclass in its ``__post_init__``.
+    names : collection of str
+        The fields to check, in the order they are reported.
+    zero_allowed : bool
+        Whether 0 is accepted.
+
+    Raises
+    ------
+    ConfigurationError
+        Naming the first field that fails and its value.
+
+    """
+    for name in names:
+        value = getattr(settings, name)
+        if not (math.isfinite(value) and (value >= 0.0 if zero_allowed else value > 0.0)):
+            rule = 'a number >= 0' if zero_allowed else 'a positive number'
+            raise ConfigurationError(f'{name} must be {rule}, got {value}')
 
 
 def _describe(value: Any) -> str:

@@ -18,6 +18,7 @@ from dataclasses import dataclass, replace
 import math
 from typing import Any
 
+from hydro_sdp.core._validate import require_positive_fields
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import ConfigurationError
 from hydro_sdp.core.model import JointModel
@@ -80,11 +81,9 @@ class OnlineSettings:
     cusum_limit: float = 15.0
 
     def __post_init__(self) -> None:
-        for name in ('noise_std', 'kappa', 'change_gate', 'margin', 'outlier', 'input_scale',
-                     'change_level', 'change_memory', 'cusum_drift', 'cusum_limit'):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value > 0.0):
-                raise ConfigurationError(f'{name} must be a positive number, got {value}')
+        require_positive_fields(self, ('noise_std', 'kappa', 'change_gate', 'margin', 'outlier',
+                                       'input_scale', 'change_level', 'change_memory',
+                                       'cusum_drift', 'cusum_limit'))
         if self.hold_off < 0:
             raise ConfigurationError(f'hold_off must be >= 0, got {self.hold_off}')
 

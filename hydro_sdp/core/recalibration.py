@@ -20,6 +20,7 @@ from collections import deque
 from dataclasses import dataclass, replace
 import math
 
+from hydro_sdp.core._validate import require_positive_fields
 from hydro_sdp.core.controller_spec import idz_for_model
 from hydro_sdp.core.errors import ConfigurationError
 from hydro_sdp.core.idz import InverseDeadZone
@@ -57,14 +58,8 @@ class RecalibrationPolicy:
     cooldown: float = 5.0
 
     def __post_init__(self) -> None:
-        for name in ('significance', 'confidence'):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value > 0.0):
-                raise ConfigurationError(f'{name} must be a positive number, got {value}')
-        for name in ('settle', 'min_change', 'cooldown'):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value >= 0.0):
-                raise ConfigurationError(f'{name} must be a number >= 0, got {value}')
+        require_positive_fields(self, ('significance', 'confidence'))
+        require_positive_fields(self, ('settle', 'min_change', 'cooldown'), zero_allowed=True)
 
 
 @dataclass(frozen=True)

@@ -1,7 +1,10 @@
 """The shared readers of parsed files: each refusal names the key and the reason."""
 
-from hydro_sdp.core._validate import read_document, require_mapping
-from hydro_sdp.core.errors import ModelFileError
+from dataclasses import dataclass
+import math
+
+from hydro_sdp.core._validate import read_document, require_mapping, require_positive_fields
+from hydro_sdp.core.errors import ConfigurationError, ModelFileError
 import pytest
 
 FORMAT = 'hydro_sdp/example/v1'
@@ -46,3 +49,27 @@ def test_require_mapping_names_the_nested_key(value, expected, message):
 def test_require_mapping_returns_the_mapping_it_accepts():
     value = {'joint': 'j'}
     assert require_mapping(value, 'links[0]', ('joint', 'length'), ('joint',)) is value
+
+
+@dataclass
+class _Settings:
+    gain: float = 1.0
+    wait: float = 0.0
+
+
+def test_require_positive_fields_accepts_positive_and_allowed_zero():
+    require_positive_fields(_Settings(), ('gain',))
+    require_positive_fields(_Settings(), ('gain', 'wait'), zero_allowed=True)
+
+
+@pytest.mark.parametrize(('settings', 'zero_allowed', 'message'), [
+    (_Settings(wait=0.0), False, 'wait must be a positive number, got 0.0'),
+    (_Settings(gain=-2.0), False, 'gain must be a positive number, got -2.0'),
+    (_Settings(gain=math.inf), True, 'gain must be a number >= 0, got inf'),
+    (_Settings(wait=math.nan), True, 'wait must be a number >= 0, got nan'),
+    (_Settings(gain=-1.0, wait=-1.0), True, 'gain must be a number >= 0, got -1.0'),
+])
+def test_require_positive_fields_names_the_first_bad_field(settings, zero_allowed, message):
+    with pytest.raises(ConfigurationError) as caught:
+        require_positive_fields(settings, ('gain', 'wait'), zero_allowed=zero_allowed)
+    assert str(caught.value) == message
