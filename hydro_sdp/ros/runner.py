@@ -1,15 +1,75 @@
-"""The ``main()`` every hydro_sdp node shares (the Jazzy pattern of demo_nodes_py)."""
+"""
+The ``main()`` every hydro_sdp node shares (the Jazzy pattern of demo_nodes_py).
+
+SIGTERM (``timeout``, ``kill``, ``ros2 launch`` ending) stops a node as SIGINT
+(Ctrl-C) does: the node is destroyed (a recorder closes its bag) and the process
+exits with code 0, without a traceback. A signal that comes before this module
+is loaded (the first few hundred ms of imports) ends the process by the signal
+(status -15 for SIGTERM), as for any program.
+
+Why not plain ``rclpy.spin``: on a signal rclpy shuts the context down from
+another thread, so a callback or the node's constructor can fail half-way
+("context is not valid"), and the wake-up of the executor can be lost when the
+shutdown lands between its check of the context and its next wait, which
+leaves a node without timers (``identifier_node``) waiting forever. Here a
+Python handler records the signal first (rclpy's handler calls it), rclpy's
+handlers are installed only once the node is built (so a recorder always
+closes its bag), errors after a signal count as the shutdown they are, and the
+executor never waits longer than :data:`WAKE_PERIOD` before it looks again.
+
+"""
 
 from __future__ import annotations
 
+import signal
 import sys
-from typing import Callable
+from types import FrameType
+from typing import Any, Callable
 
 from hydro_sdp.core.errors import HydroSdpError
 import rclpy
 from rclpy.exceptions import NameValidationException, ParameterException
-from rclpy.executors import ExternalShutdownException
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
+from rclpy.signals import install_signal_handlers, SignalHandlerOptions, uninstall_signal_handlers
+
+#: Longest wait of the executor before it checks for a stop, s (bounds the exit time).
+WAKE_PERIOD = 0.1
+
+_CONFIGURATION_ERRORS = (HydroSdpError, OSError, ParameterException, NameValidationException)
+
+
+class _Stop:
+    """The stop signals received: SIGINT raises KeyboardInterrupt once, SIGTERM only records."""
+
+    def __init__(self) -> None:
+        self.signals: list[int] = []
+        #: Off during the clean-up, which a second Ctrl-C must not cut short.
+        self.interrupts = True
+
+    def __call__(self, signum: int, frame: FrameType | None) -> None:
+        first = not self.signals
+        self.signals.append(signum)
+        if first and self.interrupts and signum == signal.SIGINT:
+            raise KeyboardInterrupt
+
+    def __bool__(self) -> bool:
+        return bool(self.signals)
+
+
+def _destroy(node: Node | None, executor: SingleThreadedExecutor | None, stop: _Stop) -> None:
+    # After a signal the context may already be down: a failure to tidy up is then moot.
+    try:
+        if executor is not None:
+            executor.shutdown(timeout_sec=WAKE_PERIOD)
+        if node is not None:
+            node.destroy_node()
+    except Exception:
+        if not stop:
+            raise
+    finally:
+        rclpy.try_shutdown()
+        uninstall_signal_handlers()
 
 
 def run_node(node_cls: Callable[[], Node], args: list[str] | None = None) -> None:
@@ -17,7 +77,8 @@ def run_node(node_cls: Callable[[], Node], args: list[str] | None = None) -> Non
     Initialise rclpy, spin one node of ``node_cls`` and always clean up.
 
     A configuration error (a bad parameter or file) ends the process with one
-    line on stderr and exit code 2, not a traceback.
+    line on stderr and exit code 2, not a traceback. SIGINT and SIGTERM end it
+    with code 0 within about :data:`WAKE_PERIOD` (plus the node's own clean-up).
 
     Parameters
     ----------
@@ -27,20 +88,40 @@ def run_node(node_cls: Callable[[], Node], args: list[str] | None = None) -> Non
         Command-line arguments (``--ros-args`` included) passed to ``rclpy.init``.
 
     """
-    rclpy.init(args=args)
-    node = None
+    stop = _Stop()
+    # Installed before rclpy.init, whose own handlers call the ones they replace.
+    previous: dict[int, Any] = {
+        signum: signal.signal(signum, stop) for signum in (signal.SIGINT, signal.SIGTERM)}
+    node: Node | None = None
+    executor: SingleThreadedExecutor | None = None
     code = 0
     try:
-        node = node_cls()
-        rclpy.spin(node)
+        # rclpy's handlers (which shut the context down) wait until the node is whole: a
+        # signal during its construction is only recorded, and acted on once it is built.
+        rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+        if not stop:
+            node = node_cls()
+            install_signal_handlers(SignalHandlerOptions.ALL)
+            executor = SingleThreadedExecutor()
+            executor.add_node(node)
+            while not stop and executor.context.ok():
+                executor.spin_once(timeout_sec=WAKE_PERIOD)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
-    except (HydroSdpError, OSError, ParameterException, NameValidationException) as error:
-        sys.stderr.write(f'error: {error}\n')
-        code = 2
+    except _CONFIGURATION_ERRORS as error:
+        if not stop:
+            sys.stderr.write(f'error: {error}\n')
+            code = 2
+    except Exception:
+        if not stop:
+            raise
     finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
+        stop.interrupts = False
+        try:
+            _destroy(node, executor, stop)
+        except KeyboardInterrupt:
+            pass
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
     if code:
         sys.exit(code)

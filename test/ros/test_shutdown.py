@@ -1,0 +1,123 @@
+"""
+SIGTERM stops every node process as SIGINT does: no traceback, exit code 0, within 5 s.
+
+The five console scripts run together in one fresh ROS domain (the plant, controller and
+identifier in a loop, the recorder recording it, the player playing a bag), so callbacks are
+busy when the signal comes. Each round signals all five at one moment: during start-up
+(imports, ``rclpy.init``, the node's constructor), or once all five nodes are in the graph,
+up to 3 s later (one round sends SIGINT, for comparison). A signal that lands before a script has loaded the shared runner ends the
+process by the signal (status -15, no output), as documented in ``hydro_sdp.ros.runner``;
+once the node is up the exit code must be 0 and the recorder's bag must be closed.
+"""
+
+import os
+from pathlib import Path
+import random
+import shutil
+import signal
+import subprocess
+import sys
+import time
+
+from hydro_sdp.bags import write_bag
+from hydro_sdp.core.records import Record
+import numpy as np
+import pytest
+import rclpy
+
+pytestmark = [pytest.mark.ros, pytest.mark.slow]
+
+NODES = {'plant_node': 'hydro_plant', 'controller_node': 'pip_controller',
+         'identifier_node': 'sdp_identifier', 'bag_recorder': 'bag_recorder',
+         'bag_player': 'bag_player'}
+EXIT_LIMIT = 5.0      # s from SIGTERM to the end of the process
+# (moment, delay, signal): after spawning ('start') or after all five nodes are up ('up'), s.
+ROUNDS = [('start', 0.05, signal.SIGTERM), ('start', 0.4, signal.SIGTERM),
+          ('up', 0.0, signal.SIGTERM), ('up', 1.2, signal.SIGTERM),
+          ('up', 2.5, signal.SIGTERM), ('up', 1.0, signal.SIGINT)]
+
+
+def _script(name):
+    found = shutil.which(name, path=str(Path(sys.executable).parent))
+    if found is None:
+        pytest.skip('the console scripts are not installed in this environment')
+    return found
+
+
+@pytest.fixture(scope='module')
+def graph(tmp_path_factory):
+    """Return ``(environment, node, bag)``: a fresh domain, a node watching it, a bag to play."""
+    from rclpy.context import Context
+    from rclpy.node import Node
+    domain = random.randint(1, 200)
+    environment = dict(os.environ, ROS_DOMAIN_ID=str(domain),
+                       ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST')
+    bag = tmp_path_factory.mktemp('shutdown') / 'long_bag'
+    steps = 6000                                  # 60 s: the player is still playing
+    t = np.arange(1, steps + 1) * 0.01
+    write_bag(bag, [Record(t, np.zeros(steps), np.sin(t), joint='j2')])
+    saved = os.environ.get('ROS_AUTOMATIC_DISCOVERY_RANGE')
+    os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
+    context = Context()
+    rclpy.init(context=context, domain_id=domain)
+    node = Node('shutdown_watcher', context=context)
+    yield environment, node, bag
+    node.destroy_node()
+    rclpy.try_shutdown(context=context)
+    if saved is None:
+        os.environ.pop('ROS_AUTOMATIC_DISCOVERY_RANGE')
+    else:
+        os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = saved
+
+
+def _arguments(script, output):
+    if script == 'bag_recorder':
+        return ['-p', f'output:={output}']
+    if script == 'bag_player':
+        return ['-p', f'bag:={output.parent / "long_bag"}', '-r', '__ns:=/replay']
+    return []
+
+
+@pytest.mark.parametrize('moment, delay, signum', ROUNDS)
+def test_a_signal_stops_every_node_cleanly(graph, moment, delay, signum):
+    environment, watcher, bag = graph
+    output = bag.parent / f'recorded_{moment}_{delay}_{signum}'
+    processes = {script: subprocess.Popen(
+        [_script(script), '--ros-args', *_arguments(script, output)], env=environment,
+        stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True) for script in NODES}
+    try:
+        if moment == 'up':
+            deadline = time.monotonic() + 30.0
+            while not set(NODES.values()) <= set(watcher.get_node_names()):
+                assert time.monotonic() < deadline, 'the nodes did not come up'
+                assert all(p.poll() is None for p in processes.values()), \
+                    {s: p.stderr.read() for s, p in processes.items() if p.poll() is not None}
+                time.sleep(0.05)
+        time.sleep(delay)
+        signalled = time.monotonic()
+        for process in processes.values():
+            process.send_signal(signum)
+        ended = {}
+        for script, process in processes.items():
+            try:
+                process.wait(timeout=max(0.0, signalled + EXIT_LIMIT - time.monotonic()))
+            except subprocess.TimeoutExpired:
+                continue
+            ended[script] = time.monotonic() - signalled
+    finally:
+        for process in processes.values():
+            if process.poll() is None:
+                process.kill()
+                process.wait()
+    errors = {script: process.stderr.read() for script, process in processes.items()}
+    assert set(ended) == set(NODES), f'still running {EXIT_LIMIT} s after SIGTERM: ' \
+        f'{sorted(set(NODES) - set(ended))}'
+    for script, process in processes.items():
+        assert 'Traceback' not in errors[script], f'{script}:\n{errors[script]}'
+        allowed = (0, -signal.SIGTERM) if moment == 'start' else (0,)
+        assert process.returncode in allowed, f'{script} exit {process.returncode}:\n' \
+            f'{errors[script]}'
+    if moment == 'up':
+        # The recorder closed its bag as on Ctrl-C.
+        assert (output / 'metadata.yaml').is_file(), errors['bag_recorder']
+        assert 'wrote' in errors['bag_recorder']
