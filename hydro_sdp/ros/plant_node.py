@@ -12,6 +12,10 @@ the simulated motion over the last sample, without measurement noise). Angle
 parameters are in degrees. With ``use_sim_time`` the tick follows ``/clock``, so
 a test can run the machine in lockstep.
 
+Two parameters change at run time, from the next tick: ``noise_std`` (a sensor
+that degrades) and ``dead_zone_shift`` (a valve that wears); a request is checked
+whole before either applies. The others shape the machine and are read-only.
+
 """
 
 from __future__ import annotations
@@ -58,8 +62,9 @@ class PlantNode(Node):
         model_files = declare(self, 'model_files', Parameter.Type.STRING_ARRAY,
                               'model files of several joints (overrides model_file)',
                               read_only=True)
-        noise = declare(self, 'noise_std', 0.0, 'angle measurement noise, deg',
-                        low=0.0, high=10.0, read_only=True)
+        noise = declare(self, 'noise_std', 0.0,
+                        'angle measurement noise (std), deg; applies from the next tick',
+                        low=0.0, high=10.0)
         seed = declare(self, 'seed', 0, 'seed of the measurement noise', read_only=True)
         initial = declare(self, 'initial_angles', Parameter.Type.DOUBLE_ARRAY,
                           'starting angle of each joint, deg (default: 0, or mid-travel)',
@@ -97,20 +102,33 @@ class PlantNode(Node):
                                      partial(self._on_command, index), qos.COMMAND_QOS)
             for index, name in enumerate(names)]
         self.add_on_set_parameters_callback(self._check_parameters)
+        self.add_post_set_parameters_callback(self._apply_parameters)
         self._timer = self.create_timer(period, self._on_tick)
 
+    def _shifted_maps(self, value: Any) -> list[Any]:
+        shift = pair(value, 'dead_zone_shift')
+        return [shifted_map(base, shift) for base in self._base_maps]
+
     def _check_parameters(self, parameters: list[Parameter]) -> SetParametersResult:
+        # Checks only: nothing applies before the whole request is accepted.
         for parameter in parameters:
             if parameter.name == 'dead_zone_shift':
                 try:
-                    shift = pair(parameter.value, 'dead_zone_shift')
-                    maps = [shifted_map(base, shift) for base in self._base_maps]
+                    self._shifted_maps(parameter.value)
                 except (HydroSdpError, TypeError) as error:
                     return SetParametersResult(successful=False, reason=str(error))
-                for simulator, static_map in zip(self._simulators, maps):
-                    simulator.set_static_map(static_map)
-                self.get_logger().info(f'dead-zone edges moved by {list(shift)}')
         return SetParametersResult(successful=True)
+
+    def _apply_parameters(self, parameters: list[Parameter]) -> None:
+        for parameter in parameters:
+            if parameter.name == 'dead_zone_shift':
+                for simulator, static_map in zip(self._simulators,
+                                                 self._shifted_maps(parameter.value)):
+                    simulator.set_static_map(static_map)
+                self.get_logger().info(f'dead-zone edges moved by {list(parameter.value)}')
+            elif parameter.name == 'noise_std':
+                self._noise = float(parameter.value)
+                self.get_logger().info(f'measurement noise now {self._noise} deg')
 
     def _on_command(self, index: int, message: Float64) -> None:
         value = float(message.data)
