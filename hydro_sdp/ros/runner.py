@@ -4,8 +4,8 @@ The ``main()`` every hydro_sdp node shares (the Jazzy pattern of demo_nodes_py).
 SIGTERM (``timeout``, ``kill``, ``ros2 launch`` ending) stops a node as SIGINT
 (Ctrl-C) does: the node is destroyed (a recorder closes its bag) and the process
 exits with code 0, without a traceback. A signal that comes before this module
-is loaded (the first few hundred ms of imports) ends the process by the signal
-(status -15 for SIGTERM), as for any program.
+is loaded (about the first half second, while Python imports the node) ends the
+process by the signal (status -15 for SIGTERM), as for any program.
 
 Why not plain ``rclpy.spin``: on a signal rclpy shuts the context down from
 another thread, so a callback or the node's constructor can fail half-way
@@ -97,7 +97,8 @@ def run_node(node_cls: Callable[[], Node], args: list[str] | None = None) -> Non
     code = 0
     try:
         # rclpy's handlers (which shut the context down) wait until the node is whole: a
-        # signal during its construction is only recorded, and acted on once it is built.
+        # SIGTERM during its construction is recorded and acted on once it is built (Ctrl-C
+        # still interrupts a constructor at once).
         rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
         if not stop:
             node = node_cls()
