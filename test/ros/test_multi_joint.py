@@ -1,0 +1,177 @@
+"""One controller node for boom and dipper: per-joint topics and parameters, trajectories."""
+
+import math
+
+from conftest import REPO
+from hydro_sdp.core.closed_loop import LoopJoint, run_closed_loop
+from hydro_sdp.core.controller_spec import design_from_model
+from hydro_sdp.core.trajectory import JointTrajectory, TrajectorySampler
+from hydro_sdp.files import load_model
+from hydro_sdp.ros.controller_node import PipControllerNode
+from hydro_sdp.ros.conversions import CONTROLLER_STATE_LABELS
+from hydro_sdp.ros.plant_node import PlantNode
+from hydro_sdp.ros.testing import Lockstep, RosHarness
+import numpy as np
+import pytest
+from sensor_msgs.msg import JointState
+from std_msgs.msg import Float64, Float64MultiArray
+from trajectory_msgs.msg import JointTrajectory as TrajectoryMessage
+
+pytestmark = pytest.mark.ros
+
+MODELS = [str(REPO / 'config' / 'lucie_boom.yaml'), str(REPO / 'config' / 'lucie_dipper.yaml')]
+JOINTS = ['boom', 'dipper']
+START = {'boom': 0.0, 'dipper': -90.0}      # where the plant starts them (mid-travel dipper)
+# A ramp of 5 deg/s for 4 s on both joints, then a hold.
+TIMES = [4.0]
+ENDS = [[20.0, -70.0]]
+
+
+@pytest.fixture
+def ros():
+    """Return a harness with its own context, closed after the test."""
+    with RosHarness() as harness:
+        yield harness
+
+
+def _arm(ros, **parameters):
+    plant = ros.add(PlantNode, parameters={'model_files': MODELS})
+    controller = ros.add(PipControllerNode, parameters={
+        'joints': JOINTS, 'model_files': MODELS, **parameters})
+    return plant, controller
+
+
+def _collect(ros, topic, msgtype):
+    received = []
+    ros.helper(f'collect_{topic.replace("/", "_")}').create_subscription(
+        msgtype, topic, received.append, 100)
+    return received
+
+
+def test_one_node_commands_each_joint_and_declares_its_parameters(ros):
+    plant, controller = _arm(ros)
+    assert controller.joints == JOINTS and controller.state_label() == 'active'
+    for joint in JOINTS:
+        assert controller.count_publishers(f'{joint}/valve_command') == 1
+        assert controller.count_subscribers(f'{joint}/setpoint') == 1
+        assert controller.get_parameter(f'{joint}.gains.k_i').value == \
+            controller.loop(joint).spec.gains.k_i
+    # Several joints: only the per-joint names.
+    assert not controller.has_parameter('gains.k_i')
+    edges = controller.loop('dipper').spec.idz.dead_zone
+    result = controller.set_parameters_atomically([
+        _parameter('dipper.idz.dead_zone', [edges[0] - 5.0, edges[1] + 5.0])])
+    assert result.successful
+    assert controller.loop('dipper').spec.idz.dead_zone == (edges[0] - 5.0, edges[1] + 5.0)
+    assert controller.loop('boom').spec.idz.dead_zone != (edges[0] - 5.0, edges[1] + 5.0)
+    # An unstable gain of one joint refuses the whole request.
+    before = controller.loop('boom').spec
+    result = controller.set_parameters_atomically([
+        _parameter('boom.gains.k_i', 5.0), _parameter('dipper.idz.beta', 0.0)])
+    assert not result.successful and 'unstable' in result.reason
+    assert controller.loop('boom').spec == before
+
+
+def _parameter(name, value):
+    from rclpy.parameter import Parameter
+    return Parameter(name, value=value)
+
+
+def _offline(start, steps, period=0.01):
+    """The offline closed loop of both joints following the ramp from ``start`` (s)."""
+    sampler = TrajectorySampler(START)
+    sampler.replace(JointTrajectory(tuple(JOINTS), np.array(TIMES), np.array(ENDS)), start)
+    t = np.arange(steps) * period
+    loop = []
+    for path in MODELS:
+        model = load_model(path)
+        spec = design_from_model(model)
+        ahead = np.array([sampler.feedforward(model.joint, float(x), spec.control_period,
+                                              spec.delay_samples) for x in t])
+        loop.append(LoopJoint(model, spec.controller(), sampler.setpoints(model.joint, t),
+                              START[model.joint], ahead))
+    return run_closed_loop(loop, dt=period, control_period=0.05, noise_std=0.0)
+
+
+def test_a_trajectory_is_tracked_as_the_offline_loop_tracks_it(ros):
+    plant, controller = _arm(ros)
+    states = _collect(ros, 'joint_states', JointState)
+    controller_states = _collect(ros, 'boom/controller_state', Float64MultiArray)
+    publisher = ros.helper().create_publisher(TrajectoryMessage, 'joint_trajectory', 10)
+    loop = Lockstep(ros, plant, controllers=[controller])
+    loop.run(20)                                  # the joints hold where they are
+    # Stamped to start at 1 s: the feed-forward looks ahead by the loop's delay.
+    ros.send_trajectory(publisher, [controller], JOINTS, TIMES, ENDS, stamp_ns=10**9)
+    assert controller.trajectories_refused == 0
+    steps = 800
+    loop.run(steps - 20)
+    assert ros.spin_until(lambda: len(states) >= steps)
+    measured = np.degrees([state.position for state in states[:steps]])
+    # Sample j of the plant is stamped (j + 1) periods.
+    traces = _offline(start=1.0 - 0.01, steps=steps)
+    for column, trace in enumerate(traces):
+        np.testing.assert_allclose(measured[:, column], trace.measured, atol=1e-9, rtol=0)
+        moving = (trace.t >= 0.99) & (trace.t <= 4.99)
+        error = trace.measured - trace.setpoint
+        assert np.sqrt(np.mean(error[moving] ** 2)) < 1.5        # deg, RMS during the ramp
+        assert abs(error[-1]) < 0.5                              # deg, final
+    # The controller state of the last step: set-point, angle, error, u, v.
+    assert ros.spin_until(lambda: len(controller_states) >= steps // 5 - 1)
+    last = controller_states[-1]
+    assert [d.label for d in last.layout.dim] == [','.join(CONTROLLER_STATE_LABELS)]
+    setpoint, angle, error, _, v = last.data
+    assert math.degrees(setpoint) == pytest.approx(20.0)
+    assert error == pytest.approx(setpoint - angle)
+    assert v == controller.loop('boom').last_command
+
+
+def test_without_feedforward_the_ramp_lags(ros):
+    plant, controller = _arm(ros, feedforward=False)
+    publisher = ros.helper().create_publisher(TrajectoryMessage, 'joint_trajectory', 10)
+    loop = Lockstep(ros, plant, controllers=[controller])
+    loop.run(5)
+    ros.send_trajectory(publisher, [controller], ['boom'], TIMES, [[20.0]])
+    loop.run(300)                                   # 3 s into the 4 s ramp
+    boom = controller.loop('boom')
+    spec = boom.spec
+    # The PIP alone lags a ramp of r deg per control sample by f0 r / kI (docs/methods.md 4.9).
+    r = 5.0 * spec.control_period
+    lag = spec.gains.f[0] * r / spec.gains.k_i
+    assert boom.last_setpoint - boom.angle == pytest.approx(lag, rel=0.1)
+
+
+def test_trajectories_naming_unknown_joints_or_beyond_the_stops_are_refused_whole(ros):
+    plant, controller = _arm(ros)
+    publisher = ros.helper().create_publisher(TrajectoryMessage, 'joint_trajectory', 10)
+    loop = Lockstep(ros, plant, controllers=[controller])
+    loop.run(5)
+    ros.send_trajectory(publisher, [controller], ['boom', 'bucket'], [1.0], [[10.0, 0.0]])
+    ros.send_trajectory(publisher, [controller], ['boom', 'dipper'], [1.0], [[10.0, -10.0]])
+    assert controller.trajectories_refused == 2
+    assert not any(loop_.following for loop_ in controller.loops)
+    loop.run(100)
+    for joint in JOINTS:
+        assert controller.loop(joint).last_setpoint == pytest.approx(START[joint])
+
+
+def test_a_new_trajectory_replaces_the_rest_and_a_setpoint_ends_it(ros):
+    plant, controller = _arm(ros)
+    publisher = ros.helper().create_publisher(TrajectoryMessage, 'joint_trajectory', 10)
+    setpoint = ros.helper('setpoints').create_publisher(Float64, 'dipper/setpoint', 10)
+    loop = Lockstep(ros, plant, controllers=[controller])
+    loop.run(5)
+    ros.send_trajectory(publisher, [controller], ['boom'], [2.0], [[20.0]])
+    loop.run(100)                                   # 1 s: halfway, at 10 deg
+    ros.send_trajectory(publisher, [controller], ['boom'], [1.0], [[0.0]])
+    boom = controller.loop('boom')
+    loop.run(50)                                    # back towards 0 from ~10 deg
+    # From 10 deg at 1.05 s to 0 at 2.05 s: 5 deg at 1.55 s, within one control period (0.5 deg).
+    assert boom.last_setpoint == pytest.approx(5.0, abs=0.5)
+    loop.run(100)
+    assert boom.last_setpoint == 0.0
+    # The dipper never moved; a step set-point goes on working.
+    count = controller.setpoints_received
+    ros.send(setpoint, Float64(data=math.radians(-80.0)),
+             lambda: controller.setpoints_received > count)
+    loop.run(5)
+    assert controller.loop('dipper').last_setpoint == pytest.approx(-80.0)
