@@ -47,7 +47,6 @@ from hydro_sdp.core.safety import clamp_setpoint, SETPOINT_MARGIN, setpoint_rang
 from hydro_sdp.core.scheduling import seconds_to_ns, watchdog_period_ns
 from hydro_sdp.core.trajectory import check_trajectory, start_time, TrajectorySampler
 from hydro_sdp.files import default_model_path
-from hydro_sdp.ros import qos
 from hydro_sdp.ros.controller_setup import ControllerSetup
 from hydro_sdp.ros.conversions import fill_controller_state, joint_angle, \
     trajectory_from_message
@@ -57,7 +56,7 @@ from hydro_sdp.ros.runner import run_node
 from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
 from rclpy.parameter import Parameter
 from sensor_msgs.msg import JointState
-from std_msgs.msg import Float64, Float64MultiArray
+from std_msgs.msg import Float64
 from trajectory_msgs.msg import JointTrajectory as TrajectoryMessage
 
 SUCCESS = TransitionCallbackReturn.SUCCESS
@@ -289,13 +288,13 @@ class PipControllerNode(ControllerSetup, LifecycleNode):
         if tick == 'resume':
             # Resume bumplessly: the valve was closed, so the last applied increment is 0.
             controller.reset(u=0.0)
-        feedforward = None
+        feedforward: float | None = None
         if loop.following:
             setpoint, feedforward = self._follow(loop, stamp * 1e-9)
-        else:
+        elif loop.setpoint is not None:
             setpoint = loop.setpoint
-            if setpoint is None:
-                setpoint = loop.setpoint = angle   # hold where the joint is until told otherwise
+        else:
+            setpoint = loop.setpoint = angle   # hold where the joint is until told otherwise
         try:
             u, command = controller.step(setpoint, angle, feedforward)
         except HydroSdpError as error:

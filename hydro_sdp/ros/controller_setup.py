@@ -14,6 +14,7 @@ from __future__ import annotations
 from functools import partial
 from typing import Any
 
+from diagnostic_msgs.msg import DiagnosticArray
 from hydro_sdp.core.controller_spec import design_from_model
 from hydro_sdp.core.errors import ConfigurationError
 from hydro_sdp.core.health import joint_health
@@ -30,7 +31,6 @@ from rclpy.node import Node
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64, Float64MultiArray, MultiArrayDimension
 from trajectory_msgs.msg import JointTrajectory as TrajectoryMessage
-from diagnostic_msgs.msg import DiagnosticArray
 
 
 class ControllerSetup:

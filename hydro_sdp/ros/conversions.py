@@ -209,4 +209,3 @@ def fill_controller_state(message: Any, setpoint_deg: float, angle_deg: float, u
     setpoint, angle = math.radians(setpoint_deg), math.radians(angle_deg)
     message.data = [setpoint, angle, setpoint - angle, math.radians(u_deg), float(v)]
     return message
-

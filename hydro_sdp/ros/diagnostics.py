@@ -1,4 +1,4 @@
-"""``diagnostic_msgs/DiagnosticArray`` from the core's :class:`~hydro_sdp.core.health.HealthStatus`."""
+"""``diagnostic_msgs/DiagnosticArray`` from :class:`~hydro_sdp.core.health.HealthStatus`."""
 
 from __future__ import annotations
 
