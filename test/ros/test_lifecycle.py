@@ -117,5 +117,7 @@ def test_an_outside_client_deactivates_and_activates_the_controller(monkeypatch)
         assert nodes.spin_until(lambda: all(len(commands[j]) > sent[j] + 10 for j in JOINTS),
                                 10.0)
         assert nodes.call(get, GetState.Request()).current_state.label == 'active'
+        stderr = nodes.stop('controller_node')
+        assert 'Traceback' not in stderr and 'Error' not in stderr
     finally:
         nodes.close()

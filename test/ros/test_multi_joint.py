@@ -78,7 +78,7 @@ def _parameter(name, value):
 
 
 def _offline(start, steps, period=0.01):
-    """The offline closed loop of both joints following the ramp from ``start`` (s)."""
+    """Run the offline closed loop of both joints following the ramp from ``start`` (s)."""
     sampler = TrajectorySampler(START)
     sampler.replace(JointTrajectory(tuple(JOINTS), np.array(TIMES), np.array(ENDS)), start)
     t = np.arange(steps) * period
