@@ -175,3 +175,46 @@ def test_a_new_trajectory_replaces_the_rest_and_a_setpoint_ends_it(ros):
              lambda: controller.setpoints_received > count)
     loop.run(5)
     assert controller.loop('dipper').last_setpoint == pytest.approx(-80.0)
+
+
+@pytest.mark.slow
+def test_boom_and_dipper_processes_follow_a_ramp(monkeypatch, capsys):
+    from outside import ARM, CONTROLLER, Processes
+    from hydro_sdp.ros.conversions import fill_trajectory
+    nodes = Processes(monkeypatch, ('plant_node', ARM), ('controller_node', CONTROLLER))
+    try:
+        client = nodes.node
+        states, commands = [], []
+        client.create_subscription(JointState, 'joint_states', states.append, 100)
+        client.create_subscription(Float64, 'boom/valve_command', commands.append, 100)
+        publisher = client.create_publisher(TrajectoryMessage, 'joint_trajectory', 10)
+        assert nodes.spin_until(lambda: publisher.get_subscription_count() >= 1
+                                and len(commands) > 5, 30.0), nodes.died()
+        # Every process reads the system clock: start the ramp 1 s from now.
+        start_ns = client.get_clock().now().nanoseconds + 10**9
+        publisher.publish(fill_trajectory(TrajectoryMessage(), JOINTS, TIMES, ENDS, start_ns))
+        start = start_ns * 1e-9
+        nodes.spin_until(lambda: states and _stamp(states[-1]) > start + TIMES[-1] + 3.0, 20.0)
+    finally:
+        nodes.close()
+    sampler = TrajectorySampler(START)
+    sampler.replace(JointTrajectory(tuple(JOINTS), np.array(TIMES), np.array(ENDS)), start)
+    stamps = np.array([_stamp(state) for state in states])
+    measured = np.degrees([[state.position[state.name.index(j)] for j in JOINTS]
+                           for state in states])
+    moving = (stamps >= start) & (stamps <= start + TIMES[-1])
+    assert moving.sum() > 300 and stamps[-1] > start + TIMES[-1] + 2.5
+    with capsys.disabled():
+        print()
+    for column, joint in enumerate(JOINTS):
+        error = measured[:, column] - sampler.setpoints(joint, stamps)
+        rms = float(np.sqrt(np.mean(error[moving] ** 2)))
+        final = float(abs(error[-1]))
+        with capsys.disabled():
+            print(f'{joint}: RMS tracking error during the ramp {rms:.3f} deg, final error '
+                  f'{final:.3f} deg')
+        assert rms < 1.5 and final < 0.5
+
+
+def _stamp(state):
+    return state.header.stamp.sec + state.header.stamp.nanosec * 1e-9
