@@ -84,3 +84,31 @@ def test_diagnostics_of_a_controller_process_go_to_error_when_the_plant_stops(mo
             s.level == ERROR for s in reports[-1].status), 5.0)
     finally:
         nodes.close()
+
+
+def test_the_identifier_reports_estimates_and_a_needed_recalibration(ros):
+    from hydro_sdp.ros.identifier_node import IdentifierNode
+    from test_multi_joint import _ShiftedEstimator
+    plant = ros.add(PlantNode, parameters={'model_files': MODELS})
+    controller = ros.add(PipControllerNode, parameters={'joints': JOINTS, 'model_files': MODELS})
+    identifier = ros.add(IdentifierNode, parameters={
+        'joints': JOINTS, 'model_files': MODELS, 'settle': 0.5})
+    dipper = identifier.item('dipper')
+    dipper.estimator = _ShiftedEstimator(dipper.model, (-40.0, 35.0))
+    reports = []
+    ros.helper('diagnostics').create_subscription(DiagnosticArray, '/diagnostics',
+                                                  reports.append, 10)
+    loop = Lockstep(ros, plant, controllers=[controller], observers=[identifier])
+    loop.run(250)
+    assert ros.spin_until(lambda: sum(
+        r.status[0].name.startswith('sdp_identifier') for r in reports) == 2)
+    last = [r for r in reports if r.status[0].name.startswith('sdp_identifier')][-1]
+    statuses = _by_joint(last)
+    assert statuses['boom'].level == OK
+    assert statuses['dipper'].name == 'sdp_identifier: dipper'
+    assert (statuses['dipper'].level, statuses['dipper'].message) == (
+        WARN, 'recalibration needed')
+    values = {kv.key: kv.value for kv in statuses['dipper'].values}
+    assert values['dead_zone_lower [input units]'] == '-40'
+    assert values['dead_zone_lower [input units] std'] == '1'
+    assert values['IDZ lower edge'] == '-60'          # what the controller still uses

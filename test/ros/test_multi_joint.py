@@ -218,3 +218,50 @@ def test_boom_and_dipper_processes_follow_a_ramp(monkeypatch, capsys):
 
 def _stamp(state):
     return state.header.stamp.sec + state.header.stamp.nanosec * 1e-9
+
+
+class _ShiftedEstimator:
+    """Stands in for the online filter of a joint whose dead-zone moved: a set estimate."""
+
+    delay = 10
+
+    def __init__(self, model, edges, std=1.0):
+        from hydro_sdp.core.online import SdpEstimate
+        static = model.static_map
+        self.model = model
+        self.named = SdpEstimate(edges[0], edges[1], *static.saturation_velocity,
+                                 *static.curvature, std, std, 0.5, 0.5, 1e-4, 1e-4)
+
+    def update(self, v, y):
+        return True
+
+    def named_estimate(self):
+        return self.named
+
+    def estimate(self):
+        from dataclasses import replace
+        from hydro_sdp.core.static_maps import SdpMap
+        static = self.model.static_map
+        return replace(self.model, static_map=SdpMap(
+            dead_zone=self.named.edges, saturation_velocity=static.saturation_velocity,
+            curvature=static.curvature))
+
+
+def test_one_identifier_recalibrates_each_joint_of_one_controller(ros):
+    from hydro_sdp.ros.identifier_node import IdentifierNode
+    plant, controller = _arm(ros)
+    identifier = ros.add(IdentifierNode, parameters={
+        'joints': JOINTS, 'model_files': MODELS, 'auto_recalibrate': True, 'settle': 0.5})
+    assert [item.joint for item in identifier.identified] == JOINTS
+    dipper = identifier.item('dipper')
+    assert dipper.recalibration.reference == (-60.0, 55.0)
+    worn = (-40.0, 35.0)
+    dipper.estimator = _ShiftedEstimator(dipper.model, worn)
+    boom_edges = controller.loop('boom').spec.idz.dead_zone
+    loop = Lockstep(ros, plant, controllers=[controller], observers=[identifier])
+    loop.run(200)
+    assert ros.spin_until(lambda: dipper.recalibrations == 1)
+    assert controller.loop('dipper').spec.idz.dead_zone == worn
+    assert controller.get_parameter('dipper.idz.dead_zone').value.tolist() == list(worn)
+    assert controller.loop('boom').spec.idz.dead_zone == boom_edges
+    assert identifier.item('boom').recalibrations == 0
