@@ -3,8 +3,8 @@ Online identification as a ROS node (``ros2 run hydro_sdp identifier_node``).
 
 One node identifies one joint (``model_file``) or several (``joints`` with
 ``model_files`` in the same order). Per joint it pairs each ``joint_states`` sample
-with the last ``<joint>/valve_command`` received before it (the command in force over the interval that ends at the
-sample, as in a recorded bag), feeds the core
+with the last ``<joint>/valve_command`` received before it (the command in force
+over the interval that ends at the sample, as in a recorded bag), feeds the core
 :class:`~hydro_sdp.core.online.OnlineSdpIdentifier`, and publishes the estimates
 and their standard deviations on ``<joint>/sdp/...`` (``std_msgs/Float64``):
 
@@ -174,7 +174,7 @@ class IdentifierNode(Node):
 
     @property
     def estimator(self) -> Any:
-        """Return the first joint's estimator (settable)."""
+        """Return the online filter of the first joint (settable)."""
         return self.identified[0].estimator
 
     @estimator.setter

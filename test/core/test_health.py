@@ -4,8 +4,8 @@ from hydro_sdp.core.health import ERROR, joint_health, JointSnapshot, OK, WARN
 
 
 def _snapshot(**changes):
-    values = dict(joint='boom', feedback_age=0.01, stale_after=0.25, setpoint=20.0, angle=19.5,
-                  command=120.0, idz_edges=(-90.0, 80.0))
+    values = {'joint': 'boom', 'feedback_age': 0.01, 'stale_after': 0.25, 'setpoint': 20.0,
+              'angle': 19.5, 'command': 120.0, 'idz_edges': (-90.0, 80.0)}
     values.update(changes)
     return JointSnapshot(**values)
 
