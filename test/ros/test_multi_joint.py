@@ -265,3 +265,39 @@ def test_one_identifier_recalibrates_each_joint_of_one_controller(ros):
     assert controller.get_parameter('dipper.idz.dead_zone').value.tolist() == list(worn)
     assert controller.loop('boom').spec.idz.dead_zone == boom_edges
     assert identifier.item('boom').recalibrations == 0
+
+
+def test_trajectory_messages_are_read_in_degrees_with_their_velocities():
+    from hydro_sdp.core.errors import DataError
+    from hydro_sdp.ros.conversions import fill_trajectory, trajectory_from_message
+    from trajectory_msgs.msg import JointTrajectoryPoint
+    message = fill_trajectory(TrajectoryMessage(), JOINTS, [0.5, 2.25], [[10.0, -80.0],
+                                                                         [20.0, -70.0]],
+                              stamp_ns=3 * 10**9 + 5)
+    trajectory, stamp = trajectory_from_message(message)
+    assert stamp == pytest.approx(3.000000005)
+    assert trajectory.joint_names == tuple(JOINTS) and trajectory.velocities is None
+    np.testing.assert_allclose(trajectory.times, [0.5, 2.25])
+    np.testing.assert_allclose(trajectory.positions, [[10.0, -80.0], [20.0, -70.0]])
+    for point in message.points:
+        point.velocities = [math.radians(5.0), 0.0]
+    trajectory, _ = trajectory_from_message(message)
+    np.testing.assert_allclose(trajectory.velocities, [[5.0, 0.0], [5.0, 0.0]])
+    message.points.append(JointTrajectoryPoint(positions=[0.0]))
+    with pytest.raises(DataError, match=r'points \[2\] do not have one position per joint'):
+        trajectory_from_message(message)
+    message.points = []
+    with pytest.raises(DataError, match='no points'):
+        trajectory_from_message(message)
+
+
+def test_one_joint_keeps_its_plain_parameter_names_in_step_with_its_own(ros):
+    controller = ros.add(PipControllerNode)
+    k_i = controller.spec.gains.k_i
+    assert controller.get_parameter('j2.gains.k_i').value == k_i
+    assert controller.set_parameters([_parameter('j2.gains.k_i', 0.9 * k_i)])[0].successful
+    assert controller.get_parameter('gains.k_i').value == pytest.approx(0.9 * k_i)
+    assert controller.set_parameters([_parameter('idz.beta', 0.25)])[0].successful
+    assert controller.get_parameter('j2.idz.beta').value == 0.25
+    assert controller.spec.gains.k_i == pytest.approx(0.9 * k_i)
+    assert controller.spec.idz.beta == 0.25
