@@ -306,8 +306,12 @@ class PipControllerNode(ControllerSetup, LifecycleNode):
         loop.command_pub.publish(Float64(data=float(command)))
         self.outputs += 1
         schedule.stepped(stamp)
-        loop.state_pub.publish(fill_controller_state(self._state_message, setpoint, angle,
-                                                     u, command))
+        # After the command, so it adds nothing to the feedback-to-command latency; skipped
+        # (serialisation and all) while nobody listens.
+        state_pub = loop.state_pub
+        if state_pub.get_subscription_count():
+            state_pub.publish(fill_controller_state(self._state_message, setpoint, angle,
+                                                    u, command))
 
     def _follow(self, loop: JointLoop, t: float) -> tuple[float, float | None]:
         """Return the set-point (deg) and feed-forward (deg per control sample) at ``t`` (s)."""
