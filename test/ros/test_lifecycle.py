@@ -121,3 +121,17 @@ def test_an_outside_client_deactivates_and_activates_the_controller(monkeypatch)
         assert 'Traceback' not in stderr and 'Error' not in stderr
     finally:
         nodes.close()
+
+
+def test_shutdown_from_active_closes_the_valves_and_releases_everything(ros):
+    plant = ros.add(PlantNode, parameters={'model_files': MODELS})
+    controller = ros.add(PipControllerNode, parameters={'joints': JOINTS, 'model_files': MODELS})
+    commands = _commands(ros)
+    loop = Lockstep(ros, plant, controllers=[controller])
+    loop.run(20)
+    sent = {joint: len(commands[joint]) for joint in JOINTS}
+    assert ros.transition(controller, 'shutdown') == 'finalized'
+    assert ros.spin_until(lambda: all(len(commands[j]) == sent[j] + 1 for j in JOINTS))
+    assert all(commands[joint][-1] == 0.0 for joint in JOINTS)
+    assert controller.loops == [] and not controller.has_parameter('boom.gains.k_i')
+    assert controller.count_subscribers('joint_states') == 0          # its own is gone
