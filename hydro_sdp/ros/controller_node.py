@@ -9,7 +9,10 @@ empty controller file name designs from the model). Per joint it subscribes to
 :data:`~hydro_sdp.ros.conversions.CONTROLLER_STATE_LABELS`); one ``joint_states``
 feeds every joint, and ``joint_trajectory`` (``trajectory_msgs/JointTrajectory``)
 moves the set-points as :mod:`~hydro_sdp.core.trajectory` says, with the set-point
-rate fed forward through the IDZ when ``feedforward`` is true. ``/diagnostics``
+rate fed forward through the IDZ when ``feedforward`` is true (a trajectory is
+refused whole, with a warning naming the offenders, if it names a joint not
+controlled or leaves the end stops less ``setpoint_margin``, or if the node is not
+active or has had no feedback from a joint it names). ``/diagnostics``
 gets one status per joint every ``diagnostic_period`` (:mod:`~hydro_sdp.core.health`).
 
 The core :class:`~hydro_sdp.core.pip_controller.PipIdzController` does the
