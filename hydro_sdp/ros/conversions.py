@@ -14,6 +14,8 @@ from math import degrees, isfinite
 from typing import Any, Sequence
 
 from hydro_sdp.core.errors import DataError
+from hydro_sdp.core.trajectory import JointTrajectory
+import numpy as np
 
 
 def stamp_to_ns(stamp: Any) -> int:
@@ -91,4 +93,119 @@ def fill_joint_state(message: Any, stamp_ns: int, names: Sequence[str],
     message.position = [math.radians(a) for a in angles_deg]
     if speeds_deg is not None:
         message.velocity = [math.radians(s) for s in speeds_deg]
+    return message
+
+
+def trajectory_from_message(message: Any) -> tuple[JointTrajectory, float]:
+    """
+    Return a ``trajectory_msgs/JointTrajectory`` in core units, and its stamp.
+
+    Parameters
+    ----------
+    message : trajectory_msgs/JointTrajectory
+        Positions in rad, velocities in rad/s, ``time_from_start`` per point.
+
+    Returns
+    -------
+    tuple[JointTrajectory, float]
+        The trajectory in degrees (velocities in deg/s, kept only when every
+        point gives one per joint) and the header stamp, s (0: start now).
+
+    Raises
+    ------
+    DataError
+        If a point has the wrong number of positions, or the trajectory is not valid.
+
+    """
+    names = tuple(message.joint_names)
+    points = list(message.points)
+    if not points:
+        raise DataError('trajectory refused: it has no points')
+    wrong = [index for index, point in enumerate(points) if len(point.positions) != len(names)]
+    if wrong:
+        raise DataError(f'trajectory refused: points {wrong} do not have one position per '
+                        f'joint ({len(names)})')
+    times = [int(p.time_from_start.sec) + int(p.time_from_start.nanosec) * 1e-9 for p in points]
+    positions = np.degrees(np.array([list(p.positions) for p in points], dtype=np.float64))
+    velocities = None
+    if all(len(point.velocities) == len(names) for point in points):
+        velocities = np.degrees(np.array([list(p.velocities) for p in points],
+                                         dtype=np.float64))
+    try:
+        trajectory = JointTrajectory(names, np.array(times), positions, velocities)
+    except DataError as error:
+        raise DataError(f'trajectory refused: {error}') from None
+    return trajectory, stamp_to_ns(message.header.stamp) * 1e-9
+
+
+def fill_trajectory(message: Any, names: Sequence[str], times: Sequence[float],
+                    positions_deg: Sequence[Sequence[float]], stamp_ns: int = 0) -> Any:
+    """
+    Fill a ``trajectory_msgs/JointTrajectory`` (positions in rad).
+
+    Parameters
+    ----------
+    message : trajectory_msgs/JointTrajectory
+        Message to fill (its points are built with its own point type).
+    names : sequence of str
+        Joint names.
+    times : sequence of float
+        Time from start of each point, s.
+    positions_deg : sequence of sequence of float
+        One row of angles (deg) per point, one value per joint.
+    stamp_ns : int
+        Header stamp, ns (0: start on arrival).
+
+    Returns
+    -------
+    trajectory_msgs/JointTrajectory
+        The message.
+
+    """
+    from trajectory_msgs.msg import JointTrajectoryPoint
+    message.header.stamp.sec = int(stamp_ns // 1_000_000_000)
+    message.header.stamp.nanosec = int(stamp_ns % 1_000_000_000)
+    message.joint_names = list(names)
+    message.points = []
+    for t, row in zip(times, positions_deg):
+        point = JointTrajectoryPoint(positions=[math.radians(a) for a in row])
+        whole = math.floor(t)
+        point.time_from_start.sec = int(whole)
+        point.time_from_start.nanosec = int(round((t - whole) * 1e9))
+        message.points.append(point)
+    return message
+
+
+#: Layout of ``<joint>/controller_state`` (``std_msgs/Float64MultiArray``): one dimension
+#: of size 5 whose label lists, in data order, the set-point, angle and error (set-point less
+#: angle) in rad, the increment ``u`` in rad per control sample, the valve command ``v`` in
+#: input units.
+CONTROLLER_STATE_LABELS = ('setpoint_rad', 'angle_rad', 'error_rad', 'u_rad_per_sample',
+                           'v_command')
+
+
+def fill_controller_state(message: Any, setpoint_deg: float, angle_deg: float, u_deg: float,
+                          v: float) -> Any:
+    """
+    Fill a ``Float64MultiArray`` with one control step (layout: :data:`CONTROLLER_STATE_LABELS`).
+
+    Parameters
+    ----------
+    message : std_msgs/Float64MultiArray
+        Message whose ``layout`` is already set (:data:`CONTROLLER_STATE_LABELS`).
+    setpoint_deg, angle_deg : float
+        Set-point and measured angle, degrees.
+    u_deg : float
+        Increment applied, degrees per control sample.
+    v : float
+        Valve command, input units.
+
+    Returns
+    -------
+    std_msgs/Float64MultiArray
+        The message.
+
+    """
+    setpoint, angle = math.radians(setpoint_deg), math.radians(angle_deg)
+    message.data = [setpoint, angle, setpoint - angle, math.radians(u_deg), float(v)]
     return message

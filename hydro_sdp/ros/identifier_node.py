@@ -1,9 +1,10 @@
 """
 Online identification as a ROS node (``ros2 run hydro_sdp identifier_node``).
 
-Pairs each ``joint_states`` sample of its joint with the last valve command
-received before it (the command in force over the interval that ends at the
-sample, as in a recorded bag), feeds the core
+One node identifies one joint (``model_file``) or several (``joints`` with
+``model_files`` in the same order). Per joint it pairs each ``joint_states`` sample
+with the last ``<joint>/valve_command`` received before it (the command in force
+over the interval that ends at the sample, as in a recorded bag), feeds the core
 :class:`~hydro_sdp.core.online.OnlineSdpIdentifier`, and publishes the estimates
 and their standard deviations on ``<joint>/sdp/...`` (``std_msgs/Float64``):
 
@@ -18,30 +19,36 @@ and their standard deviations on ``<joint>/sdp/...`` (``std_msgs/Float64``):
 
 The core :class:`~hydro_sdp.core.recalibration.Recalibration` decides when the
 estimates call for a new IDZ; with ``auto_recalibrate`` the node then sets the
-controller's ``idz.dead_zone`` and ``idz.slopes`` parameters. Every writable
-parameter takes effect at once.
+controller's ``<joint>.idz.dead_zone`` and ``<joint>.idz.slopes`` parameters
+(a one-joint controller keeps its plain ``idz.*`` names in step). ``/diagnostics``
+gets one status per joint every ``diagnostic_period``: the estimates with their
+standard deviations, WARN when a recalibration is needed or samples stop. Every
+writable parameter takes effect at once.
 
 """
 
 from __future__ import annotations
 
-from dataclasses import asdict, replace
+from dataclasses import replace
+from functools import partial
 import math
 from typing import Any
 
+from diagnostic_msgs.msg import DiagnosticArray
 from hydro_sdp.core.controller_spec import idz_for_model
-from hydro_sdp.core.errors import DataError, HydroSdpError
+from hydro_sdp.core.errors import ConfigurationError, DataError, HydroSdpError
+from hydro_sdp.core.health import joint_health
 from hydro_sdp.core.idz import InverseDeadZone
 from hydro_sdp.core.model import JointModel
-from hydro_sdp.core.online import input_scale, OnlineSdpIdentifier, OnlineSettings, SdpEstimate
-from hydro_sdp.core.recalibration import (Decision, recalibrated_idz, Recalibration,
-                                          RecalibrationPolicy)
+from hydro_sdp.core.online import input_scale, OnlineSdpIdentifier, OnlineSettings
+from hydro_sdp.core.recalibration import Decision, recalibrated_idz, RecalibrationPolicy
 from hydro_sdp.files import default_model_path, load_model
 from hydro_sdp.ros import conversions, qos
+from hydro_sdp.ros.diagnostics import diagnostic_array
+from hydro_sdp.ros.identifier_joint import double_array, estimate_topics, IdentifiedJoint
 from hydro_sdp.ros.params import declare, value_of
 from hydro_sdp.ros.runner import run_node
-from rcl_interfaces.msg import (Parameter as ParameterMessage, ParameterType, ParameterValue,
-                                SetParametersResult)
+from rcl_interfaces.msg import SetParametersResult
 from rcl_interfaces.srv import SetParametersAtomically
 from rclpy.event_handler import PublisherEventCallbacks
 from rclpy.node import Node
@@ -50,37 +57,15 @@ from rclpy.task import Future
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Bool, Float64
 
+__all__ = ['estimate_topics', 'IdentifierNode', 'main']
+
 #: Recalibration thresholds, by parameter name (the fields of RecalibrationPolicy).
 POLICY_PARAMETERS = ('significance', 'settle', 'confidence', 'min_change', 'cooldown')
 
 
-def estimate_topics(estimate: SdpEstimate) -> dict[str, float]:
-    """
-    Return the estimate as topic values: saturation speeds in rad/s, the rest as they are.
-
-    Parameters
-    ----------
-    estimate : SdpEstimate
-        The estimate (speeds in deg/s).
-
-    Returns
-    -------
-    dict[str, float]
-        Value by topic name under ``<joint>/sdp/``.
-
-    """
-    values = {}
-    for name, value in asdict(estimate).items():
-        if name.startswith('saturation_'):
-            base, std = (name[:-4], '_std') if name.endswith('_std') else (name, '')
-            name, value = f'{base}_rad_s{std}', math.radians(value)
-        values[name] = float(value)
-    return values
-
-
 class IdentifierNode(Node):
     """
-    Online SDP identifier of one joint, with optional automatic IDZ recalibration.
+    Online SDP identifier of one or several joints, with optional automatic IDZ recalibration.
 
     Parameters
     ----------
@@ -95,9 +80,20 @@ class IdentifierNode(Node):
         super().__init__(node_name, **kwargs)
         model_file = declare(self, 'model_file', str(default_model_path()),
                              'model file to start from (kind sdp)', read_only=True)
-        self.model = load_model(model_file)
-        self.joint = declare(self, 'joint', self.model.joint, 'joint name in JointState',
-                             read_only=True)
+        joints = declare(self, 'joints', Parameter.Type.STRING_ARRAY,
+                         'joints of one node, in JointState (overrides model_file)',
+                         read_only=True)
+        model_files = declare(self, 'model_files', Parameter.Type.STRING_ARRAY,
+                              'model file of each of the joints', read_only=True)
+        models = [load_model(path) for path in (model_files or [model_file])]
+        if joints:
+            if len(models) != len(joints) or len(set(joints)) != len(joints):
+                raise ConfigurationError(f'joints needs distinct names, one per model file '
+                                         f'({len(models)}), got {list(joints)}')
+            names = list(joints)
+        else:
+            names = [declare(self, 'joint', models[0].joint, 'joint name in JointState',
+                             read_only=True)]
         self.sample_period = declare(self, 'sample_period', 0.01,
                                      'sample period of joint_states, s', low=1e-4, high=1.0,
                                      read_only=True)
@@ -114,6 +110,9 @@ class IdentifierNode(Node):
         self.control_period = declare(self, 'control_period', 0.05,
                                       'control period of that controller, s', low=1e-3,
                                       high=10.0, read_only=True)
+        diagnostic_period = declare(self, 'diagnostic_period', 1.0,
+                                    'time between /diagnostics reports, s', low=0.01,
+                                    high=60.0, read_only=True)
         defaults = RecalibrationPolicy()
         declare(self, 'significance', defaults.significance,
                 'edge change that counts as real, in standard deviations of the estimate',
@@ -124,49 +123,92 @@ class IdentifierNode(Node):
         declare(self, 'confidence', defaults.confidence,
                 'largest edge std to act on, fraction of the dead-zone width',
                 low=1e-4, high=1.0)
-        declare(self, 'min_change', defaults.min_change * input_scale(self.model.input_limits),
+        declare(self, 'min_change', defaults.min_change * input_scale(models[0].input_limits),
                 'smallest edge change worth a recalibration, input units', low=0.0, high=1e6)
         declare(self, 'cooldown', defaults.cooldown, 'least time between recalibrations, s',
                 low=0.0, high=3600.0)
-        self.estimator = OnlineSdpIdentifier(
-            self.model, self.sample_period,
-            OnlineSettings.for_input_limits(self.model.input_limits, noise_std=noise))
-        # The IDZ edges the controller uses: those of the model it was designed from.
-        self.recalibration = Recalibration(self.estimator.named_estimate().edges,
-                                           self._policy([]))
+        self.identified = [
+            IdentifiedJoint(name, model, OnlineSdpIdentifier(
+                model, self.sample_period,
+                OnlineSettings.for_input_limits(model.input_limits, noise_std=noise)),
+                self._policy([]))
+            for name, model in zip(names, models)]
         self.samples = 0
         self.commands_received = 0
-        self.recalibrations = 0
-        #: Times of the accepted recalibrations (their requests), s of the node clock.
-        self.recalibration_times: list[float] = []
-        self.last_decision: Decision | None = None
-        self._command: float | None = None
-        self._last_publish: int | None = None
-        self._pending: Future | None = None
-        base = f'{self.joint}/sdp/'
-        # Fifteen estimate topics: skip their QoS event handlers, which cost every wait.
+        # Fifteen estimate topics per joint: skip their QoS event handlers, which cost
+        # every wait.
         quiet = PublisherEventCallbacks(use_default_callbacks=False)
-        names = tuple(estimate_topics(self.estimator.named_estimate())) + (
-            'delay', 'slope_negative', 'slope_positive')
-        self._estimate_pubs = {
-            name: self.create_publisher(Float64, base + name, qos.ESTIMATE_QOS,
-                                        event_callbacks=quiet)
-            for name in names}
-        self._flag_pub = self.create_publisher(Bool, base + 'recalibration_needed',
-                                               qos.ESTIMATE_QOS)
+        for item in self.identified:
+            base = f'{item.joint}/sdp/'
+            topics = tuple(estimate_topics(item.estimator.named_estimate())) + (
+                'delay', 'slope_negative', 'slope_positive')
+            item.estimate_pubs = {
+                name: self.create_publisher(Float64, base + name, qos.ESTIMATE_QOS,
+                                            event_callbacks=quiet)
+                for name in topics}
+            item.flag_pub = self.create_publisher(Bool, base + 'recalibration_needed',
+                                                  qos.ESTIMATE_QOS)
+            item.command_sub = self.create_subscription(
+                Float64, f'{item.joint}/valve_command',
+                partial(self._on_command, item=item), qos.COMMAND_QOS)
         self._state_sub = self.create_subscription(JointState, 'joint_states', self._on_state,
                                                    qos.STATE_QOS)
-        self._command_sub = self.create_subscription(Float64, f'{self.joint}/valve_command',
-                                                     self._on_command, qos.COMMAND_QOS)
         self._client = self.create_client(SetParametersAtomically,
                                           f'{self.controller_name}/set_parameters_atomically')
+        self._diagnostics_pub = self.create_publisher(DiagnosticArray, '/diagnostics',
+                                                      qos.DIAGNOSTICS_QOS)
+        self._diagnostics = self.create_timer(diagnostic_period, self.publish_diagnostics)
         self.add_on_set_parameters_callback(self._check_parameters)
         self.add_post_set_parameters_callback(self._apply_parameters)
 
+    # The first (only) joint under the names of the one-joint node.
+    @property
+    def joint(self) -> str:
+        """Return the first joint's name."""
+        return self.identified[0].joint
+
+    @property
+    def model(self) -> JointModel:
+        """Return the first joint's starting model."""
+        return self.identified[0].model
+
+    @property
+    def estimator(self) -> Any:
+        """Return the online filter of the first joint (settable)."""
+        return self.identified[0].estimator
+
+    @estimator.setter
+    def estimator(self, value: Any) -> None:
+        self.identified[0].estimator = value
+
+    @property
+    def recalibration(self) -> Any:
+        """Return the first joint's recalibration decision."""
+        return self.identified[0].recalibration
+
+    @property
+    def last_decision(self) -> Decision | None:
+        """Return the first joint's last recalibration decision."""
+        return self.identified[0].last_decision
+
+    @property
+    def recalibrations(self) -> int:
+        """Return the recalibrations accepted, every joint together."""
+        return sum(item.recalibrations for item in self.identified)
+
+    @property
+    def recalibration_times(self) -> list[float]:
+        """Return the first joint's accepted recalibration times, s."""
+        return self.identified[0].recalibration_times
+
     @property
     def reference(self) -> tuple[float, float]:
-        """Return the IDZ edges the controller uses, input units."""
-        return self.recalibration.reference
+        """Return the IDZ edges the controller uses for the first joint, input units."""
+        return self.identified[0].recalibration.reference
+
+    def item(self, joint: str) -> IdentifiedJoint:
+        """Return the identification of ``joint``."""
+        return next(item for item in self.identified if item.joint == joint)
 
     def _policy(self, parameters: list[Parameter]) -> RecalibrationPolicy:
         # The thresholds after a set request (current values for the names it leaves out).
@@ -183,58 +225,70 @@ class IdentifierNode(Node):
 
     def _apply_parameters(self, parameters: list[Parameter]) -> None:
         # Called once the whole request is accepted: every writable parameter takes effect.
-        self.recalibration.policy = self._policy([])
+        policy = self._policy([])
+        for item in self.identified:
+            item.recalibration.policy = policy
         self.auto_recalibrate = bool(self.get_parameter('auto_recalibrate').value)
         self.publish_period = float(self.get_parameter('publish_period').value)
 
-    def _on_command(self, message: Float64) -> None:
+    def _on_command(self, message: Float64, item: IdentifiedJoint | None = None) -> None:
+        item = item or self.identified[0]
         if math.isfinite(message.data):
-            self._command = float(message.data)
+            item.command = float(message.data)
             self.commands_received += 1
 
     def _on_state(self, message: JointState) -> None:
-        try:
-            stamp, angle = conversions.joint_angle(message, self.joint)
-        except DataError as error:
-            self.get_logger().warning(f'skipped a sample: {error}', throttle_duration_sec=5.0,
-                                      throttle_time_source_type=self.get_clock())
-            return
-        self.samples += 1
-        if self._command is None:
-            return
-        self.estimator.update(self._command, angle)
-        # The next publication is due one period after the last: a new period counts at once.
-        if self._last_publish is None or \
-                stamp >= self._last_publish + int(self.publish_period * 1e9):
-            self._last_publish = stamp
-            self._publish(stamp)
+        read = False
+        now = self.get_clock().now().nanoseconds
+        for item in self.identified:
+            try:
+                stamp, angle = conversions.joint_angle(message, item.joint)
+            except DataError as error:
+                self.get_logger().warning(f'skipped a sample: {error}',
+                                          throttle_duration_sec=5.0,
+                                          throttle_time_source_type=self.get_clock())
+                continue
+            read = True
+            item.angle = angle
+            item.last_sample_ns = now
+            if item.command is None:
+                continue
+            item.estimator.update(item.command, angle)
+            # The next publication is due one period after the last: a new period counts at once.
+            if item.last_publish is None or \
+                    stamp >= item.last_publish + int(self.publish_period * 1e9):
+                item.last_publish = stamp
+                self._publish(item, stamp)
+        if read:
+            self.samples += 1
 
-    def _publish(self, stamp: int) -> None:
-        estimate = self.estimator.named_estimate()
+    def _publish(self, item: IdentifiedJoint, stamp: int) -> None:
+        estimator = item.estimator
+        estimate = estimator.named_estimate()
         values = estimate_topics(estimate)
-        values['delay'] = self.estimator.delay * self.sample_period
-        model = self.estimator.estimate()
-        decision = self.recalibration.observe(stamp * 1e-9, estimate)
-        self.last_decision = decision
+        values['delay'] = estimator.delay * self.sample_period
+        model = estimator.estimate()
+        decision = item.recalibration.observe(stamp * 1e-9, estimate)
+        item.last_decision = decision
         try:
             values['slope_negative'], values['slope_positive'] = idz_for_model(
                 model, self.control_period).slopes
         except HydroSdpError:
             pass
         for name, value in values.items():
-            self._estimate_pubs[name].publish(Float64(data=float(value)))
-        self._flag_pub.publish(Bool(data=decision.needed))
-        if decision.due and self.auto_recalibrate and self._pending is None:
+            item.estimate_pubs[name].publish(Float64(data=float(value)))
+        item.flag_pub.publish(Bool(data=decision.needed))
+        if decision.due and self.auto_recalibrate and item.pending is None:
             try:
                 wanted = recalibrated_idz(model, decision.edges, self.control_period)
             except HydroSdpError as error:
-                self.get_logger().warning(f'no IDZ from the estimate: {error}',
+                self.get_logger().warning(f'{item.joint}: no IDZ from the estimate: {error}',
                                           throttle_duration_sec=5.0,
                                           throttle_time_source_type=self.get_clock())
                 return
-            self._recalibrate(wanted, stamp)
+            self._recalibrate(item, wanted, stamp)
 
-    def _recalibrate(self, idz: InverseDeadZone, stamp: int) -> None:
+    def _recalibrate(self, item: IdentifiedJoint, idz: InverseDeadZone, stamp: int) -> None:
         if not self._client.service_is_ready():
             self.get_logger().warning(
                 f'{self.controller_name} offers no set_parameters_atomically service; '
@@ -242,35 +296,41 @@ class IdentifierNode(Node):
                 throttle_time_source_type=self.get_clock())
             return
         request = SetParametersAtomically.Request()
-        request.parameters = [_double_array('idz.dead_zone', idz.dead_zone),
-                              _double_array('idz.slopes', idz.slopes)]
-        self._pending = self._client.call_async(request)
-        self.recalibration.attempted(stamp * 1e-9)
+        edges_name, slopes_name = item.parameter_names()
+        request.parameters = [double_array(edges_name, idz.dead_zone),
+                              double_array(slopes_name, idz.slopes)]
+        item.pending = self._client.call_async(request)
+        item.recalibration.attempted(stamp * 1e-9)
         edges = idz.dead_zone
 
         def done(future: Future) -> None:
-            self._pending = None
+            item.pending = None
             answer = future.result()
             results = [answer.result] if answer is not None else []
             if results and all(result.successful for result in results):
-                self.recalibration.accepted(edges)
-                self.recalibrations += 1
-                self.recalibration_times.append(stamp * 1e-9)
-                self.get_logger().info(f'recalibrated the IDZ of {self.controller_name}: '
-                                       f'edges {[round(e, 4) for e in edges]}')
+                item.recalibration.accepted(edges)
+                item.recalibrations += 1
+                item.recalibration_times.append(stamp * 1e-9)
+                self.get_logger().info(f'recalibrated the IDZ of {item.joint} in '
+                                       f'{self.controller_name}: edges '
+                                       f'{[round(e, 4) for e in edges]}')
             else:
                 reasons = '; '.join(result.reason for result in results) or 'no answer'
-                self.get_logger().warning(f'recalibration refused: {reasons}')
-        self._pending.add_done_callback(done)
+                self.get_logger().warning(f'{item.joint}: recalibration refused: {reasons}')
+        item.pending.add_done_callback(done)
 
-    def estimate(self) -> JointModel:
-        """Return the current estimate as a joint model."""
-        return replace(self.estimator.estimate(), joint=self.joint)
+    def publish_diagnostics(self) -> None:
+        """Publish one status per joint on ``/diagnostics``."""
+        now = self.get_clock().now().nanoseconds
+        stale_after = max(0.5, 10.0 * self.sample_period)
+        statuses = [joint_health(item.snapshot(now, stale_after)) for item in self.identified]
+        self._diagnostics_pub.publish(diagnostic_array(
+            now, self.get_name(), [item.joint for item in self.identified], statuses))
 
-
-def _double_array(name: str, values: tuple[float, ...]) -> ParameterMessage:
-    return ParameterMessage(name=name, value=ParameterValue(
-        type=ParameterType.PARAMETER_DOUBLE_ARRAY, double_array_value=[float(v) for v in values]))
+    def estimate(self, joint: str | None = None) -> JointModel:
+        """Return the current estimate of ``joint`` (default: the first) as a joint model."""
+        item = self.identified[0] if joint is None else self.item(joint)
+        return replace(item.estimator.estimate(), joint=item.joint)
 
 
 def main(args: list[str] | None = None) -> None:

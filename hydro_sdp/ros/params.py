@@ -23,6 +23,8 @@ _WIDENED = {Parameter.Type.INTEGER: Parameter.Type.DOUBLE,
 # Marks a node whose pre-set callback is registered (rclpy concatenates the lists that
 # several pre-set callbacks return, so there must be exactly one).
 _HOOKED = '_hydro_sdp_integers_as_doubles'
+# Twin parameter names of a node (name -> twin), kept in step by the pre-set callback.
+_ALIASES = '_hydro_sdp_parameter_aliases'
 
 
 def as_double(parameter: Parameter, declared: Parameter.Type) -> Parameter:
@@ -52,7 +54,7 @@ def as_double(parameter: Parameter, declared: Parameter.Type) -> Parameter:
 
 def integers_as_doubles(node: Node, parameters: list[Parameter]) -> list[Parameter]:
     """
-    Pre-set callback: convert integer values of declared double parameters.
+    Pre-set callback: convert integer values of declared double parameters, add twins.
 
     Parameters
     ----------
@@ -64,11 +66,48 @@ def integers_as_doubles(node: Node, parameters: list[Parameter]) -> list[Paramet
     Returns
     -------
     list of Parameter
-        The request with integers of double parameters as doubles.
+        The request with integers of double parameters as doubles, and the twin
+        (:func:`alias`) of every name it sets whose twin it does not set.
 
     """
-    return [as_double(p, Parameter.Type(node.describe_parameter(p.name).type))
-            if node.has_parameter(p.name) else p for p in parameters]
+    converted = [as_double(p, Parameter.Type(node.describe_parameter(p.name).type))
+                 if node.has_parameter(p.name) else p for p in parameters]
+    aliases: dict[str, str] = getattr(node, _ALIASES, {})
+    if not aliases:
+        return converted
+    # A value set under one of two twin names is set under the other too, in the same request.
+    named = {p.name for p in converted}
+    twins = [Parameter(aliases[p.name], p.type_, p.value) for p in converted
+             if p.name in aliases and aliases[p.name] not in named]
+    return converted + twins
+
+
+def alias(node: Node, name: str, twin: str) -> None:
+    """
+    Make two declared parameters one: a set request naming either sets both.
+
+    Parameters
+    ----------
+    node : Node
+        The node (its pre-set callback is :func:`integers_as_doubles`, see :func:`declare`).
+    name, twin : str
+        The two names.
+
+    """
+    aliases = getattr(node, _ALIASES, None)
+    if aliases is None:
+        aliases = {}
+        setattr(node, _ALIASES, aliases)
+    aliases[name], aliases[twin] = twin, name
+
+
+def unalias(node: Node, names: list[str]) -> None:
+    """Forget the twins of ``names`` (before undeclaring them)."""
+    aliases = getattr(node, _ALIASES, {})
+    for name in names:
+        twin = aliases.pop(name, None)
+        if twin is not None:
+            aliases.pop(twin, None)
 
 
 def _declared_type(default: Any) -> Parameter.Type | None:

@@ -8,3 +8,5 @@ STATE_QOS = QoSProfile(depth=10)
 COMMAND_QOS = QoSProfile(depth=10)
 #: identifier estimates: reliable, depth 10.
 ESTIMATE_QOS = QoSProfile(depth=10)
+#: /diagnostics: reliable, depth 10.
+DIAGNOSTICS_QOS = QoSProfile(depth=10)

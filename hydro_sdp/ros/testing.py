@@ -139,6 +139,64 @@ class RosHarness:
         while time.monotonic() < deadline:
             self.executor.spin_once(timeout_sec=0.005)
 
+    def transition(self, node: Any, transition: str) -> str:
+        """
+        Run a lifecycle transition of ``node`` in this thread; return the state reached.
+
+        Parameters
+        ----------
+        node : rclpy.lifecycle.LifecycleNode
+            The node.
+        transition : str
+            ``configure``, ``activate``, ``deactivate``, ``cleanup`` or ``shutdown``.
+
+        Returns
+        -------
+        str
+            Label of the state after the transition (``active``, ``inactive``...).
+
+        """
+        getattr(node, f'trigger_{transition}')()
+        return str(node._state_machine.current_state[1])
+
+    def send(self, publisher: Any, message: Any, received: Callable[[], bool],
+             timeout: float = 5.0) -> None:
+        """Publish ``message`` and spin until ``received()`` holds (the receiver took it)."""
+        publisher.publish(message)
+        if not self.spin_until(received, timeout):
+            raise TimeoutError(f'{type(message).__name__} on {publisher.topic_name} was not '
+                               'received')
+
+    def send_trajectory(self, publisher: Any, controllers: Iterable[Any], names: list[str],
+                        times: list[float], positions_deg: list[list[float]],
+                        stamp_ns: int = 0) -> None:
+        """
+        Publish a ``JointTrajectory`` (angles in degrees) and wait until every controller took it.
+
+        Parameters
+        ----------
+        publisher : Publisher
+            A ``trajectory_msgs/JointTrajectory`` publisher on ``joint_trajectory``.
+        controllers : iterable of PipControllerNode
+            Controllers that must receive it (``trajectories_received`` counts).
+        names : list of str
+            Joint names.
+        times : list of float
+            Time from start of each point, s.
+        positions_deg : list of list of float
+            One row of angles per point, degrees.
+        stamp_ns : int
+            Header stamp, ns (0: start on arrival).
+
+        """
+        from hydro_sdp.ros.conversions import fill_trajectory
+        from trajectory_msgs.msg import JointTrajectory
+        targets = list(controllers)
+        counts = [c.trajectories_received for c in targets]
+        message = fill_trajectory(JointTrajectory(), names, times, positions_deg, stamp_ns)
+        self.send(publisher, message, lambda: all(
+            c.trajectories_received > n for c, n in zip(targets, counts)))
+
     def close(self) -> None:
         """Destroy the nodes and shut the context down."""
         self.executor.shutdown()
@@ -191,8 +249,10 @@ class Lockstep:
         self.steps = 0
         listeners = len(self.controllers) + len(self.observers)
         matched = harness.spin_until(lambda: plant.count_subscribers('joint_states') >= listeners
-                                     and all(c.count_subscribers(f'{c.joint}/valve_command') >= 1
-                                             for c in self.controllers), timeout)
+                                     and all(c.count_subscribers(f'{joint}/valve_command') >= 1
+                                             for c in self.controllers
+                                             for joint in getattr(c, 'joints', [c.joint])),
+                                     timeout)
         if not matched:
             raise TimeoutError('the nodes did not discover each other')
 

@@ -1,0 +1,115 @@
+"""
+One joint of the identifier node: its estimator, recalibration decision and topics.
+
+:class:`IdentifiedJoint` holds what :class:`~hydro_sdp.ros.identifier_node.IdentifierNode`
+keeps per joint; :func:`estimate_topics` gives the published values.
+
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict
+import math
+from typing import Any
+
+from hydro_sdp.core.health import JointSnapshot
+from hydro_sdp.core.model import JointModel
+from hydro_sdp.core.online import OnlineSdpIdentifier, SdpEstimate
+from hydro_sdp.core.recalibration import Decision, Recalibration, RecalibrationPolicy
+from rcl_interfaces.msg import Parameter as ParameterMessage, ParameterType, ParameterValue
+
+
+def estimate_topics(estimate: SdpEstimate) -> dict[str, float]:
+    """
+    Return the estimate as topic values: saturation speeds in rad/s, the rest as they are.
+
+    Parameters
+    ----------
+    estimate : SdpEstimate
+        The estimate (speeds in deg/s).
+
+    Returns
+    -------
+    dict[str, float]
+        Value by topic name under ``<joint>/sdp/``.
+
+    """
+    values = {}
+    for name, value in asdict(estimate).items():
+        if name.startswith('saturation_'):
+            base, std = (name[:-4], '_std') if name.endswith('_std') else (name, '')
+            name, value = f'{base}_rad_s{std}', math.radians(value)
+        values[name] = float(value)
+    return values
+
+
+def estimate_pairs(estimate: SdpEstimate) -> dict[str, tuple[float, float]]:
+    """Return each estimated value with its standard deviation, by name with its unit."""
+    values = asdict(estimate)
+    units = {'dead_zone': 'input units', 'saturation': 'deg/s', 'curvature': '1/input unit'}
+    pairs = {}
+    for name, value in values.items():
+        if name.endswith('_std'):
+            continue
+        unit = next(u for prefix, u in units.items() if name.startswith(prefix))
+        pairs[f'{name} [{unit}]'] = (float(value), float(values[f'{name}_std']))
+    return pairs
+
+
+def double_array(name: str, values: tuple[float, ...]) -> ParameterMessage:
+    """Return a double-array parameter message."""
+    return ParameterMessage(name=name, value=ParameterValue(
+        type=ParameterType.PARAMETER_DOUBLE_ARRAY, double_array_value=[float(v) for v in values]))
+
+
+class IdentifiedJoint:
+    """
+    The online identification of one joint.
+
+    Parameters
+    ----------
+    joint : str
+        Joint name in JointState, topics, and the controller's parameters.
+    model : JointModel
+        The model to start from.
+    estimator : OnlineSdpIdentifier
+        The online filter.
+    policy : RecalibrationPolicy
+        The recalibration thresholds.
+
+    """
+
+    def __init__(self, joint: str, model: JointModel, estimator: OnlineSdpIdentifier,
+                 policy: RecalibrationPolicy) -> None:
+        self.joint = joint
+        self.model = model
+        self.estimator: Any = estimator
+        # The IDZ edges the controller uses: those of the model it was designed from.
+        self.recalibration = Recalibration(estimator.named_estimate().edges, policy)
+        self.recalibrations = 0
+        #: Times of the accepted recalibrations (their requests), s of the node clock.
+        self.recalibration_times: list[float] = []
+        self.last_decision: Decision | None = None
+        self.command: float | None = None
+        self.angle: float | None = None
+        self.last_publish: int | None = None
+        self.last_sample_ns: int | None = None
+        self.pending: Any = None
+        # Set by the node.
+        self.estimate_pubs: dict[str, Any] = {}
+        self.flag_pub: Any = None
+        self.command_sub: Any = None
+
+    def parameter_names(self) -> tuple[str, str]:
+        """Return the controller's parameters of this joint's IDZ edges and slopes."""
+        return f'{self.joint}.idz.dead_zone', f'{self.joint}.idz.slopes'
+
+    def snapshot(self, now_ns: int, stale_after: float) -> JointSnapshot:
+        """Return the joint's state for ``/diagnostics``."""
+        age = None if self.last_sample_ns is None else max(now_ns - self.last_sample_ns, 0) * 1e-9
+        decision = self.last_decision
+        return JointSnapshot(
+            joint=self.joint, feedback_age=age, stale_after=stale_after,
+            recalibration_needed=bool(decision is not None and decision.needed),
+            angle=self.angle, command=self.command, idz_edges=self.recalibration.reference,
+            estimates=estimate_pairs(self.estimator.named_estimate()))

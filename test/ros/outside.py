@@ -1,0 +1,91 @@
+"""Node processes on the host and a client node in the test's process (separate-process tests)."""
+
+import os
+from pathlib import Path
+import random
+import shutil
+import subprocess
+import sys
+import time
+
+from conftest import REPO
+import pytest
+import rclpy
+
+MODELS = [str(REPO / 'config' / 'lucie_boom.yaml'), str(REPO / 'config' / 'lucie_dipper.yaml')]
+ARM = ['-p', f"model_files:=[{','.join(MODELS)}]"]
+CONTROLLER = ['-p', 'joints:=[boom,dipper]', *ARM]
+
+
+def script(name):
+    """Return the console script ``name`` of this environment, or None."""
+    return shutil.which(name, path=str(Path(sys.executable).parent))
+
+
+class Processes:
+    """Node processes in a fresh ROS domain found on this host, and a client node."""
+
+    def __init__(self, monkeypatch, *commands):
+        if any(script(name) is None for name, _ in commands):
+            pytest.skip('the console scripts are not installed in this environment')
+        domain = random.randint(1, 200)
+        # The in-process harness turns discovery off; a process must be found on the host.
+        monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
+        environment = dict(os.environ, ROS_DOMAIN_ID=str(domain))
+        self.processes = {name: subprocess.Popen([script(name), '--ros-args', *arguments],
+                                                 env=environment, stdout=subprocess.DEVNULL,
+                                                 stderr=subprocess.PIPE, text=True)
+                          for name, arguments in commands}
+        from rclpy.context import Context
+        from rclpy.executors import SingleThreadedExecutor
+        from rclpy.node import Node
+        self.context = Context()
+        rclpy.init(context=self.context, domain_id=domain)
+        self.node = Node('outside_client', context=self.context)
+        self.executor = SingleThreadedExecutor(context=self.context)
+        self.executor.add_node(self.node)
+
+    def died(self):
+        """Describe the processes that ended, with their stderr."""
+        return '; '.join(f'{name} ended: {process.stderr.read()}'
+                         for name, process in self.processes.items()
+                         if process.poll() is not None) or 'all alive'
+
+    def spin_until(self, predicate, timeout=10.0):
+        """Spin the client until ``predicate()`` holds or ``timeout`` s pass; return it."""
+        deadline = time.monotonic() + timeout
+        while not predicate():
+            if time.monotonic() > deadline:
+                return False
+            self.executor.spin_once(timeout_sec=0.01)
+        return True
+
+    def spin_for(self, seconds):
+        """Spin the client for ``seconds``."""
+        self.spin_until(lambda: False, seconds)
+
+    def call(self, client, request, timeout=10.0):
+        """Call a service and return its answer."""
+        assert client.wait_for_service(timeout_sec=30.0), self.died()
+        future = client.call_async(request)
+        assert self.spin_until(future.done, timeout), 'no answer from the service'
+        return future.result()
+
+    def stop(self, name):
+        """Stop one process with SIGTERM; return its stderr."""
+        process = self.processes.pop(name)
+        process.terminate()
+        try:
+            _, stderr = process.communicate(timeout=10)
+        except subprocess.TimeoutExpired:
+            process.kill()
+            _, stderr = process.communicate(timeout=10)
+        return stderr
+
+    def close(self):
+        """Stop every process and the client."""
+        for name in list(self.processes):
+            self.stop(name)
+        self.executor.shutdown()
+        self.node.destroy_node()
+        rclpy.try_shutdown(context=self.context)
