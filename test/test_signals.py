@@ -90,8 +90,9 @@ def test_sigint_during_simulate(tmp_path, delay):
     _check_interrupted(code, stderr)
     assert _leftovers(tmp_path) == []
     bag = tmp_path / 'out' / 'bag'
-    # The bag is there whole, or not at all.
-    assert (bag / 'metadata.yaml').is_file() if code == 0 else not bag.exists()
+    # The bag is there whole, or not at all; an interrupt that lands after the bag was
+    # renamed into place still ends the run with 130, and the bag stays whole.
+    assert (bag / 'metadata.yaml').is_file() if code == 0 or bag.exists() else True
 
 
 @pytest.mark.slow
