@@ -1,16 +1,18 @@
 """
-Pure time delay of a hydraulic joint, estimated three ways.
+Dead time (and valve lag) of a hydraulic joint, estimated three ways.
 
 A small step moves the joint slowly, so its motion crosses any threshold late
 and looks like extra delay; the estimators here avoid that:
 
-* **fit** (the answer): for each candidate delay, the differenced angle is
-  explained by one mean speed per experiment and delayed command level (a
-  non-parametric static map); the delay whose map explains most of it wins.
-  This is the differenced-output fit of docs/methods.md section 1.5, free of any map shape.
-* **onset**: on the fastest steps, the time the motion crosses six noise
-  standard deviations, moved back by the time that distance takes at the step's
-  speed.
+* **fit** (the answer): for each candidate dead time and first-order valve lag,
+  the differenced angle is explained by one mean speed per experiment and
+  delayed command level (a non-parametric static map) passed through the lag;
+  the pair that explains most of it wins (:mod:`hydro_sdp.core.valve_dynamics`).
+  This is the differenced-output fit of docs/methods.md section 1.5, free of any
+  map shape.
+* **onset**: on the fastest steps, the first sample where the speed reaches half
+  of the step's final speed, moved back by the time the fitted lag takes to
+  rise half way (so twitches before the motion and the lag's rise do not count).
 * **cross-correlation**: the lag where changes of speed line up with changes
   of command.
 
@@ -19,12 +21,14 @@ and looks like extra delay; the estimators here avoid that:
 from __future__ import annotations
 
 from dataclasses import dataclass
+import math
 from typing import Sequence
 
 from hydro_sdp.core.arrays import FloatArray, IntArray
 from hydro_sdp.core.errors import DataError
 from hydro_sdp.core.experiments import Experiment
 from hydro_sdp.core.timing import delayed_at
+from hydro_sdp.core.valve_dynamics import fit_delay_and_lag, lag_pole
 import numpy as np
 
 
@@ -47,6 +51,8 @@ class DelayEstimate:
         Delay from cross-correlation of speed and command changes.
     explained : FloatArray
         Share of the differenced angle's variance explained at each candidate delay.
+    lag : float
+        First-order valve lag time constant found with the delay, s (0: none).
 
     """
 
@@ -56,6 +62,7 @@ class DelayEstimate:
     onset: int | None
     xcorr: int | None
     explained: FloatArray
+    lag: float = 0.0
 
     @property
     def agree(self) -> bool:
@@ -96,17 +103,10 @@ def level_groups(experiments: Sequence[Experiment],
     return np.concatenate(increments), np.concatenate(groups), np.concatenate(levels)
 
 
-def _explained(experiments: Sequence[Experiment], delay: int) -> float:
-    dy, group, levels = level_groups(experiments, delay)
-    sums = np.bincount(group, weights=dy, minlength=levels.size)
-    counts = np.bincount(group, minlength=levels.size)
-    total = float(np.sum(dy ** 2))
-    return float(np.sum(sums ** 2 / np.maximum(counts, 1)) / total) if total > 0 else 0.0
-
-
-def _onset(experiments: Sequence[Experiment], rest: float, noise: float,
-           max_delay: int) -> int | None:
-    threshold = 6.0 * max(noise, 1e-9)
+def _onset(experiments: Sequence[Experiment], noise: float, max_delay: int,
+           pole: float) -> int | None:
+    # Samples the lag needs to reach half of a step in speed (0 without lag).
+    rise = math.ceil(math.log(0.5) / math.log(pole)) - 1 if pole > 0.0 else 0
     found = []
     for experiment in experiments:
         if experiment.kind != 'step':
@@ -114,22 +114,28 @@ def _onset(experiments: Sequence[Experiment], rest: float, noise: float,
         start = experiment.start
         held = np.flatnonzero(experiment.v[start + 1:] != experiment.level)
         length = int(held[0]) if held.size else experiment.v.size - start - 1
-        window = experiment.y[start:start + 1 + min(length + max_delay, experiment.y.size)]
-        moved = np.abs(window - window[0])
-        crossing = np.flatnonzero(moved > threshold)
-        if crossing.size == 0 or crossing[0] + 20 > window.size:
+        window = experiment.y[start:start + 1 + min(length, experiment.y.size)]
+        if window.size < max_delay + 20:
             continue
-        k = int(crossing[0])
-        speed = abs(window[min(k + 20, window.size - 1)] - window[k]) / 20.0
-        if speed <= 0.0:
+        # Speed over five samples centred on each one: a step in speed reaches half
+        # height exactly where it happens.
+        speed = np.r_[np.full(2, 0.0), (window[5:] - window[:-5]) / 5.0, np.full(2, 0.0)]
+        final = float(np.median(speed[speed.size // 2:]))
+        if abs(final) < 20.0 * max(noise, 1e-9) / 5.0:
             continue
-        found.append((speed, k - threshold / speed))
+        above = np.sign(final) * speed >= 0.5 * abs(final)
+        sustained = above[:-3] & above[1:-2] & above[2:-1] & above[3:]
+        crossing = np.flatnonzero(sustained)
+        if crossing.size == 0:
+            continue
+        # speed[j] is centred on the increment y[start + j] - y[start + j - 1], j >= 1:
+        # the first command v[start + 1] shows first in increment 1 + delay.
+        found.append((abs(final), int(crossing[0]) + 1 - 1 - rise))
     if len(found) < 2:
         return None
     found.sort(reverse=True)
     fastest = [onset for _, onset in found[:max(2, len(found) // 3)]]
-    # The step's first command is v[start + 1]; its motion first shows at y[start + 1 + delay].
-    return int(round(float(np.median(fastest)))) - 1
+    return int(round(float(np.median(fastest))))
 
 
 def _xcorr(experiments: Sequence[Experiment], max_delay: int) -> int | None:
@@ -174,12 +180,10 @@ def estimate_delay(experiments: Sequence[Experiment], dt: float, *, max_delay: i
     """
     if not experiments:
         raise DataError('no experiments to estimate the delay from')
-    candidates = np.arange(1, max_delay + 1)
-    explained = np.array([_explained(experiments, int(d)) for d in candidates])
-    best = int(candidates[int(np.argmax(explained))])
+    best, lag, explained = fit_delay_and_lag(experiments, dt, max_delay)
     return DelayEstimate(samples=best, seconds=best * dt, fit=best,
-                         onset=_onset(experiments, rest, noise, max_delay),
-                         xcorr=_xcorr(experiments, max_delay), explained=explained)
+                         onset=_onset(experiments, noise, max_delay, lag_pole(lag, dt)),
+                         xcorr=_xcorr(experiments, max_delay), explained=explained, lag=lag)
 
 
 @dataclass(frozen=True)

@@ -11,11 +11,14 @@ simulation in :mod:`hydro_sdp.core.simulation` applies them.
 
 from __future__ import annotations
 
+from bisect import bisect_right
 from dataclasses import asdict, dataclass, fields, MISSING
 from typing import Any, ClassVar, Mapping, Union
 
-from hydro_sdp.core._validate import require_float
+from hydro_sdp.core._validate import require_float, require_float_list
+from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import ModelFileError
+import numpy as np
 
 
 @dataclass(frozen=True)
@@ -123,12 +126,105 @@ class DirectionDependentDelay:
                     f'got {value}')
 
 
-Effect = Union[ValveLag, Backlash, AngleDependentVelocity, DirectionDependentDelay]
+@dataclass(frozen=True)
+class StrokeGeometry:
+    """
+    Speed scaled by a smooth factor of the angle along the stroke (linkage geometry, cushions).
+
+    The cylinder's stroke maps to the joint angle through the linkage, so at
+    one valve flow the joint moves faster in some parts of its range than in
+    others, the same way for both directions (unlike the gravity-like
+    ``angle_dependent_velocity``). The speed becomes ``w f(y, sign w)`` with
+    ``f = interp(y, knots, factors) (1 + sign(w) interp(y, knots, asymmetry))``,
+    held flat beyond the end knots, and within ``cushion`` degrees of the end
+    knot the joint is heading for, times a factor falling linearly to
+    ``cushion_factor`` at that knot (the cylinder's end cushions).
+
+    Parameters
+    ----------
+    knots : tuple[float, ...]
+        Angles, degrees, strictly increasing (two or more); model-file key ``knots``.
+    factors : tuple[float, ...]
+        Shared speed factor at each knot (> 0); key ``factors``.
+    asymmetry : tuple[float, ...]
+        Per-direction part at each knot, inside (-1, 1), or empty for none; key ``asymmetry``.
+    cushion : float
+        Length of the end cushions, degrees (>= 0, 0: none); key ``cushion``.
+    cushion_factor : float
+        Speed factor at the very end of a cushion, in (0, 1]; key ``cushion_factor``.
+
+    """
+
+    name: ClassVar[str] = 'stroke_geometry'
+    knots: tuple[float, ...]
+    factors: tuple[float, ...]
+    asymmetry: tuple[float, ...] = ()
+    cushion: float = 0.0
+    cushion_factor: float = 1.0
+
+    def __post_init__(self) -> None:
+        key = "key 'effects.stroke_geometry"
+        knots = tuple(float(x) for x in self.knots)
+        factors = tuple(float(x) for x in self.factors)
+        asymmetry = tuple(float(x) for x in self.asymmetry)
+        if len(knots) < 2 or len(factors) != len(knots) or len(asymmetry) not in (0, len(knots)):
+            raise ModelFileError(f"{key}': knots and factors (and asymmetry, if given) need "
+                                 'two or more values each, of equal number')
+        if not np.all(np.isfinite(knots + factors + asymmetry)) or np.any(np.diff(knots) <= 0.0):
+            raise ModelFileError(f"{key}.knots': must be finite and strictly increasing")
+        if min(factors) <= 0.0:
+            raise ModelFileError(f"{key}.factors': must be > 0, got {list(factors)}")
+        if asymmetry and max(abs(a) for a in asymmetry) >= 1.0:
+            raise ModelFileError(f"{key}.asymmetry': must be inside (-1, 1)")
+        if self.cushion < 0.0 or not 0.0 < self.cushion_factor <= 1.0:
+            raise ModelFileError(f"{key}': cushion must be >= 0 and cushion_factor in (0, 1], "
+                                 f'got {self.cushion} and {self.cushion_factor}')
+        object.__setattr__(self, 'knots', knots)
+        object.__setattr__(self, 'factors', factors)
+        object.__setattr__(self, 'asymmetry', asymmetry)
+
+    def factor_at(self, angle: float, speed: float) -> float:
+        """
+        Return the speed factor at ``angle`` (degrees) for motion of sign ``speed``.
+
+        Plain float arithmetic, so that the sample-by-sample and the vectorised
+        simulations give the same numbers.
+        """
+        knots = self.knots
+        if angle <= knots[0]:
+            index, weight = 0, 0.0
+        elif angle >= knots[-1]:
+            index, weight = len(knots) - 2, 1.0
+        else:
+            index = bisect_right(knots, angle) - 1
+            weight = (angle - knots[index]) / (knots[index + 1] - knots[index])
+        factor = self.factors[index] + weight * (self.factors[index + 1] - self.factors[index])
+        direction = 1.0 if speed > 0.0 else -1.0 if speed < 0.0 else 0.0
+        if self.asymmetry:
+            part = self.asymmetry[index] + weight * (self.asymmetry[index + 1] -
+                                                     self.asymmetry[index])
+            factor *= 1.0 + direction * part
+        if self.cushion > 0.0 and direction != 0.0:
+            distance = knots[-1] - angle if direction > 0.0 else angle - knots[0]
+            share = min(max(distance / self.cushion, 0.0), 1.0)
+            factor *= self.cushion_factor + (1.0 - self.cushion_factor) * share
+        return factor
+
+    def factor(self, angles: FloatArray, speeds: FloatArray) -> FloatArray:
+        """Return :meth:`factor_at` for arrays of angles and speeds."""
+        return np.array([self.factor_at(a, w) for a, w in
+                         zip(np.asarray(angles, dtype=np.float64).tolist(),
+                             np.asarray(speeds, dtype=np.float64).tolist())])
+
+
+Effect = Union[ValveLag, Backlash, AngleDependentVelocity, DirectionDependentDelay,
+               StrokeGeometry]
 
 #: Effect classes by vocabulary word, in the order the simulation applies them.
 EFFECT_TYPES: dict[str, type[Effect]] = {
     cls.name: cls
-    for cls in (DirectionDependentDelay, ValveLag, AngleDependentVelocity, Backlash)
+    for cls in (DirectionDependentDelay, ValveLag, StrokeGeometry, AngleDependentVelocity,
+                Backlash)
 }
 
 
@@ -160,15 +256,18 @@ def effect_from_mapping(name: str, params: Any) -> Effect:
     if unknown:
         raise ModelFileError(f"key 'effects.{name}': unknown parameter {unknown[0]!r} "
                              f"(parameters: {', '.join(names)})")
-    values = {}
+    values: dict[str, Any] = {}
     for field in fields(cls):
         if field.name in params:
-            values[field.name] = require_float(params[field.name], f'effects.{name}.{field.name}')
+            key = f'effects.{name}.{field.name}'
+            values[field.name] = require_float_list(params[field.name], key) \
+                if str(field.type).startswith('tuple') else require_float(params[field.name], key)
         elif field.default is MISSING:
             raise ModelFileError(f"key 'effects.{name}': missing parameter {field.name!r}")
     return cls(**values)
 
 
-def effect_to_mapping(effect: Effect) -> dict[str, float]:
-    """Return the model-file parameters of ``effect``."""
-    return {key: float(value) for key, value in asdict(effect).items()}
+def effect_to_mapping(effect: Effect) -> dict[str, float | list[float]]:
+    """Return the model-file parameters of ``effect`` (lists for the knot tables)."""
+    return {key: [float(x) for x in value] if isinstance(value, tuple) else float(value)
+            for key, value in asdict(effect).items()}

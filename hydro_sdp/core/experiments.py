@@ -19,9 +19,15 @@ import math
 from typing import Sequence
 
 from hydro_sdp.core.arrays import FloatArray
+from hydro_sdp.core.end_stops import clamp_start, stop_window
 from hydro_sdp.core.errors import DataError
 from hydro_sdp.core.records import Record
+from hydro_sdp.core.rest import estimate_rest_command
 import numpy as np
+
+__all__ = ['Dropped', 'Experiment', 'MIN_SAMPLES', 'Segmentation', 'check_record',
+           'estimate_rest_command', 'noise_level', 'segment_record', 'segment_records',
+           'split_long', 'thin']
 
 #: Samples an experiment needs beyond its start to be worth fitting.
 MIN_SAMPLES = 10
@@ -166,39 +172,6 @@ def check_record(record: Record, *, min_samples: int = 50, max_gap: float = 3.0)
     return period
 
 
-def estimate_rest_command(v: FloatArray, y: FloatArray | None = None) -> float:
-    """
-    Estimate from data the command a record rests at.
-
-    Among the commands held for at least 5 % of the samples, the one during
-    which the joint moves least (with angles given), else the most frequent;
-    0 when no command is held that often. (The rest command a model implies
-    is :func:`hydro_sdp.core.programs.rest_command`.)
-
-    Parameters
-    ----------
-    v : FloatArray
-        Commands.
-    y : FloatArray or None
-        Angles alongside ``v``.
-
-    Returns
-    -------
-    float
-        The rest command.
-
-    """
-    values, inverse, counts = np.unique(v, return_inverse=True, return_counts=True)
-    frequent = np.flatnonzero((counts >= 0.05 * v.size) & (counts > 1))
-    if frequent.size == 0:
-        return 0.0
-    if y is None or frequent.size == 1:
-        return float(values[frequent[np.argmax(counts[frequent])]])
-    speed = np.abs(np.diff(y, prepend=y[0]))
-    mean_speed = np.bincount(inverse, weights=speed, minlength=values.size) / counts
-    return float(values[frequent[np.argmin(mean_speed[frequent])]])
-
-
 def noise_level(record: Record, rest: float, settle: int) -> float:
     """
     Estimate the angle noise from samples taken well after the command went to rest.
@@ -235,35 +208,6 @@ def _blocks(v: FloatArray, rest: float) -> list[tuple[int, int]]:
     return list(zip(edges[::2].tolist(), edges[1::2].tolist()))
 
 
-def _clamp_start(y: FloatArray, v: FloatArray, rest: float, begin: int, end: int,
-                 delay: int, noise: float, extremes: tuple[float, float],
-                 limits: tuple[float, float] | None) -> tuple[int, float] | None:
-    """First index in ``[begin, end)`` where the joint is held by an end stop, if any."""
-    tolerance = max(6.0 * noise, 0.05)
-    window = 10
-    # Mean |y_k - y_{k-1}| of a joint at rest: E|N(0, 2 noise^2)| = 1.13 noise.
-    still = 1.13 * max(noise, 1e-6)
-    if end - begin < window:
-        return None
-    if limits is not None:
-        near = (y[begin:end] <= limits[0] + tolerance) | (y[begin:end] >= limits[1] - tolerance)
-        hits = np.flatnonzero(near)
-        return (begin + int(hits[0]), float(y[begin + hits[0]])) if hits.size else None
-    step = np.abs(np.diff(y[begin:end]))
-    moving = np.convolve(step, np.ones(window) / window, mode='valid')
-    for direction, extreme in ((1.0, extremes[1]), (-1.0, extremes[0])):
-        near = np.abs(y[begin:end] - extreme) <= tolerance
-        driven = np.sign(v[begin:end] - rest) == direction
-        for index in np.flatnonzero(near[:moving.size] & driven[:moving.size]):
-            # Held: still now, although it was moving the moment before, under the same drive.
-            if index >= window and moving[index] < 1.6 * still and \
-                    moving[index - window] > 4.0 * still and \
-                    np.all(v[begin + index - window - delay:begin + index + 1] ==
-                           v[begin + index]):
-                return begin + int(index), float(extreme)
-    return None
-
-
 def segment_record(record: Record, *, max_delay: int, rest: float | None = None,
                    angle_limits: tuple[float, float] | None = None,
                    min_samples: int = MIN_SAMPLES) -> Segmentation:
@@ -278,7 +222,7 @@ def segment_record(record: Record, *, max_delay: int, rest: float | None = None,
         Largest delay considered, samples: the history kept before each
         experiment and the tail kept after its command returns to rest.
     rest : float or None
-        Rest command; default: the record's most frequent command.
+        Rest command; default: :func:`~hydro_sdp.core.rest.estimate_rest_command`.
     angle_limits : tuple[float, float] or None
         Known end stops; default: detected where the joint is held still while driven.
     min_samples : int
@@ -291,10 +235,10 @@ def segment_record(record: Record, *, max_delay: int, rest: float | None = None,
 
     """
     v, y = record.v, record.y
-    rest = estimate_rest_command(v, y) if rest is None else rest
+    rest = estimate_rest_command([(v, y)]) if rest is None else rest
     noise = noise_level(record, rest, max_delay)
     blocks = _blocks(v, rest)
-    extremes = (float(np.min(y)), float(np.max(y)))
+    window = stop_window(float(np.median(np.diff(record.t)))) if len(record) > 1 else 5
     experiments: list[Experiment] = []
     dropped: list[Dropped] = []
     stops: list[list[float]] = [[], []]
@@ -311,8 +255,8 @@ def segment_record(record: Record, *, max_delay: int, rest: float | None = None,
         # A block may meet the end stops several times: cut out each stretch the joint
         # is held, and go on where it leaves the stop.
         while block_stop - start - 1 >= min_samples:
-            clamp = _clamp_start(y, v, rest, start, block_stop, max_delay, noise, extremes,
-                                 angle_limits)
+            clamp = clamp_start(y, v, start, block_stop, delay=max_delay, noise=noise,
+                                window=window, limits=angle_limits)
             stop = block_stop if clamp is None else clamp[0]
             if stop - start - 1 >= min_samples:
                 history = max(start - max_delay, 0)
@@ -328,7 +272,7 @@ def segment_record(record: Record, *, max_delay: int, rest: float | None = None,
             changed = np.flatnonzero(v[stop:block_stop] != v[stop])
             released = min(stop + int(changed[0]) + max_delay, block_stop) \
                 if changed.size else block_stop
-            stops[int(clamp[1] > np.mean(extremes))].append(float(np.median(y[stop:released])))
+            stops[clamp[2]].append(clamp[1])
             dropped.append(Dropped(float(record.t[stop]), 'clamped by an end stop',
                                    record.source, record.since_start(record.t[stop])))
             start = released
@@ -404,9 +348,14 @@ def thin(experiments: Sequence[Experiment], max_samples: int) -> list[Experiment
 
 
 def segment_records(records: Sequence[Record], *, max_delay: int,
-                    angle_limits: tuple[float, float] | None = None) -> Segmentation:
+                    angle_limits: tuple[float, float] | None = None,
+                    rest: float | None = None,
+                    input_limits: tuple[float, float] | None = None) -> Segmentation:
     """
     Segment several records of one joint and pool the experiments.
+
+    The records are put in a canonical order first (by source, start time and
+    content), so the order they are given in changes nothing.
 
     Parameters
     ----------
@@ -416,23 +365,35 @@ def segment_records(records: Sequence[Record], *, max_delay: int,
         Largest delay considered, samples.
     angle_limits : tuple[float, float] or None
         Known end stops.
+    rest : float or None
+        Rest (neutral) command; default: from the data
+        (:func:`~hydro_sdp.core.rest.estimate_rest_command`).
+    input_limits : tuple[float, float] or None
+        Command range of the valve (its middle is the preferred rest when it excludes 0).
 
     Returns
     -------
     Segmentation
-        Pooled experiments; rest and noise from all records.
+        Pooled experiments; rest and noise from all records; each end stop the
+        median of the angles the joint was held at.
 
     """
     if not records:
         raise DataError('no records to identify from')
-    rest = estimate_rest_command(np.concatenate([r.v for r in records]),
-                                 np.concatenate([r.y for r in records]))
+    ordered = sorted(records, key=_record_key)
+    if rest is None:
+        rest = estimate_rest_command([(r.v, r.y) for r in ordered], input_limits=input_limits)
     parts = [segment_record(r, max_delay=max_delay, rest=rest, angle_limits=angle_limits)
-             for r in records]
+             for r in ordered]
     lows = [p.end_stops[0] for p in parts if p.end_stops[0] is not None]
     highs = [p.end_stops[1] for p in parts if p.end_stops[1] is not None]
     return Segmentation(
         tuple(e for p in parts for e in p.experiments),
         tuple(d for p in parts for d in p.dropped), rest,
         float(np.median([p.noise_std for p in parts])),
-        (min(lows) if lows else None, max(highs) if highs else None))
+        (float(np.median(lows)) if lows else None, float(np.median(highs)) if highs else None))
+
+
+def _record_key(record: Record) -> tuple[str, float, int, float, float]:
+    return (record.source, float(record.t[0]) if len(record) else 0.0, len(record),
+            float(np.sum(record.v)), float(np.sum(record.y)))

@@ -24,7 +24,7 @@ import math
 
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.effects import (
-    AngleDependentVelocity, Backlash, DirectionDependentDelay, ValveLag)
+    AngleDependentVelocity, Backlash, DirectionDependentDelay, StrokeGeometry, ValveLag)
 from hydro_sdp.core.errors import DataError
 from hydro_sdp.core.model import JointModel
 from hydro_sdp.core.static_maps import StaticMap
@@ -195,9 +195,9 @@ def simulate(model: JointModel, v: FloatArray, dt: float, y0: float,
     if not 0 <= start < v.size:
         raise DataError(f'start must be a sample index below {v.size}, got {start}')
     low, high = _limits(model)
-    gravity = model.effect(AngleDependentVelocity.name)
-    if isinstance(gravity, AngleDependentVelocity):
-        y = _integrate_angle_dependent(speed[start:], dt, y0, low, high, gravity)
+    gravity, geometry = _angle_effects(model)
+    if gravity is not None or geometry is not None:
+        y = _integrate_angle_dependent(speed[start:], dt, y0, low, high, gravity, geometry)
     else:
         y = bounded_cumsum(y0, dt * speed[start + 1:], low, high)
     play = model.effect(Backlash.name)
@@ -289,9 +289,11 @@ def one_step_increments(model: JointModel, v: FloatArray, y: FloatArray, dt: flo
     """
     speed = speed_profile(model, v, dt, v_before=v_before)[start + 1:]
     previous = np.asarray(y, dtype=np.float64)[start:-1]
+    gravity, geometry = _angle_effects(model)
+    if geometry is not None:
+        speed = speed * geometry.factor(previous, speed)
     increment = dt * speed
-    gravity = model.effect(AngleDependentVelocity.name)
-    if isinstance(gravity, AngleDependentVelocity):
+    if gravity is not None:
         increment = increment + dt * gravity.amplitude * np.abs(speed) * np.cos(
             np.radians(previous + gravity.phase))
     play = model.effect(Backlash.name)
@@ -303,17 +305,30 @@ def one_step_increments(model: JointModel, v: FloatArray, y: FloatArray, dt: flo
     return np.clip(previous + increment, low, high) - previous
 
 
+def _angle_effects(model: JointModel) -> tuple[AngleDependentVelocity | None,
+                                                StrokeGeometry | None]:
+    gravity = model.effect(AngleDependentVelocity.name)
+    geometry = model.effect(StrokeGeometry.name)
+    return (gravity if isinstance(gravity, AngleDependentVelocity) else None,
+            geometry if isinstance(geometry, StrokeGeometry) else None)
+
+
 def _integrate_angle_dependent(speed: FloatArray, dt: float, y0: float, low: float,
-                               high: float, effect: AngleDependentVelocity) -> FloatArray:
-    # The speed depends on the angle just reached, so this recursion is inherently serial.
+                               high: float, gravity: AngleDependentVelocity | None,
+                               geometry: StrokeGeometry | None) -> FloatArray:
+    # The speed depends on the angle just reached, so this recursion is inherently serial;
+    # JointSimulator.step does the same arithmetic in the same order.
     y = np.empty(speed.size)
     current = min(max(float(y0), low), high)
     y[0] = current
-    amplitude = effect.amplitude
-    phase = math.radians(effect.phase)
+    amplitude = gravity.amplitude if gravity is not None else 0.0
+    phase = math.radians(gravity.phase) if gravity is not None else 0.0
     for k, w in enumerate(speed[1:].tolist(), start=1):
-        current += dt * (w + amplitude * abs(w) * math.cos(math.radians(current) + phase))
-        current = min(max(current, low), high)
+        if geometry is not None:
+            w *= geometry.factor_at(current, w)
+        if gravity is not None:
+            w += amplitude * abs(w) * math.cos(math.radians(current) + phase)
+        current = min(max(current + dt * w, low), high)
         y[k] = current
     return y
 
@@ -357,8 +372,7 @@ class JointSimulator:
         lag = model.effect(ValveLag.name)
         self._lag_p = math.exp(-self.dt / lag.time_constant) if isinstance(lag, ValveLag) else None
         self._lag_state = rate_before
-        gravity = model.effect(AngleDependentVelocity.name)
-        self._gravity = gravity if isinstance(gravity, AngleDependentVelocity) else None
+        self._gravity, self._geometry = _angle_effects(model)
         play = model.effect(Backlash.name)
         self._half_play = 0.5 * play.play if isinstance(play, Backlash) else 0.0
         self._actuator = min(max(float(y0), self._low), self._high)
@@ -412,6 +426,8 @@ class JointSimulator:
             self._lag_state = (1.0 - self._lag_p) * speed + self._lag_p * self._lag_state
             speed = self._lag_state
         previous = self._actuator
+        if self._geometry is not None:
+            speed *= self._geometry.factor_at(previous, speed)
         if self._gravity is not None:
             phase = math.radians(self._gravity.phase)
             speed += self._gravity.amplitude * abs(speed) * math.cos(

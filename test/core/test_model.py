@@ -10,8 +10,8 @@ from hydro_sdp.core.errors import ConfigurationError, ModelFileError
 from hydro_sdp.core.idz import idz_mode, IDZ_MODES, InverseDeadZone
 from hydro_sdp.core.model import delay_samples, JointModel
 from hydro_sdp.core.static_maps import (
-    chord_commands, linearise, LinearMap, MAP_KINDS, MapKind, PolyMap, PwlMap, sdp_rate, SdpDzMap,
-    SdpMap, shifted_map)
+    chord_commands, linearise, LinearMap, MAP_KINDS, MapKind, PolyMap, PowerSatMap, PwlMap,
+    sdp_rate, SdpDzMap, SdpMap, shifted_map)
 from hydro_sdp.files import dump_model, load_model, save_model
 import numpy as np
 import pytest
@@ -209,6 +209,7 @@ EXAMPLE_MAPS = (
     LinearMap(12.0),
     PwlMap((-8.0, -1.0, 1.5, 8.0), (-30.0, 0.0, 0.0, 30.0)),
     PolyMap((2.0, 0.1), (3.0,), (-5.0, 5.0)),
+    PowerSatMap((-37.5, 37.5), (-40.0, 32.0), (0.03, 0.04), (3.0, 2.5)),
 )
 
 

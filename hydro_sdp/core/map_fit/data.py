@@ -2,8 +2,9 @@
 Experiments arranged for fast residual evaluation, and what a fit returns.
 
 Every experiment predicts its angles from its initial state with
-``pred_k = x_{k-1} + dt rate(v_{k-tau})``, ``Z_k = y_k - pred_k`` and
-``x_k = pred_k + beta Z_k`` (docs/methods.md section 2). The recursion is a
+``pred_k = x_{k-1} + dt w_k``, ``Z_k = y_k - pred_k`` and
+``x_k = pred_k + beta Z_k`` (docs/methods.md section 2), where ``w_k`` is
+``rate(v_{k-tau})``, passed through the first-order valve lag when there is one. The recursion is a
 first-order filter, so each residual evaluation is a few numpy and ``lfilter``
 calls over all experiments at once (experiments of similar length share one
 padded 2-D array), and the map is evaluated once per distinct command level.
@@ -13,6 +14,7 @@ padded 2-D array), and the map is evaluated once per distinct command level.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+import math
 from typing import Callable, Generic, get_args, Literal, Sequence, TypeVar
 
 from hydro_sdp.core.arrays import FloatArray, IntArray
@@ -44,15 +46,21 @@ class FitData:
         Delay, samples.
     dt : float
         Sample period, s.
+    lag : float
+        Valve lag time constant, s (0: none); each experiment's lag starts in
+        steady state at its first delayed command.
 
     """
 
-    def __init__(self, experiments: Sequence[Experiment], delay: int, dt: float) -> None:
+    def __init__(self, experiments: Sequence[Experiment], delay: int, dt: float,
+                 lag: float = 0.0) -> None:
         if not experiments:
             raise DataError('no experiments to fit')
         self.experiments = tuple(experiments)
         self.delay = delay
         self.dt = dt
+        self.lag = lag
+        self.pole = math.exp(-dt / lag) if lag > 0.0 else 0.0
         delayed_all, observed_all, initial_all = [], [], []
         for experiment in experiments:
             k = np.arange(experiment.start + 1, experiment.y.size)
@@ -85,7 +93,12 @@ class FitData:
     def increments(self, rate: RateFunction) -> list[FloatArray]:
         """Per bucket, ``dt rate(v_{k-tau})`` with padding set to zero."""
         per_level = self.dt * rate(self.levels)
-        return [np.where(mask, per_level[index], 0.0) for _, index, _, mask, _ in self.buckets]
+        out = [np.where(mask, per_level[index], 0.0) for _, index, _, mask, _ in self.buckets]
+        if self.pole == 0.0:
+            return out
+        p = self.pole
+        return [np.where(mask, lfilter([1.0 - p], [1.0, -p], q, axis=1, zi=p * q[:, :1])[0], 0.0)
+                for q, (_, _, _, mask, _) in zip(out, self.buckets)]
 
     def residuals(self, rate: RateFunction, beta: float = 0.0) -> FloatArray:
         """

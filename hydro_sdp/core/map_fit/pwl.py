@@ -1,8 +1,10 @@
 """
 Fitting the monotone piecewise-linear map (``pwl``) to experiments.
 
-The zero-speed plateau spans the dead-zone; beyond each edge, knots sit at
-quantiles of the commands used, and the speeds are cumulative non-negative
+The zero-speed plateau spans the dead-zone; beyond each edge a knot sits at
+every command level the data hold (a valve measured at a few duties is
+followed exactly there), or at quantiles of the commands when there are more
+than :data:`MAX_KNOTS` of them; the speeds are cumulative non-negative
 increments outward from the edges, so the map stays monotone.
 
 """
@@ -14,10 +16,13 @@ from typing import Sequence
 
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.delay import LevelSpeed
-from hydro_sdp.core.map_fit.data import covariance_errors, FitData, MapFit
+from hydro_sdp.core.map_fit.data import covariance_errors, FitData, FitMethod, MapFit
 from hydro_sdp.core.static_maps import PwlMap
 import numpy as np
 from scipy.optimize import least_squares
+
+#: Most knots beyond each edge.
+MAX_KNOTS = 12
 
 
 @dataclass(frozen=True, eq=False)
@@ -65,9 +70,9 @@ class PwlLayout:
 
 
 def pwl_layout(levels: FloatArray, dead_zone: tuple[float, float], *,
-               knots_per_side: int = 4) -> PwlLayout:
+               knots_per_side: int | None = None) -> PwlLayout:
     """
-    Place the knots: the plateau's edges and quantiles of the commands beyond each.
+    Place the knots: the plateau's edges and the commands beyond each.
 
     Parameters
     ----------
@@ -75,8 +80,9 @@ def pwl_layout(levels: FloatArray, dead_zone: tuple[float, float], *,
         The distinct commands of the data, input units.
     dead_zone : tuple[float, float]
         Edges of the zero-speed plateau.
-    knots_per_side : int
-        Knots beyond each edge.
+    knots_per_side : int or None
+        Knots beyond each edge, at quantiles of the commands there; default: one at
+        every distinct command, or :data:`MAX_KNOTS` quantiles when there are more.
 
     Returns
     -------
@@ -85,10 +91,17 @@ def pwl_layout(levels: FloatArray, dead_zone: tuple[float, float], *,
 
     """
     low, high = dead_zone
-    knots_neg = np.unique(np.quantile(levels[levels < low], np.linspace(0, 1, knots_per_side))) \
-        if np.any(levels < low) else np.array([low - 1.0])
-    knots_pos = np.unique(np.quantile(levels[levels > high], np.linspace(0, 1, knots_per_side))) \
-        if np.any(levels > high) else np.array([high + 1.0])
+    sides = []
+    for side, edge in ((levels[levels < low], low - 1.0), (levels[levels > high], high + 1.0)):
+        side = np.unique(side)
+        if side.size == 0:
+            sides.append(np.array([edge]))
+        elif knots_per_side is None and side.size <= MAX_KNOTS:
+            sides.append(side)
+        else:
+            count = knots_per_side if knots_per_side is not None else MAX_KNOTS
+            sides.append(np.unique(np.quantile(side, np.linspace(0, 1, count))))
+    knots_neg, knots_pos = sides
     knots = np.r_[knots_neg, low, high, knots_pos]
     if high <= low:
         knots = np.r_[knots_neg, low, knots_pos]
@@ -121,9 +134,10 @@ def initial_pwl(layout: PwlLayout, points: Sequence[LevelSpeed]) -> FloatArray:
 
 
 def fit_pwl(data: FitData, points: Sequence[LevelSpeed], rest: float,
-            dead_zone: tuple[float, float], *, knots_per_side: int = 4) -> MapFit[PwlMap]:
+            dead_zone: tuple[float, float], *, knots_per_side: int | None = None,
+            method: FitMethod = 'rr') -> MapFit[PwlMap]:
     """
-    Fit a monotone piecewise-linear map by regret-regression.
+    Fit a monotone piecewise-linear map by regret-regression or output error.
 
     Parameters
     ----------
@@ -135,6 +149,8 @@ def fit_pwl(data: FitData, points: Sequence[LevelSpeed], rest: float,
         Rest command.
     dead_zone, knots_per_side
         Plateau and knots, as in :func:`pwl_layout`.
+    method : str
+        ``rr`` (``beta`` estimated) or ``oe`` (``beta = 0``: the simulation error).
 
     Returns
     -------
@@ -146,13 +162,18 @@ def fit_pwl(data: FitData, points: Sequence[LevelSpeed], rest: float,
     knots = layout.knots
     x0 = initial_pwl(layout, points)
     parameters = layout.negative + layout.positive
+    # Output error is regret-regression with beta held at 0.
+    top = 1.0 if method == 'rr' else 0.0
     lower = np.r_[np.zeros(parameters), 0.0]
-    upper = np.r_[np.full(parameters, np.inf), 1.0]
+    upper = np.r_[np.full(parameters, np.inf), max(top, 1e-12)]
+    x0[-1] = min(x0[-1], top)
     result = least_squares(
-        lambda x: data.residuals(lambda v: np.interp(v, knots, layout.speeds(x)), x[-1]),
+        lambda x: data.residuals(lambda v: np.interp(v, knots, layout.speeds(x)),
+                                 x[-1] if method == 'rr' else 0.0),
         np.clip(x0, lower, upper), bounds=(lower, upper), x_scale='jac')
     speeds = layout.speeds(result.x)
     static_map = PwlMap(knots=tuple(knots.tolist()), speeds=tuple(speeds.tolist()))
     errors = covariance_errors(result.jac, result.cost, data.samples)
-    return MapFit(static_map, 'rr', float(result.x[-1]), float(result.cost),
-                  {'beta': float(errors[-1])}, int(result.nfev))
+    beta = float(result.x[-1]) if method == 'rr' else 0.0
+    return MapFit(static_map, method, beta, float(result.cost),
+                  {'beta': float(errors[-1])} if method == 'rr' else {}, int(result.nfev))

@@ -11,6 +11,7 @@ the same map serves every sample period; :data:`MAP_KINDS` registers them.
 
 from hydro_sdp.core.static_maps.linear import LinearMap
 from hydro_sdp.core.static_maps.poly import PolyMap
+from hydro_sdp.core.static_maps.power_sat import power_sat_rate, PowerSatMap
 from hydro_sdp.core.static_maps.protocol import MapKind, ShiftableMap, StaticMap
 from hydro_sdp.core.static_maps.pwl import PwlMap
 from hydro_sdp.core.static_maps.registry import MAP_KINDS, shifted_map
@@ -19,7 +20,7 @@ from hydro_sdp.core.static_maps.sdp import (
 from hydro_sdp.core.static_maps.sdp_dz import SdpDzMap
 
 __all__ = [
-    'CHORD_SPEED_FRACTION', 'LinearMap', 'MAP_KINDS', 'MapKind', 'PolyMap', 'PwlMap', 'SdpDzMap',
-    'SdpMap', 'ShiftableMap', 'StaticMap', 'chord_commands', 'linearise', 'sdp_rate',
-    'shifted_map',
+    'CHORD_SPEED_FRACTION', 'LinearMap', 'MAP_KINDS', 'MapKind', 'PolyMap', 'PowerSatMap',
+    'PwlMap', 'SdpDzMap', 'SdpMap', 'ShiftableMap', 'StaticMap', 'chord_commands', 'linearise',
+    'power_sat_rate', 'sdp_rate', 'shifted_map',
 ]

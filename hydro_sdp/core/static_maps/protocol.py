@@ -15,7 +15,7 @@ from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import ModelFileError
 
 #: The model file's ``kind``: one static-map family each.
-MapKind = Literal['sdp', 'sdp_dz', 'linear', 'pwl', 'poly']
+MapKind = Literal['sdp', 'sdp_dz', 'linear', 'pwl', 'poly', 'power_sat']
 
 
 class StaticMap(Protocol):

@@ -12,6 +12,7 @@ from __future__ import annotations
 from hydro_sdp.core.errors import ConfigurationError
 from hydro_sdp.core.static_maps.linear import LinearMap
 from hydro_sdp.core.static_maps.poly import PolyMap
+from hydro_sdp.core.static_maps.power_sat import PowerSatMap
 from hydro_sdp.core.static_maps.protocol import ShiftableMap, StaticMap
 from hydro_sdp.core.static_maps.pwl import PwlMap
 from hydro_sdp.core.static_maps.sdp import SdpMap
@@ -19,7 +20,7 @@ from hydro_sdp.core.static_maps.sdp_dz import SdpDzMap
 
 #: Map classes by the model file's ``kind``.
 MAP_KINDS: dict[str, type[StaticMap]] = {
-    cls.kind: cls for cls in (SdpMap, SdpDzMap, LinearMap, PwlMap, PolyMap)
+    cls.kind: cls for cls in (SdpMap, SdpDzMap, LinearMap, PwlMap, PolyMap, PowerSatMap)
 }
 
 
@@ -30,7 +31,7 @@ def shifted_map(static_map: StaticMap, shift: tuple[float, float]) -> StaticMap:
     Parameters
     ----------
     static_map : StaticMap
-        A map whose edges can move (``sdp`` or ``sdp_dz``).
+        A map whose edges can move (``sdp``, ``sdp_dz`` or ``power_sat``).
     shift : tuple[float, float]
         Added to the lower and upper edge.
 

@@ -1,0 +1,105 @@
+"""
+Where a joint is held by an end stop although its command drives it.
+
+A real stop is not a clean clamp: the link rings on its compliance, the angle
+overshoots the final angle by tenths of a degree and bounces back. So the
+test is on the net displacement over a window of about 0.3 s (which averages
+the ringing out), against the speed the joint had while it moved (not against
+the sensor noise): the joint is held where that net speed falls below a tenth
+of its moving speed and stays there while the same command is held, after it
+moved under that command, at the extreme of its travel in the direction it
+moved (or at the known stop there, when the stops are given).
+
+"""
+
+from __future__ import annotations
+
+from hydro_sdp.core.arrays import FloatArray
+import numpy as np
+
+#: Net speed, as a fraction of the moving speed, below which the joint counts as held.
+HELD_FRACTION = 0.1
+#: Net speed, as a fraction of the moving speed, the joint must have had just before.
+MOVING_FRACTION = 0.3
+#: Share of the windows after the stop that must stay held (bounces are tolerated).
+STAYS = 0.8
+
+
+def stop_window(dt: float) -> int:
+    """Return the window of the net-displacement test, samples (about 0.3 s, at least 5)."""
+    return max(5, int(round(0.3 / dt)))
+
+
+def clamp_start(y: FloatArray, v: FloatArray, begin: int, end: int, *, delay: int,
+                noise: float, window: int,
+                limits: tuple[float, float] | None = None) -> tuple[int, float, int] | None:
+    """
+    First index in ``[begin, end)`` where the joint is held by an end stop, if any.
+
+    Parameters
+    ----------
+    y, v : FloatArray
+        Angles (degrees) and commands of the whole record.
+    begin, end : int
+        The stretch searched.
+    delay : int
+        Largest delay, samples: the command must have been held that long before.
+    noise : float
+        Angle noise standard deviation, degrees.
+    window : int
+        Samples of the net-displacement window (:func:`stop_window`).
+    limits : tuple[float, float] or None
+        Known stops, degrees: a held joint counts only near the stop in the
+        direction it moved.
+
+    Returns
+    -------
+    tuple[int, float, int] or None
+        Index where the joint arrives at the stop, the angle it is held at, and
+        the stop's side (0 lower, 1 upper).
+
+    """
+    if end - begin < 2 * window + 2:
+        return None
+    segment = y[begin:end]
+    net = (segment[window:] - segment[:-window]) / window
+    speed = np.abs(net)
+    moving_speed = float(np.percentile(speed, 90))
+    floor = 4.0 * max(noise, 1e-9) / window
+    if moving_speed <= 3.0 * floor:
+        return None
+    held = speed < max(HELD_FRACTION * moving_speed, floor)
+    span = float(np.max(segment) - np.min(segment))
+    command = v[begin:end]
+    for index in np.flatnonzero(held[window:]) + window:
+        before = net[max(index - 3 * window, 0):index]
+        fast = int(np.argmax(np.abs(before)))
+        if abs(before[fast]) < MOVING_FRACTION * moving_speed:
+            continue
+        first = max(begin + index - window - delay, 0)
+        if np.any(v[first:begin + index + 1] != v[begin + index]):
+            continue
+        changed = np.flatnonzero(command[index:] != command[index])
+        last = index + (int(changed[0]) if changed.size else command.size - index)
+        stay = held[index:min(last, held.size)]
+        if stay.size < window // 2 or np.mean(stay) < STAYS:
+            continue
+        direction = 1.0 if before[fast] > 0.0 else -1.0
+        angle = float(np.median(segment[index:last]))
+        if limits is not None:
+            tolerance = max(0.05 * (limits[1] - limits[0]), 1.0)
+            if (direction > 0 and angle < limits[1] - tolerance) or \
+                    (direction < 0 and angle > limits[0] + tolerance):
+                continue
+        else:
+            extreme = np.max(segment) if direction > 0 else np.min(segment)
+            if abs(extreme - angle) > max(0.05 * span, 1.0):
+                continue
+        # Arrival: the first sample, at most three windows back, within reach of the
+        # held angle (the overshoot beyond it stays in the stretch that is cut out).
+        reach = max(6.0 * noise, 0.02)
+        back = max(index - 3 * window, 0)
+        arrived = np.flatnonzero(direction * (segment[back:index + 1] - angle) >= -reach)
+        arrival = back + int(arrived[0]) if arrived.size else index
+        return begin + arrival, angle, int(direction > 0)
+    return None

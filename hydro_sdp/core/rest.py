@@ -1,0 +1,119 @@
+"""
+The rest command of a joint's records: the command at which the joint stands still.
+
+The valve's neutral is the answer whenever the data allow it: 0 for commands
+that range over both signs, or the neutral the caller gives. Only when the
+neutral is not among the held commands, or the joint moves while it is held,
+is another command chosen, and then only one at which the joint stands still.
+Motion is measured inside each record (never across the join of two records),
+and the records are pooled by sums and medians, so their order does not matter.
+
+"""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+from hydro_sdp.core.arrays import FloatArray
+import numpy as np
+
+#: A held command counts as "still" when the joint's median step there is at most this
+#: many times the stillest held command's (and the noise floor).
+STILL_FACTOR = 3.0
+
+
+def command_motion(pairs: Sequence[tuple[FloatArray, FloatArray]]
+                   ) -> dict[float, tuple[int, float]]:
+    """
+    Samples and median angle step of each held command, measured inside each record.
+
+    Parameters
+    ----------
+    pairs : sequence of (v, y)
+        Commands and angles (degrees) of each record.
+
+    Returns
+    -------
+    dict
+        Command -> (samples in the second half of the stretches it was held,
+        median ``|y_k - y_{k-1}|`` over them, degrees).
+
+    """
+    values: list[FloatArray] = []
+    steps: list[FloatArray] = []
+    for v, y in pairs:
+        v = np.asarray(v, dtype=np.float64)
+        y = np.asarray(y, dtype=np.float64)
+        if v.size < 2:
+            continue
+        # The second half of every stretch of one held command: the joint has settled
+        # there from the previous command (delay, valve lag) whatever its dynamics.
+        starts = np.r_[0, np.flatnonzero(np.diff(v)) + 1]
+        lengths = np.diff(np.r_[starts, v.size])
+        position = np.arange(v.size) - np.repeat(starts, lengths)
+        settled = (2 * position >= np.repeat(lengths, lengths)) & (position >= 1)
+        values.append(v[1:][settled[1:]])
+        steps.append(np.abs(np.diff(y))[settled[1:]])
+    if not values:
+        return {}
+    v_all, step_all = np.concatenate(values), np.concatenate(steps)
+    order = np.lexsort((step_all, v_all))
+    v_all, step_all = v_all[order], step_all[order]
+    unique, first, counts = np.unique(v_all, return_index=True, return_counts=True)
+    return {float(u): (int(c), float(np.median(step_all[f:f + c])))
+            for u, f, c in zip(unique, first, counts)}
+
+
+def estimate_rest_command(pairs: Sequence[tuple[FloatArray, FloatArray]], *,
+                          neutral: float | None = None,
+                          input_limits: tuple[float, float] | None = None,
+                          min_share: float = 0.01) -> float:
+    """
+    Choose the rest command of one joint's records.
+
+    Parameters
+    ----------
+    pairs : sequence of (v, y)
+        Commands and angles (degrees) of each record.
+    neutral : float or None
+        The valve's neutral command, if known: it is the answer.
+    input_limits : tuple[float, float] or None
+        The valve's command range: its middle is the preferred rest when the
+        range does not contain 0 (a 0..100 % duty resting at 50).
+    min_share : float
+        Share of the samples a command must be held for to be a candidate.
+
+    Returns
+    -------
+    float
+        The rest command: the neutral (given, 0 for commands of both signs, or
+        the middle of ``input_limits``) when it is held and the joint stands
+        still there; else the still command held longest; 0 when nothing is held.
+
+    """
+    if neutral is not None:
+        return float(neutral)
+    motion = command_motion(pairs)
+    total = sum(count for count, _ in motion.values())
+    candidates = {value: step for value, (count, step) in motion.items()
+                  if count >= max(min_share * total, 2)}
+    if not candidates:
+        return 0.0
+    floor = min(candidates.values())
+    still = {value: step for value, step in candidates.items()
+             if step <= STILL_FACTOR * floor + 1e-12}
+    low = min(float(np.min(v)) for v, _ in pairs if len(v))
+    high = max(float(np.max(v)) for v, _ in pairs if len(v))
+    preferred: list[float] = []
+    if input_limits is not None:
+        preferred.append(0.0 if input_limits[0] <= 0.0 <= input_limits[1]
+                         else 0.5 * (input_limits[0] + input_limits[1]))
+    if low <= 0.0 <= high:
+        preferred.append(0.0)
+    preferred.append(0.5 * (low + high))
+    for value in preferred:
+        if value in still:
+            return value
+    # The still command held longest; among equals the one nearest the middle of the range.
+    middle = 0.5 * (low + high)
+    return max(still, key=lambda value: (motion[value][0], -abs(value - middle), -value))
