@@ -21,15 +21,21 @@ DESCRIPTION = """\
 Identify a hydraulic joint from recorded bags, as West et al. (2018) section 4:
 
   1. cut the records into step experiments (command leaves rest, holds, returns)
-     and runs, dropping what an end stop clamps;
-  2. estimate the pure delay (fit of the differenced angle, checked against motion
-     onsets and cross-correlation);
+     and runs, dropping what an end stop clamps; rest is the valve's neutral:
+     0 when the commands take both signs, else --rest (or the middle of
+     --input-limits), never a command that moves the joint;
+  2. estimate the dead time together with a first-order valve lag (fit of the
+     differenced angle, checked against motion onsets and cross-correlation);
   3. measure the speed of every command level (Figs. 2 and 3);
   4. fit the static map to the raw angles by regret-regression (--method rr) or by
      the paper's output-error simplex fit (--method oe);
-  5. with --kind auto, also fit a monotone piecewise-linear map and the second
-     paper's polynomial gain, and keep the family that predicts held-out
-     experiments best (sdp when it is within 5 %).
+  5. with --kind auto, also fit a monotone piecewise-linear map (a knot at every
+     measured level), the second paper's polynomial gain and, when eq. (5)
+     loses, a saturating power law (power_sat, convex from the dead-zone), and
+     keep the family that predicts held-out experiments best (folds that leave
+     out levels inside the measured range; sdp when it is within 5 %);
+  6. when the runs span the stroke, fit how the speed changes along it
+     (effect stroke_geometry) and keep it if it lowers the simulation error.
 
 Commands may be in any unit (volts, percent duty): nothing assumes +-10 V.
 
@@ -55,6 +61,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         help='known end stops, deg (default: those seen in the data)')
     parser.add_argument('--input-limits', nargs=2, type=finite_float, metavar=('LOW', 'HIGH'),
                         help='command range of the valve, written to the model')
+    parser.add_argument('--rest', type=finite_float, metavar='COMMAND',
+                        help="the valve's neutral command (default: 0 when the commands take "
+                             'both signs, else the middle of --input-limits or a command at '
+                             'which the joint stands still)')
     parser.add_argument('--out', help='model file to write (YAML)')
     parser.add_argument('--plot-dir', help='folder for Figs. 1-3 (step responses, gains, speeds)')
     parser.set_defaults(run=run)
@@ -75,7 +85,10 @@ def describe(result: Identification) -> dict:
             'runs': segmentation.runs,
             'dropped': [{'t': d.t0, 'reason': d.reason, 'source': d.source}
                         for d in segmentation.dropped]},
+        'rest': segmentation.rest,
+        'end_stops': list(segmentation.end_stops),
         'delay_estimates': {'samples': result.delay.samples, 'seconds': result.delay.seconds,
+                            'lag': result.delay.lag,
                             'fit': result.delay.fit, 'onset': result.delay.onset,
                             'xcorr': result.delay.xcorr, 'agree': result.delay.agree},
         'noise_std': segmentation.noise_std,
@@ -96,7 +109,7 @@ def run(args: argparse.Namespace) -> Outcome:
             records, method=args.method, kind=args.kind, max_delay=args.max_delay,
             angle_limits=tuple(args.angle_limits) if args.angle_limits else None,
             input_limits=tuple(args.input_limits) if args.input_limits else None,
-            progress=lambda name: bar.update(stages.index(name)))
+            rest=args.rest, progress=lambda name: bar.update(stages.index(name)))
     payload = describe(result)
     # Stalled recordings are cut at their gaps on reading: one piece per stretch.
     payload['pieces'] = len(records)
@@ -129,8 +142,10 @@ def run(args: argparse.Namespace) -> Outcome:
     for dropped in segmentation.dropped[:5]:
         lines.append(f'  dropped {dropped.since_start:.2f} s from the start: {dropped.reason}')
     delay = result.delay
-    lines.append(f'delay: {delay.samples} samples = {delay.seconds:g} s (fit; onset '
-                 f'{delay.onset}, cross-correlation {delay.xcorr})')
+    lines.append(f'rest command {segmentation.rest:g}; end stops seen '
+                 f'{_stops(segmentation.end_stops)}')
+    lines.append(f'delay: {delay.samples} samples = {delay.seconds:g} s, valve lag '
+                 f'{delay.lag:g} s (fit; onset {delay.onset}, cross-correlation {delay.xcorr})')
     rows = [[key, _format(value), _format(result.fit.standard_errors.get(name, math.nan))]
             for key, value, name in _parameter_rows(model)]
     lines += table(rows, ['parameter', 'value', 'std. error'])
@@ -140,9 +155,15 @@ def run(args: argparse.Namespace) -> Outcome:
                        ['kind', 'MAE (deg)', 'note'])
     lines.append(f'chosen: {model.kind} ({result.fit.method}, beta {result.fit.beta:.3f}); '
                  f'simulation MAE on the experiments {result.mae:.4f} deg')
+    if model.effect('stroke_geometry') is not None:
+        lines.append('speed along the stroke: effect stroke_geometry (see the model file)')
     if args.out:
         lines.append(f'wrote {payload["model"]}')
     return Outcome(payload, lines)
+
+
+def _stops(stops: tuple[float | None, float | None]) -> str:
+    return ', '.join('-' if stop is None else f'{stop:.2f} deg' for stop in stops)
 
 
 def _command_range(result: Identification) -> tuple[float, float]:

@@ -8,6 +8,9 @@ there on is reported for the model, for its
 SDP-DZ linearisation (eq. (6): chords from the dead-zone edges to the commands
 where the speed reaches two thirds of saturation, with the same delay and end
 stops) and for the linear model (eq. (2), gain optimised for each record).
+:func:`mean_errors` averages the records two ways: the per-record mean of
+Table 2 (every run counts once) and the time-weighted mean (every sample
+counts once, as a residual over the whole recording does).
 
 """
 
@@ -183,3 +186,34 @@ def simulated_angles(model: JointModel, record: Record) -> FloatArray:
     start = _start(model, dt, len(record))
     return simulate(model, record.v, dt, float(record.y[start]), v_before=float(record.v[0]),
                     start=start)
+
+
+#: The two ways :func:`mean_errors` averages, by name.
+AVERAGES = {'per_record': 'mean over records, each counted once (Table 2)',
+            'time_weighted': 'mean over all compared samples (records weighted by length)'}
+
+
+def mean_errors(scores: Sequence[RecordScore]) -> dict[str, dict[str, float]]:
+    """
+    The per-record and the time-weighted mean of each model's MAE.
+
+    Parameters
+    ----------
+    scores : sequence of RecordScore
+        One per record, from :func:`evaluate`.
+
+    Returns
+    -------
+    dict
+        ``{'per_record': {...}, 'time_weighted': {...}}``, each mapping ``model``,
+        ``sdp_dz`` and ``linear`` to degrees (NaN where undefined).
+
+    """
+    weights = np.array([s.samples for s in scores], dtype=np.float64)
+    out: dict[str, dict[str, float]] = {'per_record': {}, 'time_weighted': {}}
+    for key in ('model', 'sdp_dz', 'linear'):
+        values = np.array([getattr(s, key) for s in scores], dtype=np.float64)
+        out['per_record'][key] = float(np.mean(values)) if values.size else math.nan
+        out['time_weighted'][key] = float(np.sum(weights * values) / np.sum(weights)) \
+            if values.size and np.sum(weights) > 0 else math.nan
+    return out

@@ -37,7 +37,7 @@ from hydro_sdp.core.model_choice import folds
 from hydro_sdp.core.records import Record
 from hydro_sdp.core.simulation import simulate
 from hydro_sdp.core.static_maps import SdpMap, StaticMap
-from hydro_sdp.core.stroke_fit import fit_stroke_geometry
+from hydro_sdp.core.stroke_fit import fit_stroke_geometry, speed_gains
 import numpy as np
 
 #: Map families ``identify`` can fit, and the choice among them.
@@ -59,6 +59,8 @@ SMOOTH_KINDS = ('sdp', 'power_sat')
 FREE_FORM_MARGIN = 1.5
 #: The stroke factor is kept when it lowers the simulation error by this share at least.
 GEOMETRY_GAIN = 0.05
+#: Alternations of map and stroke factor.
+GEOMETRY_ROUNDS = 3
 
 
 @dataclass(frozen=True)
@@ -348,11 +350,22 @@ def identify(records: Sequence[Record], *, method: FitMethod = 'rr', kind: KindC
     mae = data.simulation_mae(fit.static_map.rate)
     geometry = fit_stroke_geometry(sample, fit.static_map.rate, delay.samples, dt, delay.lag,
                                    (low_stop, high_stop))
+    refit = fit
+    for _ in range(GEOMETRY_ROUNDS):
+        if geometry is None:
+            break
+        # Refit the map under the factor (taken at the measured angles), then the factor
+        # under the new map: the two share the speed's scale, so they alternate.
+        shaped_data = FitData(pieces, delay.samples, dt, delay.lag, speed_gains(
+            pieces, refit.static_map.rate, delay.samples, dt, delay.lag, geometry))
+        refit = _fit_kind(chosen, shaped_data, points, rest_command, method, sdp_fit.static_map)
+        geometry = fit_stroke_geometry(sample, refit.static_map.rate, delay.samples, dt,
+                                       delay.lag, (low_stop, high_stop))
     if geometry is not None:
-        shaped = replace(model, effects=effects + (geometry,))
+        shaped = replace(model, static_map=refit.static_map, effects=effects + (geometry,))
         before, after = experiments_mae(model, sample, dt), experiments_mae(shaped, sample, dt)
         if after < (1.0 - GEOMETRY_GAIN) * before:
-            model, mae = shaped, experiments_mae(shaped, pieces, dt)
+            model, fit, mae = shaped, refit, experiments_mae(shaped, pieces, dt)
     return Identification(model, dt, delay, segmentation, points, fit, comparison, mae)
 
 

@@ -149,3 +149,18 @@ def fit_stroke_geometry(experiments: Sequence[Experiment], rate_of: object, dela
     asymmetry = np.clip(part / shared, -0.95, 0.95)
     return StrokeGeometry(knots=tuple(knots.tolist()), factors=tuple(shared.tolist()),
                           asymmetry=tuple(asymmetry.tolist()))
+
+
+def speed_gains(experiments: Sequence[Experiment], rate_of: object, delay: int, dt: float,
+                lag: float, geometry: StrokeGeometry) -> list[FloatArray]:
+    """
+    Per experiment, the geometry's factor at the measured angle before each predicted sample.
+
+    Map fits take these as known gains on the speed (:class:`~hydro_sdp.core.map_fit.FitData`),
+    so that the map is fitted to the speed the stroke factor scales.
+    """
+    gains = []
+    for experiment in experiments:
+        w, _, previous = model_speeds([experiment], rate_of, delay, dt, lag)
+        gains.append(geometry.factor(previous, w))
+    return gains

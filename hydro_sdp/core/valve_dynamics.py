@@ -34,22 +34,28 @@ def lag_pole(time_constant: float, dt: float) -> float:
     return math.exp(-dt / time_constant) if time_constant > 0.0 else 0.0
 
 
-def _rows(experiments: Sequence[Experiment], delay: int
-          ) -> tuple[FloatArray, np.ndarray, np.ndarray, int]:
-    """Increments and group indices of every experiment, one padded row each."""
+def _rows(experiments: Sequence[Experiment], delay: int, window: int
+          ) -> tuple[FloatArray, np.ndarray, np.ndarray, FloatArray, int]:
+    """Increments, stretch indices and time within the stretch, one padded row each."""
     width = max(e.y.size - e.start - 1 for e in experiments)
     dy = np.zeros((len(experiments), width))
     group = np.zeros((len(experiments), width), dtype=np.int64)
     mask = np.zeros((len(experiments), width), dtype=bool)
+    time = np.zeros((len(experiments), width))
     offset = 0
     for row, experiment in enumerate(experiments):
         k = np.arange(experiment.start + 1, experiment.y.size)
-        _, inverse = np.unique(delayed_at(experiment.v, k, delay), return_inverse=True)
+        delayed = delayed_at(experiment.v, k, delay)
+        # One group per stretch of one delayed command, its first `window` samples.
+        changed = np.r_[True, delayed[1:] != delayed[:-1]]
+        stretch = np.cumsum(changed) - 1
+        since = np.arange(k.size) - np.flatnonzero(changed)[stretch]
         dy[row, :k.size] = experiment.y[k] - experiment.y[k - 1]
-        group[row, :k.size] = inverse + offset
-        mask[row, :k.size] = True
-        offset += int(inverse.max()) + 1 if inverse.size else 0
-    return dy, group, mask, offset
+        group[row, :k.size] = stretch + offset
+        time[row, :k.size] = since
+        mask[row, :k.size] = since < window
+        offset += int(stretch[-1]) + 1 if stretch.size else 0
+    return dy, group, mask, time, offset
 
 
 def lagged_residual(experiments: Sequence[Experiment], delay: int, pole: float) -> float:
@@ -71,20 +77,29 @@ def lagged_residual(experiments: Sequence[Experiment], delay: int, pole: float) 
         Sum of squared residuals of the increments, degrees squared.
 
     """
-    dy, group, mask, groups = _rows(experiments, delay)
-    return _residual(dy, group, mask, groups, pole)
+    return _residual(*_rows(experiments, delay, 2 * delay + 50), pole)
 
 
-def _residual(dy: FloatArray, group: np.ndarray, mask: np.ndarray, groups: int,
-              pole: float) -> float:
+def _residual(dy: FloatArray, group: np.ndarray, mask: np.ndarray, time: FloatArray,
+              groups: int, pole: float) -> float:
     if pole > 0.0:
         previous = np.concatenate([dy[:, :1], dy[:, :-1]], axis=1)
         raw = (dy - pole * previous) / (1.0 - pole)
     else:
         raw = dy
-    counts = np.bincount(group[mask], minlength=groups)
-    means = np.bincount(group[mask], weights=raw[mask], minlength=groups) / np.maximum(counts, 1)
-    predicted = np.where(mask, means[group], 0.0)
+    # Each stretch: a mean speed with a linear drift over its first samples (the speed
+    # changes along the stroke; a lag or a delay shows where the command changes).
+    g, t, r = group[mask], time[mask], raw[mask]
+    n = np.bincount(g, minlength=groups).astype(np.float64)
+    st = np.bincount(g, weights=t, minlength=groups)
+    stt = np.bincount(g, weights=t * t, minlength=groups)
+    sr = np.bincount(g, weights=r, minlength=groups)
+    srt = np.bincount(g, weights=r * t, minlength=groups)
+    denominator = n * stt - st * st
+    safe = np.where(denominator > 0.0, denominator, 1.0)
+    slope = np.where(denominator > 0.0, (n * srt - st * sr) / safe, 0.0)
+    intercept = (sr - slope * st) / np.maximum(n, 1.0)
+    predicted = np.where(mask, intercept[group] + slope[group] * time, 0.0)
     if pole > 0.0:
         predicted, _ = lfilter([1.0 - pole], [1.0, -pole], predicted, axis=1,
                                zi=pole * predicted[:, :1])
@@ -118,7 +133,7 @@ def fit_delay_and_lag(experiments: Sequence[Experiment], dt: float, max_delay: i
     best_lag = (math.inf, 1, 0.0)
     explained = np.zeros(max_delay)
     for delay in range(1, max_delay + 1):
-        rows = _rows(experiments, delay)
+        rows = _rows(experiments, delay, 2 * max_delay + 50)
         scores = [(_residual(*rows, lag_pole(factor * dt, dt)), factor) for factor in LAG_GRID]
         pure = scores[0][0]
         lagged, factor = min(scores)

@@ -255,7 +255,7 @@ def test_shifted_map_moves_the_edges_only():
     assert (moved.saturation_velocity, moved.curvature) == ((-29.51, 38.87), (1.356, 1.771))
     assert shifted_map(EXAMPLE_MAPS[1], (1.0, 1.0)) == SdpDzMap((0.0, 3.0), (10.0, 20.0))
     assert shifted_map(EXAMPLE_MAPS[2], (0.0, 0.0)) is EXAMPLE_MAPS[2]
-    for static_map in EXAMPLE_MAPS[2:]:
+    for static_map in EXAMPLE_MAPS[2:5]:
         with pytest.raises(ConfigurationError, match='needs an sdp or sdp_dz model'):
             shifted_map(static_map, (0.1, 0.1))
 

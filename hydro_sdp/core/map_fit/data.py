@@ -49,11 +49,14 @@ class FitData:
     lag : float
         Valve lag time constant, s (0: none); each experiment's lag starts in
         steady state at its first delayed command.
+    gains : sequence of FloatArray or None
+        Per experiment, a factor on the speed of each predicted sample (the
+        stroke geometry at the measured angle before it); default: 1.
 
     """
 
     def __init__(self, experiments: Sequence[Experiment], delay: int, dt: float,
-                 lag: float = 0.0) -> None:
+                 lag: float = 0.0, gains: Sequence[FloatArray] | None = None) -> None:
         if not experiments:
             raise DataError('no experiments to fit')
         self.experiments = tuple(experiments)
@@ -75,6 +78,7 @@ class FitData:
         offsets = np.r_[0, np.cumsum(lengths)]
         self.buckets: list[tuple[IntArray, IntArray, FloatArray, npt.NDArray[np.bool_],
                                  FloatArray]] = []
+        self.gains: list[FloatArray] = []
         for size in np.unique(sizes):
             members = np.flatnonzero(sizes == size)
             width = int(lengths[members].max())
@@ -89,16 +93,24 @@ class FitData:
                 mask[row, :length] = True
             initial = np.array([initial_all[m] for m in members])
             self.buckets.append((members, index, observed, mask, initial))
+            if gains is not None:
+                gain = np.ones((members.size, width))
+                for row, member in enumerate(members):
+                    gain[row, :lengths[member]] = gains[member]
+                self.gains.append(gain)
 
     def increments(self, rate: RateFunction) -> list[FloatArray]:
         """Per bucket, ``dt rate(v_{k-tau})`` with padding set to zero."""
         per_level = self.dt * rate(self.levels)
         out = [np.where(mask, per_level[index], 0.0) for _, index, _, mask, _ in self.buckets]
-        if self.pole == 0.0:
-            return out
-        p = self.pole
-        return [np.where(mask, lfilter([1.0 - p], [1.0, -p], q, axis=1, zi=p * q[:, :1])[0], 0.0)
-                for q, (_, _, _, mask, _) in zip(out, self.buckets)]
+        if self.pole != 0.0:
+            p = self.pole
+            out = [np.where(mask, lfilter([1.0 - p], [1.0, -p], q, axis=1,
+                                          zi=p * q[:, :1])[0], 0.0)
+                   for q, (_, _, _, mask, _) in zip(out, self.buckets)]
+        if self.gains:
+            out = [q * gain for q, gain in zip(out, self.gains)]
+        return out
 
     def residuals(self, rate: RateFunction, beta: float = 0.0) -> FloatArray:
         """

@@ -2,7 +2,7 @@
 Fitting the saturating power-law map (``power_sat``) to experiments.
 
 The parameters are bounded by what the per-level speeds show: saturation
-speeds between the fastest measured speed and 1.5 times it, each edge between
+speeds between 0.7 and 1.5 times the fastest measured speed, each edge between
 rest and the innermost level that moves the joint, exponents 0.5..8. The start
 is the best of a few exponents fitted to the per-level speeds from the edges
 of an ``sdp`` fit; the map is then fitted to the raw angles by
@@ -46,9 +46,9 @@ def _bounds(levels: FloatArray, speeds: FloatArray, rest: float
         edge = (rest - inner, rest) if sign < 0 else (rest, rest + inner)
         if sign < 0:
             lower += [-1.5 * fastest, 1e-3 / scale, 0.5, edge[0]]
-            upper += [-0.98 * fastest, 1e3 / scale, 8.0, edge[1]]
+            upper += [-0.7 * fastest, 1e3 / scale, 8.0, edge[1]]
         else:
-            lower += [0.98 * fastest, 1e-3 / scale, 0.5, edge[0]]
+            lower += [0.7 * fastest, 1e-3 / scale, 0.5, edge[0]]
             upper += [1.5 * fastest, 1e3 / scale, 8.0, edge[1]]
     return np.array(lower), np.array(upper)
 
