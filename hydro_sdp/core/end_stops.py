@@ -31,8 +31,8 @@ def stop_window(dt: float) -> int:
 
 
 def clamp_start(y: FloatArray, v: FloatArray, begin: int, end: int, *, delay: int,
-                noise: float, window: int,
-                limits: tuple[float, float] | None = None) -> tuple[int, float, int] | None:
+                noise: float, window: int, limits: tuple[float, float] | None = None,
+                extremes: tuple[float, float] | None = None) -> tuple[int, float, int] | None:
     """
     First index in ``[begin, end)`` where the joint is held by an end stop, if any.
 
@@ -51,6 +51,10 @@ def clamp_start(y: FloatArray, v: FloatArray, begin: int, end: int, *, delay: in
     limits : tuple[float, float] or None
         Known stops, degrees: a held joint counts only near the stop in the
         direction it moved.
+    extremes : tuple[float, float] or None
+        Lowest and highest angle of the whole record, degrees: without known
+        stops, a stop lies at one of them (a stretch that reaches neither is
+        not searched).
 
     Returns
     -------
@@ -62,6 +66,10 @@ def clamp_start(y: FloatArray, v: FloatArray, begin: int, end: int, *, delay: in
     if end - begin < 2 * window + 2:
         return None
     segment = y[begin:end]
+    if limits is None and extremes is not None:
+        reach = max(0.05 * (extremes[1] - extremes[0]), 1.0)
+        if np.max(segment) < extremes[1] - reach and np.min(segment) > extremes[0] + reach:
+            return None
     net = (segment[window:] - segment[:-window]) / window
     speed = np.abs(net)
     moving_speed = float(np.percentile(speed, 90))
@@ -98,8 +106,8 @@ def clamp_start(y: FloatArray, v: FloatArray, begin: int, end: int, *, delay: in
         # Arrival: the first sample, at most three windows back, within reach of the
         # held angle (the overshoot beyond it stays in the stretch that is cut out).
         reach = max(6.0 * noise, 0.02)
-        back = max(index - 3 * window, 0)
+        back = max(int(index) - 3 * window, 0)
         arrived = np.flatnonzero(direction * (segment[back:index + 1] - angle) >= -reach)
-        arrival = back + int(arrived[0]) if arrived.size else index
+        arrival = back + int(arrived[0]) if arrived.size else int(index)
         return begin + arrival, angle, int(direction > 0)
     return None

@@ -195,7 +195,7 @@ AVERAGES = {'per_record': 'mean over records, each counted once (Table 2)',
 
 def mean_errors(scores: Sequence[RecordScore]) -> dict[str, dict[str, float]]:
     """
-    The per-record and the time-weighted mean of each model's MAE.
+    Average each model's MAE per record and weighted by time.
 
     Parameters
     ----------

@@ -239,6 +239,7 @@ def segment_record(record: Record, *, max_delay: int, rest: float | None = None,
     noise = noise_level(record, rest, max_delay)
     blocks = _blocks(v, rest)
     window = stop_window(float(np.median(np.diff(record.t)))) if len(record) > 1 else 5
+    extremes = (float(np.min(y)), float(np.max(y))) if len(record) else (0.0, 0.0)
     experiments: list[Experiment] = []
     dropped: list[Dropped] = []
     stops: list[list[float]] = [[], []]
@@ -256,7 +257,7 @@ def segment_record(record: Record, *, max_delay: int, rest: float | None = None,
         # is held, and go on where it leaves the stop.
         while block_stop - start - 1 >= min_samples:
             clamp = clamp_start(y, v, start, block_stop, delay=max_delay, noise=noise,
-                                window=window, limits=angle_limits)
+                                window=window, limits=angle_limits, extremes=extremes)
             stop = block_stop if clamp is None else clamp[0]
             if stop - start - 1 >= min_samples:
                 history = max(start - max_delay, 0)

@@ -133,7 +133,8 @@ def _fit_kind(kind: FittedKind, data: FitData, points: Sequence[LevelSpeed], res
     if kind == 'sdp':
         return fit_sdp(data, points, rest, method=method, starts=starts)
     if kind == 'poly':
-        return fit_poly(points, rest, data=data, method=method)
+        # The second paper fits the points; the output error is honoured on the angles.
+        return fit_poly(points, rest, data=data if method == 'oe' else None, method=method)
     if sdp_map is None:
         sdp_map = fit_sdp(data, points, rest, method='rr', starts=1).static_map
     if kind == 'pwl':
@@ -351,6 +352,10 @@ def identify(records: Sequence[Record], *, method: FitMethod = 'rr', kind: KindC
     geometry = fit_stroke_geometry(sample, fit.static_map.rate, delay.samples, dt, delay.lag,
                                    (low_stop, high_stop))
     refit = fit
+    if geometry is not None and experiments_mae(
+            replace(model, effects=effects + (geometry,)), sample, dt) >= \
+            (1.0 - GEOMETRY_GAIN) * experiments_mae(model, sample, dt):
+        geometry = None         # no gain even before the map is refitted under it
     for _ in range(GEOMETRY_ROUNDS):
         if geometry is None:
             break

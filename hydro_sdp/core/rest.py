@@ -25,7 +25,7 @@ STILL_FACTOR = 3.0
 def command_motion(pairs: Sequence[tuple[FloatArray, FloatArray]]
                    ) -> dict[float, tuple[int, float]]:
     """
-    Samples and median angle step of each held command, measured inside each record.
+    Count the samples and the median angle step of each held command, per record.
 
     Parameters
     ----------

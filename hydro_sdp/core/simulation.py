@@ -305,8 +305,10 @@ def one_step_increments(model: JointModel, v: FloatArray, y: FloatArray, dt: flo
     return np.clip(previous + increment, low, high) - previous
 
 
-def _angle_effects(model: JointModel) -> tuple[AngleDependentVelocity | None,
-                                                StrokeGeometry | None]:
+AngleEffects = tuple[AngleDependentVelocity | None, StrokeGeometry | None]
+
+
+def _angle_effects(model: JointModel) -> AngleEffects:
     gravity = model.effect(AngleDependentVelocity.name)
     geometry = model.effect(StrokeGeometry.name)
     return (gravity if isinstance(gravity, AngleDependentVelocity) else None,

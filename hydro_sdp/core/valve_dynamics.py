@@ -82,11 +82,10 @@ def lagged_residual(experiments: Sequence[Experiment], delay: int, pole: float) 
 
 def _residual(dy: FloatArray, group: np.ndarray, mask: np.ndarray, time: FloatArray,
               groups: int, pole: float) -> float:
+    raw: FloatArray = dy
     if pole > 0.0:
         previous = np.concatenate([dy[:, :1], dy[:, :-1]], axis=1)
-        raw = (dy - pole * previous) / (1.0 - pole)
-    else:
-        raw = dy
+        raw = np.asarray((dy - pole * previous) / (1.0 - pole), dtype=np.float64)
     # Each stretch: a mean speed with a linear drift over its first samples (the speed
     # changes along the stroke; a lag or a delay shows where the command changes).
     g, t, r = group[mask], time[mask], raw[mask]
@@ -125,21 +124,25 @@ def fit_delay_and_lag(experiments: Sequence[Experiment], dt: float, max_delay: i
     tuple
         ``(delay, time_constant, explained)``: dead time (samples), lag time
         constant (s, 0 for none) and, per candidate delay 1..max_delay, the share
-        of the increments' variance explained with the best lag there.
+        of the increments' variance explained with the best lag tried there.
 
     """
     total = sum(float(np.sum(np.diff(e.y[e.start:]) ** 2)) for e in experiments)
-    best_pure = (math.inf, 1)
+    window = 2 * max_delay + 50
+    rows = {delay: _rows(experiments, delay, window) for delay in range(1, max_delay + 1)}
+    pure = {delay: _residual(*rows[delay], 0.0) for delay in rows}
+    best_pure = min((score, delay) for delay, score in pure.items())
+    # A lag of T samples looks like about T samples of extra delay: with it, the dead
+    # time lies that much below the best pure delay.
     best_lag = (math.inf, 1, 0.0)
-    explained = np.zeros(max_delay)
-    for delay in range(1, max_delay + 1):
-        rows = _rows(experiments, delay, 2 * max_delay + 50)
-        scores = [(_residual(*rows, lag_pole(factor * dt, dt)), factor) for factor in LAG_GRID]
-        pure = scores[0][0]
-        lagged, factor = min(scores)
-        explained[delay - 1] = 1.0 - lagged / total if total > 0 else 0.0
-        best_pure = min(best_pure, (pure, delay))
-        best_lag = min(best_lag, (lagged, delay, factor))
+    explained = np.array([1.0 - pure[d] / total if total > 0 else 0.0 for d in sorted(pure)])
+    for factor in LAG_GRID[1:]:
+        centre = best_pure[1] - int(round(factor))
+        for delay in range(max(centre - 2, 1), min(centre + 3, max_delay + 1)):
+            lagged = _residual(*rows[delay], lag_pole(factor * dt, dt))
+            explained[delay - 1] = max(explained[delay - 1],
+                                       1.0 - lagged / total if total > 0 else 0.0)
+            best_lag = min(best_lag, (lagged, delay, factor))
     if best_lag[2] > 0.0 and best_lag[0] < (1.0 - LAG_GAIN) * best_pure[0]:
         return best_lag[1], best_lag[2] * dt, explained
     return best_pure[1], 0.0, explained

@@ -77,7 +77,7 @@ def test_poly_on_a_valve_that_rests_at_50():
 
 
 def step_and_return_record(truth, levels, back, *, seed=0):
-    """Steps from a home angle, each followed by a return at one fixed command."""
+    """Return steps from a home angle, each followed by a return at one fixed command."""
     rng = np.random.default_rng(seed)
     v = []
     home = 20.0
@@ -108,7 +108,8 @@ def test_a_simulated_sdp_joint_with_return_moves_is_identified_as_sdp():
 
 
 def test_stroke_geometry_is_recovered_from_full_strokes():
-    geometry = StrokeGeometry(knots=(-40.0, -30.0, 0.0, 40.0, 50.0), factors=(0.7, 0.7, 1.3, 0.8, 0.8))
+    geometry = StrokeGeometry(knots=(-40.0, -30.0, 0.0, 40.0, 50.0),
+                              factors=(0.7, 0.7, 1.3, 0.8, 0.8))
     truth = JointModel('j', CONVEX, 0.2, angle_limits=(-40.0, 50.0), effects=(geometry,))
     result = identify(full_strokes(truth, (45, 55, 65, 80, 100), low=-40.0, high=50.0),
                       kind='power_sat')

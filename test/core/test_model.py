@@ -5,7 +5,8 @@ from typing import get_args
 
 from hydro_sdp.core._validate import require_float_list
 from hydro_sdp.core.effects import (
-    AngleDependentVelocity, Backlash, DirectionDependentDelay, ValveLag)
+    AngleDependentVelocity, Backlash, DirectionDependentDelay, effect_from_mapping, StrokeGeometry,
+    ValveLag)
 from hydro_sdp.core.errors import ConfigurationError, ModelFileError
 from hydro_sdp.core.idz import idz_mode, IDZ_MODES, InverseDeadZone
 from hydro_sdp.core.model import delay_samples, JointModel
@@ -283,3 +284,27 @@ def test_names_of_modes_and_lists():
         require_float_list(3.0, 'knots')
     with pytest.raises(ModelFileError, match="key 'knots\\[1\\]': expected a number"):
         require_float_list([1.0, 'x'], 'knots')
+
+
+def test_stroke_geometry_round_trips_through_the_model_file(tmp_path):
+    geometry = StrokeGeometry(knots=(-10.0, 20.0, 60.0), factors=(0.7, 1.2, 0.9),
+                              asymmetry=(0.1, 0.0, -0.1), cushion=3.0, cushion_factor=0.4)
+    model = JointModel('arm', PowerSatMap((-37.5, 37.5), (-40.0, 32.0), (0.03, 0.04), (3.0, 2.5)),
+                       0.25, angle_limits=(-10.0, 60.0), effects=(geometry, ValveLag(0.1)))
+    path = save_model(model, tmp_path / 'model.yaml')
+    text = path.read_text()
+    assert 'stroke_geometry:' in text and 'knots:' in text and 'exponent:' in text
+    assert load_model(path) == model
+
+
+@pytest.mark.parametrize(('params', 'message'), [
+    ({'knots': [0.0, 1.0], 'factors': [1.0]}, 'of equal number'),
+    ({'knots': [1.0, 0.0], 'factors': [1.0, 1.0]}, 'strictly increasing'),
+    ({'knots': [0.0, 1.0], 'factors': [1.0, -1.0]}, 'must be > 0'),
+    ({'knots': [0.0, 1.0], 'factors': [1.0, 1.0], 'asymmetry': [0.0, 1.5]}, 'inside'),
+    ({'knots': [0.0, 1.0], 'factors': [1.0, 1.0], 'cushion_factor': 0.0}, 'cushion_factor'),
+    ({'knots': 3.0, 'factors': [1.0, 1.0]}, 'list of numbers'),
+])
+def test_bad_stroke_geometry_is_refused(params, message):
+    with pytest.raises(ModelFileError, match=message):
+        effect_from_mapping('stroke_geometry', params)

@@ -96,7 +96,7 @@ class FitData:
             if gains is not None:
                 gain = np.ones((members.size, width))
                 for row, member in enumerate(members):
-                    gain[row, :lengths[member]] = gains[member]
+                    gain[row, :lengths[member]] = gains[int(member)]
                 self.gains.append(gain)
 
     def increments(self, rate: RateFunction) -> list[FloatArray]:

@@ -3,8 +3,8 @@ Fitting the monotone piecewise-linear map (``pwl``) to experiments.
 
 The zero-speed plateau spans the dead-zone; beyond each edge a knot sits at
 every command level the data hold (a valve measured at a few duties is
-followed exactly there), or at quantiles of the commands when there are more
-than :data:`MAX_KNOTS` of them; the speeds are cumulative non-negative
+followed exactly there), or at :data:`QUANTILE_KNOTS` quantiles of the commands
+when there are more than :data:`MAX_KNOTS` of them; the speeds are cumulative non-negative
 increments outward from the edges, so the map stays monotone.
 
 """
@@ -21,8 +21,9 @@ from hydro_sdp.core.static_maps import PwlMap
 import numpy as np
 from scipy.optimize import least_squares
 
-#: Most knots beyond each edge.
+#: Most knots beyond each edge at measured levels, and the quantile knots beyond it.
 MAX_KNOTS = 12
+QUANTILE_KNOTS = 12
 
 
 @dataclass(frozen=True, eq=False)
@@ -82,7 +83,8 @@ def pwl_layout(levels: FloatArray, dead_zone: tuple[float, float], *,
         Edges of the zero-speed plateau.
     knots_per_side : int or None
         Knots beyond each edge, at quantiles of the commands there; default: one at
-        every distinct command, or :data:`MAX_KNOTS` quantiles when there are more.
+        every distinct command, or :data:`QUANTILE_KNOTS` quantiles when there are
+        more than :data:`MAX_KNOTS`.
 
     Returns
     -------
@@ -99,7 +101,7 @@ def pwl_layout(levels: FloatArray, dead_zone: tuple[float, float], *,
         elif knots_per_side is None and side.size <= MAX_KNOTS:
             sides.append(side)
         else:
-            count = knots_per_side if knots_per_side is not None else MAX_KNOTS
+            count = knots_per_side if knots_per_side is not None else QUANTILE_KNOTS
             sides.append(np.unique(np.quantile(side, np.linspace(0, 1, count))))
     knots_neg, knots_pos = sides
     knots = np.r_[knots_neg, low, high, knots_pos]

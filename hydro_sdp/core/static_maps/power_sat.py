@@ -89,7 +89,7 @@ class PowerSatMap:
         for key in ('curvature', 'exponent'):
             if min(getattr(self, key)) <= 0.0:
                 raise ModelFileError(
-                    f"key {key!r}: both values must be > 0, got {list(getattr(self, key))}")
+                    f'key {key!r}: both values must be > 0, got {list(getattr(self, key))}')
 
     def rate(self, v: FloatArray) -> FloatArray:
         """Angular velocity (deg/s) for steady commands ``v`` (:meth:`StaticMap.rate`)."""
