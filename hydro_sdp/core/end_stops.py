@@ -32,7 +32,8 @@ def stop_window(dt: float) -> int:
 
 def clamp_start(y: FloatArray, v: FloatArray, begin: int, end: int, *, delay: int,
                 noise: float, window: int, limits: tuple[float, float] | None = None,
-                extremes: tuple[float, float] | None = None) -> tuple[int, float, int] | None:
+                extremes: tuple[float, float] | None = None,
+                rest: float | None = None) -> tuple[int, float, int] | None:
     """
     First index in ``[begin, end)`` where the joint is held by an end stop, if any.
 
@@ -55,6 +56,9 @@ def clamp_start(y: FloatArray, v: FloatArray, begin: int, end: int, *, delay: in
         Lowest and highest angle of the whole record, degrees: without known
         stops, a stop lies at one of them (a stretch that reaches neither is
         not searched).
+    rest : float or None
+        Rest command: a stop counts only when the held command drives the joint
+        the way it moved (above rest up, below rest down).
 
     Returns
     -------
@@ -80,12 +84,19 @@ def clamp_start(y: FloatArray, v: FloatArray, begin: int, end: int, *, delay: in
     span = float(np.max(segment) - np.min(segment))
     command = v[begin:end]
     for index in np.flatnonzero(held[window:]) + window:
-        before = net[max(index - 3 * window, 0):index]
+        earliest = max(int(index) - 3 * window, 0)
+        before = net[earliest:index]
         fast = int(np.argmax(np.abs(before)))
         if abs(before[fast]) < MOVING_FRACTION * moving_speed:
             continue
-        first = max(begin + index - window - delay, 0)
+        # The motion must come from the command that is now held: held since a delay
+        # before the stop and since before the window where the joint moved, and
+        # driving the way it moved (every map is increasing: positive commands move
+        # the joint up).
+        first = max(min(begin + index - window - delay, begin + earliest + fast), 0)
         if np.any(v[first:begin + index + 1] != v[begin + index]):
+            continue
+        if rest is not None and np.sign(v[begin + index] - rest) != np.sign(before[fast]):
             continue
         changed = np.flatnonzero(command[index:] != command[index])
         last = index + (int(changed[0]) if changed.size else command.size - index)
@@ -100,8 +111,11 @@ def clamp_start(y: FloatArray, v: FloatArray, begin: int, end: int, *, delay: in
                     (direction < 0 and angle > limits[0] + tolerance):
                 continue
         else:
-            extreme = np.max(segment) if direction > 0 else np.min(segment)
-            if abs(extreme - angle) > max(0.05 * span, 1.0):
+            # A stop is at the far end of the travel: of the record's when known.
+            low, high = extremes if extremes is not None else (np.min(segment),
+                                                               np.max(segment))
+            extreme = high if direction > 0 else low
+            if abs(extreme - angle) > max(0.05 * (high - low if extremes else span), 1.0):
                 continue
         # Arrival: the first sample, at most three windows back, within reach of the
         # held angle (the overshoot beyond it stays in the stretch that is cut out).

@@ -257,7 +257,8 @@ def segment_record(record: Record, *, max_delay: int, rest: float | None = None,
         # is held, and go on where it leaves the stop.
         while block_stop - start - 1 >= min_samples:
             clamp = clamp_start(y, v, start, block_stop, delay=max_delay, noise=noise,
-                                window=window, limits=angle_limits, extremes=extremes)
+                                window=window, limits=angle_limits, extremes=extremes,
+                                rest=rest)
             stop = block_stop if clamp is None else clamp[0]
             if stop - start - 1 >= min_samples:
                 history = max(start - max_delay, 0)
@@ -277,8 +278,9 @@ def segment_record(record: Record, *, max_delay: int, rest: float | None = None,
             dropped.append(Dropped(float(record.t[stop]), 'clamped by an end stop',
                                    record.source, record.since_start(record.t[stop])))
             start = released
-    end_stops = (float(np.median(stops[0])) if stops[0] else None,
-                 float(np.median(stops[1])) if stops[1] else None)
+    # A joint cannot be held beyond its stop: the outermost angle held is the stop.
+    end_stops = (float(np.min(stops[0])) if stops[0] else None,
+                 float(np.max(stops[1])) if stops[1] else None)
     if angle_limits is not None:
         end_stops = angle_limits
     return Segmentation(tuple(experiments), tuple(dropped), rest, noise, end_stops)
@@ -376,7 +378,7 @@ def segment_records(records: Sequence[Record], *, max_delay: int,
     -------
     Segmentation
         Pooled experiments; rest and noise from all records; each end stop the
-        median of the angles the joint was held at.
+        outermost angle the joint was held at.
 
     """
     if not records:
@@ -392,7 +394,7 @@ def segment_records(records: Sequence[Record], *, max_delay: int,
         tuple(e for p in parts for e in p.experiments),
         tuple(d for p in parts for d in p.dropped), rest,
         float(np.median([p.noise_std for p in parts])),
-        (float(np.median(lows)) if lows else None, float(np.median(highs)) if highs else None))
+        (min(lows) if lows else None, max(highs) if highs else None))
 
 
 def _record_key(record: Record) -> tuple[str, float, int, float, float]:
