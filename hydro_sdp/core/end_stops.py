@@ -81,7 +81,6 @@ def clamp_start(y: FloatArray, v: FloatArray, begin: int, end: int, *, delay: in
     if moving_speed <= 3.0 * floor:
         return None
     held = speed < max(HELD_FRACTION * moving_speed, floor)
-    span = float(np.max(segment) - np.min(segment))
     command = v[begin:end]
     for index in np.flatnonzero(held[window:]) + window:
         earliest = max(int(index) - 3 * window, 0)
@@ -112,10 +111,10 @@ def clamp_start(y: FloatArray, v: FloatArray, begin: int, end: int, *, delay: in
                 continue
         else:
             # A stop is at the far end of the travel: of the record's when known.
-            low, high = extremes if extremes is not None else (np.min(segment),
-                                                               np.max(segment))
+            low, high = extremes if extremes is not None else (float(np.min(segment)),
+                                                               float(np.max(segment)))
             extreme = high if direction > 0 else low
-            if abs(extreme - angle) > max(0.05 * (high - low if extremes else span), 1.0):
+            if abs(extreme - angle) > max(0.05 * (high - low), 1.0):
                 continue
         # Arrival: the first sample, at most three windows back, within reach of the
         # held angle (the overshoot beyond it stays in the stretch that is cut out).
