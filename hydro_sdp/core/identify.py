@@ -133,8 +133,8 @@ def _fit_kind(kind: FittedKind, data: FitData, points: Sequence[LevelSpeed], res
     if kind == 'sdp':
         return fit_sdp(data, points, rest, method=method, starts=starts)
     if kind == 'poly':
-        # The second paper fits the points; the output error is honoured on the angles.
-        return fit_poly(points, rest, data=data if method == 'oe' else None, method=method)
+        # The second paper's fit to the points, refined on the angles by the method asked.
+        return fit_poly(points, rest, data=data, method=method)
     if sdp_map is None:
         sdp_map = fit_sdp(data, points, rest, method='rr', starts=1).static_map
     if kind == 'pwl':
