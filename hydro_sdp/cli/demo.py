@@ -34,9 +34,9 @@ Run the hydro_sdp pipeline on the built-in BROKK J2 joint (West et al. 2018):
 simulate step and random-level experiments and record them as rosbag2 bags,
 identify the joint from the step bag and evaluate it on the random runs (Table
 2), design the PIP-IDZ controller from the identified model, run it in closed
-loop on set-point steps, and run two LUCIE-like excavator joints along ramps.
-The report folder gets the bags, PNG figures in the style of the paper's and
-summary.md.
+loop on set-point steps, run two LUCIE-like excavator joints along ramps and
+drive their bucket tip along a straight line (path error in mm). The report
+folder gets the bags, PNG figures in the style of the papers' and summary.md.
 
 example:
   hydro-sdp demo --out demo_output
