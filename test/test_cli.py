@@ -116,7 +116,7 @@ def test_demo_writes_a_report(tmp_path, capsys):
     assert (report / 'summary.md').read_text().startswith('# hydro_sdp demo')
     for name in ('steps.png', 'step_responses.png', 'gains.png', 'velocity_map.png',
                  'evaluation.png', 'idz.png', 'closed_loop.png', 'two_joints.png',
-                 'recalibration.png'):
+                 'bucket_line.png', 'recalibration.png'):
         png = report / 'figures' / name
         assert png.read_bytes()[:8] == b'\x89PNG\r\n\x1a\n'
     assert read_record(summary['bags']['steps']).joint == 'j2'
@@ -134,6 +134,15 @@ def test_demo_writes_a_report(tmp_path, capsys):
     assert (report / 'diagnosis' / 'summary.md').is_file()
     assert all(step['settling_time'] < 5.0 for step in summary['control']['steps'])
     assert (report / 'j2_controller.yaml').is_file()
+    line = summary['bucket_line']
+    assert set(line) == {'motion', 'path_error_mm', 'rms_error', 'final_error'}
+    assert set(line['rms_error']) == set(line['final_error']) == {'boom', 'dipper'}
+    # The shipped line is 0.99 m at 0.1 m/s, starting 1 s in.
+    assert line['motion'] == pytest.approx([1.0, 1.0 + np.hypot(0.7, 0.7) / 0.1])
+    path = line['path_error_mm']
+    assert 0.0 < path['rms'] <= path['max'] < 5.0
+    assert all(0.0 < error < 1.0 for error in line['rms_error'].values())
+    assert '## A straight bucket path' in (report / 'summary.md').read_text()
 
 
 def test_help_teaches(capsys):

@@ -3,12 +3,13 @@
 from __future__ import annotations
 
 import argparse
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
 
 from hydro_sdp.bags import read_bag, write_bag
 from hydro_sdp.cli.common import Outcome, table
+from hydro_sdp.cli.demo_line import bucket_line
+from hydro_sdp.cli.demo_report import Report
 from hydro_sdp.cli.progress import ProgressBar
 from hydro_sdp.core.closed_loop import LoopJoint, run_closed_loop, step_metrics, step_setpoints
 from hydro_sdp.core.controller_spec import design_from_model, format_pole
@@ -18,15 +19,13 @@ from hydro_sdp.core.errors import DataError
 from hydro_sdp.core.evaluate import evaluate, simulated_angles
 from hydro_sdp.core.experiment_records import experiment_record
 from hydro_sdp.core.identify import identify
-from hydro_sdp.core.model import JointModel
 from hydro_sdp.core.records import Record
 from hydro_sdp.files import (
     atomic_write_text, default_model_path, load_model, save_controller, save_model, shipped_config)
 from hydro_sdp.plots import (
-    plot_closed_loop, plot_gains, plot_idz, plot_recalibration, plot_record, plot_step_responses,
-    plot_velocity_map, save_figure)
+    command_unit_of, plot_closed_loop, plot_gains, plot_idz, plot_recalibration, plot_record,
+    plot_step_responses, plot_velocity_map)
 from hydro_sdp.report.diagnosis import write_report
-from matplotlib.figure import Figure
 import numpy as np
 
 HELP = 'run the pipeline on the built-in BROKK J2 joint and write a report folder'
@@ -35,9 +34,9 @@ Run the hydro_sdp pipeline on the built-in BROKK J2 joint (West et al. 2018):
 simulate step and random-level experiments and record them as rosbag2 bags,
 identify the joint from the step bag and evaluate it on the random runs (Table
 2), design the PIP-IDZ controller from the identified model, run it in closed
-loop on set-point steps, and run two LUCIE-like excavator joints along ramps.
-The report folder gets the bags, PNG figures in the style of the paper's and
-summary.md.
+loop on set-point steps, run two LUCIE-like excavator joints along ramps and
+drive their bucket tip along a straight line (path error in mm). The report
+folder gets the bags, PNG figures in the style of the papers' and summary.md.
 
 example:
   hydro-sdp demo --out demo_output
@@ -54,30 +53,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument('--short', action='store_true',
                         help='shorter experiments, for a quick check')
     parser.set_defaults(run=run)
-
-
-@dataclass
-class Report:
-    """What the demo's stages leave for the summary."""
-
-    out: Path
-    short: bool
-    seed: int
-    sections: list[str] = field(default_factory=list)
-    lines: list[str] = field(default_factory=list)
-    payload: dict = field(default_factory=dict)
-    identified: JointModel | None = None
-
-    def figure(self, figure: Figure, name: str) -> str:
-        """Save a figure into ``figures/`` and return its path relative to the report."""
-        save_figure(figure, self.out / 'figures' / name)
-        return f'figures/{name}'
-
-    def model(self) -> JointModel:
-        """Return the model the identification stage left."""
-        if self.identified is None:
-            raise DataError('the demo stages run in order: identification comes first')
-        return self.identified
 
 
 def _experiments(report: Report) -> None:
@@ -184,7 +159,8 @@ def _control(report: Report) -> None:
     figures = [report.figure(plot_idz(model, idz, 0.05, u_limits=spec.u_limits),
                              'idz.png'),
                report.figure(plot_closed_loop(
-                   [trace], title='J2 PIP-IDZ control (West et al. 2018, Fig. 7)'),
+                   [trace], title='J2 PIP-IDZ control (West et al. 2018, Fig. 7)',
+                   command_unit=command_unit_of(model)),
                    'closed_loop.png')]
     gains = spec.gains
     rows = [[f'{m.size:+.0f}', f'{m.settling_time:.2f}', f'{m.overshoot:.2f}',
@@ -320,6 +296,7 @@ STAGES: list[tuple[str, Callable[[Report], None]]] = [
     ('identification', _identification),
     ('control', _control),
     ('two joints', _two_joints),
+    ('bucket line', bucket_line),
     ('ROS nodes', _ros_nodes),
     ('diagnosis', _diagnosis),
 ]
