@@ -101,7 +101,7 @@ def run(args: argparse.Namespace) -> Outcome:
     lines.append('candidates (first round):')
     lines += table([[c.effect, 'yes' if c.significant else 'no', f'{100 * c.gain:.1f}',
                      f'{c.t:.1f}', c.evidence[:70]] for c in result.candidates if c.applicable],
-                   ['effect', 'significant', 'gain %', 't', 'evidence'])
+                   ['effect', 'significant', 'gain %', 'z', 'evidence'])
     if args.out:
         lines.append(f'wrote {payload["model_file"]}')
     return Outcome(payload, lines)

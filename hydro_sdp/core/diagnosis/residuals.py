@@ -30,7 +30,7 @@ import numpy as np
 T_LIMIT = 3.0
 #: ...and it removes at least this share of the squared velocity residual.
 MIN_GAIN = 0.02
-#: Length of the blocks the t-test pairs, s.
+#: Length of the blocks the sign test compares, s.
 BLOCK_SECONDS = 1.0
 
 

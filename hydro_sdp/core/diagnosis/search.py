@@ -3,10 +3,10 @@ The search loop of the discrepancy workflow (docs/methods.md section 8.4).
 
 Every registered detector adds its effect to the model and fits it; a candidate
 is *significant* when its residuals are smaller than the model's block by block
-(t > 3) and by a useful margin (2 %); the largest significant improvement names
-the effect. It is kept only if the simulation error on the validation records
-shrinks, and the search repeats on the augmented model until nothing significant
-is left: ``none``.
+(block sign test, z > 3) and by a useful margin (2 %); the largest significant
+improvement names the effect. It is kept only if the simulation error on the
+validation records shrinks, and the search repeats on the augmented model until
+nothing significant is left: ``none``.
 
 """
 

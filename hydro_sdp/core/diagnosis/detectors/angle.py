@@ -7,7 +7,7 @@ import math
 
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.diagnosis.context import Context
-from hydro_sdp.core.diagnosis.detectors.base import Detector
+from hydro_sdp.core.diagnosis.detectors.base import Detector, EffectDetector
 from hydro_sdp.core.diagnosis.residuals import velocity_residuals
 from hydro_sdp.core.diagnosis.results import Candidate, Trial
 from hydro_sdp.core.effects import AngleDependentVelocity as AngleSpeed
@@ -111,7 +111,7 @@ class AngleLimits(Detector):
         return replace(trial, signature_match=current is None and trial.significant), augmented
 
 
-class AngleDependentVelocity(Detector):
+class AngleDependentVelocity(EffectDetector):
     """The speed depends on the angle (geometry, gravity): regress the residual on it."""
 
     word = 'angle_dependent_velocity'
@@ -119,10 +119,8 @@ class AngleDependentVelocity(Detector):
     remedy = 'effect, regression on the angle'
     feature = 'angle'
 
-    def fit(self, context: Context) -> Trial:
+    def fit_effect(self, context: Context) -> Trial:
         """Fit amplitude and phase by regression, polish on the residuals, and score."""
-        if context.model.effect(AngleSpeed.name) is not None:
-            return Candidate(self.word, False), None
         # eps ~ dt |w| (A cos y + B sin y) with A = c cos(phi), B = -c sin(phi): a linear
         # regression of the velocity residual on the model speed times the angle's cosine
         # and sine (the library term 'q cos(y) sgn(q)' of docs/methods.md 8.6) gives c and

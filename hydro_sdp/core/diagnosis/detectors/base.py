@@ -11,11 +11,12 @@ report's signature figure all come from the registered detectors.
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from typing import ClassVar
+from typing import Callable, ClassVar
 
 from hydro_sdp.core.diagnosis.context import Context
 from hydro_sdp.core.diagnosis.residuals import Run, velocity_residuals
-from hydro_sdp.core.diagnosis.results import Feature, Signature, Trial
+from hydro_sdp.core.diagnosis.results import Candidate, Feature, Signature, Trial
+from hydro_sdp.core.effects import Effect
 from hydro_sdp.core.model import JointModel
 from hydro_sdp.core.simulation import speed_profile
 from hydro_sdp.core.timing import delayed_at
@@ -85,6 +86,42 @@ class Detector(ABC):
 
         """
         return feature_signature(self.word, self.feature, model, augmented, run)
+
+
+class EffectDetector(Detector):
+    """
+    An effect of :mod:`hydro_sdp.core.effects`: tried only on a model without it.
+
+    The word is the effect's name. Subclasses implement :meth:`fit_effect`.
+
+    """
+
+    def fit(self, context: Context) -> Trial:
+        """Fit and score the effect; not applicable when the model has it already."""
+        if context.model.effect(self.word) is not None:
+            return Candidate(self.word, False), None
+        return self.fit_effect(context)
+
+    @abstractmethod
+    def fit_effect(self, context: Context) -> Trial:
+        """As :meth:`Detector.fit`, on a model that lacks the effect."""
+
+    def fit_one_parameter(self, context: Context, effect: Callable[[float], Effect],
+                          parameter: str, bounds: tuple[float, float], finding: str,
+                          log: bool = False) -> Trial:
+        """
+        Fit an effect of one parameter in ``bounds`` and score it (for :meth:`fit_effect`).
+
+        ``effect`` builds the effect from a value and ``parameter`` names the value in
+        the model file; ``finding`` is the evidence, with ``{}`` where the value goes
+        (formatted ``.3g``); ``log`` searches its logarithm (as :meth:`Context.fit_scalar`).
+
+        """
+        def model_with(value: float) -> JointModel:
+            return context.model.with_effect(effect(value))
+        value = context.fit_scalar(model_with, bounds, log=log)
+        return context.score(self.word, model_with(value), {parameter: value},
+                             finding.format(format(value, '.3g')))
 
 
 def feature_signature(word: str, feature: Feature, model: JointModel, augmented: JointModel,
