@@ -26,11 +26,11 @@ setup(
     entry_points={
         'console_scripts': [
             'hydro-sdp = hydro_sdp.cli.main:entry_point',
-            'plant_node = hydro_sdp.ros.plant_node:main',
-            'controller_node = hydro_sdp.ros.controller_node:main',
-            'identifier_node = hydro_sdp.ros.identifier_node:main',
-            'bag_recorder = hydro_sdp.ros.bag_recorder:main',
-            'bag_player = hydro_sdp.ros.bag_player:main',
+            'plant_node = hydro_sdp.ros.entry_points:plant_node',
+            'controller_node = hydro_sdp.ros.entry_points:controller_node',
+            'identifier_node = hydro_sdp.ros.entry_points:identifier_node',
+            'bag_recorder = hydro_sdp.ros.entry_points:bag_recorder',
+            'bag_player = hydro_sdp.ros.entry_points:bag_player',
         ],
     },
 )

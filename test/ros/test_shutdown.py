@@ -122,3 +122,22 @@ def test_a_signal_stops_every_node_cleanly(graph, moment, delay, signum):
         # The recorder closed its bag as on Ctrl-C.
         assert (output / 'metadata.yaml').is_file(), errors['bag_recorder']
         assert 'wrote' in errors['bag_recorder']
+
+
+@pytest.mark.parametrize('delay', [0.05, 0.15, 0.4])
+def test_sigint_while_a_node_loads_prints_no_traceback(delay):
+    # A Ctrl-C while the node's modules still load ends it quietly (130), as the command line.
+    process = subprocess.Popen(
+        [_script('plant_node')], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+        env=dict(os.environ, ROS_DOMAIN_ID=str(random.randint(1, 200))),
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    time.sleep(delay)
+    process.send_signal(signal.SIGINT)
+    try:
+        output, _ = process.communicate(timeout=EXIT_LIMIT)
+    except subprocess.TimeoutExpired:
+        process.kill()
+        output, _ = process.communicate()
+        pytest.fail(f'plant_node did not end within {EXIT_LIMIT} s of SIGINT')
+    assert b'Traceback' not in output, output.decode(errors='replace')
+    assert process.returncode in (0, 130)

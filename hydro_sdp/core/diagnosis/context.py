@@ -53,7 +53,8 @@ class Context:
         elif self.segmentation is not None:
             self.rest = self.segmentation.rest
         else:
-            self.rest = estimate_rest_command(levels, np.concatenate([r.y for r in records]))
+            self.rest = estimate_rest_command([(r.v, r.y) for r in records],
+                                              input_limits=model.input_limits)
         self.scale = max(float(np.max(np.abs(levels - self.rest))), 1e-9)
 
     def fit_data(self, delay: int) -> FitData:
