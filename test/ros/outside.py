@@ -10,7 +10,9 @@ import time
 
 from conftest import REPO
 import pytest
+from rcl_interfaces.srv import GetParameters, SetParametersAtomically
 import rclpy
+from rclpy.parameter import Parameter, parameter_value_to_python
 
 MODELS = [str(REPO / 'config' / 'lucie_boom.yaml'), str(REPO / 'config' / 'lucie_dipper.yaml')]
 ARM = ['-p', f"model_files:=[{','.join(MODELS)}]"]
@@ -22,18 +24,26 @@ def script(name):
     return shutil.which(name, path=str(Path(sys.executable).parent))
 
 
+def required_script(name):
+    """Return the console script ``name``; skip the test when it is not installed."""
+    found = script(name)
+    if found is None:
+        pytest.skip('the console scripts are not installed in this environment')
+    return found
+
+
 class Processes:
     """Node processes in a fresh ROS domain found on this host, and a client node."""
 
-    def __init__(self, monkeypatch, *commands):
-        if any(script(name) is None for name, _ in commands):
-            pytest.skip('the console scripts are not installed in this environment')
+    def __init__(self, monkeypatch, *commands, cwd=None):
+        scripts = {name: required_script(name) for name, _ in commands}
         domain = random.randint(1, 200)
         # The in-process harness turns discovery off; a process must be found on the host.
         monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
         environment = dict(os.environ, ROS_DOMAIN_ID=str(domain))
-        self.processes = {name: subprocess.Popen([script(name), '--ros-args', *arguments],
-                                                 env=environment, stdout=subprocess.DEVNULL,
+        self.processes = {name: subprocess.Popen([scripts[name], '--ros-args', *arguments],
+                                                 env=environment, cwd=cwd,
+                                                 stdout=subprocess.DEVNULL,
                                                  stderr=subprocess.PIPE, text=True)
                           for name, arguments in commands}
         from rclpy.context import Context
@@ -89,3 +99,52 @@ class Processes:
         self.executor.shutdown()
         self.node.destroy_node()
         rclpy.try_shutdown(context=self.context)
+
+
+class NodeProcess(Processes):
+    """One node process with its parameter services, and a client node."""
+
+    def __init__(self, monkeypatch, script_name, node_name, *arguments):
+        super().__init__(monkeypatch, (script_name, list(arguments)))
+        self.name = script_name
+        self.process = self.processes[script_name]
+        self.set_client = self.node.create_client(
+            SetParametersAtomically, f'/{node_name}/set_parameters_atomically')
+        self.get_client = self.node.create_client(GetParameters, f'/{node_name}/get_parameters')
+
+    def wait_until_up(self, predicate):
+        """Wait for the parameter services, then until ``predicate()`` holds."""
+        assert self.set_client.wait_for_service(timeout_sec=30.0), self.died()
+        assert self.get_client.wait_for_service(timeout_sec=10.0), self.died()
+        assert self.spin_until(predicate), self.died()
+
+    def set_atomically(self, **values):
+        """Set parameters atomically (dots written as ``__``); return the result."""
+        request = SetParametersAtomically.Request()
+        request.parameters = [Parameter(name.replace('__', '.'), value=value).to_parameter_msg()
+                              for name, value in values.items()]
+        return self.call(self.set_client, request).result
+
+    def get(self, *names):
+        """Return ``(type, value)`` of parameters."""
+        answer = self.call(self.get_client, GetParameters.Request(names=list(names)))
+        return [(Parameter.Type(value.type), parameter_value_to_python(value))
+                for value in answer.values]
+
+    def close(self):
+        """Stop the process and the client; the process must have been alive."""
+        alive = self.process.poll() is None
+        super().close()
+        assert alive, f'{self.name} died'
+
+
+def node_process_fixture(kind, monkeypatch):
+    """Yield a function starting ``kind(monkeypatch, *arguments)``; close each after the test."""
+    started = []
+
+    def start(*arguments):
+        started.append(kind(monkeypatch, *arguments))
+        return started[-1]
+    yield start
+    for client in started:
+        client.close()

@@ -7,13 +7,6 @@ process from an outside rclpy client (what ``ros2 param set`` does).
 
 from dataclasses import replace
 import math
-import os
-from pathlib import Path
-import random
-import shutil
-import subprocess
-import sys
-import time
 
 from hydro_sdp.core.controller_spec import design_from_model
 from hydro_sdp.core.errors import ConfigurationError
@@ -21,10 +14,9 @@ from hydro_sdp.core.pip_controller import PipIdzController
 from hydro_sdp.files import default_model_path, load_model, save_controller
 from hydro_sdp.ros.controller_node import PipControllerNode
 from hydro_sdp.ros.testing import RosHarness
+from outside import node_process_fixture, NodeProcess
 import pytest
-from rcl_interfaces.srv import GetParameters, SetParametersAtomically
-import rclpy
-from rclpy.parameter import Parameter, parameter_value_to_python
+from rclpy.parameter import Parameter
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64
 
@@ -164,78 +156,18 @@ def test_a_controller_file_for_another_valve_range_is_refused(ros, tmp_path):
                 parameters={'controller_file': str(tmp_path / 'boom_c.yaml')})
 
 
-def _script(name):
-    return shutil.which(name, path=str(Path(sys.executable).parent))
-
-
-class OutsideClient:
+class OutsideClient(NodeProcess):
     """A controller_node process and a client in this process: parameter services and topics."""
 
-    def __init__(self, *arguments):
-        if _script('controller_node') is None:
-            pytest.skip('the console scripts are not installed in this environment')
-        domain = random.randint(1, 200)
-        # The in-process harness turns discovery off; a process must be found on the host.
-        environment = dict(os.environ, ROS_DOMAIN_ID=str(domain),
-                           ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST')
-        self.process = subprocess.Popen([_script('controller_node'), '--ros-args', *arguments],
-                                        env=environment, stdout=subprocess.DEVNULL,
-                                        stderr=subprocess.PIPE, text=True)
-        from rclpy.context import Context
-        from rclpy.executors import SingleThreadedExecutor
-        from rclpy.node import Node
-        os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
-        self.context = Context()
-        rclpy.init(context=self.context, domain_id=domain)
-        self.node = Node('param_client', context=self.context)
-        self.executor = SingleThreadedExecutor(context=self.context)
-        self.executor.add_node(self.node)
+    def __init__(self, monkeypatch, *arguments):
+        super().__init__(monkeypatch, 'controller_node', 'pip_controller', *arguments)
         self.commands = []
         self.node.create_subscription(Float64, 'j2/valve_command',
                                       lambda m: self.commands.append(m.data), 100)
         self.states = self.node.create_publisher(JointState, 'joint_states', 10)
         self.setpoints = self.node.create_publisher(Float64, 'j2/setpoint', 10)
-        self.set_client = self.node.create_client(SetParametersAtomically,
-                                                  '/pip_controller/set_parameters_atomically')
-        self.get_client = self.node.create_client(GetParameters,
-                                                  '/pip_controller/get_parameters')
-        assert self.set_client.wait_for_service(timeout_sec=30.0), self._died()
-        assert self.get_client.wait_for_service(timeout_sec=10.0), self._died()
-        assert self.spin_until(lambda: self.states.get_subscription_count() >= 1
-                               and self.setpoints.get_subscription_count() >= 1), self._died()
-
-    def _died(self):
-        return 'controller_node did not come up' + (
-            f': {self.process.stderr.read()}' if self.process.poll() is not None else '')
-
-    def spin_until(self, predicate, timeout=10.0):
-        deadline = time.monotonic() + timeout
-        while not predicate():
-            if time.monotonic() > deadline:
-                return False
-            self.executor.spin_once(timeout_sec=0.01)
-        return True
-
-    def spin_for(self, seconds):
-        self.spin_until(lambda: False, seconds)
-
-    def _call(self, client, request):
-        future = client.call_async(request)
-        assert self.spin_until(future.done), 'no answer from the parameter service'
-        return future.result()
-
-    def set_atomically(self, **values):
-        """Set parameters atomically (dots written as ``__``); return the result."""
-        request = SetParametersAtomically.Request()
-        request.parameters = [Parameter(name.replace('__', '.'), value=value).to_parameter_msg()
-                              for name, value in values.items()]
-        return self._call(self.set_client, request).result
-
-    def get(self, *names):
-        """Return ``(type, value)`` of parameters."""
-        answer = self._call(self.get_client, GetParameters.Request(names=list(names)))
-        return [(Parameter.Type(value.type), parameter_value_to_python(value))
-                for value in answer.values]
+        self.wait_until_up(lambda: self.states.get_subscription_count() >= 1
+                           and self.setpoints.get_subscription_count() >= 1)
 
     def setpoint(self, degrees):
         self.setpoints.publish(Float64(data=math.radians(degrees)))
@@ -253,32 +185,11 @@ class OutsideClient:
         count = len(self.commands)
         return self.spin_until(lambda: 0.0 in self.commands[count:], timeout)
 
-    def close(self):
-        alive = self.process.poll() is None
-        self.process.terminate()
-        try:
-            self.process.wait(timeout=10)
-        except subprocess.TimeoutExpired:
-            self.process.kill()
-            self.process.wait(timeout=10)
-        self.executor.shutdown()
-        self.node.destroy_node()
-        rclpy.try_shutdown(context=self.context)
-        assert alive, 'controller_node died'
-
 
 @pytest.fixture
 def outside(monkeypatch):
     """Start a controller_node process and an outside client; stop both after the test."""
-    monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
-    clients = []
-
-    def start(*arguments):
-        clients.append(OutsideClient(*arguments))
-        return clients[-1]
-    yield start
-    for client in clients:
-        client.close()
+    yield from node_process_fixture(OutsideClient, monkeypatch)
 
 
 @pytest.mark.slow

@@ -1,11 +1,6 @@
 """The ROS nodes in-process: lockstep equals offline, safety, parameters, recalibration, bags."""
 
 import math
-import os
-from pathlib import Path
-import shutil
-import subprocess
-import sys
 import time
 
 from conftest import REPO
@@ -23,8 +18,8 @@ from hydro_sdp.ros.identifier_node import IdentifierNode
 from hydro_sdp.ros.plant_node import PlantNode
 from hydro_sdp.ros.testing import Lockstep, RosHarness
 import numpy as np
+from outside import Processes
 import pytest
-import rclpy
 from rclpy.parameter import Parameter
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Bool, Float64
@@ -289,37 +284,17 @@ def test_recorder_and_player_refuse_missing_settings(ros):
         ros.add(BagPlayerNode)
 
 
-def _script(name):
-    return shutil.which(name, path=str(Path(sys.executable).parent))
-
-
 @pytest.mark.slow
 def test_nodes_as_separate_processes_settle_a_step(tmp_path, monkeypatch):
-    if _script('plant_node') is None:
-        pytest.skip('the console scripts are not installed in this environment')
-    domain = str(100 + os.getpid() % 100)
-    # The in-process harness turns discovery off; processes must find each other on the host.
-    monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
-    environment = dict(os.environ, ROS_DOMAIN_ID=domain)
-    processes = [subprocess.Popen([_script(name), '--ros-args'] + arguments,
-                                  env=environment, stdout=subprocess.DEVNULL,
-                                  stderr=subprocess.PIPE, text=True)
-                 for name, arguments in (('plant_node', ['-p', 'noise_std:=0.01']),
-                                         ('controller_node', []),
-                                         ('identifier_node', []))]
-    from rclpy.context import Context
-    from rclpy.executors import SingleThreadedExecutor
-    from rclpy.node import Node
-    context = Context()
-    rclpy.init(context=context, domain_id=int(domain))
-    node = Node('step_test', context=context)
-    executor = SingleThreadedExecutor(context=context)
-    executor.add_node(node)
+    machine = Processes(monkeypatch, ('plant_node', ['-p', 'noise_std:=0.01']),
+                        ('controller_node', []), ('identifier_node', []))
+    executor = machine.executor
     angles = []
-    node.create_subscription(JointState, 'joint_states',
-                             lambda m: angles.append((time.monotonic(),
-                                                      math.degrees(m.position[0]))), 100)
-    publisher = node.create_publisher(Float64, 'j2/setpoint', 10)
+    machine.node.create_subscription(JointState, 'joint_states',
+                                     lambda m: angles.append((time.monotonic(),
+                                                              math.degrees(m.position[0]))),
+                                     100)
+    publisher = machine.node.create_publisher(Float64, 'j2/setpoint', 10)
     try:
         deadline = time.monotonic() + 30.0
         while (publisher.get_subscription_count() < 1 or len(angles) < 10) and \
@@ -334,13 +309,7 @@ def test_nodes_as_separate_processes_settle_a_step(tmp_path, monkeypatch):
         settled = [a for t, a in after if t >= 6.0]
         assert settled and max(abs(a - 20.0) for a in settled) < 0.5
     finally:
-        for process in processes:
-            process.terminate()
-        for process in processes:
-            process.wait(timeout=10)
-        executor.shutdown()
-        node.destroy_node()
-        rclpy.try_shutdown(context=context)
+        machine.close()
 
 
 def test_plant_simulates_several_joints_in_one_joint_state(ros):

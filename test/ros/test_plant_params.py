@@ -7,22 +7,15 @@ does).
 """
 
 import math
-import os
-from pathlib import Path
-import random
-import shutil
-import subprocess
-import sys
 import time
 
 from hydro_sdp.files import default_model_path, load_model
 from hydro_sdp.ros.plant_node import PlantNode
 from hydro_sdp.ros.testing import Lockstep, RosHarness
 import numpy as np
+from outside import node_process_fixture, NodeProcess
 import pytest
-from rcl_interfaces.srv import GetParameters, SetParametersAtomically
-import rclpy
-from rclpy.parameter import Parameter, parameter_value_to_python
+from rclpy.parameter import Parameter
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64
 
@@ -103,68 +96,16 @@ def test_machine_parameters_are_read_only(ros):
         assert not result.successful and 'read-only' in result.reason, name
 
 
-def _script(name):
-    found = shutil.which(name, path=str(Path(sys.executable).parent))
-    if found is None:
-        pytest.skip('the console scripts are not installed in this environment')
-    return found
-
-
-class _OutsidePlant:
+class _OutsidePlant(NodeProcess):
     """A plant_node process, and a client in this process on the same fresh domain."""
 
-    def __init__(self, *arguments):
-        from rclpy.context import Context
-        from rclpy.executors import SingleThreadedExecutor
-        from rclpy.node import Node
-        domain = random.randint(1, 200)
-        environment = dict(os.environ, ROS_DOMAIN_ID=str(domain),
-                           ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST')
-        self.process = subprocess.Popen([_script('plant_node'), '--ros-args', *arguments],
-                                        env=environment, stdout=subprocess.DEVNULL,
-                                        stderr=subprocess.PIPE, text=True)
-        self.context = Context()
-        rclpy.init(context=self.context, domain_id=domain)
-        self.node = Node('plant_param_client', context=self.context)
-        self.executor = SingleThreadedExecutor(context=self.context)
-        self.executor.add_node(self.node)
+    def __init__(self, monkeypatch, *arguments):
+        super().__init__(monkeypatch, 'plant_node', 'hydro_plant', *arguments)
         self.states = []
         self.node.create_subscription(JointState, 'joint_states', self.states.append, 1000)
         self.commands = self.node.create_publisher(Float64, 'j2/valve_command', 10)
-        self.set_client = self.node.create_client(SetParametersAtomically,
-                                                  '/hydro_plant/set_parameters_atomically')
-        self.get_client = self.node.create_client(GetParameters, '/hydro_plant/get_parameters')
-        assert self.set_client.wait_for_service(timeout_sec=30.0), self._died()
-        assert self.get_client.wait_for_service(timeout_sec=10.0), self._died()
-        assert self.spin_until(lambda: len(self.states) > 0
-                               and self.commands.get_subscription_count() >= 1), self._died()
-
-    def _died(self):
-        return 'plant_node did not come up' + (
-            f': {self.process.stderr.read()}' if self.process.poll() is not None else '')
-
-    def spin_until(self, predicate, timeout=10.0):
-        deadline = time.monotonic() + timeout
-        while not predicate():
-            if time.monotonic() > deadline:
-                return False
-            self.executor.spin_once(timeout_sec=0.01)
-        return True
-
-    def _call(self, client, request):
-        future = client.call_async(request)
-        assert self.spin_until(future.done), 'no answer from the parameter service'
-        return future.result()
-
-    def set_atomically(self, **values):
-        request = SetParametersAtomically.Request()
-        request.parameters = [Parameter(name, value=value).to_parameter_msg()
-                              for name, value in values.items()]
-        return self._call(self.set_client, request).result
-
-    def get(self, *names):
-        answer = self._call(self.get_client, GetParameters.Request(names=list(names)))
-        return [(Parameter.Type(v.type), parameter_value_to_python(v)) for v in answer.values]
+        self.wait_until_up(lambda: len(self.states) > 0
+                           and self.commands.get_subscription_count() >= 1)
 
     def next_states(self, count):
         """Return the next ``count`` joint_states published (after this call)."""
@@ -173,32 +114,14 @@ class _OutsidePlant:
         return self.states[start:start + count]
 
     def close(self):
-        alive = self.process.poll() is None
-        self.process.terminate()
-        try:
-            self.process.wait(timeout=10)
-        except subprocess.TimeoutExpired:
-            self.process.kill()
-            self.process.wait(timeout=10)
-        self.executor.shutdown()
-        self.node.destroy_node()
-        rclpy.try_shutdown(context=self.context)
-        assert alive, 'plant_node died'
+        super().close()
         assert self.process.returncode == 0
 
 
 @pytest.fixture
 def outside(monkeypatch):
     """Start a plant_node process and an outside client; stop both after the test."""
-    monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
-    clients = []
-
-    def start(*arguments):
-        clients.append(_OutsidePlant(*arguments))
-        return clients[-1]
-    yield start
-    for client in clients:
-        client.close()
+    yield from node_process_fixture(_OutsidePlant, monkeypatch)
 
 
 @pytest.mark.slow

@@ -10,19 +10,14 @@ the valve through the plant's ``dead_zone_shift`` parameter, and reads the contr
 """
 
 import math
-import os
 from pathlib import Path
-import random
-import shutil
-import subprocess
-import sys
 import time
 
 from hydro_sdp.files import default_model_path, load_model
 from hydro_sdp.ros import qos
+from outside import node_process_fixture, Processes
 import pytest
 from rcl_interfaces.srv import GetParameters, SetParametersAtomically
-import rclpy
 from rclpy.parameter import Parameter, parameter_value_to_python
 from std_msgs.msg import Bool, Float64
 
@@ -40,34 +35,14 @@ def _edges():
     return load_model(default_model_path()).static_map.dead_zone
 
 
-def _script(name):
-    found = shutil.which(name, path=str(Path(sys.executable).parent))
-    if found is None:
-        pytest.skip('the console scripts are not installed in this environment')
-    return found
-
-
-class _Machine:
+class _Machine(Processes):
     """The three node processes and an outside client on one fresh domain."""
 
-    def __init__(self, *identifier_arguments):
-        from rclpy.context import Context
-        from rclpy.executors import SingleThreadedExecutor
-        from rclpy.node import Node
-        domain = random.randint(1, 200)
-        environment = dict(os.environ, ROS_DOMAIN_ID=str(domain),
-                           ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST')
+    def __init__(self, monkeypatch, *identifier_arguments):
         commands = {'plant_node': ['-p', 'noise_std:=0.02'], 'controller_node': [],
                     'identifier_node': list(identifier_arguments)}
-        self.processes = {name: subprocess.Popen(
-            [_script(name), '--ros-args', '--params-file', PARAMS, *arguments],
-            env=environment, cwd=REPO, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
-            text=True) for name, arguments in commands.items()}
-        self.context = Context()
-        rclpy.init(context=self.context, domain_id=domain)
-        self.node = Node('recalibration_client', context=self.context)
-        self.executor = SingleThreadedExecutor(context=self.context)
-        self.executor.add_node(self.node)
+        super().__init__(monkeypatch, *((name, ['--params-file', PARAMS, *arguments])
+                                        for name, arguments in commands.items()), cwd=REPO)
         self.flags = []
         self.node.create_subscription(Bool, 'j2/sdp/recalibration_needed',
                                       lambda m: self.flags.append(m.data), qos.ESTIMATE_QOS)
@@ -82,37 +57,20 @@ class _Machine:
             for kind, service in (('get_parameters', GetParameters),
                                   ('set_parameters_atomically', SetParametersAtomically))}
         for client in self.clients.values():
-            assert client.wait_for_service(timeout_sec=30.0), self._died()
+            assert client.wait_for_service(timeout_sec=30.0), self.died()
         assert self.spin_until(lambda: self.setpoints.get_subscription_count() >= 1,
-                               10.0), self._died()
-
-    def _died(self):
-        return 'the nodes did not come up: ' + '; '.join(
-            f'{name}: {process.stderr.read()}' for name, process in self.processes.items()
-            if process.poll() is not None)
-
-    def spin_until(self, predicate, timeout):
-        deadline = time.monotonic() + timeout
-        while not predicate():
-            if time.monotonic() > deadline:
-                return False
-            self.executor.spin_once(timeout_sec=0.01)
-        return True
-
-    def _call(self, key, request):
-        future = self.clients[key].call_async(request)
-        assert self.spin_until(future.done, 10.0), f'no answer from {key}'
-        return future.result()
+                               10.0), self.died()
 
     def set_atomically(self, node, **values):
         """Set parameters of ``node`` atomically (dots written as ``__``); return the result."""
         request = SetParametersAtomically.Request(parameters=[
             Parameter(name.replace('__', '.'), value=value).to_parameter_msg()
             for name, value in values.items()])
-        return self._call((node, 'set_parameters_atomically'), request).result
+        return self.call(self.clients[node, 'set_parameters_atomically'], request).result
 
     def get(self, node, name):
-        answer = self._call((node, 'get_parameters'), GetParameters.Request(names=[name]))
+        answer = self.call(self.clients[node, 'get_parameters'],
+                           GetParameters.Request(names=[name]))
         return parameter_value_to_python(answer.values[0])
 
     def controller_edges(self):
@@ -125,32 +83,14 @@ class _Machine:
 
     def close(self):
         alive = {name: process.poll() is None for name, process in self.processes.items()}
-        for process in self.processes.values():
-            process.terminate()
-        for process in self.processes.values():
-            try:
-                process.wait(timeout=10)
-            except subprocess.TimeoutExpired:
-                process.kill()
-                process.wait(timeout=10)
-        self.executor.shutdown()
-        self.node.destroy_node()
-        rclpy.try_shutdown(context=self.context)
+        super().close()
         assert all(alive.values()), f'a node died: {alive}'
 
 
 @pytest.fixture
 def machine(monkeypatch):
     """Start the three processes and a client; stop them after the test."""
-    monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
-    machines = []
-
-    def start(*identifier_arguments):
-        machines.append(_Machine(*identifier_arguments))
-        return machines[-1]
-    yield start
-    for started in machines:
-        started.close()
+    yield from node_process_fixture(_Machine, monkeypatch)
 
 
 def _drive_until_recalibrated(machine, first_hold, limit):

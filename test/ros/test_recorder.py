@@ -9,17 +9,15 @@ the kill, each topic with its real type.
 
 import json
 import os
-from pathlib import Path
-import shutil
 import signal
 import sqlite3
 import subprocess
-import sys
 import time
 
 from hydro_sdp.bags import read_bag, write_bag
 from hydro_sdp.core.records import Record
 import numpy as np
+from outside import required_script
 import pytest
 import rclpy
 from sensor_msgs.msg import JointState
@@ -29,13 +27,6 @@ pytestmark = [pytest.mark.ros, pytest.mark.slow]
 
 RATE = 100.0          # joint_states per second, the plant's default sample period 0.01 s
 FLUSH = 1.0           # s, the recorder's default flush_period
-
-
-def _script(name):
-    found = shutil.which(name, path=str(Path(sys.executable).parent))
-    if found is None:
-        pytest.skip('the console scripts are not installed in this environment')
-    return found
 
 
 class _Domain:
@@ -56,7 +47,7 @@ class _Domain:
         self.executor.add_node(self.node)
 
     def start(self, name, *arguments):
-        process = subprocess.Popen([_script(name), '--ros-args', *arguments],
+        process = subprocess.Popen([required_script(name), '--ros-args', *arguments],
                                    env=self.environment, stdout=subprocess.DEVNULL,
                                    stderr=subprocess.PIPE, text=True)
         self.processes.append(process)
@@ -134,7 +125,7 @@ def test_killed_recorder_keeps_all_but_the_last_second(domain, tmp_path):
     domain.spin(0.2)
     assert not (bag / 'metadata.yaml').exists()
 
-    result = subprocess.run([_script('hydro-sdp'), 'reindex', str(bag), '--json'],
+    result = subprocess.run([required_script('hydro-sdp'), 'reindex', str(bag), '--json'],
                             capture_output=True, text=True, timeout=60)
     assert result.returncode == 0, result.stderr
     report = json.loads(result.stdout)
