@@ -17,8 +17,8 @@ from typing import Any, ClassVar, Mapping
 
 from hydro_sdp.core._validate import require_ordered_pair, require_pair
 from hydro_sdp.core.arrays import FloatArray
-from hydro_sdp.core.errors import ModelFileError
-from hydro_sdp.core.static_maps.protocol import check_dead_zone, MapKind
+from hydro_sdp.core.static_maps.protocol import (
+    check_dead_zone, check_positive_pair, check_saturation_velocity, MapKind)
 import numpy as np
 
 
@@ -81,15 +81,9 @@ class PowerSatMap:
 
     def __post_init__(self) -> None:
         check_dead_zone(self.dead_zone)
-        negative, positive = self.saturation_velocity
-        if not negative < 0.0 < positive:
-            raise ModelFileError(
-                "key 'saturation_velocity': expected [negative, positive] deg/s, "
-                f'got [{negative}, {positive}]')
-        for key in ('curvature', 'exponent'):
-            if min(getattr(self, key)) <= 0.0:
-                raise ModelFileError(
-                    f'key {key!r}: both values must be > 0, got {list(getattr(self, key))}')
+        check_saturation_velocity(self.saturation_velocity)
+        check_positive_pair('curvature', self.curvature)
+        check_positive_pair('exponent', self.exponent)
 
     def rate(self, v: FloatArray) -> FloatArray:
         """Angular velocity (deg/s) for steady commands ``v`` (:meth:`StaticMap.rate`)."""

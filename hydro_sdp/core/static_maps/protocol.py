@@ -85,3 +85,18 @@ def check_dead_zone(dead_zone: tuple[float, float]) -> None:
     if dead_zone[0] > dead_zone[1]:
         raise ModelFileError(
             f"key 'dead_zone': lower edge {dead_zone[0]} is above upper edge {dead_zone[1]}")
+
+
+def check_saturation_velocity(saturation_velocity: tuple[float, float]) -> None:
+    """Refuse saturation speeds that are not ``[negative, positive]`` deg/s (ModelFileError)."""
+    negative, positive = saturation_velocity
+    if not negative < 0.0 < positive:
+        raise ModelFileError(
+            "key 'saturation_velocity': expected [negative, positive] deg/s, "
+            f'got [{negative}, {positive}]')
+
+
+def check_positive_pair(key: str, pair: tuple[float, float]) -> None:
+    """Refuse the pair of file key ``key`` unless both values are > 0 (ModelFileError)."""
+    if min(pair) <= 0.0:
+        raise ModelFileError(f'key {key!r}: both values must be > 0, got {list(pair)}')

@@ -17,7 +17,8 @@ from typing import Any, ClassVar, Literal, Mapping
 from hydro_sdp.core._validate import require_ordered_pair, require_pair
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import ConfigurationError, ModelFileError
-from hydro_sdp.core.static_maps.protocol import check_dead_zone, MapKind
+from hydro_sdp.core.static_maps.protocol import (
+    check_dead_zone, check_positive_pair, check_saturation_velocity, MapKind)
 from hydro_sdp.core.static_maps.sdp_dz import SdpDzMap
 import numpy as np
 
@@ -83,14 +84,8 @@ class SdpMap:
 
     def __post_init__(self) -> None:
         check_dead_zone(self.dead_zone)
-        negative, positive = self.saturation_velocity
-        if not negative < 0.0 < positive:
-            raise ModelFileError(
-                "key 'saturation_velocity': expected [negative, positive] deg/s, "
-                f'got [{negative}, {positive}]')
-        if min(self.curvature) <= 0.0:
-            raise ModelFileError(
-                f"key 'curvature': both values must be > 0, got {list(self.curvature)}")
+        check_saturation_velocity(self.saturation_velocity)
+        check_positive_pair('curvature', self.curvature)
 
     def rate(self, v: FloatArray) -> FloatArray:
         """Angular velocity (deg/s) for steady commands ``v`` (:meth:`StaticMap.rate`)."""

@@ -7,8 +7,7 @@ from typing import Any, ClassVar, Mapping
 
 from hydro_sdp.core._validate import require_ordered_pair, require_pair
 from hydro_sdp.core.arrays import FloatArray
-from hydro_sdp.core.errors import ModelFileError
-from hydro_sdp.core.static_maps.protocol import check_dead_zone, MapKind
+from hydro_sdp.core.static_maps.protocol import check_dead_zone, check_positive_pair, MapKind
 import numpy as np
 
 
@@ -34,9 +33,7 @@ class SdpDzMap:
 
     def __post_init__(self) -> None:
         check_dead_zone(self.dead_zone)
-        if min(self.slope) <= 0.0:
-            raise ModelFileError(
-                f"key 'slope': both values must be > 0, got {list(self.slope)}")
+        check_positive_pair('slope', self.slope)
 
     def rate(self, v: FloatArray) -> FloatArray:
         """Angular velocity (deg/s) for steady commands ``v`` (:meth:`StaticMap.rate`)."""
