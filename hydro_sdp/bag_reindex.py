@@ -311,17 +311,8 @@ def reindex(folder: str | os.PathLike[str]) -> BagSummary:
 
     An existing ``metadata.yaml`` is replaced (as ``ros2 bag reindex`` does);
     the storage files are not changed, except that a transaction a crash cut
-    short is rolled back by sqlite.
-
-    Parameters
-    ----------
-    folder : str or PathLike
-        Bag folder.
-
-    Returns
-    -------
-    BagSummary
-        What was indexed.
+    short is rolled back by sqlite. ``folder``, the returned summary (what was
+    indexed) and the errors are those of :func:`summarise`.
 
     """
     summary = summarise(folder)

@@ -344,19 +344,9 @@ def load_controller(path: str | os.PathLike[str]) -> ControllerSpec:
 
 def save_controller(spec: ControllerSpec, path: str | os.PathLike[str]) -> Path:
     """
-    Write a controller file whole or not at all.
+    Write the controller ``spec`` to a file whole or not at all.
 
-    Parameters
-    ----------
-    spec : ControllerSpec
-        The controller.
-    path : str or PathLike
-        Target file.
-
-    Returns
-    -------
-    Path
-        The target path.
+    ``path`` and the returned target path as in :func:`save_model`.
 
     """
     return atomic_write_text(path, _yaml_text(spec.to_mapping()))

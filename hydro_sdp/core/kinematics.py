@@ -194,15 +194,8 @@ class TwoLinkArm:
         """
         Return ``d(x, z) / d(boom, dipper)`` at the joint angles (deg), m per degree.
 
-        Parameters
-        ----------
-        boom, dipper : float
-            Joint angles, degrees.
-
-        Returns
-        -------
-        np.ndarray
-            2 x 2 matrix, rows ``x`` and ``z``.
+        The angles are those of :meth:`forward`; the result is a 2 x 2 matrix, rows ``x``
+        and ``z``.
 
         """
         phi1 = math.radians(boom + self.offsets[0])

@@ -295,14 +295,8 @@ def check_poles(plant: DiscretePlant, gains: PipGains, poles: Sequence[complex])
     """
     Raise :class:`ConfigurationError` unless ``gains`` give the closed-loop ``poles``.
 
-    Parameters
-    ----------
-    plant : DiscretePlant
-        The plant.
-    gains : PipGains
-        The controller.
-    poles : sequence of complex
-        Requested poles.
+    ``plant`` and ``gains`` as in :func:`closed_loop_poles`; ``poles`` (sequence of
+    complex) are the requested ones.
 
     """
     achieved = closed_loop_poles(plant, gains)

@@ -268,18 +268,12 @@ def one_step_increments(model: JointModel, v: FloatArray, y: FloatArray, dt: flo
 
     Parameters
     ----------
-    model : JointModel
-        The joint.
-    v : FloatArray
-        Commands.
+    model, v, dt, v_before
+        As in :func:`speed_profile`.
     y : FloatArray
         Measured angles, degrees.
-    dt : float
-        Sample period, s.
     start : int
         First sample whose delayed commands are known.
-    v_before : float
-        Command assumed before the first sample.
 
     Returns
     -------

@@ -147,22 +147,10 @@ class Machine:
 
 def load_machine(path: str | os.PathLike[str]) -> Machine:
     """
-    Read a physics plant file.
+    Read a physics plant file (YAML, format ``hydro_sdp/physics/v1``) at ``path``.
 
-    Parameters
-    ----------
-    path : str or PathLike
-        YAML file in the format ``hydro_sdp/physics/v1``.
-
-    Returns
-    -------
-    Machine
-        The validated machine.
-
-    Raises
-    ------
-    ModelFileError
-        Naming the file and the key.
+    The machine is validated as by :meth:`Machine.from_mapping`; its
+    :class:`ModelFileError` names the file and the key.
 
     """
     # Imported here: hydro_sdp.files imports the core, not the other way round.
