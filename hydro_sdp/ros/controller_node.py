@@ -53,6 +53,7 @@ from hydro_sdp.files import default_model_path
 from hydro_sdp.ros.controller_setup import ControllerSetup
 from hydro_sdp.ros.conversions import fill_controller_state, joint_angle, \
     trajectory_from_message
+from hydro_sdp.ros.first_joint import first_joint
 from hydro_sdp.ros.joint_loop import JointLoop
 from hydro_sdp.ros.params import declare, value_of
 from hydro_sdp.ros.runner import run_node
@@ -130,49 +131,21 @@ class PipControllerNode(ControllerSetup, LifecycleNode):
             self.trigger_activate()
 
     # Single-joint names of earlier versions: the first (only) joint's state.
-    @property
-    def joint(self) -> str:
-        """Return the first joint's name."""
-        return self.loops[0].joint
+    joint = first_joint('loops', 'joint', "The first joint's name.")
+    controller = first_joint('loops', 'controller',
+                             "The first joint's :class:`PipIdzController`.")
+    spec = first_joint('loops', 'spec', "The first joint's controller spec.")
+    model = first_joint('loops', 'model', "The first joint's model.")
+    gate = first_joint('loops', 'gate', "The first joint's feedback gate.")
+    last_command = first_joint('loops', 'last_command', "The first joint's last valve command.")
+    _setpoint = first_joint('loops', 'setpoint', "The first joint's set-point, or None.")
+    _blind = first_joint('loops', 'gate.blind', 'Whether the watchdog found no valid feedback '
+                         '(the valve is closed).')
 
     @property
     def joints(self) -> list[str]:
         """Return the controlled joints."""
         return [loop.joint for loop in self.loops]
-
-    @property
-    def controller(self) -> Any:
-        """Return the first joint's :class:`PipIdzController`."""
-        return self.loops[0].controller
-
-    @property
-    def spec(self) -> Any:
-        """Return the first joint's controller spec."""
-        return self.loops[0].spec
-
-    @property
-    def model(self) -> Any:
-        """Return the first joint's model."""
-        return self.loops[0].model
-
-    @property
-    def gate(self) -> Any:
-        """Return the first joint's feedback gate."""
-        return self.loops[0].gate
-
-    @property
-    def last_command(self) -> float:
-        """Return the first joint's last valve command."""
-        return self.loops[0].last_command
-
-    @property
-    def _setpoint(self) -> float | None:
-        return self.loops[0].setpoint
-
-    @property
-    def _blind(self) -> bool:
-        """Whether the watchdog found no valid feedback (the valve is closed)."""
-        return self.loops[0].gate.blind
 
     def loop(self, joint: str) -> JointLoop:
         """Return the loop of ``joint``."""

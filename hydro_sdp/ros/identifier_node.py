@@ -41,10 +41,11 @@ from hydro_sdp.core.health import joint_health
 from hydro_sdp.core.idz import InverseDeadZone
 from hydro_sdp.core.model import JointModel
 from hydro_sdp.core.online import input_scale, OnlineSdpIdentifier, OnlineSettings
-from hydro_sdp.core.recalibration import Decision, recalibrated_idz, RecalibrationPolicy
+from hydro_sdp.core.recalibration import recalibrated_idz, RecalibrationPolicy
 from hydro_sdp.files import default_model_path, load_model
 from hydro_sdp.ros import conversions, qos
 from hydro_sdp.ros.diagnostics import diagnostic_array
+from hydro_sdp.ros.first_joint import first_joint
 from hydro_sdp.ros.identifier_joint import double_array, estimate_topics, IdentifiedJoint
 from hydro_sdp.ros.params import declare, value_of
 from hydro_sdp.ros.runner import run_node
@@ -162,49 +163,23 @@ class IdentifierNode(Node):
         self.add_post_set_parameters_callback(self._apply_parameters)
 
     # The first (only) joint under the names of the one-joint node.
-    @property
-    def joint(self) -> str:
-        """Return the first joint's name."""
-        return self.identified[0].joint
-
-    @property
-    def model(self) -> JointModel:
-        """Return the first joint's starting model."""
-        return self.identified[0].model
-
-    @property
-    def estimator(self) -> Any:
-        """Return the online filter of the first joint (settable)."""
-        return self.identified[0].estimator
-
-    @estimator.setter
-    def estimator(self, value: Any) -> None:
-        self.identified[0].estimator = value
-
-    @property
-    def recalibration(self) -> Any:
-        """Return the first joint's recalibration decision."""
-        return self.identified[0].recalibration
-
-    @property
-    def last_decision(self) -> Decision | None:
-        """Return the first joint's last recalibration decision."""
-        return self.identified[0].last_decision
+    joint = first_joint('identified', 'joint', "The first joint's name.")
+    model = first_joint('identified', 'model', "The first joint's starting model.")
+    estimator = first_joint('identified', 'estimator',
+                            'The online filter of the first joint (settable).', settable=True)
+    recalibration = first_joint('identified', 'recalibration',
+                                "The first joint's recalibration decision.")
+    last_decision = first_joint('identified', 'last_decision',
+                                "The first joint's last recalibration decision.")
+    recalibration_times = first_joint('identified', 'recalibration_times',
+                                      "The first joint's accepted recalibration times, s.")
+    reference = first_joint('identified', 'recalibration.reference',
+                            'The IDZ edges the controller uses for the first joint, input units.')
 
     @property
     def recalibrations(self) -> int:
         """Return the recalibrations accepted, every joint together."""
         return sum(item.recalibrations for item in self.identified)
-
-    @property
-    def recalibration_times(self) -> list[float]:
-        """Return the first joint's accepted recalibration times, s."""
-        return self.identified[0].recalibration_times
-
-    @property
-    def reference(self) -> tuple[float, float]:
-        """Return the IDZ edges the controller uses for the first joint, input units."""
-        return self.identified[0].recalibration.reference
 
     def item(self, joint: str) -> IdentifiedJoint:
         """Return the identification of ``joint``."""
