@@ -18,6 +18,7 @@ from typing import Any
 
 from hydro_sdp.bags import EmptyBagError, FLOAT64, JOINT_STATE, raw_messages
 from hydro_sdp.core.errors import ConfigurationError
+from hydro_sdp.ros.conversions import fill_stamp
 from hydro_sdp.ros.params import declare
 from hydro_sdp.ros.runner import run_node
 from rclpy.node import Node
@@ -83,7 +84,7 @@ class BagPlayerNode(Node):
         topic, message_type, stamp, raw = self._messages[self.published]
         if self._clock_pub is not None:
             clock = Clock()
-            clock.clock.sec, clock.clock.nanosec = divmod(stamp, 1_000_000_000)
+            fill_stamp(clock.clock, stamp)
             self._clock_pub.publish(clock)
         self._topic_pubs[topic].publish(raw)
         self.published += 1

@@ -23,6 +23,11 @@ def stamp_to_ns(stamp: Any) -> int:
     return int(stamp.sec) * 1_000_000_000 + int(stamp.nanosec)
 
 
+def fill_stamp(stamp: Any, stamp_ns: int) -> None:
+    """Set a ``builtin_interfaces/Time`` to ``stamp_ns`` integer nanoseconds."""
+    stamp.sec, stamp.nanosec = divmod(int(stamp_ns), 1_000_000_000)
+
+
 def joint_angle(message: Any, joint: str) -> tuple[int, float]:
     """
     Return the stamp (ns) and the angle (degrees) of ``joint`` in a JointState.
@@ -58,8 +63,7 @@ def joint_angle(message: Any, joint: str) -> tuple[int, float]:
     value = float(positions[index])
     if not isfinite(value):
         raise DataError(f'position of joint {joint!r} is not finite ({value})')
-    stamp = message.header.stamp
-    return int(stamp.sec) * 1_000_000_000 + int(stamp.nanosec), degrees(value)
+    return stamp_to_ns(message.header.stamp), degrees(value)
 
 
 def fill_joint_state(message: Any, stamp_ns: int, names: Sequence[str],
@@ -87,8 +91,7 @@ def fill_joint_state(message: Any, stamp_ns: int, names: Sequence[str],
         The message.
 
     """
-    message.header.stamp.sec = int(stamp_ns // 1_000_000_000)
-    message.header.stamp.nanosec = int(stamp_ns % 1_000_000_000)
+    fill_stamp(message.header.stamp, stamp_ns)
     message.name = list(names)
     message.position = [math.radians(a) for a in angles_deg]
     if speeds_deg is not None:
@@ -163,8 +166,7 @@ def fill_trajectory(message: Any, names: Sequence[str], times: Sequence[float],
 
     """
     from trajectory_msgs.msg import JointTrajectoryPoint
-    message.header.stamp.sec = int(stamp_ns // 1_000_000_000)
-    message.header.stamp.nanosec = int(stamp_ns % 1_000_000_000)
+    fill_stamp(message.header.stamp, stamp_ns)
     message.joint_names = list(names)
     message.points = []
     for t, row in zip(times, positions_deg):

@@ -6,6 +6,7 @@ from typing import Sequence
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from hydro_sdp.core.health import HealthStatus
+from hydro_sdp.ros.conversions import fill_stamp
 
 
 def diagnostic_status(node_name: str, joint: str, health: HealthStatus) -> DiagnosticStatus:
@@ -55,7 +56,7 @@ def diagnostic_array(stamp_ns: int, node_name: str, joints: Sequence[str],
 
     """
     array = DiagnosticArray()
-    array.header.stamp.sec, array.header.stamp.nanosec = divmod(int(stamp_ns), 1_000_000_000)
+    fill_stamp(array.header.stamp, stamp_ns)
     array.status = [diagnostic_status(node_name, joint, health)
                     for joint, health in zip(joints, statuses)]
     return array
