@@ -247,7 +247,8 @@ def test_a_csv_log_needs_its_columns(tmp_path, capsys):
     assert code == 2 and '--joint, --time, --angle, --command' in err
     args = build_parser().parse_args(['calibrate', str(log), '--out', 'x', '--joint', 'arm',
                                       '--time', 't', '--angle', 'angle', '--command', 'duty'])
-    (record,) = read_inputs([str(log)], args, 'reading')
+    (record,), topic = read_inputs([str(log)], args, 'reading')
+    assert topic is None   # a CSV log has no command topic
     assert record.joint == 'arm'
     np.testing.assert_allclose(record.y, [1.0, 1.1, 1.3])
     np.testing.assert_allclose(record.v, [0.0, 0.0, 50.0])  # a row's command acts after it

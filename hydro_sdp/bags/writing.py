@@ -24,7 +24,8 @@ import numpy as np
 
 def write_bag(path: str | os.PathLike[str], records: Sequence[Record], *,
               storage: str = 'sqlite3',
-              setpoints: Mapping[str, FloatArray] | None = None) -> Path:
+              setpoints: Mapping[str, FloatArray] | None = None,
+              command_topics: Mapping[str, str] | None = None) -> Path:
     """
     Write records as a rosbag2 bag, whole or not at all.
 
@@ -46,6 +47,9 @@ def write_bag(path: str | os.PathLike[str], records: Sequence[Record], *,
     setpoints : mapping of str to FloatArray, optional
         Desired angle (degrees) per joint and sample, written as
         ``/<joint>/setpoint`` in radians.
+    command_topics : mapping of str to str, optional
+        Command topic per joint, e.g. ``{'arm': '/arm/pwm'}``; default
+        ``/<joint>/valve_command``.
 
     Returns
     -------
@@ -78,20 +82,26 @@ def write_bag(path: str | os.PathLike[str], records: Sequence[Record], *,
     template = _joint_state_template(typestore, names)
     positions = np.radians(np.column_stack([record.y for record in records]))
     messages = [('/joint_states', JOINT_STATE, encode_joint_states(template, stamps, positions))]
+    topics = {record.joint: f'/{record.joint}/valve_command' for record in records}
+    for joint, topic in (command_topics or {}).items():
+        if joint not in topics:
+            raise DataError(f'command topic given for {joint!r}, which has no record')
+        topics[joint] = topic
     for record in records:
-        messages.append((f'/{record.joint}/valve_command', FLOAT64, encode_float64(record.v)))
+        messages.append((topics[record.joint], FLOAT64, encode_float64(record.v)))
     for joint, values in (setpoints or {}).items():
         values = np.asarray(values, dtype=np.float64)
         if values.shape != t.shape:
             raise DataError(f'setpoints of {joint} do not match the time stamps')
         messages.append((f'/{joint}/setpoint', FLOAT64, encode_float64(np.radians(values))))
+    commands = set(topics.values())
     plugin = StoragePlugin.MCAP if storage == 'mcap' else StoragePlugin.SQLITE3
     with atomic_directory(path) as building:
         # Metadata version 8 is what rosbag2 on Jazzy writes and reads.
         with Writer(building, version=8, storage_plugin=plugin) as writer:
             connections = [
                 (writer.add_connection(topic, msgtype, typestore=typestore), raws,
-                 command_stamps.tolist() if topic.endswith('/valve_command') else stamps.tolist())
+                 command_stamps.tolist() if topic in commands else stamps.tolist())
                 for topic, msgtype, raws in messages]
             for k in range(stamps.size):
                 for connection, raws, times in connections:

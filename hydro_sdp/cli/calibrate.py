@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 import argparse
+from dataclasses import replace
 import math
 from pathlib import Path
 from typing import Any
 
-from hydro_sdp.bags import read_record, STORAGE_SUFFIXES
+from hydro_sdp.bags import read_bag, STORAGE_SUFFIXES
 from hydro_sdp.cli.common import (
     add_bag_options, finite_float, json_number, Outcome, positive_float, table)
 from hydro_sdp.cli.design import complex_pole
@@ -115,9 +116,31 @@ def is_csv(path: str) -> bool:
             and source.name != 'metadata.yaml')
 
 
-def read_inputs(paths: list[str], args: argparse.Namespace, label: str) -> list[Record]:
-    """Read bags and CSV logs as records of one joint, with a progress bar."""
+def read_inputs(paths: list[str], args: argparse.Namespace, label: str,
+                preferred_topic: str | None = None) -> tuple[list[Record], str | None]:
+    """
+    Read bags and CSV logs as records of one joint, with a progress bar.
+
+    Parameters
+    ----------
+    paths : list of str
+        Bags and CSV logs.
+    args : argparse.Namespace
+        The command line (bag and CSV options).
+    label : str
+        Progress bar label.
+    preferred_topic : str or None
+        Command topic used without ``--command-topic`` where a bag has it.
+
+    Returns
+    -------
+    tuple
+        ``(records, topic)``: the command topic every bag was read from, or
+        ``None`` when there are no bags or they used different topics.
+
+    """
     records = []
+    topics: set[str] = set()
     with ProgressBar(label, len(paths)) as bar:
         for done, path in enumerate(paths, start=1):
             if is_csv(path):
@@ -131,9 +154,16 @@ def read_inputs(paths: list[str], args: argparse.Namespace, label: str) -> list[
                     command=args.command, command_negative=args.command_negative,
                     angle_unit=args.angle_unit, delimiter=args.delimiter).record)
             else:
-                records.append(read_record(path, args.joint, args.command_topic))
+                data = read_bag(path)
+                joint = data.choose_joint(args.joint)
+                asked = args.command_topic
+                if asked is None and preferred_topic in data.floats:
+                    asked = preferred_topic
+                topic = data.command_topic(joint, asked)
+                topics.add(topic)
+                records.append(data.record(joint, topic))
             bar.update(done)
-    return records
+    return records, (topics.pop() if len(topics) == 1 else None)
 
 
 def check_out(out: Path, force: bool) -> None:
@@ -196,6 +226,7 @@ def describe(result: CalibrationResult, folder: Path) -> dict[str, Any]:
         'report': str(folder / 'report'),
         'joint': result.model.joint,
         'kind': result.model.kind,
+        'rest': result.identification.segmentation.rest,
         'effect': result.diagnosis.effect,
         'effects': [step.effect for step in result.diagnosis.ledger],
         'mae': {'identified': json_number(result.mae_identified),
@@ -239,9 +270,10 @@ def run(args: argparse.Namespace) -> Outcome:
     check_out(out, args.force)
     if args.iterations < 0:
         raise ConfigurationError(f'--iterations must be >= 0, got {args.iterations}')
-    records = read_inputs(args.inputs, args, 'reading recordings')
-    validation = read_inputs(args.validation, args, 'reading validation recordings') \
-        if args.validation else []
+    records, topic = read_inputs(args.inputs, args, 'reading recordings')
+    # Validation bags are read from the command topic the inputs were read from.
+    validation = read_inputs(args.validation, args, 'reading validation recordings',
+                             preferred_topic=topic)[0] if args.validation else []
     settings = CalibrationSettings(
         rest=args.rest, input_limits=tuple(args.input_limits) if args.input_limits else None,
         angle_limits=tuple(args.angle_limits) if args.angle_limits else None,
@@ -255,7 +287,7 @@ def run(args: argparse.Namespace) -> Outcome:
     unit = command_unit_of(result.model, args.command_unit)
     with atomic_directory(out) as building:
         building.mkdir()
-        save_model(result.model, building / 'model.yaml')
+        save_model(replace(result.model, command_topic=topic), building / 'model.yaml')
         save_controller(result.spec, building / 'controller.yaml')
         atomic_write_text(building / 'params.yaml', yaml.safe_dump(
             ros_parameters(result, out), sort_keys=False, default_flow_style=False))

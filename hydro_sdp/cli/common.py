@@ -116,7 +116,7 @@ def table(rows: list[list[str]], header: list[str]) -> list[str]:
 
 
 def read_records(bags: list[str], joint: str | None, command_topic: str | None,
-                 label: str = 'reading bags') -> list:
+                 label: str = 'reading bags', *, preferred_topic: str | None = None) -> list:
     """
     Read one joint's record from each bag, cut at gaps in its time stamps, with a progress bar.
 
@@ -127,9 +127,12 @@ def read_records(bags: list[str], joint: str | None, command_topic: str | None,
     joint : str or None
         Joint name (default: the only joint of each bag).
     command_topic : str or None
-        Command topic (default: the only ``valve_command`` topic).
+        Command topic (default: ``preferred_topic`` where the bag has it, else the
+        only ``valve_command`` topic).
     label : str
         Progress bar label.
+    preferred_topic : str or None
+        Topic remembered by a model file (its ``command_topic``).
 
     Returns
     -------
@@ -138,16 +141,54 @@ def read_records(bags: list[str], joint: str | None, command_topic: str | None,
         (:func:`hydro_sdp.core.records.split_at_gaps`).
 
     """
+    return read_records_and_topic(bags, joint, command_topic, label,
+                                  preferred_topic=preferred_topic)[0]
+
+
+def read_records_and_topic(bags: list[str], joint: str | None, command_topic: str | None,
+                           label: str = 'reading bags', *,
+                           preferred_topic: str | None = None) -> tuple[list, str | None]:
+    """
+    Read records as :func:`read_records` does, and name the command topic they came from.
+
+    Parameters
+    ----------
+    bags : list of str
+        Bag paths.
+    joint : str or None
+        Joint name (default: the only joint of each bag).
+    command_topic : str or None
+        Command topic asked for by the user.
+    label : str
+        Progress bar label.
+    preferred_topic : str or None
+        Topic used when ``command_topic`` is None and the bag has it.
+
+    Returns
+    -------
+    tuple
+        ``(records, topic)``: the topic every bag was read from, or ``None`` when
+        the bags used different topics.
+
+    """
     from hydro_sdp.bags import read_bag
     from hydro_sdp.cli.progress import ProgressBar
     from hydro_sdp.core.records import split_at_gaps
 
     records: list = []
+    topics: set[str] = set()
     with ProgressBar(label, len(bags)) as bar:
         for done, bag in enumerate(bags, start=1):
-            records.extend(split_at_gaps(read_bag(bag).record(joint, command_topic)).records)
+            data = read_bag(bag)
+            name = data.choose_joint(joint)
+            asked = command_topic
+            if asked is None and preferred_topic is not None and preferred_topic in data.floats:
+                asked = preferred_topic
+            topic = data.command_topic(name, asked)
+            topics.add(topic)
+            records.extend(split_at_gaps(data.record(name, topic)).records)
             bar.update(done)
-    return records
+    return records, (topics.pop() if len(topics) == 1 else None)
 
 
 def add_bag_options(parser: argparse.ArgumentParser) -> None:

@@ -74,9 +74,11 @@ def describe(result: Diagnosis) -> dict[str, Any]:
 def run(args: argparse.Namespace) -> Outcome:
     """Run ``diagnose``."""
     model = load_model(args.model)
-    records = read_records(args.bags, args.joint or model.joint, args.command_topic)
-    validation = read_records(args.validation, args.joint or model.joint,
-                              args.command_topic) if args.validation else []
+    # Without --command-topic the bags are read from the topic the model remembers.
+    records = read_records(args.bags, args.joint or model.joint, args.command_topic,
+                           preferred_topic=model.command_topic)
+    validation = read_records(args.validation, args.joint or model.joint, args.command_topic,
+                              preferred_topic=model.command_topic) if args.validation else []
     effects = list(VOCABULARY)
     with ProgressBar('diagnose', len(effects) * args.iterations) as bar:
         done = [0]

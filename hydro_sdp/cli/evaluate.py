@@ -45,7 +45,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> Outcome:
     """Run ``evaluate``."""
     model = load_model(args.model)
-    records = read_records(args.bags, args.joint or model.joint, args.command_topic)
+    # Without --command-topic the bags are read from the topic the model remembers.
+    records = read_records(args.bags, args.joint or model.joint, args.command_topic,
+                           preferred_topic=model.command_topic)
     scores = evaluate(records, model)
     # A bag with gaps in its time stamps is read as several pieces, one row each.
     rows = [{'bag': record.source, 'samples': s.samples, 'model': s.model,

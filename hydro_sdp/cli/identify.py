@@ -3,12 +3,14 @@
 from __future__ import annotations
 
 import argparse
+from dataclasses import replace
 import math
 from pathlib import Path
 from typing import Any, Iterator
 
 from hydro_sdp.cli.common import (
-    add_bag_options, finite_float, json_number, Outcome, positive_float, read_records, table)
+    add_bag_options, finite_float, json_number, Outcome, positive_float, read_records_and_topic,
+    table)
 from hydro_sdp.cli.progress import ProgressBar
 from hydro_sdp.core.identify import Identification, identify, KINDS
 from hydro_sdp.core.model import JointModel
@@ -101,7 +103,7 @@ def describe(result: Identification) -> dict:
 
 def run(args: argparse.Namespace) -> Outcome:
     """Run ``identify``."""
-    records = read_records(args.bags, args.joint, args.command_topic)
+    records, topic = read_records_and_topic(args.bags, args.joint, args.command_topic)
     stages = ['segmenting', 'estimating the delay', 'fitting the static map',
               'comparing map families on held-out experiments']
     with ProgressBar('identify', len(stages)) as bar:
@@ -110,6 +112,8 @@ def run(args: argparse.Namespace) -> Outcome:
             angle_limits=tuple(args.angle_limits) if args.angle_limits else None,
             input_limits=tuple(args.input_limits) if args.input_limits else None,
             rest=args.rest, progress=lambda name: bar.update(stages.index(name)))
+    # The model file remembers the topic, so evaluate and diagnose read the same one.
+    result = replace(result, model=replace(result.model, command_topic=topic))
     payload = describe(result)
     # Stalled recordings are cut at their gaps on reading: one piece per stretch.
     payload['pieces'] = len(records)

@@ -15,13 +15,12 @@ record), and the result says which.
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
-import inspect
 import math
 from typing import Any, Callable, Sequence
 
 from hydro_sdp.core.controller_spec import ControllerSpec, design_from_model, format_pole
 from hydro_sdp.core.diagnosis import DETECTORS, diagnose, Diagnosis
-from hydro_sdp.core.errors import ConfigurationError, DataError, HydroSdpError
+from hydro_sdp.core.errors import DataError, HydroSdpError
 from hydro_sdp.core.evaluate import evaluate, RecordScore
 from hydro_sdp.core.identify import Identification, identify
 from hydro_sdp.core.loop_check import check_loop, CheckSettings, LoopCheck, slower_poles
@@ -165,12 +164,7 @@ def _identify(records: Sequence[Record], settings: CalibrationSettings,
               progress: Callable[[str], None]) -> Identification:
     options: dict[str, Any] = {'angle_limits': settings.angle_limits,
                                'input_limits': settings.input_limits, 'progress': progress}
-    if settings.rest is not None:
-        if 'rest' not in inspect.signature(identify).parameters:
-            raise ConfigurationError('this version of identify chooses the rest command '
-                                     'itself; leave out --rest')
-        options['rest'] = settings.rest
-    return identify(records, **options)
+    return identify(records, rest=settings.rest, **options)
 
 
 def chord_map(model: JointModel, span: tuple[float, float]) -> SdpDzMap:

@@ -24,7 +24,8 @@ import numpy as np
 
 MODEL_FORMAT = 'hydro_sdp/model/v1'
 
-_COMMON_KEYS = ('format', 'joint', 'kind', 'delay', 'angle_limits', 'input_limits')
+_COMMON_KEYS = ('format', 'joint', 'command_topic', 'kind', 'delay', 'angle_limits',
+                'input_limits')
 _ALL_MAP_KEYS = tuple(dict.fromkeys(key for cls in MAP_KINDS.values() for key in cls.keys))
 
 
@@ -47,6 +48,12 @@ class JointModel:
         Command range accepted by the valve interface, input units, or ``None``.
     effects : tuple[Effect, ...]
         Effects beyond the static map, at most one of each kind.
+    command_topic : str or None
+        Float64 topic the joint's commands were recorded on when the model was
+        identified from bags (key ``command_topic``, next to ``joint``; e.g.
+        ``/arm/pwm``), or ``None`` (key absent: the bag readers' default, the
+        only topic ending in ``valve_command``). Commands that read bags use it
+        when no ``--command-topic`` is given.
 
     """
 
@@ -56,10 +63,16 @@ class JointModel:
     angle_limits: tuple[float, float] | None = None
     input_limits: tuple[float, float] | None = None
     effects: tuple[Effect, ...] = field(default=())
+    command_topic: str | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.joint, str) or not self.joint.strip():
             raise ModelFileError(f"key 'joint': expected a non-empty name, got {self.joint!r}")
+        topic = self.command_topic
+        if topic is not None and (not isinstance(topic, str) or not topic.strip()
+                                  or any(c.isspace() for c in topic)):
+            raise ModelFileError(f"key 'command_topic': expected a topic name without spaces, "
+                                 f'got {topic!r}')
         if not (math.isfinite(self.delay) and self.delay >= 0.0):
             raise ModelFileError(f"key 'delay': must be a finite number >= 0 s, got {self.delay}")
         names = [effect.name for effect in self.effects]
@@ -150,11 +163,15 @@ class JointModel:
         data: dict[str, Any] = {
             'format': MODEL_FORMAT,
             'joint': self.joint,
+        }
+        if self.command_topic is not None:
+            data['command_topic'] = self.command_topic
+        data.update({
             'kind': self.kind,
             'delay': self.delay,
             'angle_limits': None if self.angle_limits is None else list(self.angle_limits),
             'input_limits': None if self.input_limits is None else list(self.input_limits),
-        }
+        })
         data.update(self.static_map.to_mapping())
         data['effects'] = {effect.name: effect_to_mapping(effect) for effect in self.effects}
         return data
@@ -200,6 +217,9 @@ class JointModel:
         joint = data['joint']
         if not isinstance(joint, str):
             raise ModelFileError(f"key 'joint': expected a name, got {joint!r}")
+        topic = data.get('command_topic')
+        if topic is not None and not isinstance(topic, str):
+            raise ModelFileError(f"key 'command_topic': expected a topic name, got {topic!r}")
         return cls(
             joint=joint,
             static_map=map_cls.from_mapping(data),
@@ -208,6 +228,7 @@ class JointModel:
             input_limits=_optional_limits(data, 'input_limits'),
             effects=tuple(effect_from_mapping(str(name), params)
                           for name, params in effects.items()),
+            command_topic=topic,
         )
 
 
