@@ -167,13 +167,24 @@ def _identify(records: Sequence[Record], settings: CalibrationSettings,
     return identify(records, rest=settings.rest, **options)
 
 
+#: Speed, as a fraction of the speed at the end of the span, that the chord of a
+#: convex map passes through on its way to the two-thirds point.
+CREEP_SPEED_FRACTION = 0.02
+
+
 def chord_map(model: JointModel, span: tuple[float, float]) -> SdpDzMap:
     """
     SDP-DZ chords of any monotone map, as the IDZ of an ``sdp`` map (docs/methods.md 3.3).
 
-    On each side of rest the edge is where the speed first exceeds 0.1 % of its
-    value at the end of ``span``, and the chord ends where the speed reaches two
-    thirds of that value.
+    On each side of rest the chord ends where the speed reaches two thirds of its
+    value at the end of ``span``; its edge is the outer of where the speed first
+    exceeds 0.1 % of that value and where the line through the points at 2 %
+    (:data:`CREEP_SPEED_FRACTION`) and two thirds meets zero speed. For a map that
+    leaves its dead-zone steeply (``sdp``, ``pwl``) that is the dead-zone edge; a
+    convex map (``power_sat``) creeps for a long way past its dead-zone, and an
+    IDZ edge there leaves the integral action to wind through commands that barely
+    move the joint: on the physics plant's arm the edge moves from 28 % to 37 %
+    duty, and the limit cycles of the held set-points go.
 
     Parameters
     ----------
@@ -197,8 +208,13 @@ def chord_map(model: JointModel, span: tuple[float, float]) -> SdpDzMap:
         if not (sign * (end - rest) > 0.0 and top > 0.0):
             raise DataError(f'the {model.kind} map does not move the joint '
                             f'{"down" if sign < 0 else "up"} within the commands measured')
-        edge = float(v[max(int(np.argmax(speed > 1e-3 * top)) - 1, 0)])
+        leaves = float(v[max(int(np.argmax(speed > 1e-3 * top)) - 1, 0)])
+        creep = float(v[int(np.argmax(speed >= CREEP_SPEED_FRACTION * top))])
         reach = float(v[int(np.argmax(speed >= CHORD_SPEED_FRACTION * top))])
+        secant = (CHORD_SPEED_FRACTION - CREEP_SPEED_FRACTION) * top / max(
+            abs(reach - creep), 1e-12)
+        meets = creep - sign * CREEP_SPEED_FRACTION * top / secant
+        edge = leaves if sign * (leaves - meets) >= 0.0 else meets
         edges.append(edge)
         slopes.append(CHORD_SPEED_FRACTION * top / max(abs(reach - edge), 1e-12))
     return SdpDzMap(dead_zone=(edges[0], edges[1]), slope=(slopes[0], slopes[1]))
