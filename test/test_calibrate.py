@@ -156,7 +156,7 @@ def redesigned(records):
 @pytest.mark.slow
 def test_a_failed_check_designs_again_with_slower_poles(redesigned):
     result = redesigned
-    assert result.diagnosis.effect == 'valve_lag'
+    assert result.effect == 'valve_lag'
     assert len(result.designs) >= 2 and result.designs[0][:2] == ('0.75+0.1j', '0.75-0.1j')
     assert result.check.passed
     assert any('designed again with slower poles' in w for w in result.warnings)

@@ -227,8 +227,8 @@ def describe(result: CalibrationResult, folder: Path) -> dict[str, Any]:
         'joint': result.model.joint,
         'kind': result.model.kind,
         'rest': result.identification.segmentation.rest,
-        'effect': result.diagnosis.effect,
-        'effects': [step.effect for step in result.diagnosis.ledger],
+        'effect': result.effect,
+        'effects': list(result.effects),
         'mae': {'identified': json_number(result.mae_identified),
                 'final': json_number(result.mae_final), 'validation': result.validation_note},
         'closed_loop': {
@@ -297,7 +297,7 @@ def run(args: argparse.Namespace) -> Outcome:
              else f'{m.settling_time:.2f}', f'{m.overshoot:.1f}']
             for m in result.check.steps]
     lines = [f'joint {result.model.joint}: {result.model.kind} model, named effect '
-             f'{result.diagnosis.effect}; validation MAE {result.mae_identified:.4g} -> '
+             f'{result.effect}; validation MAE {result.mae_identified:.4g} -> '
              f'{result.mae_final:.4g} deg ({result.validation_note})',
              f'closed-loop check on the final model: '
              f'{"passed" if result.check.passed else "FAILED"}']

@@ -123,6 +123,18 @@ class CalibrationResult:
         return self.diagnosis.model
 
     @property
+    def effects(self) -> tuple[str, ...]:
+        """Named effects: identify's first (a valve lag...), then the diagnosis's."""
+        found = tuple(effect.name for effect in self.identification.model.effects)
+        return found + tuple(step.effect for step in self.diagnosis.ledger
+                             if step.effect not in found)
+
+    @property
+    def effect(self) -> str:
+        """Return the first named effect, or ``none``."""
+        return self.effects[0] if self.effects else 'none'
+
+    @property
     def mae_identified(self) -> float:
         """Mean per-record validation MAE of the identified model, degrees."""
         return float(np.mean([s.model for s in self.scores_identified]))

@@ -69,7 +69,7 @@ def summary_lines(result: CalibrationResult, unit: str, figures: list[str]) -> l
         f'# Calibration of joint `{model.joint}`', '',
         f'Model `{model.kind}` with delay {model.delay:g} s'
         + (f', dead-zone [{dead_zone[0]:.4g}, {dead_zone[1]:.4g}] {unit}' if dead_zone else '')
-        + f'; named effect **{diagnosis.effect}**; controller at {spec.control_period:g} s; '
+        + f'; named effect **{result.effect}**; controller at {spec.control_period:g} s; '
         f'closed-loop check **{"passed" if check.passed else "FAILED"}**.', '',
         '## Warnings', '', *([f'- {w}' for w in result.warnings] or ['none']), '',
         '## Identification', '',
@@ -77,7 +77,9 @@ def summary_lines(result: CalibrationResult, unit: str, figures: list[str]) -> l
         f'({segmentation.steps} steps, {segmentation.runs} runs), {len(segmentation.dropped)} '
         f'segments dropped, rest command {segmentation.rest:g} {unit}, sample period '
         f'{identified.sample_period:g} s, noise {segmentation.noise_std:.3g} deg. Delay '
-        f'{identified.delay.samples} samples. Map family chosen on held-out experiments:', '',
+        f'{identified.delay.samples} samples; effects found: '
+        f'{", ".join(e.name for e in identified.model.effects) or "none"}. Map family chosen '
+        'on held-out experiments:', '',
         '| kind | held-out MAE (deg) |', '|---|---|',
         *[f'| {s.kind} | {s.mae:.4g} |' for s in identified.comparison], '',
         '## Evaluation', '',
