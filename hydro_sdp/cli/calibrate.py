@@ -58,6 +58,9 @@ file is read as a CSV log (one row per sample; the command on a row acts until
 the next row; see `hydro-sdp import --help`), and needs --joint, --time,
 --angle and --command (column names or 0-based indices).
 
+model.yaml remembers the command topic of the bags (key command_topic), so
+evaluate and diagnose read the same topic without --command-topic.
+
 Labels give the command in the model's own unit: % for input limits [0, 100]
 or [-100, 100], V for [-10, 10] or [0, 10], otherwise --command-unit.
 

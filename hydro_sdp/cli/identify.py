@@ -40,6 +40,8 @@ Identify a hydraulic joint from recorded bags, as West et al. (2018) section 4:
      (effect stroke_geometry) and keep it if it lowers the simulation error.
 
 Commands may be in any unit (volts, percent duty): nothing assumes +-10 V.
+The model file remembers the command topic read (key command_topic):
+evaluate and diagnose read bags from it when --command-topic is not given.
 
 examples:
   hydro-sdp identify steps_bag --out j2_model.yaml --plot-dir figures
