@@ -78,7 +78,10 @@ def test_calibrate_names_the_lag_and_its_controller_holds_on_the_true_joint(
                             'closed_loop', 'warnings'}
     assert payload['effect'] == 'valve_lag'
     assert set(payload['mae']) >= {'identified', 'final'}
-    assert payload['mae']['final'] < payload['mae']['identified'] < 1.0
+    # identify fits a lag together with the dead time, so the diagnosis has little left to
+    # add: the final model is no worse, and it carries a valve lag.
+    assert payload['mae']['final'] <= payload['mae']['identified'] < 1.0
+    assert isinstance(load_model(payload['model']).effect(ValveLag.name), ValveLag)
     steps = payload['closed_loop']
     assert len(steps['settling_time']) == len(steps['overshoot']) == 4
     assert steps['passed'] and max(steps['overshoot']) < 10.0
