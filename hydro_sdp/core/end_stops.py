@@ -124,3 +124,49 @@ def clamp_start(y: FloatArray, v: FloatArray, begin: int, end: int, *, delay: in
         arrival = back + int(arrived[0]) if arrived.size else int(index)
         return begin + arrival, angle, int(direction > 0)
     return None
+
+
+def pushes_into_stop(y: FloatArray, level: float, rest: float,
+                     stops: tuple[float | None, float | None]) -> bool:
+    """
+    Whether a step starts at an end stop and its command drives into that stop.
+
+    Such a step says nothing about the valve: the joint cannot move, whatever
+    the command. It counts when the first angle lies within
+    :func:`stop_tolerance` of the stop the command drives towards and no angle
+    of the step gets beyond the stop by more than that.
+
+    Parameters
+    ----------
+    y : FloatArray
+        Angles of the step from its initial state on, degrees.
+    level : float
+        The held command.
+    rest : float
+        Rest command: above it the joint is driven up, below it down.
+    stops : tuple[float | None, float | None]
+        Lower and upper end stop (known or detected), degrees; None where unknown.
+
+    Returns
+    -------
+    bool
+        True when the step is held against an end stop from its start.
+
+    """
+    if y.size == 0 or not level != rest:
+        return False
+    side = int(level > rest)
+    stop = stops[side]
+    if stop is None:
+        return False
+    direction = 1.0 if side else -1.0
+    tolerance = stop_tolerance(stops)
+    return bool(direction * (stop - y[0]) <= tolerance
+                and np.all(direction * (y - stop) <= tolerance))
+
+
+def stop_tolerance(stops: tuple[float | None, float | None]) -> float:
+    """Return how near a stop a joint counts as at it, degrees (2 % of the travel, at least 1)."""
+    low, high = stops
+    travel = high - low if low is not None and high is not None else 0.0
+    return max(0.02 * travel, 1.0)

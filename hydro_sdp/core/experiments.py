@@ -8,7 +8,9 @@ Each experiment keeps some samples of command history before its start, so
 that the delayed input of its first samples is known (docs/methods.md section 2.3), and
 ends before the joint is clamped by an end stop: an end stop makes the joint
 stand still although the command drives it, which no static map explains.
-What is dropped is kept with the reason.
+A step that starts at a stop (known or detected) and drives into it is
+dropped whole, "held against an end stop". What is dropped is kept with the
+reason.
 
 """
 
@@ -19,7 +21,7 @@ import math
 from typing import Sequence
 
 from hydro_sdp.core.arrays import FloatArray
-from hydro_sdp.core.end_stops import clamp_start, stop_window
+from hydro_sdp.core.end_stops import clamp_start, pushes_into_stop, stop_window
 from hydro_sdp.core.errors import DataError
 from hydro_sdp.core.records import Record
 from hydro_sdp.core.rest import estimate_rest_command
@@ -283,7 +285,20 @@ def segment_record(record: Record, *, max_delay: int, rest: float | None = None,
                  float(np.max(stops[1])) if stops[1] else None)
     if angle_limits is not None:
         end_stops = angle_limits
-    return Segmentation(tuple(experiments), tuple(dropped), rest, noise, end_stops)
+    kept, at_stop = _drop_held(experiments, end_stops, rest, record)
+    return Segmentation(kept, tuple(dropped) + at_stop, rest, noise, end_stops)
+
+
+def _drop_held(experiments: Sequence[Experiment], stops: tuple[float | None, float | None],
+               rest: float, record: Record) -> tuple[tuple[Experiment, ...],
+                                                     tuple[Dropped, ...]]:
+    # Steps that start at a stop and push into it: zero speed there is true but
+    # says nothing about the valve.
+    held = [e for e in experiments if e.kind == 'step'
+            and pushes_into_stop(e.y[e.start:], e.level, rest, stops)]
+    return (tuple(e for e in experiments if e not in held),
+            tuple(Dropped(e.t0, 'held against an end stop', record.source,
+                          record.since_start(e.t0)) for e in held))
 
 
 def split_long(experiments: Sequence[Experiment], max_samples: int,
@@ -390,11 +405,13 @@ def segment_records(records: Sequence[Record], *, max_delay: int,
              for r in ordered]
     lows = [p.end_stops[0] for p in parts if p.end_stops[0] is not None]
     highs = [p.end_stops[1] for p in parts if p.end_stops[1] is not None]
+    stops = (min(lows) if lows else None, max(highs) if highs else None)
+    # A stop seen in one record holds in the others.
+    held = [_drop_held(p.experiments, stops, rest, r) for p, r in zip(parts, ordered)]
     return Segmentation(
-        tuple(e for p in parts for e in p.experiments),
-        tuple(d for p in parts for d in p.dropped), rest,
-        float(np.median([p.noise_std for p in parts])),
-        (min(lows) if lows else None, max(highs) if highs else None))
+        tuple(e for kept, _ in held for e in kept),
+        tuple(d for p, (_, more) in zip(parts, held) for d in p.dropped + more), rest,
+        float(np.median([p.noise_std for p in parts])), stops)
 
 
 def _record_key(record: Record) -> tuple[str, float, int, float, float]:

@@ -93,8 +93,12 @@ def pwl_layout(levels: FloatArray, dead_zone: tuple[float, float], *,
 
     """
     low, high = dead_zone
+    # A side without data gets one knot past its edge: 1 input unit, or more where
+    # the edge is so large (a plateau beyond every level) that 1 would round away.
+    beyond = [max(1.0, 1e-9 * abs(edge)) for edge in (low, high)]
     sides = []
-    for side, edge in ((levels[levels < low], low - 1.0), (levels[levels > high], high + 1.0)):
+    for side, edge in ((levels[levels < low], low - beyond[0]),
+                       (levels[levels > high], high + beyond[1])):
         side = np.unique(side)
         if side.size == 0:
             sides.append(np.array([edge]))
