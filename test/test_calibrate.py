@@ -108,8 +108,10 @@ def test_calibrate_names_the_lag_and_its_controller_holds_on_the_true_joint(
         assert path.is_absolute() and path.is_file()
     report = Path(payload['report'])
     for name in ('summary.md', 'velocity_map.png', 'evaluation.png', 'closed_loop.png',
-                 'ramp.png', 'diagnosis/signature.png', 'diagnosis/gap.png'):
+                 'ramp.png', 'diagnosis/gap.png'):
         assert (report / name).is_file(), name
+    # identify already carries the lag, so the diagnosis names nothing and draws no signature.
+    assert not (report / 'diagnosis' / 'signature.png').exists()
     summary = (report / 'summary.md').read_text()
     assert 'valve_lag' in summary and 'dead-zone [' in summary and '] V;' in summary
     assert sorted(p.name for p in out.parent.iterdir()) == ['arm']  # no temporary left
