@@ -31,6 +31,11 @@ RateFunction = Callable[[FloatArray], FloatArray]
 FitMethod = Literal['rr', 'oe']
 FIT_METHODS: tuple[FitMethod, ...] = get_args(FitMethod)
 
+#: Trust-region solver of the bounded fits on the raw angles: LSMR works on the tall
+#: Jacobian (one row per sample) directly, where the exact solver takes its SVD at
+#: every step, the cost of a fit on a long record.
+TR_SOLVER: Literal['lsmr'] = 'lsmr'
+
 MapT = TypeVar('MapT', bound=StaticMap, covariant=True)
 
 

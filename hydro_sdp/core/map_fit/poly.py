@@ -13,7 +13,7 @@ from typing import Sequence
 
 from hydro_sdp.core.delay import LevelSpeed
 from hydro_sdp.core.errors import DataError
-from hydro_sdp.core.map_fit.data import FitData, FitMethod, MapFit
+from hydro_sdp.core.map_fit.data import FitData, FitMethod, MapFit, TR_SOLVER
 from hydro_sdp.core.static_maps import PolyMap
 import numpy as np
 from scipy.optimize import least_squares
@@ -75,7 +75,8 @@ def fit_poly(points: Sequence[LevelSpeed], rest: float, *, degree: int = 3,
         result = least_squares(lambda x: data.residuals(build(x).rate, float(x[-1])),
                                np.r_[start, 0.5], bounds=(
                                    np.r_[np.full(start.size, -np.inf), 0.0],
-                                   np.r_[np.full(start.size, np.inf), 1.0]), x_scale='jac')
+                                   np.r_[np.full(start.size, np.inf), 1.0]), x_scale='jac',
+                               tr_solver=TR_SOLVER)
         beta = float(result.x[-1])
     else:
         result = least_squares(lambda x: data.residuals(build(x).rate), start, method='lm')

@@ -16,7 +16,8 @@ from typing import Any, Sequence
 
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.delay import LevelSpeed
-from hydro_sdp.core.map_fit.data import covariance_errors, FitData, FitMethod, MapFit
+from hydro_sdp.core.map_fit.data import (
+    covariance_errors, FitData, FitMethod, MapFit, TR_SOLVER)
 from hydro_sdp.core.static_maps import power_sat_rate, PowerSatMap, SdpMap
 import numpy as np
 from scipy.optimize import least_squares
@@ -96,11 +97,11 @@ def fit_power_sat(data: FitData, points: Sequence[LevelSpeed], rest: float, star
     if method == 'rr':
         result = least_squares(lambda x: data.residuals(_rate(x), float(x[8])),
                                np.r_[best[1], 0.5], bounds=(np.r_[lower, 0.0], np.r_[upper, 1.0]),
-                               x_scale='jac')
+                               x_scale='jac', tr_solver=TR_SOLVER)
         beta = float(result.x[8])
     else:
         result = least_squares(lambda x: data.residuals(_rate(x)), best[1],
-                               bounds=(lower, upper), x_scale='jac')
+                               bounds=(lower, upper), x_scale='jac', tr_solver=TR_SOLVER)
         beta = 0.0
     x = np.asarray(result.x)
     errors = covariance_errors(np.asarray(result.jac), float(result.cost), data.samples)

@@ -16,7 +16,8 @@ from typing import Sequence
 
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.delay import LevelSpeed
-from hydro_sdp.core.map_fit.data import covariance_errors, FitData, FitMethod, MapFit
+from hydro_sdp.core.map_fit.data import (
+    covariance_errors, FitData, FitMethod, MapFit, TR_SOLVER)
 from hydro_sdp.core.static_maps import PwlMap
 import numpy as np
 from scipy.optimize import least_squares
@@ -176,7 +177,7 @@ def fit_pwl(data: FitData, points: Sequence[LevelSpeed], rest: float,
     result = least_squares(
         lambda x: data.residuals(lambda v: np.interp(v, knots, layout.speeds(x)),
                                  x[-1] if method == 'rr' else 0.0),
-        np.clip(x0, lower, upper), bounds=(lower, upper), x_scale='jac')
+        np.clip(x0, lower, upper), bounds=(lower, upper), x_scale='jac', tr_solver=TR_SOLVER)
     speeds = layout.speeds(result.x)
     static_map = PwlMap(knots=tuple(knots.tolist()), speeds=tuple(speeds.tolist()))
     errors = covariance_errors(result.jac, result.cost, data.samples)
