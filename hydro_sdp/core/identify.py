@@ -52,6 +52,9 @@ FIRST_KINDS: tuple[FittedKind, ...] = ('sdp', 'pwl', 'poly')
 PIECE_SAMPLES = 3000
 SEARCH_SAMPLES = 60_000
 DELAY_SAMPLES = 100_000
+#: Sample budget of the held-out comparison of map families: every fold refits every
+#: family, and a few hundred experiments score them as well as a thousand.
+COMPARE_SAMPLES = 30_000
 #: ``auto`` keeps ``sdp`` when its held-out error is within this factor of the best.
 PARSIMONY = 1.05
 #: Families of a physical shape, and the factor a free-form family must beat them by.
@@ -249,6 +252,44 @@ def experiments_mae(model: JointModel, experiments: Sequence[Experiment], dt: fl
     return total / max(count, 1)
 
 
+def thin_evenly(experiments: Sequence[Experiment], max_samples: int,
+                rest: float) -> list[Experiment]:
+    """
+    Keep every k-th experiment of each kind and direction, up to about ``max_samples``.
+
+    Parameters
+    ----------
+    experiments : sequence of Experiment
+        The experiments.
+    max_samples : int
+        Sample budget (predicted samples).
+    rest : float
+        Rest command (splits the directions of step experiments).
+
+    Returns
+    -------
+    list of Experiment
+        All of them when within budget, else every k-th of each kind and direction,
+        in their order: alternating directions are not thinned to one.
+
+    """
+    total = sum(e.samples for e in experiments)
+    if total <= max_samples:
+        return list(experiments)
+    stride = math.ceil(total / max_samples)
+    seen: dict[tuple[str, float], int] = {}
+    out = []
+    for experiment in experiments:
+        side = float(np.sign(experiment.level - rest)) if math.isfinite(experiment.level) \
+            else 0.0
+        group = (experiment.kind, side)
+        count = seen.get(group, 0)
+        seen[group] = count + 1
+        if count % stride == 0:
+            out.append(experiment)
+    return out
+
+
 def _records_dt(records: Sequence[Record]) -> float:
     periods = [check_record(record) for record in records]
     if max(periods) > 1.01 * min(periods):
@@ -329,12 +370,13 @@ def identify(records: Sequence[Record], *, method: FitMethod = 'rr', kind: KindC
     chosen: FittedKind = 'sdp' if kind == 'auto' else kind
     if kind == 'auto':
         step('comparing map families on held-out experiments')
-        comparison = tuple(compare_kinds(sample, delay.samples, dt, rest_command, method,
+        trial = thin_evenly(sample, COMPARE_SAMPLES, rest_command)
+        comparison = tuple(compare_kinds(trial, delay.samples, dt, rest_command, method,
                                          FIRST_KINDS, lag=delay.lag))
         chosen = choose_kind(comparison)
         if chosen != 'sdp':
             # Eq. (5) lost: try its generalisation, convex from the dead-zone.
-            comparison += tuple(compare_kinds(sample, delay.samples, dt, rest_command, method,
+            comparison += tuple(compare_kinds(trial, delay.samples, dt, rest_command, method,
                                               ('power_sat',), lag=delay.lag))
             chosen = choose_kind(comparison)
     fit: MapFit[StaticMap] = sdp_fit if chosen == 'sdp' else _fit_kind(
@@ -375,4 +417,4 @@ def identify(records: Sequence[Record], *, method: FitMethod = 'rr', kind: KindC
 
 
 __all__ = ['Identification', 'KINDS', 'KindScore', 'StrokeGeometry', 'choose_kind',
-           'compare_kinds', 'experiments_mae', 'identify']
+           'compare_kinds', 'experiments_mae', 'identify', 'thin_evenly']
