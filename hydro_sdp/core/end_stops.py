@@ -82,7 +82,12 @@ def clamp_start(y: FloatArray, v: FloatArray, begin: int, end: int, *, delay: in
         return None
     held = speed < max(HELD_FRACTION * moving_speed, floor)
     command = v[begin:end]
-    for index in np.flatnonzero(held[window:]) + window:
+    # Only held samples that come within three windows of a fast one can be a stop: the
+    # largest net speed of the three windows before each sample, all at once.
+    padded = np.r_[np.zeros(3 * window), speed]
+    recent = np.lib.stride_tricks.sliding_window_view(padded[:-1], 3 * window).max(axis=1)
+    candidates = held & (recent >= MOVING_FRACTION * moving_speed)
+    for index in np.flatnonzero(candidates[window:]) + window:
         earliest = max(int(index) - 3 * window, 0)
         before = net[earliest:index]
         fast = int(np.argmax(np.abs(before)))
