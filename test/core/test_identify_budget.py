@@ -9,14 +9,14 @@ def _step(level: float, samples: int = 100) -> Experiment:
     return Experiment(np.full(samples + 1, level), np.zeros(samples + 1), 0, 'step', level, 0.0)
 
 
-def test_thinning_keeps_both_directions_of_alternating_steps():
+def test_thinning_keeps_both_directions_of_alternating_steps() -> None:
     # Steps alternate up and down: every other one would keep one direction only.
     steps = [_step(level) for level in (1.0, -1.0, 2.0, -2.0, 3.0, -3.0, 4.0, -4.0)]
     kept = thin_evenly(steps, 400, 0.0)
     assert [e.level for e in kept] == [1.0, -1.0, 3.0, -3.0]
 
 
-def test_thinning_within_budget_keeps_everything_and_splits_runs_apart():
+def test_thinning_within_budget_keeps_everything_and_splits_runs_apart() -> None:
     steps = [_step(1.0), _step(-1.0)]
     assert thin_evenly(steps, 200, 0.0) == steps
     runs = [Experiment(np.zeros(101), np.zeros(101), 0, 'run', float('nan'), float(k))
