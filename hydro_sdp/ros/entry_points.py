@@ -2,21 +2,43 @@
 Console-script entry points of the nodes (``ros2 run hydro_sdp plant_node`` ...).
 
 Loading a node's modules (rclpy, numpy) takes a good part of a second; a Ctrl-C in
-that time would otherwise end in a ``KeyboardInterrupt`` traceback. Here the
-module is imported under a handler, so the process ends quietly with 130, as
-the command line does; once the node runs, :func:`hydro_sdp.ros.runner.run_node`
-handles signals.
+that time would otherwise end in a ``KeyboardInterrupt`` traceback, or worse, in
+an ``ImportError`` when it lands inside rclpy's C extension, whose initialiser turns
+the interrupt into "initialization failed". Here a Ctrl-C during the import is only
+noted; once the modules are in, the process ends quietly with 130, as the command
+line does. Once the node runs, :func:`hydro_sdp.ros.runner.run_node` handles signals.
 
 """
 
-import importlib
+from __future__ import annotations
+
+import signal
 import sys
+
+# Installed first, before anything slow is imported: a Ctrl-C from here on is noted.
+_interrupted: list[int] = []
+
+
+def _note(signum: int, frame: object) -> None:
+    _interrupted.append(signum)
+
+
+# A shell's background job ignores SIGINT; that choice is kept.
+_previous_handler = signal.getsignal(signal.SIGINT)
+if _previous_handler is not signal.SIG_IGN:
+    signal.signal(signal.SIGINT, _note)
 
 
 def _run(module: str) -> None:
+    import importlib
+
     try:
         main = importlib.import_module(f'hydro_sdp.ros.{module}').main
     except KeyboardInterrupt:
+        sys.exit(130)
+    finally:
+        signal.signal(signal.SIGINT, _previous_handler)
+    if _interrupted:
         sys.exit(130)
     main()
 
