@@ -74,12 +74,21 @@ class Processes:
         """Spin the client for ``seconds``."""
         self.spin_until(lambda: False, seconds)
 
-    def call(self, client, request, timeout=10.0):
-        """Call a service and return its answer."""
+    def call(self, client, request, timeout=10.0, attempts=1):
+        """
+        Call a service and return its answer.
+
+        An idempotent request (parameter services) may be sent ``attempts`` times: a
+        service can be discovered before the client's response reader is matched, and
+        DDS then drops the first answer (as `ros2 service call` users see on busy hosts).
+        """
         assert client.wait_for_service(timeout_sec=30.0), self.died()
-        future = client.call_async(request)
-        assert self.spin_until(future.done, timeout), 'no answer from the service'
-        return future.result()
+        for _ in range(attempts):
+            future = client.call_async(request)
+            if self.spin_until(future.done, timeout):
+                return future.result()
+            client.remove_pending_request(future)
+        raise AssertionError(f'no answer from the service in {attempts} tries; {self.died()}')
 
     def stop(self, name):
         """Stop one process with SIGTERM; return its stderr."""
@@ -123,11 +132,11 @@ class NodeProcess(Processes):
         request = SetParametersAtomically.Request()
         request.parameters = [Parameter(name.replace('__', '.'), value=value).to_parameter_msg()
                               for name, value in values.items()]
-        return self.call(self.set_client, request).result
+        return self.call(self.set_client, request, attempts=3).result
 
     def get(self, *names):
         """Return ``(type, value)`` of parameters."""
-        answer = self.call(self.get_client, GetParameters.Request(names=list(names)))
+        answer = self.call(self.get_client, GetParameters.Request(names=list(names)), attempts=3)
         return [(Parameter.Type(value.type), parameter_value_to_python(value))
                 for value in answer.values]
 

@@ -66,11 +66,12 @@ class _Machine(Processes):
         request = SetParametersAtomically.Request(parameters=[
             Parameter(name.replace('__', '.'), value=value).to_parameter_msg()
             for name, value in values.items()])
-        return self.call(self.clients[node, 'set_parameters_atomically'], request).result
+        return self.call(self.clients[node, 'set_parameters_atomically'], request,
+                         attempts=3).result
 
     def get(self, node, name):
         answer = self.call(self.clients[node, 'get_parameters'],
-                           GetParameters.Request(names=[name]))
+                           GetParameters.Request(names=[name]), attempts=3)
         return parameter_value_to_python(answer.values[0])
 
     def controller_edges(self):
