@@ -1,6 +1,7 @@
 """Identification on data shaped like real machines: the physics plant's full-stroke runs."""
 
 from dataclasses import replace
+import warnings
 
 from hydro_sdp.core.delay import estimate_delay
 from hydro_sdp.core.end_stops import clamp_start
@@ -150,3 +151,18 @@ def test_stroke_geometry_is_identified_when_the_runs_span_the_stroke(runs):
         e for e in result.model.effects if e.name != 'stroke_geometry'))
     assert np.mean([s.model for s in evaluate(runs['high'], result.model)]) < \
         np.mean([s.model for s in evaluate(runs['high'], without)])
+
+
+def test_the_sdp_fit_reports_errors_when_beta_reaches_its_bound(runs):
+    # On these runs regret-regression drives beta to 1 (its logit's slope underflows):
+    # beta gets no error, the map's parameters keep theirs, and nothing divides by zero.
+    with warnings.catch_warnings():
+        warnings.simplefilter('error', RuntimeWarning)
+        result = identify([r for r in runs['high'] if duty_of(r) in (50, 70, 100)],
+                          kind='sdp')
+    errors = result.fit.standard_errors
+    assert errors['beta'] == np.inf
+    assert result.fit.beta == pytest.approx(1.0)
+    for name in ('saturation_velocity[0]', 'curvature[0]', 'dead_zone[0]',
+                 'saturation_velocity[1]', 'curvature[1]', 'dead_zone[1]'):
+        assert np.isfinite(errors[name]) and errors[name] > 0.0, (name, errors)

@@ -250,12 +250,18 @@ def fit_sdp(data: FitData, points: Sequence[LevelSpeed], rest: float, *,
     if method == 'rr':
         x = _to_natural(result.x, rest)
         cost = float(result.cost)
-        jacobian: FloatArray = np.asarray(result.jac) / _natural_derivative(result.x)
+        # A parameter driven to its bound (beta at 0 or 1: the logit's slope underflows)
+        # has no error; the others' errors are those with it held there.
+        derivative = _natural_derivative(result.x)
+        free = np.abs(derivative) > 1e-12
+        errors = np.full(derivative.size, np.inf)
+        errors[free] = covariance_errors(np.asarray(result.jac)[:, free] / derivative[free],
+                                         cost, data.samples)
     else:
         x = np.r_[result.x, 0.0]
         cost = 0.5 * float(np.sum(data.residuals(sdp_rate_function(x)) ** 2))
         jacobian = numeric_jacobian(lambda p: data.residuals(sdp_rate_function(p)), x[:6])
-    errors = covariance_errors(jacobian, cost, data.samples)
+        errors = covariance_errors(jacobian, cost, data.samples)
     names = SDP_NAMES + (('beta',) if method == 'rr' else ())
     return MapFit(sdp_from_rate_vector(x), method, float(x[6]), cost,
                   dict(zip(names, errors.tolist())), evaluations, len(factors))
