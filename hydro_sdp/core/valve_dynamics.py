@@ -3,12 +3,28 @@ Dead time and first-order valve lag of a joint, identified together.
 
 A real valve answers a step with a dead time (electronics, pilot stage) and
 then a rise (the spool's travel): ``w_k = p w_{k-1} + (1 - p) rate(v_{k-tau})``
-with ``p = exp(-dt / T)``, the model's ``valve_lag`` effect. With the lag
-known, the speed the map gives is recovered from the measured increments by
-inverting the lag, ``r_k = (dy_k - p dy_{k-1}) / (1 - p)``; its mean per
-experiment and delayed command level is a map free of any shape, and the
-pair ``(tau, T)`` whose lagged means explain the measured increments best wins
-(the differenced-output fit of docs/methods.md section 1.5, with the lag).
+with ``p = exp(-dt / T)``, the model's ``valve_lag`` effect, and the joint
+integrates ``w``. The pair ``(tau, T)`` is found from the measured increments
+around every change of the delayed command, free of any map shape (the
+differenced-output fit of docs/methods.md section 1.5, with the lag):
+
+* each change gets a window: up to :data:`BEFORE` samples before it (the old
+  command) and up to :data:`AFTER` after it (the new one), never crossing the
+  neighbouring changes;
+* inside the window the speed the map gives is one level before the change and
+  a level with a linear drift after it (the speed changes along the stroke);
+  the lag filters it, starting from a *free* speed at the window's first
+  sample, so whatever came before (an earlier transient, a stop) is explained
+  exactly and nothing is assumed about it;
+* the model is linear in those four numbers: a least-squares fit per window,
+  and the residual per degree of freedom over all windows scores the pair.
+
+Fitting in the measured increments (not in increments with the lag inverted,
+which amplifies noise by ``1 / (1 - p)``) and carrying the lag's state across
+every change keeps the score unbiased, so a long lag is not traded for a
+longer delay. The score of every dead time is searched with every lag of
+:data:`LAG_GRID` around the best pure delay, and the best time constant is
+then refined continuously.
 
 """
 
@@ -17,21 +33,136 @@ from __future__ import annotations
 import math
 from typing import Sequence
 
-from hydro_sdp.core.arrays import FloatArray
+from hydro_sdp.core.arrays import FloatArray, IntArray
 from hydro_sdp.core.experiments import Experiment
 from hydro_sdp.core.timing import delayed_at
 import numpy as np
+from scipy.optimize import minimize_scalar
 from scipy.signal import lfilter
 
 #: Candidate lag time constants, in sample periods (0: pure delay).
 LAG_GRID = (0.0, 1.0, 1.5, 2.0, 3.0, 4.0, 5.0, 6.0, 8.0, 10.0, 12.0, 15.0, 20.0, 25.0, 30.0)
 #: A lag is kept only when it lowers the residual of the best pure delay by this share.
 LAG_GAIN = 0.02
+#: Samples of the old command scored before each change of the delayed command.
+BEFORE = 30
+#: Samples of the new command scored after it (five times the longest lag of the grid).
+AFTER = 150
+#: Parameters of each window: old level, new level, its drift, free initial speed.
+_PER_WINDOW = 4
 
 
 def lag_pole(time_constant: float, dt: float) -> float:
     """Return ``p = exp(-dt / T)`` (0 for no lag)."""
     return math.exp(-dt / time_constant) if time_constant > 0.0 else 0.0
+
+
+class ChangeWindows:
+    """
+    The measured increments around every change of the command.
+
+    Each window holds the samples where the change can show for any dead time
+    from 1 to ``max_delay``, and no other change can: the same samples are
+    scored for every dead time, so their residuals compare directly.
+
+    Parameters
+    ----------
+    experiments : sequence of Experiment
+        The experiments.
+    max_delay : int
+        Largest dead time, samples.
+
+    """
+
+    def __init__(self, experiments: Sequence[Experiment], max_delay: int) -> None:
+        increments, firsts, lengths, earliest = [], [], [], []
+        offset = 0
+        for experiment in experiments:
+            n = experiment.y.size - experiment.start - 1
+            # The command change at v[m] shows in increment m - start - 1 + delay.
+            shows = np.flatnonzero(experiment.v[1:] != experiment.v[:-1]) - experiment.start
+            increments.append(np.diff(experiment.y[experiment.start:]))
+            offset += n
+            if shows.size == 0:
+                continue
+            previous = np.r_[-np.inf, shows[:-1]]
+            following = np.r_[shows[1:], np.inf]
+            first = np.maximum.reduce([shows + 1 - BEFORE, previous + max_delay + 1,
+                                       np.zeros(shows.size)])
+            last = np.minimum.reduce([shows + 1 + max_delay + AFTER, following + 1,
+                                      np.full(shows.size, n)])
+            keep = (last > first) & (shows + max_delay >= 0) & (shows + 1 < n)
+            firsts.append(offset - n + first[keep].astype(np.int64))
+            lengths.append((last - first)[keep].astype(np.int64))
+            earliest.append((shows + 1 - first)[keep].astype(np.int64))
+        dy = np.concatenate(increments) if increments else np.zeros(0)
+        at = np.concatenate(firsts) if firsts else np.zeros(0, np.int64)
+        #: Samples in each window.
+        self.length: IntArray = np.concatenate(lengths) if lengths else at
+        #: Where in its window each change shows with a dead time of one sample.
+        self.earliest: IntArray = np.concatenate(earliest) if earliest else at
+        width = int(self.length.max()) if at.size else 0
+        t = np.arange(width)
+        mask = t < self.length[:, None]
+        gathered = dy[np.clip(at[:, None] + t, 0, max(dy.size - 1, 0))] if dy.size else 0.0
+        #: Increments of each window from its first sample, 0 past its end.
+        self.dy: FloatArray = np.where(mask, gathered, 0.0)
+        self.windows = int(at.size)
+        self.energy = float(np.sum(self.dy ** 2))
+
+    def residual(self, delay: int, pole: float) -> float:
+        """
+        Residual sum of squares with dead time ``delay`` and lag pole ``pole``.
+
+        Parameters
+        ----------
+        delay : int
+            Dead time, samples.
+        pole : float
+            Lag pole ``p`` (0: pure delay).
+
+        Returns
+        -------
+        float
+            Sum over the windows of the squared residuals, degrees squared.
+
+        """
+        if self.windows == 0:
+            return 0.0
+        p = float(pole)
+        width = self.dy.shape[1]
+        t = np.arange(width, dtype=np.float64)
+        # Where the change shows in each window; windows share a few such places.
+        places, place_of = np.unique(self.earliest + delay - 1, return_inverse=True)
+        i = t[None, :] - places[:, None]
+        after = i >= 0.0
+        # The old level, filtered and continued past the change, and the free initial
+        # speed decaying from the window's first sample span the same responses as
+        # {1 then p^(i+1)} and {p^(t+1)}.
+        decay = np.where(after, p ** np.maximum(i + 1.0, 0.0), 1.0) if p > 0.0 else \
+            (~after).astype(np.float64)
+        step = np.where(after, 1.0 - decay, 0.0)
+        drift = np.where(after, i / AFTER, 0.0)
+        ramp = lfilter([1.0 - p], [1.0, -p], drift, axis=1) if p > 0.0 else drift
+        free = np.broadcast_to(p ** (t + 1.0) if p > 0.0 else np.zeros(width), i.shape)
+        basis = np.stack([decay, step, ramp, free], axis=2)
+        rhs = np.einsum('wt,wtj->wj', self.dy, basis[place_of])
+        # Each window's Gram matrix: partial sums from its first sample to its last.
+        grams = np.cumsum(basis[:, :, :, None] * basis[:, :, None, :], axis=1)
+        gram = grams[place_of, self.length - 1]
+        # Unit diagonal, then a tiny ridge: columns may vanish (no lag) or coincide
+        # (a change at the window's first sample).
+        diagonal = np.einsum('wjj->wj', gram)
+        norm = np.where(diagonal > 0.0, 1.0 / np.sqrt(np.where(diagonal > 0.0, diagonal, 1.0)),
+                        0.0)
+        gram = gram * norm[:, :, None] * norm[:, None, :] + 1e-10 * np.eye(_PER_WINDOW)
+        rhs = rhs * norm
+        theta = np.linalg.solve(gram, rhs[:, :, None])[:, :, 0]
+        return max(self.energy - float(np.sum(theta * rhs)), 0.0)
+
+
+# The paper baseline's delay (hydro_sdp.core.paper_baseline): one mean speed with a drift
+# per stretch of the delayed command, the lag inverted in the increments.
 
 
 def _rows(experiments: Sequence[Experiment], delay: int, window: int
@@ -124,25 +255,35 @@ def fit_delay_and_lag(experiments: Sequence[Experiment], dt: float, max_delay: i
     tuple
         ``(delay, time_constant, explained)``: dead time (samples), lag time
         constant (s, 0 for none) and, per candidate delay 1..max_delay, the share
-        of the increments' variance explained with the best lag tried there.
+        of the windows' squared increments explained with the best lag tried there.
 
     """
-    total = sum(float(np.sum(np.diff(e.y[e.start:]) ** 2)) for e in experiments)
-    window = 2 * max_delay + 50
-    rows = {delay: _rows(experiments, delay, window) for delay in range(1, max_delay + 1)}
-    pure = {delay: _residual(*rows[delay], 0.0) for delay in rows}
-    best_pure = min((score, delay) for delay, score in pure.items())
-    # A lag of T samples looks like about T samples of extra delay: with it, the dead
-    # time lies that much below the best pure delay.
-    best_lag = (math.inf, 1, 0.0)
-    explained = np.array([1.0 - pure[d] / total if total > 0 else 0.0 for d in sorted(pure)])
+    windows = ChangeWindows(experiments, max_delay)
+    best = {delay: (windows.residual(delay, 0.0), 0.0) for delay in range(1, max_delay + 1)}
+    pure_score, pure = min((score, delay) for delay, (score, _) in best.items())
+    # A lag of T samples moves the best pure delay later by about 0.7 T: the dead time
+    # with the lag lies between T + 3 samples below it and 2 above.
     for factor in LAG_GRID[1:]:
-        centre = best_pure[1] - int(round(factor))
-        for delay in range(max(centre - 2, 1), min(centre + 3, max_delay + 1)):
-            lagged = _residual(*rows[delay], lag_pole(factor * dt, dt))
-            explained[delay - 1] = max(explained[delay - 1],
-                                       1.0 - lagged / total if total > 0 else 0.0)
-            best_lag = min(best_lag, (lagged, delay, factor))
-    if best_lag[2] > 0.0 and best_lag[0] < (1.0 - LAG_GAIN) * best_pure[0]:
-        return best_lag[1], best_lag[2] * dt, explained
-    return best_pure[1], 0.0, explained
+        pole = lag_pole(factor * dt, dt)
+        for delay in range(max(1, pure - math.ceil(factor) - 3), min(pure + 2, max_delay) + 1):
+            best[delay] = min(best[delay], (windows.residual(delay, pole), factor * dt))
+    score, delay, lag = min((score, delay, lag) for delay, (score, lag) in best.items())
+    if lag > 0.0:
+        # Between the neighbours of the best time constant of the grid, on the best dead
+        # time and the ones beside it (the two trade a little at the grid's steps).
+        index = LAG_GRID.index(round(lag / dt, 9))
+        low = LAG_GRID[max(index - 1, 1)] * dt
+        high = LAG_GRID[min(index + 1, len(LAG_GRID) - 1)] * dt
+        for near in range(max(1, delay - 1), min(max_delay, delay + 1) + 1):
+            result = minimize_scalar(
+                lambda x, d=near: windows.residual(d, lag_pole(math.exp(x), dt)),
+                bounds=(math.log(low), math.log(high)), method='bounded',
+                options={'xatol': 0.01})
+            if float(result.fun) < best[near][0]:
+                best[near] = (float(result.fun), math.exp(float(result.x)))
+        score, delay, lag = min((score, delay, lag) for delay, (score, lag) in best.items())
+    energy = windows.energy if windows.energy > 0.0 else 1.0
+    explained = np.array([1.0 - best[d][0] / energy for d in sorted(best)])
+    if lag > 0.0 and score < (1.0 - LAG_GAIN) * pure_score:
+        return delay, lag, explained
+    return pure, 0.0, explained
