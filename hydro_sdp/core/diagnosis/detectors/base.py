@@ -90,21 +90,27 @@ class Detector(ABC):
 
 class EffectDetector(Detector):
     """
-    An effect of :mod:`hydro_sdp.core.effects`: tried only on a model without it.
+    An effect of :mod:`hydro_sdp.core.effects`, tried on a model without it.
 
-    The word is the effect's name. Subclasses implement :meth:`fit_effect`.
+    The word is the effect's name. Subclasses implement :meth:`fit_effect`; those
+    that set :attr:`refits` are also tried on a model that has the effect, which
+    they fit again (the candidate replaces it and is scored against the model
+    with the old value, so a poorly fitted effect is named and corrected).
 
     """
 
+    #: Whether the effect is fitted again when the model has it already.
+    refits: ClassVar[bool] = False
+
     def fit(self, context: Context) -> Trial:
-        """Fit and score the effect; not applicable when the model has it already."""
-        if context.model.effect(self.word) is not None:
+        """Fit and score the effect; not applicable when the model has it, unless refitted."""
+        if context.model.effect(self.word) is not None and not self.refits:
             return Candidate(self.word, False), None
         return self.fit_effect(context)
 
     @abstractmethod
     def fit_effect(self, context: Context) -> Trial:
-        """As :meth:`Detector.fit`, on a model that lacks the effect."""
+        """As :meth:`Detector.fit`, on a model that lacks the effect (or has it, to refit)."""
 
     def fit_one_parameter(self, context: Context, effect: Callable[[float], Effect],
                           parameter: str, bounds: tuple[float, float], finding: str,

@@ -9,19 +9,28 @@ from hydro_sdp.core.effects import Backlash as Play, ValveLag as Lag
 
 
 class ValveLag(EffectDetector):
-    """The speed approaches each new level with a first-order lag: fit its time constant."""
+    """
+    The speed approaches each new level with a first-order lag: fit its time constant.
+
+    A model with a lag has it fitted again: a time constant that is far off (a short
+    lag traded for a longer delay) is named and corrected like a missing one.
+
+    """
 
     word = 'valve_lag'
     description = 'the speed approaches each new level with a lag'
     remedy = 'effect, time constant fitted'
     feature = 'events'
+    refits = True
 
     def fit_effect(self, context: Context) -> Trial:
         """Fit the time constant between a fifth of a sample and 2 s, and score it."""
-        return self.fit_one_parameter(
-            context, Lag, 'time_constant', (0.2 * context.dt, 2.0),
-            'after each command change the speed settles with a time constant of {} s',
-            log=True)
+        finding = 'after each command change the speed settles with a time constant of {} s'
+        present = context.model.effect(self.word)
+        if isinstance(present, Lag):
+            finding += f', not {present.time_constant:.3g} s'
+        return self.fit_one_parameter(context, Lag, 'time_constant', (0.2 * context.dt, 2.0),
+                                      finding, log=True)
 
 
 class Backlash(EffectDetector):
