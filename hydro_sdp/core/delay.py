@@ -5,11 +5,12 @@ A small step moves the joint slowly, so its motion crosses any threshold late
 and looks like extra delay; the estimators here avoid that:
 
 * **fit** (the answer): for each candidate dead time and first-order valve lag,
-  the differenced angle is explained by one mean speed per experiment and
-  delayed command level (a non-parametric static map) passed through the lag;
-  the pair that explains most of it wins (:mod:`hydro_sdp.core.valve_dynamics`).
-  This is the differenced-output fit of docs/methods.md section 1.5, free of any
-  map shape.
+  the differenced angle around every command change is explained by one speed
+  before the change and one (with a drift) after it, passed through the lag
+  from a free initial speed; the pair that explains most of it wins, scored on
+  the same samples for every pair (:mod:`hydro_sdp.core.valve_dynamics`). This
+  is the differenced-output fit of docs/methods.md section 1.5, free of any map
+  shape.
 * **onset**: on the fastest steps, the first sample where the speed reaches half
   of the step's final speed, moved back by the time the fitted lag takes to
   rise half way (so twitches before the motion and the lag's rise do not count).
@@ -50,7 +51,8 @@ class DelayEstimate:
     xcorr : int or None
         Delay from cross-correlation of speed and command changes.
     explained : FloatArray
-        Share of the differenced angle's variance explained at each candidate delay.
+        Share of the squared increments around the command changes explained at
+        each candidate delay 1..max_delay, with the best lag tried there.
     lag : float
         First-order valve lag time constant found with the delay, s (0: none).
 

@@ -5,26 +5,27 @@ A real valve answers a step with a dead time (electronics, pilot stage) and
 then a rise (the spool's travel): ``w_k = p w_{k-1} + (1 - p) rate(v_{k-tau})``
 with ``p = exp(-dt / T)``, the model's ``valve_lag`` effect, and the joint
 integrates ``w``. The pair ``(tau, T)`` is found from the measured increments
-around every change of the delayed command, free of any map shape (the
+around every change of the command, free of any map shape (the
 differenced-output fit of docs/methods.md section 1.5, with the lag):
 
-* each change gets a window: up to :data:`BEFORE` samples before it (the old
-  command) and up to :data:`AFTER` after it (the new one), never crossing the
-  neighbouring changes;
-* inside the window the speed the map gives is one level before the change and
-  a level with a linear drift after it (the speed changes along the stroke);
-  the lag filters it, starting from a *free* speed at the window's first
-  sample, so whatever came before (an earlier transient, a stop) is explained
-  exactly and nothing is assumed about it;
+* each change gets a window: from :data:`BEFORE` samples before the earliest
+  place it can show (dead time 1) to :data:`AFTER` samples after the latest
+  (``max_delay``), cut where a neighbouring change could show; so every
+  candidate pair is scored on the same samples;
+* inside the window the speed the map gives is one level before the delayed
+  change and a level with a linear drift after it (the speed changes along the
+  stroke); the lag filters it, starting from a *free* speed at the window's
+  first sample, so whatever came before (an earlier transient, a stop) is
+  explained exactly and nothing is assumed about it;
 * the model is linear in those four numbers: a least-squares fit per window,
-  and the residual per degree of freedom over all windows scores the pair.
+  and the residual summed over all windows scores the pair.
 
-Fitting in the measured increments (not in increments with the lag inverted,
-which amplifies noise by ``1 / (1 - p)``) and carrying the lag's state across
-every change keeps the score unbiased, so a long lag is not traded for a
-longer delay. The score of every dead time is searched with every lag of
-:data:`LAG_GRID` around the best pure delay, and the best time constant is
-then refined continuously.
+Fitting the measured increments (not increments with the lag inverted, which
+amplifies their noise by ``1 / (1 - p)``), carrying the lag's state across
+every change and scoring every pair on the same samples keep the score
+unbiased, so a long lag is not traded for a longer delay. Every dead time near
+the best pure delay is tried with every lag of :data:`LAG_GRID`, and the best
+time constant is then refined continuously.
 
 """
 
@@ -44,9 +45,9 @@ from scipy.signal import lfilter
 LAG_GRID = (0.0, 1.0, 1.5, 2.0, 3.0, 4.0, 5.0, 6.0, 8.0, 10.0, 12.0, 15.0, 20.0, 25.0, 30.0)
 #: A lag is kept only when it lowers the residual of the best pure delay by this share.
 LAG_GAIN = 0.02
-#: Samples of the old command scored before each change of the delayed command.
+#: Samples of the old command scored before the earliest place a change can show.
 BEFORE = 30
-#: Samples of the new command scored after it (five times the longest lag of the grid).
+#: Samples of the new command scored after the latest (five times the grid's longest lag).
 AFTER = 150
 #: Parameters of each window: old level, new level, its drift, free initial speed.
 _PER_WINDOW = 4
