@@ -31,6 +31,7 @@ from hydro_sdp.core.experiments import Experiment
 from hydro_sdp.core.timing import delayed_at
 from hydro_sdp.core.valve_dynamics import fit_delay_and_lag, lag_pole
 import numpy as np
+from scipy.signal import lfilter
 
 
 @dataclass(frozen=True)
@@ -140,13 +141,17 @@ def _onset(experiments: Sequence[Experiment], noise: float, max_delay: int,
     return int(round(float(np.median(fastest))))
 
 
-def _xcorr(experiments: Sequence[Experiment], max_delay: int) -> int | None:
+def _xcorr(experiments: Sequence[Experiment], max_delay: int, pole: float) -> int | None:
     score = np.zeros(max_delay + 1)
     for experiment in experiments:
         acceleration = np.diff(experiment.y, 2)
         change = np.diff(experiment.v)[:-1]
         if acceleration.size <= max_delay or not np.any(change):
             continue
+        if pole > 0.0:
+            # Through the lag a change of command changes the speed over the samples
+            # after the dead time: correlate with that shape, not with a spike.
+            change = lfilter([1.0 - pole], [1.0, -pole], change)
         for lag in range(1, max_delay + 1):
             score[lag] += float(np.dot(acceleration[lag:], change[:change.size - lag]))
     if not np.any(score):
@@ -185,7 +190,8 @@ def estimate_delay(experiments: Sequence[Experiment], dt: float, *, max_delay: i
     best, lag, explained = fit_delay_and_lag(experiments, dt, max_delay)
     return DelayEstimate(samples=best, seconds=best * dt, fit=best,
                          onset=_onset(experiments, noise, max_delay, lag_pole(lag, dt)),
-                         xcorr=_xcorr(experiments, max_delay), explained=explained, lag=lag)
+                         xcorr=_xcorr(experiments, max_delay, lag_pole(lag, dt)),
+                         explained=explained, lag=lag)
 
 
 @dataclass(frozen=True)

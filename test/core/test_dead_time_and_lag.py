@@ -51,6 +51,8 @@ def test_dead_time_and_lag_of_j2_steps(j2: JointModel, lag: float, noise: float)
         found = estimate_delay(pieces, DT, max_delay=50, noise=segmentation.noise_std)
         assert abs(found.samples - round(delay / DT)) <= 1, (delay, found.samples, found.lag)
         assert found.lag == pytest.approx(lag, rel=0.2), (delay, found.samples, found.lag)
+        # Cross-correlation with the lag's response to a change agrees.
+        assert found.xcorr is not None and abs(found.xcorr - round(delay / DT)) <= 1
 
 
 def test_identify_puts_the_lag_into_the_model(j2: JointModel) -> None:
