@@ -217,14 +217,116 @@ class StrokeGeometry:
                              np.asarray(speeds, dtype=np.float64).tolist())])
 
 
+@dataclass(frozen=True)
+class FlowSharing:
+    """
+    Speed cut when other joints draw on the same pump (a shared pump-flow limit).
+
+    Demands are normalised: the joint's own is ``w / full_positive`` or
+    ``-w / full_negative`` (1 at its top speed in that direction, where one
+    joint alone takes the whole pump), the other joints' ``sum_j (s_j+ / other_positive + s_j- /
+    other_negative)`` with ``s_j+`` and ``s_j-`` the measured speed of other joint
+    ``j`` in its positive and negative direction (deg/s, from the record's
+    ``others``, smoothed over 0.1 s; a joint lowered by gravity draws less flow
+    than one lifted). The speed becomes
+    ``w min(1, limit / (own demand + other joints' demand))``: when the demands
+    add up to more than the pump's ``limit``, every joint gets its share. The
+    full speeds are set to the model's top speeds, so that ``limit`` reads in
+    full demands of this joint.
+
+    Parameters
+    ----------
+    limit : float
+        Pump flow in full demands of this joint (> 0; >= 1 leaves the joint alone
+        as fast as its map says).
+    full_positive, full_negative : float
+        Speed of this joint in each direction that counts as one full demand, deg/s (> 0).
+    other_positive, other_negative : float
+        Speed of the other joints in their positive and negative directions that
+        counts as one full demand, deg/s (> 0).
+
+    """
+
+    name: ClassVar[str] = 'flow_sharing'
+    limit: float
+    full_positive: float
+    full_negative: float
+    other_positive: float
+    other_negative: float
+
+    def __post_init__(self) -> None:
+        for label in ('limit', 'full_positive', 'full_negative', 'other_positive',
+                      'other_negative'):
+            value = getattr(self, label)
+            if not (np.isfinite(value) and value > 0.0):
+                raise ModelFileError(f"key 'effects.flow_sharing.{label}': must be > 0, "
+                                     f'got {value}')
+
+
+@dataclass(frozen=True)
+class LoadDependence:
+    """
+    Speed scaled by the load, each direction on its own (payload, digging force).
+
+    With a measured load ``L`` (the record's ``load``, e.g. a cylinder pressure
+    in bar) the speed becomes ``w max(0.05, 1 + k (L - reference))`` with ``k``
+    = ``positive`` for ``w > 0`` and ``negative`` for ``w < 0``. A record without
+    a load signal takes the factors fitted to it by name (``records``, with
+    ``record_positive`` and ``record_negative``); other records keep factor 1.
+
+    Parameters
+    ----------
+    positive, negative : float
+        Relative speed change per load unit in each direction, 1/load unit.
+    reference : float
+        Load at which the map holds, load units.
+    records : tuple[str, ...]
+        Keys of records (:func:`hydro_sdp.core.exogenous.record_key`) with fitted factors.
+    record_positive, record_negative : tuple[float, ...]
+        Speed factor of each of those records per direction (> 0).
+
+    """
+
+    name: ClassVar[str] = 'load_dependence'
+    positive: float = 0.0
+    negative: float = 0.0
+    reference: float = 0.0
+    records: tuple[str, ...] = ()
+    record_positive: tuple[float, ...] = ()
+    record_negative: tuple[float, ...] = ()
+
+    def __post_init__(self) -> None:
+        key = "key 'effects.load_dependence"
+        records = tuple(str(r) for r in self.records)
+        up = tuple(float(x) for x in self.record_positive)
+        down = tuple(float(x) for x in self.record_negative)
+        if not len(up) == len(down) == len(records) or len(set(records)) != len(records):
+            raise ModelFileError(f"{key}': records, record_positive and record_negative need "
+                                 'one value per record, records named once')
+        if not all(np.isfinite(x) and x > 0.0 for x in up + down):
+            raise ModelFileError(f"{key}': record factors must be > 0")
+        if not np.all(np.isfinite((self.positive, self.negative, self.reference))):
+            raise ModelFileError(f"{key}': positive, negative and reference must be finite")
+        object.__setattr__(self, 'records', records)
+        object.__setattr__(self, 'record_positive', up)
+        object.__setattr__(self, 'record_negative', down)
+
+    def record_factors(self, key: str) -> tuple[float, float]:
+        """Return the factors of the record called ``key`` (1, 1 when it has none)."""
+        if key in self.records:
+            index = self.records.index(key)
+            return self.record_positive[index], self.record_negative[index]
+        return 1.0, 1.0
+
+
 Effect = Union[ValveLag, Backlash, AngleDependentVelocity, DirectionDependentDelay,
-               StrokeGeometry]
+               StrokeGeometry, FlowSharing, LoadDependence]
 
 #: Effect classes by vocabulary word, in the order the simulation applies them.
 EFFECT_TYPES: dict[str, type[Effect]] = {
     cls.name: cls
-    for cls in (DirectionDependentDelay, ValveLag, StrokeGeometry, AngleDependentVelocity,
-                Backlash)
+    for cls in (DirectionDependentDelay, ValveLag, FlowSharing, LoadDependence, StrokeGeometry,
+                AngleDependentVelocity, Backlash)
 }
 
 
@@ -260,14 +362,26 @@ def effect_from_mapping(name: str, params: Any) -> Effect:
     for field in fields(cls):
         if field.name in params:
             key = f'effects.{name}.{field.name}'
-            values[field.name] = require_float_list(params[field.name], key) \
-                if str(field.type).startswith('tuple') else require_float(params[field.name], key)
+            value = params[field.name]
+            if str(field.type) == 'tuple[str, ...]':
+                if not isinstance(value, list) or not all(isinstance(x, str) for x in value):
+                    raise ModelFileError(f'key {key!r}: expected a list of names')
+                values[field.name] = tuple(value)
+            elif str(field.type).startswith('tuple'):
+                values[field.name] = require_float_list(value, key)
+            else:
+                values[field.name] = require_float(value, key)
         elif field.default is MISSING:
             raise ModelFileError(f"key 'effects.{name}': missing parameter {field.name!r}")
     return cls(**values)
 
 
-def effect_to_mapping(effect: Effect) -> dict[str, float | list[float]]:
-    """Return the model-file parameters of ``effect`` (lists for the knot tables)."""
-    return {key: [float(x) for x in value] if isinstance(value, tuple) else float(value)
-            for key, value in asdict(effect).items()}
+def effect_to_mapping(effect: Effect) -> dict[str, float | list[float] | list[str]]:
+    """Return the model-file parameters of ``effect`` (lists for the tables)."""
+    out: dict[str, float | list[float] | list[str]] = {}
+    for key, value in asdict(effect).items():
+        if isinstance(value, tuple):
+            out[key] = [str(x) for x in value] if key == 'records' else [float(x) for x in value]
+        else:
+            out[key] = float(value)
+    return out

@@ -21,6 +21,7 @@ import math
 from typing import Sequence
 
 from hydro_sdp.core.arrays import FloatArray
+from hydro_sdp.core.exogenous import exogenous_of
 from hydro_sdp.core.experiments import check_record
 from hydro_sdp.core.model import JointModel
 from hydro_sdp.core.records import Record
@@ -107,7 +108,8 @@ def _start(model: JointModel, dt: float, samples: int) -> int:
 
 def _mae(model: JointModel, record: Record, dt: float, start: int) -> float:
     simulated = simulate(model, record.v, dt, float(record.y[start]),
-                         v_before=float(record.v[0]), start=start)
+                         v_before=float(record.v[0]), start=start,
+                         exogenous=exogenous_of(record, dt))
     return float(np.mean(np.abs(record.y[start:] - simulated[start:])))
 
 
@@ -185,7 +187,7 @@ def simulated_angles(model: JointModel, record: Record) -> FloatArray:
     dt = check_record(record, min_samples=2)
     start = _start(model, dt, len(record))
     return simulate(model, record.v, dt, float(record.y[start]), v_before=float(record.v[0]),
-                    start=start)
+                    start=start, exogenous=exogenous_of(record, dt))
 
 
 #: The two ways :func:`mean_errors` averages, by name.

@@ -12,6 +12,12 @@ either side are not one sample period apart, so no fit or simulation may run
 across it. :func:`split_at_gaps` cuts a record there into pieces that each
 keep the origin of the whole.
 
+A record may carry signals beyond the joint's own (the effects
+``load_dependence`` and ``flow_sharing`` need them): ``load``, a measured load
+(a cylinder pressure, say) held at each sample, and ``others``, the angles of
+the other joints of the same machine at each sample, one column per joint
+named in ``other_joints``.
+
 """
 
 from __future__ import annotations
@@ -48,6 +54,12 @@ class Record:
         Where the record came from (a bag path), for messages.
     origin : float or None
         Time messages count from, s (the start of the bag); default: ``t[0]``.
+    load : FloatArray or None
+        Measured load at each sample (its own units, e.g. bar), or None.
+    others : FloatArray or None
+        Angles of the other joints at each sample, degrees, shape ``(n, joints)``, or None.
+    other_joints : tuple[str, ...]
+        Names of the columns of ``others``.
 
     """
 
@@ -57,6 +69,9 @@ class Record:
     joint: str = ''
     source: str = ''
     origin: float | None = None
+    load: FloatArray | None = None
+    others: FloatArray | None = None
+    other_joints: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         arrays = {}
@@ -85,6 +100,38 @@ class Record:
             since = arrays['t'][k + 1] - (arrays['t'][0] if self.origin is None else self.origin)
             raise DataError(f'{self._label()}: time stamps {kind} at sample {k + 1} '
                             f'({since:.6f} s from the start), {backwards.size} times in all')
+        self._check_exogenous(arrays['t'].size)
+
+    def _check_exogenous(self, n: int) -> None:
+        """Validate ``load`` and ``others``: aligned with ``t`` and finite."""
+        if self.load is not None:
+            load = np.asarray(self.load, dtype=np.float64)
+            if load.shape != (n,):
+                raise DataError(f'{self._label()}: load must have one value per sample '
+                                f'({n}), got shape {load.shape}')
+            object.__setattr__(self, 'load', load)
+        names = tuple(str(name) for name in self.other_joints)
+        object.__setattr__(self, 'other_joints', names)
+        if self.others is not None:
+            others = np.asarray(self.others, dtype=np.float64)
+            if others.ndim == 1:
+                others = others[:, None]
+            if others.ndim != 2 or others.shape[0] != n:
+                raise DataError(f'{self._label()}: others must have one row per sample '
+                                f'({n}), got shape {others.shape}')
+            if len(names) not in (0, others.shape[1]):
+                raise DataError(f'{self._label()}: others has {others.shape[1]} columns but '
+                                f'{len(names)} other_joints are named')
+            object.__setattr__(self, 'others', others)
+        elif names:
+            raise DataError(f'{self._label()}: other_joints named without others')
+        for name, what in (('load', 'load'), ('others', 'other-joint angle')):
+            values = getattr(self, name)
+            if values is not None:
+                bad = np.flatnonzero(~np.isfinite(values).reshape(n, -1).all(axis=1))
+                if bad.size:
+                    raise DataError(f'{self._label()}: {bad.size} {what} samples are NaN or '
+                                    f'infinite (first at sample {bad[0]})')
 
     def since_start(self, t: float) -> float:
         """
@@ -128,7 +175,10 @@ class Record:
     def window(self, start: int, stop: int) -> Record:
         """Return samples ``start:stop`` as a new record."""
         return Record(self.t[start:stop], self.v[start:stop], self.y[start:stop],
-                      self.joint, self.source, self._origin())
+                      self.joint, self.source, self._origin(),
+                      None if self.load is None else self.load[start:stop],
+                      None if self.others is None else self.others[start:stop],
+                      self.other_joints)
 
     def _origin(self) -> float | None:
         if self.origin is not None:

@@ -5,7 +5,9 @@ Simulation of a joint model at any sample period.
 (eqs. (3)-(4) of West et al., docs/methods.md sections 3.1-3.2) plus the model's effects.
 :func:`simulate` processes a whole command sequence with numpy; the end-stop
 clamp, a recursion, is solved exactly by reflecting the cumulative sum at one
-stop at a time (:func:`bounded_cumsum`). :class:`JointSimulator` steps the same
+stop at a time (:func:`hydro_sdp.core.bounded.bounded_cumsum`). Effects that need
+signals beyond the joint's own (other joints' motion, a measured load) take them
+as an :class:`~hydro_sdp.core.exogenous.Exogenous` (``exogenous=``). :class:`JointSimulator` steps the same
 equations one sample at a time for closed loops and the plant node; both give
 the same trajectory.
 
@@ -23,112 +25,15 @@ from dataclasses import replace
 import math
 
 from hydro_sdp.core.arrays import FloatArray
+from hydro_sdp.core.bounded import bounded_cumsum
 from hydro_sdp.core.effects import (
     AngleDependentVelocity, Backlash, DirectionDependentDelay, StrokeGeometry, ValveLag)
 from hydro_sdp.core.errors import DataError
+from hydro_sdp.core.exogenous import Exogenous, exogenous_factor
 from hydro_sdp.core.model import JointModel
 from hydro_sdp.core.static_maps import StaticMap
 from hydro_sdp.core.timing import check_sample_period, delay_samples, delayed, DelayLine
 import numpy as np
-
-# Samples handled per reflection pass; bounds the cost of each switch between stops.
-_CHUNK = 8192
-
-
-def bounded_cumsum(x0: float, increments: FloatArray, low: float, high: float) -> FloatArray:
-    """
-    Solve ``x_k = min(max(x_{k-1} + d_k, low), high)`` for a whole sequence.
-
-    Hydraulic commands are mostly held levels, so the increments come in runs
-    of equal values; inside a run the path is monotone and meets at most one
-    bound, so each run is solved in closed form and only the run boundaries
-    are visited in Python. Increments that change at nearly every sample are
-    handled by reflection instead (:func:`_reflected_cumsum`).
-
-    Parameters
-    ----------
-    x0 : float
-        Value before the first increment (clamped into the bounds).
-    increments : FloatArray
-        Increments ``d_1..d_n``.
-    low : float
-        Lower bound (may be ``-inf``).
-    high : float
-        Upper bound (may be ``inf``).
-
-    Returns
-    -------
-    FloatArray
-        ``x_0..x_n`` (length ``n + 1``).
-
-    """
-    increments = np.asarray(increments, dtype=np.float64)
-    n = increments.size
-    x = min(max(float(x0), low), high)
-    if math.isinf(low) and math.isinf(high):
-        return np.r_[x, x + np.cumsum(increments)]
-    starts = np.flatnonzero(np.diff(increments)) + 1
-    if 8 * (starts.size + 1) > n:
-        return _reflected_cumsum(x, increments, low, high)
-    starts = np.r_[0, starts]
-    lengths = np.diff(np.r_[starts, n])
-    values = increments[starts]
-    run_start = np.empty(starts.size)
-    for i, (step, length) in enumerate(zip(values.tolist(), lengths.tolist())):
-        run_start[i] = x
-        x = min(max(x + step * length, low), high)
-    steps_into_run = np.arange(1, n + 1) - np.repeat(starts, lengths)
-    path = np.repeat(run_start, lengths) + np.repeat(values, lengths) * steps_into_run
-    return np.r_[min(max(float(x0), low), high), np.clip(path, low, high)]
-
-
-def _reflected_cumsum(x: float, increments: FloatArray, low: float, high: float) -> FloatArray:
-    """
-    Two-sided clamped cumulative sum by one-sided reflections.
-
-    Between switches from one bound to the other, the recursion equals a
-    one-sided reflection, which has the closed form
-    ``x = s - max(0, running_max(s - high))`` (Skorokhod/Lindley) of the plain
-    cumulative sum ``s``. The sequence is processed in chunks, restarting from
-    the last value, so each switch costs at most one chunk.
-    """
-    n = increments.size
-    out = np.empty(n + 1)
-    out[0] = x
-    reflect_high = True
-    start = 0
-    while start < n:
-        stop = min(start + _CHUNK, n)
-        path = x + np.cumsum(increments[start:stop])
-        if reflect_high:
-            path = _reflect(path, path - high, high, -1.0)
-            crossed = np.flatnonzero(path < low)
-        else:
-            path = _reflect(path, low - path, low, 1.0)
-            crossed = np.flatnonzero(path > high)
-        if crossed.size:
-            j = int(crossed[0])
-            out[start + 1:start + 1 + j] = path[:j]
-            x = low if reflect_high else high
-            out[start + 1 + j] = x
-            start += j + 1
-            reflect_high = not reflect_high
-        else:
-            out[start + 1:stop + 1] = path
-            x = float(path[-1])
-            start = stop
-    # Rounding in the reflection may step a hair past a bound.
-    return np.clip(out, low, high, out=out)
-
-
-def _reflect(path: FloatArray, excess: FloatArray, bound: float, sign: float) -> FloatArray:
-    """Reflect ``path`` at ``bound`` given how far it overshoots it (``excess``)."""
-    pushed = np.maximum.accumulate(excess)
-    reflected = path + sign * np.maximum(pushed, 0.0)
-    # Where the overshoot peaks the joint is at the stop; say so exactly, not up to rounding.
-    reflected[(excess >= pushed) & (pushed > 0.0)] = bound
-    return reflected
-
 
 def _rate_of_levels(model: JointModel, v: FloatArray) -> FloatArray:
     """Evaluate the static map once per held level rather than once per sample."""
@@ -157,7 +62,7 @@ def _check_commands(v: FloatArray) -> FloatArray:
 
 def simulate(model: JointModel, v: FloatArray, dt: float, y0: float,
              *, v_before: float = 0.0, start: int = 0,
-             backlash_offset: float = 0.0) -> FloatArray:
+             backlash_offset: float = 0.0, exogenous: Exogenous | None = None) -> FloatArray:
     """
     Simulate the joint's angle for a command sequence.
 
@@ -179,6 +84,8 @@ def simulate(model: JointModel, v: FloatArray, dt: float, y0: float,
         the delayed commands are all known).
     backlash_offset : float
         Sensor angle minus actuator angle at the start, within +-play/2 (with backlash).
+    exogenous : Exogenous or None
+        The record's load and other joints' speeds (``load_dependence``, ``flow_sharing``).
 
     Returns
     -------
@@ -191,7 +98,7 @@ def simulate(model: JointModel, v: FloatArray, dt: float, y0: float,
     v = _check_commands(v)
     if v.size == 0:
         return np.empty(0)
-    speed = speed_profile(model, v, dt, v_before=v_before)
+    speed = speed_profile(model, v, dt, v_before=v_before, exogenous=exogenous)
     if not 0 <= start < v.size:
         raise DataError(f'start must be a sample index below {v.size}, got {start}')
     low, high = _limits(model)
@@ -211,12 +118,13 @@ def simulate(model: JointModel, v: FloatArray, dt: float, y0: float,
 
 
 def speed_profile(model: JointModel, v: FloatArray, dt: float, *,
-                  v_before: float = 0.0) -> FloatArray:
+                  v_before: float = 0.0, exogenous: Exogenous | None = None) -> FloatArray:
     """
     Speed ``w_k`` (deg/s) that moves the joint from ``y_{k-1}`` to ``y_k``, before end stops.
 
     The static map of the delayed command, with separate delays per direction and
-    the valve lag applied; angle-dependent speed and backlash act on top of it.
+    the valve lag applied, scaled by flow sharing and load; angle-dependent speed
+    and backlash act on top of it.
 
     Parameters
     ----------
@@ -228,6 +136,8 @@ def speed_profile(model: JointModel, v: FloatArray, dt: float, *,
         Sample period, s.
     v_before : float
         Command assumed before the first sample.
+    exogenous : Exogenous or None
+        The record's load and other joints' speeds.
 
     Returns
     -------
@@ -253,11 +163,13 @@ def speed_profile(model: JointModel, v: FloatArray, dt: float, *,
         from scipy.signal import lfilter   # here: importing scipy.signal takes seconds
         p = math.exp(-dt / lag.time_constant)
         speed, _ = lfilter([1.0 - p], [1.0, -p], speed, zi=[p * rate_before])
-    return speed
+    factor = exogenous_factor(model, speed, exogenous)
+    return speed if factor is None else speed * factor
 
 
 def one_step_increments(model: JointModel, v: FloatArray, y: FloatArray, dt: float, *,
-                        start: int = 0, v_before: float = 0.0) -> FloatArray:
+                        start: int = 0, v_before: float = 0.0,
+                        exogenous: Exogenous | None = None) -> FloatArray:
     """
     Return the increments ``y^_k - y_{k-1}`` the model predicts from each measured angle.
 
@@ -268,7 +180,7 @@ def one_step_increments(model: JointModel, v: FloatArray, y: FloatArray, dt: flo
 
     Parameters
     ----------
-    model, v, dt, v_before
+    model, v, dt, v_before, exogenous
         As in :func:`speed_profile`.
     y : FloatArray
         Measured angles, degrees.
@@ -281,7 +193,7 @@ def one_step_increments(model: JointModel, v: FloatArray, y: FloatArray, dt: flo
         Predicted increments for samples ``start + 1 ..``.
 
     """
-    speed = speed_profile(model, v, dt, v_before=v_before)[start + 1:]
+    speed = speed_profile(model, v, dt, v_before=v_before, exogenous=exogenous)[start + 1:]
     previous = np.asarray(y, dtype=np.float64)[start:-1]
     gravity, geometry = _angle_effects(model)
     if geometry is not None:
@@ -421,6 +333,10 @@ class JointSimulator:
             # Same arithmetic as lfilter's transposed direct form, so results agree exactly.
             self._lag_state = (1.0 - self._lag_p) * speed + self._lag_p * self._lag_state
             speed = self._lag_state
+        factor = exogenous_factor(self.model, np.array([speed]))
+        if factor is not None:
+            # No signals here: the load at its reference, the other joints still.
+            speed *= float(factor[0])
         previous = self._actuator
         if self._geometry is not None:
             speed *= self._geometry.factor_at(previous, speed)

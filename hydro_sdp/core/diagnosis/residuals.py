@@ -19,6 +19,7 @@ from typing import Sequence
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.effects import AngleDependentVelocity, Backlash
 from hydro_sdp.core.evaluate import simulated_angles
+from hydro_sdp.core.exogenous import exogenous_of
 from hydro_sdp.core.experiments import check_record
 from hydro_sdp.core.model import JointModel
 from hydro_sdp.core.records import Record
@@ -117,7 +118,7 @@ def simulate_record(model: JointModel, run: Run, backlash_offset: float = 0.0) -
     record = run.record
     return simulate(model, record.v, run.dt, float(record.y[run.start]),
                     v_before=float(record.v[run.start]), start=run.start,
-                    backlash_offset=backlash_offset)
+                    backlash_offset=backlash_offset, exogenous=exogenous_of(record, run.dt))
 
 
 def _record_mae(model: JointModel, run: Run) -> float:
@@ -171,7 +172,8 @@ def velocity_residuals(model: JointModel, runs: Sequence[Run]) -> list[FloatArra
             predicted = _play_at_stops(model, run)
         else:
             predicted = one_step_increments(model, record.v, record.y, run.dt,
-                                            start=run.start, v_before=float(record.v[0]))
+                                            start=run.start, v_before=float(record.v[0]),
+                                            exogenous=exogenous_of(record, run.dt))
         out.append(np.diff(record.y[run.start:]) - predicted)
     return out
 
@@ -187,7 +189,8 @@ def _play_at_stops(model: JointModel, run: Run) -> FloatArray:
     play = model.effect(Backlash.name)
     assert isinstance(play, Backlash) and model.angle_limits is not None
     half = 0.5 * play.play
-    speed = speed_profile(model, record.v, run.dt, v_before=float(record.v[0]))[run.start + 1:]
+    speed = speed_profile(model, record.v, run.dt, v_before=float(record.v[0]),
+                          exogenous=exogenous_of(record, run.dt))[run.start + 1:]
     increment = run.dt * speed
     offset = bounded_cumsum(0.0, -increment, -half, half)
     previous = record.y[run.start:-1]

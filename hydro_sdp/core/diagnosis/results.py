@@ -9,8 +9,9 @@ from hydro_sdp.core.arrays import FloatArray, IntArray
 from hydro_sdp.core.model import JointModel
 
 #: What a residual signature is drawn against: the delayed command or the angle (residual
-#: averaged in bins), or the samples after command changes or reversals (event average).
-Feature = Literal['command', 'angle', 'events', 'reversals']
+#: averaged in bins), or the samples after command changes or reversals (event average), or
+#: the other joints' summed speed (averaged in bins).
+Feature = Literal['command', 'angle', 'events', 'reversals', 'others']
 
 
 @dataclass(frozen=True)

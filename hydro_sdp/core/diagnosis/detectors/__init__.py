@@ -13,6 +13,7 @@ from hydro_sdp.core.diagnosis.detectors.angle import AngleDependentVelocity, Ang
 from hydro_sdp.core.diagnosis.detectors.base import Detector, feature_signature
 from hydro_sdp.core.diagnosis.detectors.delays import DirectionDependentDelay, TimeDelay
 from hydro_sdp.core.diagnosis.detectors.dynamics import Backlash, ValveLag
+from hydro_sdp.core.diagnosis.detectors.exogenous import FlowSharing, LoadDependence
 from hydro_sdp.core.diagnosis.detectors.map_shape import Asymmetry, DeadZone, VelocitySaturation
 from hydro_sdp.core.errors import ConfigurationError
 
@@ -20,6 +21,7 @@ from hydro_sdp.core.errors import ConfigurationError
 DETECTORS: tuple[Detector, ...] = (
     DeadZone(), VelocitySaturation(), Asymmetry(), TimeDelay(), DirectionDependentDelay(),
     AngleLimits(), ValveLag(), Backlash(), AngleDependentVelocity(),
+    FlowSharing(), LoadDependence(),
 )
 
 #: The vocabulary: every word the workflow can name (besides ``none``).

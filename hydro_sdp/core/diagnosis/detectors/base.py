@@ -17,6 +17,7 @@ from hydro_sdp.core.diagnosis.context import Context
 from hydro_sdp.core.diagnosis.residuals import Run, velocity_residuals
 from hydro_sdp.core.diagnosis.results import Candidate, Feature, Signature, Trial
 from hydro_sdp.core.effects import Effect
+from hydro_sdp.core.exogenous import exogenous_of
 from hydro_sdp.core.model import JointModel
 from hydro_sdp.core.simulation import speed_profile
 from hydro_sdp.core.timing import delayed_at
@@ -28,6 +29,7 @@ FEATURE_LABELS: dict[Feature, str] = {
     'angle': 'joint angle (deg)',
     'events': 'samples after a delayed command change (signed by the change)',
     'reversals': 'samples after a reversal of motion (signed by the new direction)',
+    'others': "other joints' speed, summed (deg/s)",
 }
 
 
@@ -165,6 +167,9 @@ def feature_signature(word: str, feature: Feature, model: JointModel, augmented:
         x = command
     elif feature == 'angle':
         x = record.y[start:-1]
+    elif feature == 'others':
+        speeds = exogenous_of(record, run.dt).other_speeds
+        x = np.zeros(samples.size) if speeds is None else np.abs(speeds).sum(axis=1)[start + 1:]
     elif feature == 'events':
         triggers = np.flatnonzero(np.diff(command)) + 1
         signs = np.sign(np.diff(command)[triggers - 1])

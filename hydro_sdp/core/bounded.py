@@ -1,0 +1,113 @@
+"""
+A cumulative sum clamped between two bounds: the end-stop recursion of the simulation.
+
+``x_k = min(max(x_{k-1} + d_k, low), high)`` solved for a whole sequence with
+numpy (:func:`bounded_cumsum`): held levels in closed form run by run, other
+sequences by one-sided reflections.
+
+"""
+
+from __future__ import annotations
+
+import math
+
+from hydro_sdp.core.arrays import FloatArray
+import numpy as np
+
+# Samples handled per reflection pass; bounds the cost of each switch between stops.
+_CHUNK = 8192
+
+
+def bounded_cumsum(x0: float, increments: FloatArray, low: float, high: float) -> FloatArray:
+    """
+    Solve ``x_k = min(max(x_{k-1} + d_k, low), high)`` for a whole sequence.
+
+    Hydraulic commands are mostly held levels, so the increments come in runs
+    of equal values; inside a run the path is monotone and meets at most one
+    bound, so each run is solved in closed form and only the run boundaries
+    are visited in Python. Increments that change at nearly every sample are
+    handled by reflection instead (:func:`_reflected_cumsum`).
+
+    Parameters
+    ----------
+    x0 : float
+        Value before the first increment (clamped into the bounds).
+    increments : FloatArray
+        Increments ``d_1..d_n``.
+    low : float
+        Lower bound (may be ``-inf``).
+    high : float
+        Upper bound (may be ``inf``).
+
+    Returns
+    -------
+    FloatArray
+        ``x_0..x_n`` (length ``n + 1``).
+
+    """
+    increments = np.asarray(increments, dtype=np.float64)
+    n = increments.size
+    x = min(max(float(x0), low), high)
+    if math.isinf(low) and math.isinf(high):
+        return np.r_[x, x + np.cumsum(increments)]
+    starts = np.flatnonzero(np.diff(increments)) + 1
+    if 8 * (starts.size + 1) > n:
+        return _reflected_cumsum(x, increments, low, high)
+    starts = np.r_[0, starts]
+    lengths = np.diff(np.r_[starts, n])
+    values = increments[starts]
+    run_start = np.empty(starts.size)
+    for i, (step, length) in enumerate(zip(values.tolist(), lengths.tolist())):
+        run_start[i] = x
+        x = min(max(x + step * length, low), high)
+    steps_into_run = np.arange(1, n + 1) - np.repeat(starts, lengths)
+    path = np.repeat(run_start, lengths) + np.repeat(values, lengths) * steps_into_run
+    return np.r_[min(max(float(x0), low), high), np.clip(path, low, high)]
+
+
+def _reflected_cumsum(x: float, increments: FloatArray, low: float, high: float) -> FloatArray:
+    """
+    Two-sided clamped cumulative sum by one-sided reflections.
+
+    Between switches from one bound to the other, the recursion equals a
+    one-sided reflection, which has the closed form
+    ``x = s - max(0, running_max(s - high))`` (Skorokhod/Lindley) of the plain
+    cumulative sum ``s``. The sequence is processed in chunks, restarting from
+    the last value, so each switch costs at most one chunk.
+    """
+    n = increments.size
+    out = np.empty(n + 1)
+    out[0] = x
+    reflect_high = True
+    start = 0
+    while start < n:
+        stop = min(start + _CHUNK, n)
+        path = x + np.cumsum(increments[start:stop])
+        if reflect_high:
+            path = _reflect(path, path - high, high, -1.0)
+            crossed = np.flatnonzero(path < low)
+        else:
+            path = _reflect(path, low - path, low, 1.0)
+            crossed = np.flatnonzero(path > high)
+        if crossed.size:
+            j = int(crossed[0])
+            out[start + 1:start + 1 + j] = path[:j]
+            x = low if reflect_high else high
+            out[start + 1 + j] = x
+            start += j + 1
+            reflect_high = not reflect_high
+        else:
+            out[start + 1:stop + 1] = path
+            x = float(path[-1])
+            start = stop
+    # Rounding in the reflection may step a hair past a bound.
+    return np.clip(out, low, high, out=out)
+
+
+def _reflect(path: FloatArray, excess: FloatArray, bound: float, sign: float) -> FloatArray:
+    """Reflect ``path`` at ``bound`` given how far it overshoots it (``excess``)."""
+    pushed = np.maximum.accumulate(excess)
+    reflected = path + sign * np.maximum(pushed, 0.0)
+    # Where the overshoot peaks the joint is at the stop; say so exactly, not up to rounding.
+    reflected[(excess >= pushed) & (pushed > 0.0)] = bound
+    return reflected

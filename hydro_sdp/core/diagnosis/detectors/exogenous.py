@@ -1,0 +1,287 @@
+"""
+Detectors of effects seen only in signals beyond the joint's own: flow sharing, load.
+
+Both need what a record may carry besides its command and angle
+(:class:`~hydro_sdp.core.records.Record` ``others`` and ``load``); on records
+without it they are not applicable, with the reason as evidence.
+
+* ``flow_sharing``: the joint slows when another joint moves at the same time
+  (one pump for both). Fitted as a shared pump-flow limit
+  (:class:`~hydro_sdp.core.effects.FlowSharing`).
+* ``load_dependence``: the speed changes with the load. With a measured load,
+  a relative speed change per load unit in each direction; without one, a
+  speed scale per record and direction, named only when the records' scales at
+  the same command differ beyond their noise (a chi-square test of
+  heterogeneity on block-robust standard errors).
+
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from hydro_sdp.core.arrays import FloatArray
+from hydro_sdp.core.diagnosis.context import Context
+from hydro_sdp.core.diagnosis.detectors.base import EffectDetector
+from hydro_sdp.core.diagnosis.residuals import mae, Run
+from hydro_sdp.core.diagnosis.results import Candidate, Trial
+from hydro_sdp.core.effects import FlowSharing as Sharing, LoadDependence as Load
+from hydro_sdp.core.exogenous import exogenous_of, record_key
+from hydro_sdp.core.model import JointModel
+from hydro_sdp.core.simulation import one_step_increments
+from hydro_sdp.core.timing import delayed_at
+import numpy as np
+from scipy.optimize import minimize, minimize_scalar
+from scipy.stats import chi2
+
+#: Heterogeneity of the per-record scales is named below this p-value.
+P_LIMIT = 1e-3
+#: ...and when the scales at one command differ by at least this share.
+MIN_SPREAD = 0.03
+#: Share of the angle range at either end left out of the per-record scales.
+END_SHARE = 0.1
+
+
+def other_speed_sums(context: Context) -> list[FloatArray | None]:
+    """Return the summed other joints' speed per residual sample of each run, deg/s."""
+    out: list[FloatArray | None] = []
+    for run in context.runs:
+        speeds = exogenous_of(run.record, run.dt).other_speeds
+        out.append(None if speeds is None else np.abs(speeds).sum(axis=1)[run.start + 1:])
+    return out
+
+
+def _predicted(context: Context) -> list[FloatArray]:
+    """One-step increments of the model under test, per run, deg."""
+    return [one_step_increments(context.model, run.record.v, run.record.y, run.dt,
+                                start=run.start, v_before=float(run.record.v[0]),
+                                exogenous=exogenous_of(run.record, run.dt))
+            for run in context.runs]
+
+
+class FlowSharing(EffectDetector):
+    """The joint slows while other joints move: fit a shared pump-flow limit."""
+
+    word = 'flow_sharing'
+    description = 'the joint slows while other joints move (one pump)'
+    remedy = 'effect, pump-flow limit fitted'
+    feature = 'others'
+
+    def fit_effect(self, context: Context) -> Trial:
+        """Fit the limit and the other joints' full speeds, and score them."""
+        sums = other_speed_sums(context)
+        if all(s is None for s in sums):
+            return Candidate(self.word, False, evidence='the records carry no other joints '
+                             '(JointState of one joint)'), None
+        moving = np.concatenate([s for s in sums if s is not None])
+        top = float(np.quantile(moving, 0.99)) if moving.size else 0.0
+        if not top > 1.0:
+            return Candidate(self.word, False, evidence='the other joints never move '
+                             f'(summed speed below {max(top, 0.0):.2g} deg/s)'), None
+        levels = np.unique(np.concatenate([r.record.v for r in context.runs]))
+        rates = context.model.rate(levels)
+        # Full demand: the top speed in each direction, where the joint alone takes the pump.
+        full = (float(np.max(rates)), float(-np.min(rates)))
+        if not min(full) > 0.0:
+            return Candidate(self.word, False, evidence='the model does not move both ways '
+                             'at the commands recorded'), None
+
+        def model_with(p: FloatArray) -> JointModel:
+            limit, up, down = np.exp(np.clip(p, -6.0, 6.0))
+            return context.model.with_effect(Sharing(limit, *full, top * up, top * down))
+
+        def simulation_error(p: FloatArray) -> float:
+            return mae(model_with(p), context.runs)
+        # Fitted on the simulation error: the share a joint loses adds up over a move,
+        # which the one-step residual weighs too little against the valve's transients.
+        # The error is flat where the factor is 1: start from the best of a grid.
+        grid = [np.log([limit, up, down]) for limit in (0.8, 1.1, 1.6)
+                for up in (0.5, 1.0, 2.0) for down in (0.5, 1.0, 2.0)]
+        # The error surface is rough (a share cut integrates into a drift): polish the
+        # best two starts of the grid and keep the better.
+        starts = sorted(grid, key=simulation_error)[:2]
+        fits = [minimize(simulation_error, start, method='Nelder-Mead',
+                         options={'xatol': 1e-3, 'fatol': 1e-6, 'maxfev': 120})
+                for start in starts]
+        best = min(fits, key=lambda fit: float(fit.fun)).x
+        best = np.clip(best, -6.0, 6.0)
+        augmented = model_with(best)
+        effect = augmented.effect(self.word)
+        assert isinstance(effect, Sharing)
+        both = effect.limit / (1.0 + top / max(effect.other_positive, effect.other_negative))
+        return context.score(
+            self.word, augmented, {'limit': effect.limit, 'full_positive': effect.full_positive,
+                                   'full_negative': effect.full_negative,
+                                   'other_positive': effect.other_positive,
+                                   'other_negative': effect.other_negative},
+            f'while the other joints move ({top:.3g} deg/s) the speed at full command drops '
+            f'to x{min(both, 1.0):.2f} or less (pump limit {effect.limit:.3g} full demands)')
+
+
+def block_scale(measured: FloatArray, predicted: FloatArray, block: int) -> tuple[float, float]:
+    """
+    Scale of the measured travel on the predicted travel, and its standard error.
+
+    The scale is the ratio of the summed increments (the travel, in which the
+    link's ringing cancels); its error is the block (cluster) sandwich estimate
+    from the unexplained travel of each block of ``block`` samples, so that
+    autocorrelation within a block does not shrink it.
+
+    Returns
+    -------
+    tuple[float, float]
+        ``(scale, error)``; ``(nan, inf)`` when the predicted travel vanishes.
+
+    """
+    travel = float(np.sum(predicted))
+    if not abs(travel) > 0.0 or predicted.size < 2 * block:
+        return math.nan, math.inf
+    scale = float(np.sum(measured)) / travel
+    terms = measured - scale * predicted
+    whole = terms.size // block * block
+    sums = np.r_[terms[:whole].reshape(-1, block).sum(axis=1), terms[whole:].sum()]
+    return scale, max(float(math.sqrt(np.sum(sums * sums))) / abs(travel), 1e-12)
+
+
+def _polish(context: Context, run: Run, key: str, up: float,
+            down: float) -> tuple[float, float]:
+    """
+    Return a record's speed factors per direction, fitted to its simulation error.
+
+    Each record's error depends on its own factors only; each direction is fitted
+    in turn within +-50 % of the regression's scale (1 where the record does not
+    move that way).
+    """
+    factors = [up if math.isfinite(up) and up > 0.0 else 1.0,
+               down if math.isfinite(down) and down > 0.0 else 1.0]
+    for side, scale in enumerate((up, down)):
+        if not (math.isfinite(scale) and scale > 0.0):
+            continue
+
+        def error(x: float) -> float:
+            trial = list(factors)
+            trial[side] = x
+            effect = Load(records=(key,), record_positive=(trial[0],),
+                          record_negative=(trial[1],))
+            return mae(context.model.with_effect(effect), [run])
+        factors[side] = float(minimize_scalar(error, bounds=(0.5 * scale, 1.5 * scale),
+                                              method='bounded', options={'xatol': 1e-3}).x)
+    return factors[0], factors[1]
+
+
+class LoadDependence(EffectDetector):
+    """The speed changes with the load: per load unit, or per record when none is measured."""
+
+    word = 'load_dependence'
+    description = 'the speed changes with the load (payload, digging)'
+    remedy = 'effect, per load unit (measured load) or per record'
+    feature = 'command'
+
+    def fit_effect(self, context: Context) -> Trial:
+        """Fit on the measured load when every record has one, else per record."""
+        loads = [run.record.load for run in context.runs]
+        if all(load is not None for load in loads):
+            return self._fit_load(context)
+        if len(context.runs) < 2:
+            return Candidate(self.word, False, evidence='one record and no load signal: '
+                             'nothing to compare its speed with'), None
+        return self._fit_records(context)
+
+    def _fit_load(self, context: Context) -> Trial:
+        """Regress the residual on the load per direction, polish on the simulation error."""
+        predicted = _predicted(context)
+        loads = [run.record.load[run.start + 1:] for run in context.runs
+                 if run.record.load is not None]
+        everything = np.concatenate(loads)
+        reference = float(np.median(everything))
+        spread = float(np.quantile(everything, 0.95) - np.quantile(everything, 0.05))
+        if not spread > 0.0:
+            return Candidate(self.word, True, evidence='the load signal is constant'), None
+        # eps ~ dy^ k (L - ref) per direction: a linear regression gives k+ and k-.
+        p = np.concatenate(predicted)
+        x = (np.concatenate(loads) - reference) / spread
+        rows = np.column_stack([np.where(p > 0.0, p * x, 0.0), np.where(p < 0.0, p * x, 0.0)])
+        k = np.linalg.lstsq(rows, np.concatenate(context.base), rcond=None)[0]
+
+        def simulation_error(q: FloatArray) -> float:
+            return mae(context.model.with_effect(Load(q[0] / spread, q[1] / spread, reference)),
+                       context.runs)
+        k = minimize(simulation_error, k, method='Nelder-Mead',
+                     options={'xatol': 1e-4, 'fatol': 1e-6, 'maxfev': 80}).x / spread
+        effect = Load(float(k[0]), float(k[1]), reference)
+        return context.score(
+            self.word, context.model.with_effect(effect),
+            {'positive': effect.positive, 'negative': effect.negative, 'reference': reference},
+            f'the speed changes by {100 * k[0] * spread:+.3g} % (positive) and '
+            f'{100 * k[1] * spread:+.3g} % (negative) over the load range {spread:.3g}')
+
+    def _fit_records(self, context: Context) -> Trial:
+        predicted = _predicted(context)
+        scales: dict[str, list[float]] = {'positive': [], 'negative': []}
+        errors: dict[str, list[float]] = {'positive': [], 'negative': []}
+        groups: dict[tuple[int, int], list[tuple[float, float]]] = {}
+        width = 0.05 * context.scale
+        # The ends of the range (cushions, impacts on the stops) are left out of the scales.
+        low = min(float(np.min(run.record.y)) for run in context.runs)
+        high = max(float(np.max(run.record.y)) for run in context.runs)
+        margin = END_SHARE * (high - low)
+        for run, p in zip(context.runs, predicted):
+            measured = np.diff(run.record.y[run.start:])
+            angle = run.record.y[run.start:-1]
+            inner = (angle > low + margin) & (angle < high - margin)
+            samples = np.arange(run.start + 1, len(run.record))
+            command = delayed_at(run.record.v, samples, context.model.delay_samples(run.dt))
+            for sign, name in ((1.0, 'positive'), (-1.0, 'negative')):
+                side = (np.sign(p) == sign) & inner
+                scale, error = block_scale(measured[side], p[side], context.block)
+                scales[name].append(scale)
+                errors[name].append(error)
+                # The same record's scale at each command level, for the comparison.
+                bins = np.round(command[side] / width).astype(np.int64)
+                for level in np.unique(bins).tolist():
+                    chosen = bins == level
+                    fit = block_scale(measured[side][chosen], p[side][chosen], context.block)
+                    if math.isfinite(fit[0]):
+                        groups.setdefault((int(sign), level), []).append(fit)
+        statistic, freedom, spread = 0.0, 0, 0.0
+        for fits in groups.values():
+            if len(fits) < 2:
+                continue
+            value = np.array([f[0] for f in fits])
+            weight = 1.0 / np.array([f[1] for f in fits]) ** 2
+            mean = float(np.sum(weight * value) / np.sum(weight))
+            statistic += float(np.sum(weight * (value - mean) ** 2))
+            freedom += len(fits) - 1
+            spread = max(spread, float(np.ptp(value)) / max(abs(mean), 1e-9))
+        evidence = (f'per-record speed scales at the same command: chi2 {statistic:.3g} on '
+                    f'{freedom} degrees of freedom, spread {100 * spread:.3g} %')
+        if freedom == 0:
+            return Candidate(self.word, True, evidence='no two records hold the same command '
+                             'in the same direction'), None
+        p_value = float(chi2.sf(statistic, freedom))
+        if p_value > P_LIMIT or spread < MIN_SPREAD:
+            return Candidate(self.word, True, evidence=evidence + ': within noise'), None
+        keys = tuple(record_key(run.record) for run in context.runs)
+        travel = [(u if math.isfinite(u) else 1.0, d if math.isfinite(d) else 1.0)
+                  for u, d in zip(scales['positive'], scales['negative'])]
+        polished = [_polish(context, run, key, up, down) for run, key, up, down in
+                    zip(context.runs, keys, scales['positive'], scales['negative'])]
+        trial: Trial | None = None
+        # The factors fitted to the simulation error, unless they no longer shrink the
+        # one-step residual significantly (a record that rings or bounces): then the
+        # travel ratios.
+        for factors in (polished, travel):
+            up = tuple(f[0] for f in factors)
+            down = tuple(f[1] for f in factors)
+            effect = Load(records=keys, record_positive=up, record_negative=down)
+            parameters: dict[str, Any] = {
+                'records': list(keys), 'record_positive': list(up), 'record_negative': list(down),
+                'scales_positive': scales['positive'], 'scales_negative': scales['negative'],
+                'errors_positive': errors['positive'], 'errors_negative': errors['negative']}
+            trial = context.score(self.word, context.model.with_effect(effect), parameters,
+                                  evidence + f' (p = {p_value:.2g})')
+            if trial[0].significant:
+                break
+        assert trial is not None
+        return trial
