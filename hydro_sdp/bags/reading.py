@@ -161,7 +161,8 @@ class BagData:
         raise TopicNotFoundError(f"{self.path}: several command topics ({', '.join(candidates)}); "
                                  'choose one with --command-topic')
 
-    def record(self, joint: str | None = None, command_topic: str | None = None) -> Record:
+    def record(self, joint: str | None = None, command_topic: str | None = None, *,
+               load_topic: str | None = None, others: bool = False) -> Record:
         """
         One joint's angle with the command in force before each angle sample.
 
@@ -175,6 +176,13 @@ class BagData:
             Joint name; default: the only joint in the bag.
         command_topic : str or None
             Float64 command topic; default: the only topic ending in ``valve_command``.
+        load_topic : str or None
+            Float64 topic of a measured load (a cylinder pressure, say), held like
+            the command (:func:`hydro_sdp.core.timing.command_in_force`) into the
+            record's ``load``; angle samples before its first message are dropped.
+        others : bool
+            Whether to carry the angles of the bag's other joints (those named in
+            every message that names ``joint``) as the record's ``others``.
 
         Returns
         -------
@@ -195,8 +203,39 @@ class BagData:
         if not keep.any():
             raise DataError(f'{self.path}: no {topic} message arrives before the last '
                             f'{self.state_topic} sample')
+        load, held = self._load(load_topic, t)
+        if load is not None:
+            keep &= held >= 0
+            if not keep.any():
+                raise DataError(f'{self.path}: no {load_topic} message arrives before the '
+                                f'last {self.state_topic} sample')
+        names, angles = self._others(joint) if others else ((), None)
         return Record(t[keep], command[index[keep]], y[keep], joint=joint, source=str(self.path),
-                      origin=float(self.t[0]))
+                      origin=float(self.t[0]),
+                      load=None if load is None else load[held[keep]],
+                      others=None if angles is None else angles[keep], other_joints=names)
+
+    def _load(self, topic: str | None,
+              t: FloatArray) -> tuple[FloatArray | None, IntArray]:
+        """Values of the load topic and, per angle sample, the index of the one in force."""
+        if topic is None:
+            return None, np.zeros(0, dtype=np.int64)
+        if topic not in self.floats:
+            raise TopicNotFoundError(f'{self.path}: no {FLOAT64} load topic {topic} '
+                                     f'(topics: {self.info.describe()})')
+        series = self.floats[topic]
+        order = np.argsort(series.t, kind='stable')
+        return series.data[order], command_in_force(t, series.t[order])
+
+    def _others(self, joint: str) -> tuple[tuple[str, ...], FloatArray | None]:
+        """Names and angles (degrees) of the other joints present wherever ``joint`` is."""
+        mask = self.present[:, self.names.index(joint)]
+        columns = [i for i, name in enumerate(self.names)
+                   if name != joint and bool(np.all(self.present[mask, i]))]
+        if not columns:
+            return (), None
+        return (tuple(self.names[i] for i in columns),
+                np.degrees(self.positions[mask][:, columns]))
 
 
 def read_bag(path: str | os.PathLike[str], *, state_topic: str | None = None,

@@ -6,9 +6,10 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from hydro_sdp.cli.common import add_bag_options, json_number, Outcome, read_records, table
+from hydro_sdp.cli.common import add_bag_options, json_number, Outcome, table
 from hydro_sdp.cli.progress import ProgressBar
 from hydro_sdp.core.diagnosis import DETECTORS, diagnose, Diagnosis, VOCABULARY
+from hydro_sdp.core.records import Record
 from hydro_sdp.files import load_model, save_model
 from hydro_sdp.report.diagnosis import write_report
 
@@ -31,9 +32,20 @@ it is kept only if the simulation error on the validation bags shrinks; the
 search repeats until nothing significant is left. `none` when the model already
 explains the data within the noise. The augmented model is a normal model file.
 
+Two words need more than the joint's own command and angle. `flow_sharing`
+uses the other joints of the same JointState (read whenever the bags have
+them): the joint slowing while another moves is fitted as a shared pump-flow
+limit. `load_dependence` uses a measured load when --load-topic names a Float64
+topic (a cylinder pressure, held between messages like the command): a speed
+change per load unit and direction. Without it, each record gets its own speed
+scale per direction, named only when the records' scales at the same command
+differ beyond their noise; those factors hold for the bags they were fitted on.
+Without the signals these words are not applicable.
+
 example:
   hydro-sdp diagnose run1 run2 --model j2_model.yaml --validation run3 \\
       --out j2_augmented.yaml --report diagnosis
+  hydro-sdp diagnose light heavy --model arm.yaml --load-topic /arm/pressure
 """
 
 
@@ -47,6 +59,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         help='held-out bags for the MAE before and after (default: the '
                              'estimation bags)')
     add_bag_options(parser)
+    parser.add_argument('--load-topic', metavar='TOPIC',
+                        help='Float64 topic of a measured load (e.g. a cylinder pressure) for '
+                             'load_dependence (default: none; per-record speed scales)')
     parser.add_argument('--iterations', type=int, default=4,
                         help='most effects added (default: 4)')
     parser.add_argument('--out', help='augmented model file to write')
@@ -75,10 +90,11 @@ def run(args: argparse.Namespace) -> Outcome:
     """Run ``diagnose``."""
     model = load_model(args.model)
     # Without --command-topic the bags are read from the topic the model remembers.
-    records = read_records(args.bags, args.joint or model.joint, args.command_topic,
-                           preferred_topic=model.command_topic)
-    validation = read_records(args.validation, args.joint or model.joint, args.command_topic,
-                              preferred_topic=model.command_topic) if args.validation else []
+    joint = args.joint or model.joint
+    records = read_records(args.bags, joint, args.command_topic, model.command_topic,
+                           args.load_topic)
+    validation = read_records(args.validation, joint, args.command_topic, model.command_topic,
+                              args.load_topic) if args.validation else []
     effects = list(VOCABULARY)
     with ProgressBar('diagnose', len(effects) * args.iterations) as bar:
         done = [0]
@@ -107,6 +123,51 @@ def run(args: argparse.Namespace) -> Outcome:
     if args.out:
         lines.append(f'wrote {payload["model_file"]}')
     return Outcome(payload, lines)
+
+
+def read_records(bags: list[str], joint: str | None, command_topic: str | None,
+                 preferred_topic: str | None, load_topic: str | None) -> list[Record]:
+    """
+    Read one joint's records with the other joints' angles and the load, cut at gaps.
+
+    As :func:`hydro_sdp.cli.common.read_records`, with the signals ``flow_sharing``
+    and ``load_dependence`` need.
+
+    Parameters
+    ----------
+    bags : list of str
+        Bag paths.
+    joint : str or None
+        Joint name (default: the only joint of each bag).
+    command_topic : str or None
+        Command topic asked for.
+    preferred_topic : str or None
+        Topic the model file remembers, used when the bag has it.
+    load_topic : str or None
+        Float64 load topic (``--load-topic``).
+
+    Returns
+    -------
+    list of Record
+        The pieces of every bag.
+
+    """
+    from hydro_sdp.bags import read_bag
+    from hydro_sdp.core.records import split_at_gaps
+
+    records: list[Record] = []
+    with ProgressBar('reading bags', len(bags)) as bar:
+        for done, bag in enumerate(bags, start=1):
+            data = read_bag(bag)
+            name = data.choose_joint(joint)
+            asked = command_topic
+            if asked is None and preferred_topic is not None and preferred_topic in data.floats:
+                asked = preferred_topic
+            record = data.record(name, data.command_topic(name, asked), load_topic=load_topic,
+                                 others=True)
+            records.extend(split_at_gaps(record).records)
+            bar.update(done)
+    return records
 
 
 def _short(value: Any) -> str:

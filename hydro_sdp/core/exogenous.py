@@ -142,9 +142,9 @@ def exogenous_factor(model: JointModel, speed: FloatArray,
         factor = np.minimum(1.0, sharing.limit / np.maximum(demand, 1e-12))
     if isinstance(load, LoadDependence):
         if exogenous.load is not None:
-            up = np.maximum(MIN_LOAD_FACTOR, 1.0 + load.positive * (exogenous.load - load.reference))
-            down = np.maximum(MIN_LOAD_FACTOR,
-                              1.0 + load.negative * (exogenous.load - load.reference))
+            change = exogenous.load - load.reference
+            up = np.maximum(MIN_LOAD_FACTOR, 1.0 + load.positive * change)
+            down = np.maximum(MIN_LOAD_FACTOR, 1.0 + load.negative * change)
         else:
             up_factor, down_factor = load.record_factors(exogenous.key)
             up, down = np.full(speed.size, up_factor), np.full(speed.size, down_factor)

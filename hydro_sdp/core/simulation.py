@@ -7,8 +7,8 @@ Simulation of a joint model at any sample period.
 clamp, a recursion, is solved exactly by reflecting the cumulative sum at one
 stop at a time (:func:`hydro_sdp.core.bounded.bounded_cumsum`). Effects that need
 signals beyond the joint's own (other joints' motion, a measured load) take them
-as an :class:`~hydro_sdp.core.exogenous.Exogenous` (``exogenous=``). :class:`JointSimulator` steps the same
-equations one sample at a time for closed loops and the plant node; both give
+as an :class:`~hydro_sdp.core.exogenous.Exogenous` (``exogenous=``).
+:class:`JointSimulator` steps the same equations one sample at a time for closed loops and the plant node; both give
 the same trajectory.
 
 ``v_k`` is the command in force over the sample interval that ends at ``t_k``:
@@ -34,6 +34,7 @@ from hydro_sdp.core.model import JointModel
 from hydro_sdp.core.static_maps import StaticMap
 from hydro_sdp.core.timing import check_sample_period, delay_samples, delayed, DelayLine
 import numpy as np
+
 
 def _rate_of_levels(model: JointModel, v: FloatArray) -> FloatArray:
     """Evaluate the static map once per held level rather than once per sample."""

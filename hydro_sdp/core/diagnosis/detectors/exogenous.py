@@ -18,6 +18,7 @@ without it they are not applicable, with the reason as evidence.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 import math
 from typing import Any
 
@@ -32,7 +33,7 @@ from hydro_sdp.core.model import JointModel
 from hydro_sdp.core.simulation import one_step_increments
 from hydro_sdp.core.timing import delayed_at
 import numpy as np
-from scipy.optimize import minimize, minimize_scalar
+from scipy.optimize import least_squares, minimize, minimize_scalar
 from scipy.stats import chi2
 
 #: Heterogeneity of the per-record scales is named below this p-value.
@@ -170,6 +171,106 @@ def _polish(context: Context, run: Run, key: str, up: float,
     return factors[0], factors[1]
 
 
+@dataclass(frozen=True)
+class RecordScales:
+    """
+    Each record's speed scale per direction, and whether they differ beyond noise.
+
+    Parameters
+    ----------
+    scales, errors : dict[str, list[float]]
+        Scale (measured over predicted travel away from the ends of the range) and
+        its standard error per record, under ``positive`` and ``negative`` (NaN and
+        inf where the record does not move that way).
+    loads : dict[str, list[float]]
+        Mean load over those samples per record (NaN without a load signal).
+    statistic : float
+        Chi-square of the records' scales about their weighted mean, summed over
+        the command levels (and directions) that two records or more share.
+    freedom : int
+        Its degrees of freedom.
+    spread : float
+        Largest relative spread of the scales at one level.
+
+    """
+
+    scales: dict[str, list[float]]
+    errors: dict[str, list[float]]
+    loads: dict[str, list[float]]
+    statistic: float
+    freedom: int
+    spread: float
+
+    @property
+    def p_value(self) -> float:
+        """Probability of a chi-square this large if the records' scales were equal."""
+        return float(chi2.sf(self.statistic, self.freedom)) if self.freedom else 1.0
+
+    def describe(self) -> str:
+        """One line for the evidence."""
+        return (f'per-record speed scales at the same command: chi2 {self.statistic:.3g} on '
+                f'{self.freedom} degrees of freedom (p = {self.p_value:.2g}), spread '
+                f'{100 * self.spread:.3g} %')
+
+
+def record_scales(context: Context) -> RecordScales:
+    """Return every record's speed scale per direction and the test of their agreement."""
+    predicted = _predicted(context)
+    scales: dict[str, list[float]] = {'positive': [], 'negative': []}
+    errors: dict[str, list[float]] = {'positive': [], 'negative': []}
+    loads: dict[str, list[float]] = {'positive': [], 'negative': []}
+    groups: dict[tuple[int, int], list[tuple[float, float]]] = {}
+    width = 0.05 * context.scale
+    # The ends of the range (cushions, impacts on the stops) are left out of the scales.
+    low = min(float(np.min(run.record.y)) for run in context.runs)
+    high = max(float(np.max(run.record.y)) for run in context.runs)
+    margin = END_SHARE * (high - low)
+    for run, p in zip(context.runs, predicted):
+        measured = np.diff(run.record.y[run.start:])
+        angle = run.record.y[run.start:-1]
+        inner = (angle > low + margin) & (angle < high - margin)
+        samples = np.arange(run.start + 1, len(run.record))
+        command = delayed_at(run.record.v, samples, context.model.delay_samples(run.dt))
+        load = run.record.load[run.start + 1:] if run.record.load is not None else None
+        for sign, name in ((1.0, 'positive'), (-1.0, 'negative')):
+            side = (np.sign(p) == sign) & inner
+            scale, error = block_scale(measured[side], p[side], context.block)
+            scales[name].append(scale)
+            errors[name].append(error)
+            loads[name].append(float(np.mean(load[side])) if load is not None and side.any()
+                               else math.nan)
+            # The same record's scale at each command level, for the comparison.
+            bins = np.round(command[side] / width).astype(np.int64)
+            for level in np.unique(bins).tolist():
+                chosen = bins == level
+                fit = block_scale(measured[side][chosen], p[side][chosen], context.block)
+                if math.isfinite(fit[0]):
+                    groups.setdefault((int(sign), level), []).append(fit)
+    statistic, freedom, spread = 0.0, 0, 0.0
+    for fits in groups.values():
+        if len(fits) < 2:
+            continue
+        value = np.array([f[0] for f in fits])
+        weight = 1.0 / np.array([f[1] for f in fits]) ** 2
+        mean = float(np.sum(weight * value) / np.sum(weight))
+        statistic += float(np.sum(weight * (value - mean) ** 2))
+        freedom += len(fits) - 1
+        spread = max(spread, float(np.ptp(value)) / max(abs(mean), 1e-9))
+    return RecordScales(scales, errors, loads, statistic, freedom, spread)
+
+
+def _first_significant(context: Context, word: str, models: list[JointModel],
+                       parameters: list[dict[str, Any]], evidence: str) -> Trial:
+    """Score the models in turn; return the first significant one (else the last)."""
+    trial: Trial | None = None
+    for model, values in zip(models, parameters):
+        trial = context.score(word, model, values, evidence)
+        if trial[0].significant:
+            break
+    assert trial is not None
+    return trial
+
+
 class LoadDependence(EffectDetector):
     """The speed changes with the load: per load unit, or per record when none is measured."""
 
@@ -180,108 +281,85 @@ class LoadDependence(EffectDetector):
 
     def fit_effect(self, context: Context) -> Trial:
         """Fit on the measured load when every record has one, else per record."""
-        loads = [run.record.load for run in context.runs]
-        if all(load is not None for load in loads):
-            return self._fit_load(context)
         if len(context.runs) < 2:
-            return Candidate(self.word, False, evidence='one record and no load signal: '
-                             'nothing to compare its speed with'), None
-        return self._fit_records(context)
-
-    def _fit_load(self, context: Context) -> Trial:
-        """Regress the residual on the load per direction, polish on the simulation error."""
-        predicted = _predicted(context)
-        loads = [run.record.load[run.start + 1:] for run in context.runs
-                 if run.record.load is not None]
-        everything = np.concatenate(loads)
-        reference = float(np.median(everything))
-        spread = float(np.quantile(everything, 0.95) - np.quantile(everything, 0.05))
-        if not spread > 0.0:
-            return Candidate(self.word, True, evidence='the load signal is constant'), None
-        # eps ~ dy^ k (L - ref) per direction: a linear regression gives k+ and k-.
-        p = np.concatenate(predicted)
-        x = (np.concatenate(loads) - reference) / spread
-        rows = np.column_stack([np.where(p > 0.0, p * x, 0.0), np.where(p < 0.0, p * x, 0.0)])
-        k = np.linalg.lstsq(rows, np.concatenate(context.base), rcond=None)[0]
-
-        def simulation_error(q: FloatArray) -> float:
-            return mae(context.model.with_effect(Load(q[0] / spread, q[1] / spread, reference)),
-                       context.runs)
-        k = minimize(simulation_error, k, method='Nelder-Mead',
-                     options={'xatol': 1e-4, 'fatol': 1e-6, 'maxfev': 80}).x / spread
-        effect = Load(float(k[0]), float(k[1]), reference)
-        return context.score(
-            self.word, context.model.with_effect(effect),
-            {'positive': effect.positive, 'negative': effect.negative, 'reference': reference},
-            f'the speed changes by {100 * k[0] * spread:+.3g} % (positive) and '
-            f'{100 * k[1] * spread:+.3g} % (negative) over the load range {spread:.3g}')
-
-    def _fit_records(self, context: Context) -> Trial:
-        predicted = _predicted(context)
-        scales: dict[str, list[float]] = {'positive': [], 'negative': []}
-        errors: dict[str, list[float]] = {'positive': [], 'negative': []}
-        groups: dict[tuple[int, int], list[tuple[float, float]]] = {}
-        width = 0.05 * context.scale
-        # The ends of the range (cushions, impacts on the stops) are left out of the scales.
-        low = min(float(np.min(run.record.y)) for run in context.runs)
-        high = max(float(np.max(run.record.y)) for run in context.runs)
-        margin = END_SHARE * (high - low)
-        for run, p in zip(context.runs, predicted):
-            measured = np.diff(run.record.y[run.start:])
-            angle = run.record.y[run.start:-1]
-            inner = (angle > low + margin) & (angle < high - margin)
-            samples = np.arange(run.start + 1, len(run.record))
-            command = delayed_at(run.record.v, samples, context.model.delay_samples(run.dt))
-            for sign, name in ((1.0, 'positive'), (-1.0, 'negative')):
-                side = (np.sign(p) == sign) & inner
-                scale, error = block_scale(measured[side], p[side], context.block)
-                scales[name].append(scale)
-                errors[name].append(error)
-                # The same record's scale at each command level, for the comparison.
-                bins = np.round(command[side] / width).astype(np.int64)
-                for level in np.unique(bins).tolist():
-                    chosen = bins == level
-                    fit = block_scale(measured[side][chosen], p[side][chosen], context.block)
-                    if math.isfinite(fit[0]):
-                        groups.setdefault((int(sign), level), []).append(fit)
-        statistic, freedom, spread = 0.0, 0, 0.0
-        for fits in groups.values():
-            if len(fits) < 2:
-                continue
-            value = np.array([f[0] for f in fits])
-            weight = 1.0 / np.array([f[1] for f in fits]) ** 2
-            mean = float(np.sum(weight * value) / np.sum(weight))
-            statistic += float(np.sum(weight * (value - mean) ** 2))
-            freedom += len(fits) - 1
-            spread = max(spread, float(np.ptp(value)) / max(abs(mean), 1e-9))
-        evidence = (f'per-record speed scales at the same command: chi2 {statistic:.3g} on '
-                    f'{freedom} degrees of freedom, spread {100 * spread:.3g} %')
-        if freedom == 0:
+            return Candidate(self.word, False, evidence='one record: nothing to compare its '
+                             'speed with'), None
+        found = record_scales(context)
+        with_load = all(run.record.load is not None for run in context.runs)
+        if found.freedom == 0 and not with_load:
             return Candidate(self.word, True, evidence='no two records hold the same command '
                              'in the same direction'), None
-        p_value = float(chi2.sf(statistic, freedom))
-        if p_value > P_LIMIT or spread < MIN_SPREAD:
-            return Candidate(self.word, True, evidence=evidence + ': within noise'), None
+        if with_load:
+            return self._fit_load(context, found)
+        if found.p_value > P_LIMIT or found.spread < MIN_SPREAD:
+            return Candidate(self.word, True, evidence=found.describe() + ': within noise'), None
+        return self._fit_records(context, found)
+
+    def _fit_load(self, context: Context, found: RecordScales) -> Trial:
+        """Fit ``1 + k (L - ref)`` per direction to the records' scales, polish, score."""
+        values, errors, loads, sides = [], [], [], []
+        for index, name in enumerate(('positive', 'negative')):
+            for value, error, mean in zip(found.scales[name], found.errors[name],
+                                          found.loads[name]):
+                if math.isfinite(value) and math.isfinite(error) and math.isfinite(mean):
+                    values.append(value)
+                    errors.append(error)
+                    loads.append(mean)
+                    sides.append(index)
+        load, scale = np.array(loads), np.array(values)
+        spread = float(np.ptp(load)) if load.size else 0.0
+        if not spread > 0.0:
+            return Candidate(self.word, True, evidence='the load does not change between '
+                             'records'), None
+        side = np.array(sides)
+        # Weighted by the scales' errors, floored so that no record weighs in alone.
+        weight = 1.0 / np.maximum(np.array(errors), 0.02)
+
+        def misfit(q: FloatArray) -> FloatArray:
+            slope = np.where(side == 0, q[0], q[1])
+            return weight * (scale - 1.0 - slope * (load - q[2] * spread) / spread)
+        start = np.array([0.0, 0.0, float(np.min(load)) / spread])
+        k = least_squares(misfit, start).x
+
+        def model_with(q: FloatArray) -> JointModel:
+            return context.model.with_effect(Load(q[0] / spread, q[1] / spread, q[2] * spread))
+
+        polished = minimize(lambda q: mae(model_with(q), context.runs), k, method='Nelder-Mead',
+                            options={'xatol': 1e-4, 'fatol': 1e-6, 'maxfev': 120}).x
+        # Polished on the simulation error, unless that loses the one-step significance.
+        models = [model_with(polished), model_with(k)]
+        parameters = []
+        for model in models:
+            effect = model.effect(self.word)
+            assert isinstance(effect, Load)
+            parameters.append({'positive': effect.positive, 'negative': effect.negative,
+                               'reference': effect.reference})
+        return _first_significant(
+            context, self.word, models, parameters,
+            f'the speed changes by {100 * k[0]:+.3g} % (positive) and {100 * k[1]:+.3g} % '
+            f'(negative) over the load range {spread:.3g}; {found.describe()}')
+
+    def _fit_records(self, context: Context, found: RecordScales) -> Trial:
+        """Give each record its own scale per direction, polish, score."""
         keys = tuple(record_key(run.record) for run in context.runs)
+        scales = found.scales
         travel = [(u if math.isfinite(u) else 1.0, d if math.isfinite(d) else 1.0)
                   for u, d in zip(scales['positive'], scales['negative'])]
         polished = [_polish(context, run, key, up, down) for run, key, up, down in
                     zip(context.runs, keys, scales['positive'], scales['negative'])]
-        trial: Trial | None = None
         # The factors fitted to the simulation error, unless they no longer shrink the
         # one-step residual significantly (a record that rings or bounces): then the
         # travel ratios.
+        models, parameters = [], []
         for factors in (polished, travel):
             up = tuple(f[0] for f in factors)
             down = tuple(f[1] for f in factors)
-            effect = Load(records=keys, record_positive=up, record_negative=down)
-            parameters: dict[str, Any] = {
-                'records': list(keys), 'record_positive': list(up), 'record_negative': list(down),
-                'scales_positive': scales['positive'], 'scales_negative': scales['negative'],
-                'errors_positive': errors['positive'], 'errors_negative': errors['negative']}
-            trial = context.score(self.word, context.model.with_effect(effect), parameters,
-                                  evidence + f' (p = {p_value:.2g})')
-            if trial[0].significant:
-                break
-        assert trial is not None
-        return trial
+            models.append(context.model.with_effect(
+                Load(records=keys, record_positive=up, record_negative=down)))
+            parameters.append({'records': list(keys), 'record_positive': list(up),
+                               'record_negative': list(down),
+                               'scales_positive': scales['positive'],
+                               'scales_negative': scales['negative'],
+                               'errors_positive': found.errors['positive'],
+                               'errors_negative': found.errors['negative']})
+        return _first_significant(context, self.word, models, parameters, found.describe())
