@@ -8,8 +8,8 @@ clamp, a recursion, is solved exactly by reflecting the cumulative sum at one
 stop at a time (:func:`hydro_sdp.core.bounded.bounded_cumsum`). Effects that need
 signals beyond the joint's own (other joints' motion, a measured load) take them
 as an :class:`~hydro_sdp.core.exogenous.Exogenous` (``exogenous=``).
-:class:`JointSimulator` steps the same equations one sample at a time for closed loops and the plant node; both give
-the same trajectory.
+:class:`JointSimulator` steps the same equations one sample at a time for
+closed loops and the plant node; both give the same trajectory.
 
 ``v_k`` is the command in force over the sample interval that ends at ``t_k``:
 the one issued during ``[t_{k-1}, t_k)`` (in a bag, the last command received

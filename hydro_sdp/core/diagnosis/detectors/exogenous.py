@@ -89,7 +89,7 @@ class FlowSharing(EffectDetector):
                              'at the commands recorded'), None
 
         def model_with(p: FloatArray) -> JointModel:
-            limit, up, down = np.exp(np.clip(p, -6.0, 6.0))
+            limit, up, down = np.exp(np.clip(p, -6.0, 6.0)).tolist()
             return context.model.with_effect(Sharing(limit, *full, top * up, top * down))
 
         def simulation_error(p: FloatArray) -> float:
@@ -322,7 +322,8 @@ class LoadDependence(EffectDetector):
         k = least_squares(misfit, start).x
 
         def model_with(q: FloatArray) -> JointModel:
-            return context.model.with_effect(Load(q[0] / spread, q[1] / spread, q[2] * spread))
+            return context.model.with_effect(Load(float(q[0] / spread), float(q[1] / spread),
+                                                  float(q[2] * spread)))
 
         polished = minimize(lambda q: mae(model_with(q), context.runs), k, method='Nelder-Mead',
                             options={'xatol': 1e-4, 'fatol': 1e-6, 'maxfev': 120}).x

@@ -1,0 +1,146 @@
+"""The diagnosis names flow sharing and load dependence on the physics plant (issue 13)."""
+
+from dataclasses import replace
+
+from hydro_sdp.core.diagnosis import diagnose
+from hydro_sdp.core.identify import identify
+from hydro_sdp.core.physics import load_machine, simulate_plant
+from hydro_sdp.core.physics.linkage import Geometry
+from hydro_sdp.core.physics.machine import PlantSimulator
+from hydro_sdp.core.physics.plant import with_payload
+from hydro_sdp.core.physics.programs import duty_command, full_stroke_runs
+from hydro_sdp.core.records import Record
+from hydro_sdp.files import shipped_config
+import numpy as np
+import pytest
+
+DT = 0.01
+DUTIES = (40, 50, 60, 70, 80, 90, 100)
+
+
+def levels(machine, duration, moving, seed):
+    """
+    Random duties held 0.5-3 s on the joints in ``moving``, each turned back before its stops.
+
+    Returns the first joint's record with the second joint's angle as ``others``.
+    """
+    rng = np.random.default_rng(seed)
+    neutral = [joint.valve.neutral for joint in machine.joints]
+    limits = [Geometry(joint).angle_limits for joint in machine.joints]
+    sim = PlantSimulator(machine, DT, angles0=[0.5 * (low + high) for low, high in limits],
+                         command_before=neutral, seed=seed)
+    commands, angles = [list(neutral)], [sim.angles]
+    current, left = list(neutral), [0] * len(neutral)
+    while len(commands) < int(round(duration / DT)):
+        for j in moving:
+            if left[j] <= 0:
+                low, high = limits[j]
+                sign = 1.0 if rng.random() > (angles[-1][j] - low) / (high - low) else -1.0
+                current[j] = duty_command(machine, j, sign * rng.uniform(35.0, 100.0))
+                left[j] = int(round(rng.uniform(0.5, 3.0) / DT))
+            left[j] -= 1
+        commands.append(list(current))
+        angles.append(sim.step(current))
+    c, a = np.array(commands), np.array(angles)
+    return Record(DT * np.arange(1, len(c) + 1), c[:, 0], a[:, 0], machine.names[0],
+                  f'levels {seed}', others=a[:, 1:], other_joints=machine.names[1:])
+
+
+@pytest.fixture(scope='module')
+def excavator():
+    """The arm and the boom of the presets on the arm's pump (32.4 l/min)."""
+    arm = load_machine(shipped_config('physics_arm.yaml'))
+    boom = load_machine(shipped_config('physics_boom.yaml'))
+    return replace(arm, joints=(arm.joints[0], boom.joints[0]))
+
+
+@pytest.fixture(scope='module')
+def sharing(excavator):
+    """A model of the arm from runs with the boom still, and runs with both moving."""
+    alone = [levels(excavator, 60.0, [0], seed) for seed in (1, 2, 3)]
+    model = identify([Record(r.t, r.v, r.y, r.joint, r.source) for r in alone]).model
+    both = [levels(excavator, 60.0, [0, 1], seed) for seed in (4, 5, 6)]
+    return model, alone, both, diagnose(both, model)
+
+
+def test_flow_sharing_is_named_first_and_the_gap_shrinks(sharing):
+    model, _, both, result = sharing
+    assert result.effect == 'flow_sharing'
+    assert result.candidates[0].effect == 'flow_sharing' and result.candidates[0].significant
+    first = result.ledger[0]
+    assert first.mae_before == pytest.approx(result.mae_before)
+    # The validation gap (per-record MAE) shrinks by at least 30 %.
+    assert first.mae_after <= 0.7 * first.mae_before
+    effect = result.model.effect('flow_sharing')
+    # The arm and the boom at full duty take more than the pump gives: a share below 1.
+    assert effect.limit / (1.0 + 30.0 / effect.other_positive) < 0.8
+    signature = result.signature
+    assert signature.feature == 'others' and signature.x.size == signature.before.size
+    # The residual while the boom moves is what the effect takes away.
+    busy = signature.x > 10.0
+    assert np.mean(np.abs(signature.after[busy])) < np.mean(np.abs(signature.before[busy]))
+
+
+def test_a_model_with_flow_sharing_does_not_get_it_again(sharing):
+    _, _, both, result = sharing
+    again = diagnose(both, result.model, max_iterations=1)
+    assert again.effect != 'flow_sharing'
+    candidate = next(c for c in again.candidates if c.effect == 'flow_sharing')
+    assert not candidate.applicable
+
+
+def test_flow_sharing_is_not_applicable_without_another_joint_moving(sharing):
+    model, alone, _, _ = sharing
+    result = diagnose(alone, model, max_iterations=1)
+    assert result.effect != 'flow_sharing'
+    candidate = next(c for c in result.candidates if c.effect == 'flow_sharing')
+    assert not candidate.applicable and 'never move' in candidate.evidence
+    bare = [Record(r.t, r.v, r.y, r.joint, r.source) for r in alone]
+    result = diagnose(bare, model, max_iterations=1)
+    candidate = next(c for c in result.candidates if c.effect == 'flow_sharing')
+    assert not candidate.applicable and 'no other joints' in candidate.evidence
+
+
+def payload_runs(arm, payload, seed):
+    """Full-stroke runs of the arm at one payload, named by it."""
+    return [Record(r.t, r.v, r.y, r.joint, f'{payload:g} kg {r.source}')
+            for r in full_stroke_runs(with_payload(arm, payload), DT, DUTIES, seed=seed)]
+
+
+@pytest.fixture(scope='module')
+def payloads():
+    """A model of the arm from runs without payload, and runs without and with 1200 kg."""
+    arm = load_machine(shipped_config('physics_arm.yaml'))
+    model = identify(payload_runs(arm, 0.0, 1), kind='power_sat').model
+    return arm, model, payload_runs(arm, 0.0, 50) + payload_runs(arm, 1200.0, 80)
+
+
+def test_load_dependence_is_named_first_from_per_record_scales(payloads):
+    _, model, runs = payloads
+    result = diagnose(runs, model, max_iterations=1)
+    assert result.effect == 'load_dependence'
+    candidate = result.candidates[0]
+    assert candidate.effect == 'load_dependence' and 'chi2' in candidate.evidence
+    first = result.ledger[0]
+    assert first.mae_after <= 0.7 * first.mae_before
+    effect = result.model.effect('load_dependence')
+    # The payload speeds up the arm moving with gravity (positive duty), a few tenths at
+    # the lower duties; the records without payload keep factors near 1.
+    heavy = [up for key, up in zip(effect.records, effect.record_positive)
+             if key.startswith('1200 kg full stroke +4')]
+    light = [up for key, up in zip(effect.records, effect.record_positive)
+             if key.startswith('0 kg full stroke +4')]
+    assert heavy[0] > 1.2 and abs(light[0] - 1.0) < 0.1
+    again = diagnose(runs, result.model, max_iterations=1)
+    assert again.effect != 'load_dependence'
+
+
+def test_one_payload_gives_no_load_dependence(payloads):
+    arm, model, runs = payloads
+    # The same payload twice (other noise): the records' scales agree within their noise.
+    same = runs[:len(DUTIES) * 2] + payload_runs(arm, 0.0, 120)
+    same = [replace(r, source=f'{r.source} {i}') for i, r in enumerate(same)]
+    result = diagnose(same, model, max_iterations=1)
+    candidate = next(c for c in result.candidates if c.effect == 'load_dependence')
+    assert result.effect != 'load_dependence' and not candidate.significant
+    assert 'within noise' in candidate.evidence

@@ -1,0 +1,183 @@
+"""Signals beyond a joint's own: Record load/others, flow_sharing and load_dependence."""
+
+from dataclasses import replace
+import math
+
+from hydro_sdp.bags import read_bag, write_bag
+from hydro_sdp.core.diagnosis.context import Context
+from hydro_sdp.core.diagnosis.detectors import detector, VOCABULARY
+from hydro_sdp.core.diagnosis.detectors.base import feature_signature
+from hydro_sdp.core.diagnosis.detectors.exogenous import block_scale
+from hydro_sdp.core.diagnosis.residuals import runs_of
+from hydro_sdp.core.effects import FlowSharing, LoadDependence
+from hydro_sdp.core.errors import DataError, ModelFileError
+from hydro_sdp.core.exogenous import (
+    Exogenous, exogenous_factor, exogenous_of, record_key, smoothed_speeds)
+from hydro_sdp.core.model import JointModel
+from hydro_sdp.core.records import Record
+from hydro_sdp.core.simulation import JointSimulator, simulate
+from hydro_sdp.core.static_maps import SdpDzMap
+import numpy as np
+import pytest
+
+DT = 0.01
+
+
+def linear_model(**changes):
+    model = JointModel('arm', SdpDzMap(dead_zone=(-0.5, 0.5), slope=(10.0, 10.0)), delay=0.05)
+    return replace(model, **changes)
+
+
+def test_record_carries_load_and_others_and_checks_them():
+    t = DT * np.arange(1, 11)
+    record = Record(t, np.ones(10), np.zeros(10), 'arm', 'bag', load=np.arange(10.0),
+                    others=np.arange(10.0), other_joints=('boom',))
+    assert record.others.shape == (10, 1) and record.other_joints == ('boom',)
+    piece = record.window(2, 5)
+    assert piece.load.tolist() == [2.0, 3.0, 4.0] and piece.others[:, 0].tolist() == [2, 3, 4]
+    assert piece.other_joints == ('boom',)
+    with pytest.raises(DataError, match='load must have one value per sample'):
+        Record(t, np.ones(10), np.zeros(10), load=np.ones(9))
+    with pytest.raises(DataError, match='others has 2 columns but 1 other_joints'):
+        Record(t, np.ones(10), np.zeros(10), others=np.ones((10, 2)), other_joints=('boom',))
+    with pytest.raises(DataError, match='other_joints named without others'):
+        Record(t, np.ones(10), np.zeros(10), other_joints=('boom',))
+    bad = np.ones(10)
+    bad[3] = np.nan
+    with pytest.raises(DataError, match='1 load samples are NaN or infinite .first at sample 3'):
+        Record(t, np.ones(10), np.zeros(10), load=bad)
+    with pytest.raises(DataError, match='other-joint angle samples are NaN'):
+        Record(t, np.ones(10), np.zeros(10), others=bad)
+
+
+def test_smoothed_speeds_of_a_ramp_and_the_record_key():
+    angles = np.c_[np.arange(50) * 0.2, np.zeros(50)]
+    speeds = smoothed_speeds(angles, DT)
+    assert speeds[0].tolist() == [0.0, 0.0]
+    np.testing.assert_allclose(speeds[1:, 0], 20.0)
+    np.testing.assert_allclose(speeds[:, 1], 0.0)
+    record = Record(DT * np.arange(1, 51), np.zeros(50), np.zeros(50), 'arm', 'run 1',
+                    origin=0.0, others=angles)
+    assert record_key(record) == 'run 1 arm at 0.010 s'
+    exogenous = exogenous_of(record)
+    assert exogenous.load is None and exogenous.key == 'run 1 arm at 0.010 s'
+    np.testing.assert_allclose(exogenous.other_speeds[10:, 0], 20.0)
+
+
+def test_flow_sharing_factor_is_the_pumps_share():
+    sharing = FlowSharing(limit=1.2, full_positive=20.0, full_negative=10.0,
+                          other_positive=30.0, other_negative=60.0)
+    model = linear_model(effects=(sharing,))
+    speed = np.array([20.0, -10.0, 10.0, 20.0, 0.0])
+    others = np.array([[0.0], [30.0], [-60.0], [-30.0], [30.0]])
+    factor = exogenous_factor(model, speed, Exogenous(other_speeds=others))
+    # Demands: 1 + 0, 1 + 1, 0.5 + 1, 1 + 0.5, 0 + 1.
+    np.testing.assert_allclose(factor, [1.0, 0.6, 0.8, 0.8, 1.0])
+    # Without the others' motion the joint alone keeps its speed (limit >= 1).
+    np.testing.assert_allclose(exogenous_factor(model, speed), 1.0)
+    assert exogenous_factor(linear_model(), speed) is None
+
+
+def test_load_dependence_factor_with_a_load_and_per_record():
+    effect = LoadDependence(positive=0.01, negative=-0.002, reference=100.0,
+                            records=('a arm at 0.000 s',), record_positive=(1.2,),
+                            record_negative=(0.9,))
+    model = linear_model(effects=(effect,))
+    speed = np.array([5.0, -5.0, 0.0])
+    load = Exogenous(load=np.array([150.0, 150.0, 150.0]))
+    np.testing.assert_allclose(exogenous_factor(model, speed, load), [1.5, 0.9, 1.0])
+    # Far below the reference the factor stops at 0.05, not below zero.
+    low = Exogenous(load=np.array([-1000.0, 0.0, 0.0]))
+    np.testing.assert_allclose(exogenous_factor(model, speed, low)[0], 0.05)
+    named = Exogenous(key='a arm at 0.000 s')
+    np.testing.assert_allclose(exogenous_factor(model, speed, named), [1.2, 0.9, 1.0])
+    np.testing.assert_allclose(exogenous_factor(model, speed, Exogenous(key='b')), 1.0)
+
+
+def test_effects_round_trip_through_the_model_file_and_refuse_bad_values():
+    model = linear_model(effects=(
+        FlowSharing(1.1, 30.0, 35.0, 20.0, 40.0),
+        LoadDependence(records=('run 1 arm at 0.000 s', 'run 2 arm at 0.000 s'),
+                       record_positive=(1.0, 1.3), record_negative=(1.0, 0.9))))
+    data = model.to_mapping()
+    assert data['effects']['load_dependence']['records'] == ['run 1 arm at 0.000 s',
+                                                              'run 2 arm at 0.000 s']
+    assert JointModel.from_mapping(data) == model
+    with pytest.raises(ModelFileError, match="effects.flow_sharing.limit': must be > 0"):
+        FlowSharing(0.0, 1.0, 1.0, 1.0, 1.0)
+    with pytest.raises(ModelFileError, match='one value per record'):
+        LoadDependence(records=('a',), record_positive=(1.0,))
+    data['effects']['load_dependence']['records'] = [1, 2]
+    with pytest.raises(ModelFileError, match='expected a list of names'):
+        JointModel.from_mapping(data)
+
+
+def test_simulation_applies_the_signals_and_the_step_simulator_agrees_without_them():
+    sharing = FlowSharing(1.0, 10.0, 10.0, 20.0, 20.0)
+    model = linear_model(effects=(sharing,))
+    v = np.r_[np.zeros(10), np.full(90, 1.5)]
+    others = np.zeros((100, 1))
+    others[50:, 0] = 20.0    # the other joint moves at 20 deg/s from sample 50 on
+    speeds = np.zeros((100, 1))
+    speeds[50:] = 20.0
+    alone = simulate(model, v, DT, 0.0)
+    shared = simulate(model, v, DT, 0.0, exogenous=Exogenous(other_speeds=speeds))
+    # 10 deg/s alone; half of that (limit 1 / (1 + 1)) while the other moves.
+    np.testing.assert_allclose(np.diff(alone)[60:], 0.1)
+    np.testing.assert_allclose(np.diff(shared)[60:], 0.05)
+    sim = JointSimulator(model, DT, 0.0, v_before=v[0])
+    stepped = [0.0] + [sim.step(c) for c in v[1:]]
+    np.testing.assert_allclose(stepped, alone)
+
+
+def test_detectors_are_not_applicable_without_the_signals():
+    assert {'flow_sharing', 'load_dependence'} <= set(VOCABULARY)
+    t = DT * np.arange(1, 601)
+    v = np.where((t % 2.0) < 1.0, 1.5, -1.5)
+    y = simulate(linear_model(), v, DT, 0.0)
+    record = Record(t, v, y, 'arm', 'one')
+    context = Context(linear_model(), runs_of([record], 0.5), 50)
+    for word in ('flow_sharing', 'load_dependence'):
+        candidate, augmented = detector(word).fit(context)
+        assert not candidate.applicable and augmented is None
+        assert candidate.evidence
+    assert 'no other joints' in detector('flow_sharing').fit(context)[0].evidence
+    still = replace(record, others=np.zeros((600, 1)), other_joints=('boom',))
+    context = Context(linear_model(), runs_of([still], 0.5), 50)
+    assert 'never move' in detector('flow_sharing').fit(context)[0].evidence
+    signature = feature_signature('flow_sharing', 'others', linear_model(), linear_model(),
+                                  context.runs[0])
+    assert signature.x is not None and signature.x.size == signature.before.size
+
+
+def test_block_scale_and_its_error():
+    predicted = np.tile([1.0, 1.0, 0.0, 2.0], 50)
+    scale, error = block_scale(1.25 * predicted, predicted, 10)
+    assert scale == pytest.approx(1.25) and error < 1e-9
+    noise = np.random.default_rng(0).normal(0.0, 0.1, predicted.size)
+    scale, error = block_scale(predicted + noise, predicted, 10)
+    assert abs(scale - 1.0) < 4 * error and 0.001 < error < 0.05
+    assert math.isnan(block_scale(np.zeros(5), np.zeros(5), 10)[0])
+
+
+def test_a_bag_gives_the_other_joints_and_the_held_load(tmp_path):
+    t = DT * np.arange(1, 201)
+    arm = Record(t, np.full(200, 0.5), np.linspace(0.0, 10.0, 200), 'arm')
+    boom = Record(t, np.zeros(200), np.linspace(5.0, -5.0, 200), 'boom')
+    pressure = 100.0 + np.arange(200.0)
+    # write_bag stores setpoints in radians: degrees in, so the topic holds the pressure.
+    path = write_bag(tmp_path / 'two', [arm, boom], setpoints={'arm_load': np.degrees(pressure)})
+    data = read_bag(path)
+    plain = data.record('arm')
+    assert plain.others is None and plain.load is None
+    record = data.record('arm', load_topic='/arm_load/setpoint', others=True)
+    assert record.other_joints == ('boom',)
+    # Held like a command: the value in force at a sample is the last one stamped before
+    # it, so the load stamped with each sample counts from the next one on, and the
+    # first sample, with no load before it, is dropped.
+    assert len(record) == 199
+    np.testing.assert_allclose(record.load, pressure[:-1], atol=1e-9)
+    np.testing.assert_allclose(record.others[:, 0], boom.y[1:], atol=1e-9)
+    np.testing.assert_allclose(record.y, arm.y[1:], atol=1e-9)
+    with pytest.raises(Exception, match='no .* load topic /missing'):
+        data.record('arm', load_topic='/missing')
