@@ -181,3 +181,79 @@ def test_a_bag_gives_the_other_joints_and_the_held_load(tmp_path):
     np.testing.assert_allclose(record.y, arm.y[1:], atol=1e-9)
     with pytest.raises(Exception, match='no .* load topic /missing'):
         data.record('arm', load_topic='/missing')
+
+
+def loaded_records(effect, loads, seed=0):
+    """Random levels of the linear joint, each record at one measured load, effect hidden."""
+    rng = np.random.default_rng(seed)
+    records = []
+    for i, load in enumerate(loads):
+        held = rng.choice([-2.0, -1.5, -1.0, 1.0, 1.5, 2.0], size=40)
+        v = np.r_[np.zeros(100), np.repeat(held, 150)]
+        signal = np.full(v.size, float(load))
+        y = simulate(linear_model(effects=(effect,)), v, DT, 0.0,
+                     exogenous=Exogenous(load=signal))
+        y = y + rng.normal(0.0, 0.002, y.size)
+        records.append(Record(DT * np.arange(1, v.size + 1), v, y, 'arm', f'run {i}',
+                              load=signal))
+    return records
+
+
+def test_load_dependence_is_fitted_on_a_measured_load():
+    from hydro_sdp.core.diagnosis import diagnose
+    hidden = LoadDependence(positive=0.004, negative=-0.002, reference=50.0)
+    records = loaded_records(hidden, (50.0, 150.0, 50.0, 150.0))
+    result = diagnose(records, linear_model(), max_iterations=1)
+    assert result.effect == 'load_dependence'
+    assert result.ledger[0].mae_after <= 0.3 * result.ledger[0].mae_before
+    found = result.model.effect('load_dependence')
+    # Speed x1.4 up and x0.8 down at 150 bar against the reference: recovered.
+    assert 1.0 + found.positive * (150.0 - found.reference) == pytest.approx(1.4, abs=0.03)
+    assert 1.0 + found.negative * (150.0 - found.reference) == pytest.approx(0.8, abs=0.03)
+    assert 1.0 + found.positive * (50.0 - found.reference) == pytest.approx(1.0, abs=0.03)
+    # With the load at one value everywhere the effect cannot be told apart.
+    same = loaded_records(hidden, (50.0, 50.0))
+    candidate = next(c for c in diagnose(same, linear_model(), max_iterations=1).candidates
+                     if c.effect == 'load_dependence')
+    assert not candidate.significant and 'does not change' in candidate.evidence
+
+
+def test_diagnose_command_reads_the_other_joints_and_the_load_topic(tmp_path, capsys):
+    import json
+
+    from hydro_sdp.cli.main import main
+    from hydro_sdp.files import save_model
+    hidden = FlowSharing(1.0, 20.0, 20.0, 20.0, 20.0)
+    rng = np.random.default_rng(3)
+    bags = []
+    for i in range(2):
+        v = np.r_[np.zeros(100), np.repeat(rng.choice([-2.0, -1.5, 1.5, 2.0], size=30), 150)]
+        t = DT * np.arange(1, v.size + 1)
+        # The boom swings at 20 deg/s for 2 s out of every 4.
+        boom_speed = np.where((t % 4.0) < 2.0, 20.0, 0.0) * np.where((t % 8.0) < 4.0, 1.0, -1.0)
+        boom_y = np.cumsum(boom_speed) * DT
+        speeds = smoothed_speeds(boom_y[:, None], DT)
+        y = simulate(linear_model(effects=(hidden,)), v, DT, 0.0,
+                     exogenous=Exogenous(other_speeds=speeds))
+        arm = Record(t, v, y, 'arm')
+        boom = Record(t, np.zeros(v.size), boom_y, 'boom')
+        bags.append(str(write_bag(tmp_path / f'run{i}', [arm, boom],
+                                  setpoints={'arm_load': np.full(v.size, np.degrees(80.0))})))
+    save_model(linear_model(), tmp_path / 'arm.yaml')
+    code = main(['diagnose', *bags, '--model', str(tmp_path / 'arm.yaml'), '--iterations', '1',
+                 '--load-topic', '/arm_load/setpoint', '--json'])
+    out = capsys.readouterr().out
+    assert code == 0
+    result = json.loads(out)
+    assert result['effect'] == 'flow_sharing'
+    assert result['ledger'][0]['mae_after'] < 0.3 * result['ledger'][0]['mae_before']
+    load = next(c for c in result['candidates'] if c['effect'] == 'load_dependence')
+    assert load['applicable'] and 'does not change' in load['evidence']
+    sharing = result['model']['effects']['flow_sharing']
+    # Only limit x full speed and limit x other speed matter: 20 deg/s each, as hidden.
+    assert sharing['full_positive'] == pytest.approx(15.0)
+    for key in ('full_positive', 'full_negative', 'other_positive', 'other_negative'):
+        assert sharing['limit'] * sharing[key] == pytest.approx(20.0, rel=0.1)
+    with pytest.raises(SystemExit):
+        main(['diagnose', '--help'])
+    assert '--load-topic' in capsys.readouterr().out
