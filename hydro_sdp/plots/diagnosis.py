@@ -184,3 +184,40 @@ def plot_candidates(candidates: Sequence[Candidate], named: str) -> Figure:
     z_ax.set_xticks(place, labels, fontsize=7, rotation=30, ha='right')
     figure.suptitle('Candidates: what each word explains', fontsize=11)
     return figure
+
+
+def plot_record_scales(candidate: Candidate) -> Figure | None:
+    """
+    Draw each record's speed scale per direction with its error bars (``load_dependence``).
+
+    Parameters
+    ----------
+    candidate : Candidate
+        The ``load_dependence`` candidate; its parameters hold ``scales_positive``,
+        ``errors_positive`` and the same for ``negative`` (None where a record does
+        not move that way).
+
+    Returns
+    -------
+    Figure or None
+        The figure, or None when the candidate holds no scales.
+
+    """
+    if 'scales_positive' not in candidate.parameters:
+        return None
+    figure, (ax,) = new_figure(1, height=3.4, width=8.0)
+    for offset, name, colour in ((-0.1, 'positive', MEASURED), (0.1, 'negative', MODEL)):
+        scales = candidate.parameters[f'scales_{name}']
+        errors = candidate.parameters[f'errors_{name}']
+        shown = [(i, s, e) for i, (s, e) in enumerate(zip(scales, errors))
+                 if s is not None and e is not None]
+        if shown:
+            index, value, error = (np.array(column, dtype=np.float64) for column in zip(*shown))
+            ax.errorbar(index + offset, value, yerr=2.0 * error, fmt='o', color=colour,
+                        markersize=4, capsize=2, label=f'{name} direction (+-2 s.e.)')
+    ax.axhline(1.0, color='black', linewidth=0.6)
+    ax.set_xlabel('record')
+    ax.set_ylabel('measured / predicted travel')
+    ax.legend(loc='best', fontsize=8, frameon=False)
+    figure.suptitle('Speed scale of each record (load_dependence)', fontsize=11)
+    return figure

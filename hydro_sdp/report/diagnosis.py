@@ -7,7 +7,7 @@ from pathlib import Path
 from hydro_sdp.core.diagnosis import Diagnosis
 from hydro_sdp.files import atomic_write_text, dump_model
 from hydro_sdp.plots import command_unit_of, plot_gap, plot_ledger, plot_signature, save_figure
-from hydro_sdp.plots.diagnosis import plot_candidates
+from hydro_sdp.plots.diagnosis import plot_candidates, plot_record_scales
 
 
 def write_report(folder: Path, result: Diagnosis, *, command_unit: str | None = None) -> list[str]:
@@ -41,6 +41,13 @@ def write_report(folder: Path, result: Diagnosis, *, command_unit: str | None = 
                                    folder / 'signature.png'))
         figures.append(save_figure(plot_candidates(result.candidates, result.effect),
                                    folder / 'candidates.png'))
+    # The evidence of load_dependence, when it was named: each record's scale with errors.
+    named = {step.effect for step in result.ledger}
+    for candidate in result.candidates:
+        if candidate.effect == 'load_dependence' and candidate.effect in named:
+            scales = plot_record_scales(candidate)
+            if scales is not None:
+                figures.append(save_figure(scales, folder / 'record_scales.png'))
     rows = [f'| {c.effect} | {"yes" if c.significant else "no"} | {100 * c.gain:.1f} | '
             f'{c.t:.1f} | {c.evidence} |' for c in result.candidates if c.applicable]
     ledger = [f'| {i} | {s.effect} | {s.mae_before:.4g} | {s.mae_after:.4g} |'

@@ -4,13 +4,14 @@ from dataclasses import replace
 
 from hydro_sdp.core.diagnosis import diagnose
 from hydro_sdp.core.identify import identify
-from hydro_sdp.core.physics import load_machine, simulate_plant
+from hydro_sdp.core.physics import load_machine
 from hydro_sdp.core.physics.linkage import Geometry
 from hydro_sdp.core.physics.machine import PlantSimulator
 from hydro_sdp.core.physics.plant import with_payload
 from hydro_sdp.core.physics.programs import duty_command, full_stroke_runs
 from hydro_sdp.core.records import Record
 from hydro_sdp.files import shipped_config
+from hydro_sdp.report.diagnosis import write_report
 import numpy as np
 import pytest
 
@@ -48,7 +49,7 @@ def levels(machine, duration, moving, seed):
 
 @pytest.fixture(scope='module')
 def excavator():
-    """The arm and the boom of the presets on the arm's pump (32.4 l/min)."""
+    """Put the arm and the boom of the presets on the arm's pump (32.4 l/min)."""
     arm = load_machine(shipped_config('physics_arm.yaml'))
     boom = load_machine(shipped_config('physics_boom.yaml'))
     return replace(arm, joints=(arm.joints[0], boom.joints[0]))
@@ -56,15 +57,18 @@ def excavator():
 
 @pytest.fixture(scope='module')
 def sharing(excavator):
-    """A model of the arm from runs with the boom still, and runs with both moving."""
+    """Identify the arm with the boom still; diagnose it on runs with both moving."""
     alone = [levels(excavator, 60.0, [0], seed) for seed in (1, 2, 3)]
     model = identify([Record(r.t, r.v, r.y, r.joint, r.source) for r in alone]).model
     both = [levels(excavator, 60.0, [0, 1], seed) for seed in (4, 5, 6)]
     return model, alone, both, diagnose(both, model)
 
 
-def test_flow_sharing_is_named_first_and_the_gap_shrinks(sharing):
+def test_flow_sharing_is_named_first_and_the_gap_shrinks(sharing, tmp_path):
     model, _, both, result = sharing
+    written = [str(path) for path in write_report(tmp_path, result)]
+    assert str(tmp_path / 'signature.png') in written
+    assert str(tmp_path / 'record_scales.png') not in written
     assert result.effect == 'flow_sharing'
     assert result.candidates[0].effect == 'flow_sharing' and result.candidates[0].significant
     first = result.ledger[0]
@@ -109,15 +113,17 @@ def payload_runs(arm, payload, seed):
 
 @pytest.fixture(scope='module')
 def payloads():
-    """A model of the arm from runs without payload, and runs without and with 1200 kg."""
+    """Identify the arm without payload; return runs without and with 1200 kg."""
     arm = load_machine(shipped_config('physics_arm.yaml'))
     model = identify(payload_runs(arm, 0.0, 1), kind='power_sat').model
     return arm, model, payload_runs(arm, 0.0, 50) + payload_runs(arm, 1200.0, 80)
 
 
-def test_load_dependence_is_named_first_from_per_record_scales(payloads):
+def test_load_dependence_is_named_first_from_per_record_scales(payloads, tmp_path):
     _, model, runs = payloads
     result = diagnose(runs, model, max_iterations=1)
+    written = write_report(tmp_path, result)
+    assert str(tmp_path / 'record_scales.png') in [str(path) for path in written]
     assert result.effect == 'load_dependence'
     candidate = result.candidates[0]
     assert candidate.effect == 'load_dependence' and 'chi2' in candidate.evidence

@@ -100,8 +100,8 @@ def test_effects_round_trip_through_the_model_file_and_refuse_bad_values():
         LoadDependence(records=('run 1 arm at 0.000 s', 'run 2 arm at 0.000 s'),
                        record_positive=(1.0, 1.3), record_negative=(1.0, 0.9))))
     data = model.to_mapping()
-    assert data['effects']['load_dependence']['records'] == ['run 1 arm at 0.000 s',
-                                                              'run 2 arm at 0.000 s']
+    names = data['effects']['load_dependence']['records']
+    assert names == ['run 1 arm at 0.000 s', 'run 2 arm at 0.000 s']
     assert JointModel.from_mapping(data) == model
     with pytest.raises(ModelFileError, match="effects.flow_sharing.limit': must be > 0"):
         FlowSharing(0.0, 1.0, 1.0, 1.0, 1.0)

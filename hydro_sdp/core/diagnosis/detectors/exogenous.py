@@ -206,6 +206,14 @@ class RecordScales:
         """Probability of a chi-square this large if the records' scales were equal."""
         return float(chi2.sf(self.statistic, self.freedom)) if self.freedom else 1.0
 
+    def evidence(self) -> dict[str, list[float | None]]:
+        """Return the scales and errors per direction for the report (None where undefined)."""
+        def listed(values: list[float]) -> list[float | None]:
+            return [float(v) if math.isfinite(v) else None for v in values]
+        return {f'{what}_{name}': listed(table[name])
+                for what, table in (('scales', self.scales), ('errors', self.errors))
+                for name in ('positive', 'negative')}
+
     def describe(self) -> str:
         """One line for the evidence."""
         return (f'per-record speed scales at the same command: chi2 {self.statistic:.3g} on '
@@ -334,7 +342,7 @@ class LoadDependence(EffectDetector):
             effect = model.effect(self.word)
             assert isinstance(effect, Load)
             parameters.append({'positive': effect.positive, 'negative': effect.negative,
-                               'reference': effect.reference})
+                               'reference': effect.reference, **found.evidence()})
         return _first_significant(
             context, self.word, models, parameters,
             f'the speed changes by {100 * k[0]:+.3g} % (positive) and {100 * k[1]:+.3g} % '
@@ -359,8 +367,5 @@ class LoadDependence(EffectDetector):
                 Load(records=keys, record_positive=up, record_negative=down)))
             parameters.append({'records': list(keys), 'record_positive': list(up),
                                'record_negative': list(down),
-                               'scales_positive': scales['positive'],
-                               'scales_negative': scales['negative'],
-                               'errors_positive': found.errors['positive'],
-                               'errors_negative': found.errors['negative']})
+                               **found.evidence()})
         return _first_significant(context, self.word, models, parameters, found.describe())
