@@ -27,7 +27,8 @@ import math
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.bounded import bounded_cumsum
 from hydro_sdp.core.effects import (
-    AngleDependentVelocity, Backlash, DirectionDependentDelay, StrokeGeometry, ValveLag)
+    AngleDependentVelocity, Backlash, DirectionDependentDelay, FlowSharing, LoadDependence,
+    StrokeGeometry, ValveLag)
 from hydro_sdp.core.errors import DataError
 from hydro_sdp.core.exogenous import Exogenous, exogenous_factor
 from hydro_sdp.core.model import JointModel
@@ -282,6 +283,8 @@ class JointSimulator:
         self._lag_p = math.exp(-self.dt / lag.time_constant) if isinstance(lag, ValveLag) else None
         self._lag_state = rate_before
         self._gravity, self._geometry = _angle_effects(model)
+        self._exogenous = any(model.effect(name) is not None
+                              for name in (FlowSharing.name, LoadDependence.name))
         play = model.effect(Backlash.name)
         self._half_play = 0.5 * play.play if isinstance(play, Backlash) else 0.0
         self._actuator = min(max(float(y0), self._low), self._high)
@@ -334,10 +337,10 @@ class JointSimulator:
             # Same arithmetic as lfilter's transposed direct form, so results agree exactly.
             self._lag_state = (1.0 - self._lag_p) * speed + self._lag_p * self._lag_state
             speed = self._lag_state
-        factor = exogenous_factor(self.model, np.array([speed]))
-        if factor is not None:
+        if self._exogenous:
             # No signals here: the load at its reference, the other joints still.
-            speed *= float(factor[0])
+            factor = exogenous_factor(self.model, np.array([speed]))
+            speed *= 1.0 if factor is None else float(factor[0])
         previous = self._actuator
         if self._geometry is not None:
             speed *= self._geometry.factor_at(previous, speed)
