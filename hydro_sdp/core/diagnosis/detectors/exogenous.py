@@ -329,9 +329,14 @@ class LoadDependence(EffectDetector):
         start = np.array([0.0, 0.0, float(np.min(load)) / spread])
         k = least_squares(misfit, start).x
 
+        lowest = float(np.min(load))
+
         def model_with(q: FloatArray) -> JointModel:
+            # The reference stays within the loads seen (beyond, 1 + k (L - ref) degenerates
+            # into a constant factor).
+            reference = min(max(float(q[2] * spread), lowest), lowest + spread)
             return context.model.with_effect(Load(float(q[0] / spread), float(q[1] / spread),
-                                                  float(q[2] * spread)))
+                                                  reference))
 
         polished = minimize(lambda q: mae(model_with(q), context.runs), k, method='Nelder-Mead',
                             options={'xatol': 1e-4, 'fatol': 1e-6, 'maxfev': 120}).x
