@@ -1,13 +1,17 @@
 """The diagnosis names flow sharing and load dependence on the physics plant (issue 13)."""
 
 from dataclasses import replace
+from pathlib import Path
+from typing import Sequence
 
-from hydro_sdp.core.diagnosis import diagnose
+from hydro_sdp.core.diagnosis import diagnose, Diagnosis
+from hydro_sdp.core.effects import FlowSharing, LoadDependence
 from hydro_sdp.core.identify import identify
+from hydro_sdp.core.model import JointModel
 from hydro_sdp.core.physics import load_machine
 from hydro_sdp.core.physics.linkage import Geometry
 from hydro_sdp.core.physics.machine import PlantSimulator
-from hydro_sdp.core.physics.plant import with_payload
+from hydro_sdp.core.physics.plant import Machine, with_payload
 from hydro_sdp.core.physics.programs import duty_command, full_stroke_runs
 from hydro_sdp.core.records import Record
 from hydro_sdp.files import shipped_config
@@ -17,9 +21,13 @@ import pytest
 
 DT = 0.01
 DUTIES = (40, 50, 60, 70, 80, 90, 100)
+#: The model identified, the records with the boom still and moving, and the diagnosis.
+Sharing = tuple[JointModel, list[Record], list[Record], Diagnosis]
+#: The arm, the model identified without payload, and the runs at both payloads.
+Payloads = tuple[Machine, JointModel, list[Record]]
 
 
-def levels(machine, duration, moving, seed):
+def levels(machine: Machine, duration: float, moving: Sequence[int], seed: int) -> Record:
     """
     Random duties held 0.5-3 s on the joints in ``moving``, each turned back before its stops.
 
@@ -48,7 +56,7 @@ def levels(machine, duration, moving, seed):
 
 
 @pytest.fixture(scope='module')
-def excavator():
+def excavator() -> Machine:
     """Put the arm and the boom of the presets on the arm's pump (32.4 l/min)."""
     arm = load_machine(shipped_config('physics_arm.yaml'))
     boom = load_machine(shipped_config('physics_boom.yaml'))
@@ -56,7 +64,7 @@ def excavator():
 
 
 @pytest.fixture(scope='module')
-def sharing(excavator):
+def sharing(excavator: Machine) -> Sharing:
     """Identify the arm with the boom still; diagnose it on runs with both moving."""
     alone = [levels(excavator, 60.0, [0], seed) for seed in (1, 2, 3)]
     model = identify([Record(r.t, r.v, r.y, r.joint, r.source) for r in alone]).model
@@ -64,7 +72,8 @@ def sharing(excavator):
     return model, alone, both, diagnose(both, model)
 
 
-def test_flow_sharing_is_named_first_and_the_gap_shrinks(sharing, tmp_path):
+def test_flow_sharing_is_named_first_and_the_gap_shrinks(
+        sharing: Sharing, tmp_path: Path) -> None:
     model, _, both, result = sharing
     written = [str(path) for path in write_report(tmp_path, result)]
     assert str(tmp_path / 'signature.png') in written
@@ -76,16 +85,18 @@ def test_flow_sharing_is_named_first_and_the_gap_shrinks(sharing, tmp_path):
     # The validation gap (per-record MAE) shrinks by at least 30 %.
     assert first.mae_after <= 0.7 * first.mae_before
     effect = result.model.effect('flow_sharing')
+    assert isinstance(effect, FlowSharing)
     # The arm and the boom at full duty take more than the pump gives: a share below 1.
     assert effect.limit / (1.0 + 30.0 / effect.other_positive) < 0.8
     signature = result.signature
+    assert signature is not None and signature.x is not None
     assert signature.feature == 'others' and signature.x.size == signature.before.size
     # The residual while the boom moves is what the effect takes away.
     busy = signature.x > 10.0
     assert np.mean(np.abs(signature.after[busy])) < np.mean(np.abs(signature.before[busy]))
 
 
-def test_a_model_with_flow_sharing_does_not_get_it_again(sharing):
+def test_a_model_with_flow_sharing_does_not_get_it_again(sharing: Sharing) -> None:
     _, _, both, result = sharing
     again = diagnose(both, result.model, max_iterations=1)
     assert again.effect != 'flow_sharing'
@@ -93,7 +104,7 @@ def test_a_model_with_flow_sharing_does_not_get_it_again(sharing):
     assert not candidate.applicable
 
 
-def test_flow_sharing_is_not_applicable_without_another_joint_moving(sharing):
+def test_flow_sharing_is_not_applicable_without_another_joint_moving(sharing: Sharing) -> None:
     model, alone, _, _ = sharing
     result = diagnose(alone, model, max_iterations=1)
     assert result.effect != 'flow_sharing'
@@ -105,21 +116,22 @@ def test_flow_sharing_is_not_applicable_without_another_joint_moving(sharing):
     assert not candidate.applicable and 'no other joints' in candidate.evidence
 
 
-def payload_runs(arm, payload, seed):
+def payload_runs(arm: Machine, payload: float, seed: int) -> list[Record]:
     """Full-stroke runs of the arm at one payload, named by it."""
     return [Record(r.t, r.v, r.y, r.joint, f'{payload:g} kg {r.source}')
             for r in full_stroke_runs(with_payload(arm, payload), DT, DUTIES, seed=seed)]
 
 
 @pytest.fixture(scope='module')
-def payloads():
+def payloads() -> Payloads:
     """Identify the arm without payload; return runs without and with 1200 kg."""
     arm = load_machine(shipped_config('physics_arm.yaml'))
     model = identify(payload_runs(arm, 0.0, 1), kind='power_sat').model
     return arm, model, payload_runs(arm, 0.0, 50) + payload_runs(arm, 1200.0, 80)
 
 
-def test_load_dependence_is_named_first_from_per_record_scales(payloads, tmp_path):
+def test_load_dependence_is_named_first_from_per_record_scales(
+        payloads: Payloads, tmp_path: Path) -> None:
     _, model, runs = payloads
     result = diagnose(runs, model, max_iterations=1)
     written = write_report(tmp_path, result)
@@ -130,6 +142,7 @@ def test_load_dependence_is_named_first_from_per_record_scales(payloads, tmp_pat
     first = result.ledger[0]
     assert first.mae_after <= 0.7 * first.mae_before
     effect = result.model.effect('load_dependence')
+    assert isinstance(effect, LoadDependence)
     # The payload speeds up the arm moving with gravity (positive duty), a few tenths at
     # the lower duties; the records without payload keep factors near 1.
     heavy = [up for key, up in zip(effect.records, effect.record_positive)
@@ -141,7 +154,7 @@ def test_load_dependence_is_named_first_from_per_record_scales(payloads, tmp_pat
     assert again.effect != 'load_dependence'
 
 
-def test_one_payload_gives_no_load_dependence(payloads):
+def test_one_payload_gives_no_load_dependence(payloads: Payloads) -> None:
     arm, model, runs = payloads
     # The same payload twice (other noise): the records' scales agree within their noise.
     same = runs[:len(DUTIES) * 2] + payload_runs(arm, 0.0, 120)

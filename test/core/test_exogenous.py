@@ -2,6 +2,8 @@
 
 from dataclasses import replace
 import math
+from pathlib import Path
+from typing import Any, Sequence, TypeVar
 
 from hydro_sdp.bags import read_bag, write_bag
 from hydro_sdp.core.diagnosis.context import Context
@@ -21,20 +23,35 @@ import numpy as np
 import pytest
 
 DT = 0.01
+T = TypeVar('T')
 
 
-def linear_model(**changes):
+def given(value: T | None) -> T:
+    """Return ``value``, which the test expects to be there."""
+    assert value is not None
+    return value
+
+
+def load_effect(model: JointModel) -> LoadDependence:
+    """Return the model's load_dependence effect."""
+    effect = model.effect('load_dependence')
+    assert isinstance(effect, LoadDependence)
+    return effect
+
+
+def linear_model(**changes: Any) -> JointModel:
     model = JointModel('arm', SdpDzMap(dead_zone=(-0.5, 0.5), slope=(10.0, 10.0)), delay=0.05)
     return replace(model, **changes)
 
 
-def test_record_carries_load_and_others_and_checks_them():
+def test_record_carries_load_and_others_and_checks_them() -> None:
     t = DT * np.arange(1, 11)
     record = Record(t, np.ones(10), np.zeros(10), 'arm', 'bag', load=np.arange(10.0),
                     others=np.arange(10.0), other_joints=('boom',))
-    assert record.others.shape == (10, 1) and record.other_joints == ('boom',)
+    assert given(record.others).shape == (10, 1) and record.other_joints == ('boom',)
     piece = record.window(2, 5)
-    assert piece.load.tolist() == [2.0, 3.0, 4.0] and piece.others[:, 0].tolist() == [2, 3, 4]
+    assert given(piece.load).tolist() == [2.0, 3.0, 4.0]
+    assert given(piece.others)[:, 0].tolist() == [2, 3, 4]
     assert piece.other_joints == ('boom',)
     with pytest.raises(DataError, match='load must have one value per sample'):
         Record(t, np.ones(10), np.zeros(10), load=np.ones(9))
@@ -50,7 +67,7 @@ def test_record_carries_load_and_others_and_checks_them():
         Record(t, np.ones(10), np.zeros(10), others=bad)
 
 
-def test_smoothed_speeds_of_a_ramp_and_the_record_key():
+def test_smoothed_speeds_of_a_ramp_and_the_record_key() -> None:
     angles = np.c_[np.arange(50) * 0.2, np.zeros(50)]
     speeds = smoothed_speeds(angles, DT)
     assert speeds[0].tolist() == [0.0, 0.0]
@@ -61,40 +78,40 @@ def test_smoothed_speeds_of_a_ramp_and_the_record_key():
     assert record_key(record) == 'run 1 arm at 0.010 s'
     exogenous = exogenous_of(record)
     assert exogenous.load is None and exogenous.key == 'run 1 arm at 0.010 s'
-    np.testing.assert_allclose(exogenous.other_speeds[10:, 0], 20.0)
+    np.testing.assert_allclose(given(exogenous.other_speeds)[10:, 0], 20.0)
 
 
-def test_flow_sharing_factor_is_the_pumps_share():
+def test_flow_sharing_factor_is_the_pumps_share() -> None:
     sharing = FlowSharing(limit=1.2, full_positive=20.0, full_negative=10.0,
                           other_positive=30.0, other_negative=60.0)
     model = linear_model(effects=(sharing,))
     speed = np.array([20.0, -10.0, 10.0, 20.0, 0.0])
     others = np.array([[0.0], [30.0], [-60.0], [-30.0], [30.0]])
-    factor = exogenous_factor(model, speed, Exogenous(other_speeds=others))
+    factor = given(exogenous_factor(model, speed, Exogenous(other_speeds=others)))
     # Demands: 1 + 0, 1 + 1, 0.5 + 1, 1 + 0.5, 0 + 1.
     np.testing.assert_allclose(factor, [1.0, 0.6, 0.8, 0.8, 1.0])
     # Without the others' motion the joint alone keeps its speed (limit >= 1).
-    np.testing.assert_allclose(exogenous_factor(model, speed), 1.0)
+    np.testing.assert_allclose(given(exogenous_factor(model, speed)), 1.0)
     assert exogenous_factor(linear_model(), speed) is None
 
 
-def test_load_dependence_factor_with_a_load_and_per_record():
+def test_load_dependence_factor_with_a_load_and_per_record() -> None:
     effect = LoadDependence(positive=0.01, negative=-0.002, reference=100.0,
                             records=('a arm at 0.000 s',), record_positive=(1.2,),
                             record_negative=(0.9,))
     model = linear_model(effects=(effect,))
     speed = np.array([5.0, -5.0, 0.0])
     load = Exogenous(load=np.array([150.0, 150.0, 150.0]))
-    np.testing.assert_allclose(exogenous_factor(model, speed, load), [1.5, 0.9, 1.0])
+    np.testing.assert_allclose(given(exogenous_factor(model, speed, load)), [1.5, 0.9, 1.0])
     # Far below the reference the factor stops at 0.05, not below zero.
     low = Exogenous(load=np.array([-1000.0, 0.0, 0.0]))
-    np.testing.assert_allclose(exogenous_factor(model, speed, low)[0], 0.05)
+    np.testing.assert_allclose(given(exogenous_factor(model, speed, low))[0], 0.05)
     named = Exogenous(key='a arm at 0.000 s')
-    np.testing.assert_allclose(exogenous_factor(model, speed, named), [1.2, 0.9, 1.0])
-    np.testing.assert_allclose(exogenous_factor(model, speed, Exogenous(key='b')), 1.0)
+    np.testing.assert_allclose(given(exogenous_factor(model, speed, named)), [1.2, 0.9, 1.0])
+    np.testing.assert_allclose(given(exogenous_factor(model, speed, Exogenous(key='b'))), 1.0)
 
 
-def test_effects_round_trip_through_the_model_file_and_refuse_bad_values():
+def test_effects_round_trip_through_the_model_file_and_refuse_bad_values() -> None:
     model = linear_model(effects=(
         FlowSharing(1.1, 30.0, 35.0, 20.0, 40.0),
         LoadDependence(records=('run 1 arm at 0.000 s', 'run 2 arm at 0.000 s'),
@@ -112,7 +129,7 @@ def test_effects_round_trip_through_the_model_file_and_refuse_bad_values():
         JointModel.from_mapping(data)
 
 
-def test_simulation_applies_the_signals_and_the_step_simulator_agrees_without_them():
+def test_simulation_applies_the_signals_and_the_step_simulator_agrees_without_them() -> None:
     sharing = FlowSharing(1.0, 10.0, 10.0, 20.0, 20.0)
     model = linear_model(effects=(sharing,))
     v = np.r_[np.zeros(10), np.full(90, 1.5)]
@@ -130,7 +147,7 @@ def test_simulation_applies_the_signals_and_the_step_simulator_agrees_without_th
     np.testing.assert_allclose(stepped, alone)
 
 
-def test_detectors_are_not_applicable_without_the_signals():
+def test_detectors_are_not_applicable_without_the_signals() -> None:
     assert {'flow_sharing', 'load_dependence'} <= set(VOCABULARY)
     t = DT * np.arange(1, 601)
     v = np.where((t % 2.0) < 1.0, 1.5, -1.5)
@@ -150,7 +167,7 @@ def test_detectors_are_not_applicable_without_the_signals():
     assert signature.x is not None and signature.x.size == signature.before.size
 
 
-def test_block_scale_and_its_error():
+def test_block_scale_and_its_error() -> None:
     predicted = np.tile([1.0, 1.0, 0.0, 2.0], 50)
     scale, error = block_scale(1.25 * predicted, predicted, 10)
     assert scale == pytest.approx(1.25) and error < 1e-9
@@ -160,7 +177,7 @@ def test_block_scale_and_its_error():
     assert math.isnan(block_scale(np.zeros(5), np.zeros(5), 10)[0])
 
 
-def test_a_bag_gives_the_other_joints_and_the_held_load(tmp_path):
+def test_a_bag_gives_the_other_joints_and_the_held_load(tmp_path: Path) -> None:
     t = DT * np.arange(1, 201)
     arm = Record(t, np.full(200, 0.5), np.linspace(0.0, 10.0, 200), 'arm')
     boom = Record(t, np.zeros(200), np.linspace(5.0, -5.0, 200), 'boom')
@@ -176,14 +193,15 @@ def test_a_bag_gives_the_other_joints_and_the_held_load(tmp_path):
     # it, so the load stamped with each sample counts from the next one on, and the
     # first sample, with no load before it, is dropped.
     assert len(record) == 199
-    np.testing.assert_allclose(record.load, pressure[:-1], atol=1e-9)
-    np.testing.assert_allclose(record.others[:, 0], boom.y[1:], atol=1e-9)
+    np.testing.assert_allclose(given(record.load), pressure[:-1], atol=1e-9)
+    np.testing.assert_allclose(given(record.others)[:, 0], boom.y[1:], atol=1e-9)
     np.testing.assert_allclose(record.y, arm.y[1:], atol=1e-9)
     with pytest.raises(Exception, match='no .* load topic /missing'):
         data.record('arm', load_topic='/missing')
 
 
-def loaded_records(effect, loads, seed=0):
+def loaded_records(effect: LoadDependence, loads: Sequence[float],
+                   seed: int = 0) -> list[Record]:
     """Random levels of the linear joint, each record at one measured load, effect hidden."""
     rng = np.random.default_rng(seed)
     records = []
@@ -199,14 +217,14 @@ def loaded_records(effect, loads, seed=0):
     return records
 
 
-def test_load_dependence_is_fitted_on_a_measured_load():
+def test_load_dependence_is_fitted_on_a_measured_load() -> None:
     from hydro_sdp.core.diagnosis import diagnose
     hidden = LoadDependence(positive=0.004, negative=-0.002, reference=50.0)
     records = loaded_records(hidden, (50.0, 150.0, 50.0, 150.0))
     result = diagnose(records, linear_model(), max_iterations=1)
     assert result.effect == 'load_dependence'
     assert result.ledger[0].mae_after <= 0.3 * result.ledger[0].mae_before
-    found = result.model.effect('load_dependence')
+    found = load_effect(result.model)
     # Speed x1.4 up and x0.8 down at 150 bar against the reference: recovered.
     assert 1.0 + found.positive * (150.0 - found.reference) == pytest.approx(1.4, abs=0.03)
     assert 1.0 + found.negative * (150.0 - found.reference) == pytest.approx(0.8, abs=0.03)
@@ -218,7 +236,8 @@ def test_load_dependence_is_fitted_on_a_measured_load():
     assert not candidate.significant and 'does not change' in candidate.evidence
 
 
-def test_diagnose_command_reads_the_other_joints_and_the_load_topic(tmp_path, capsys):
+def test_diagnose_command_reads_the_other_joints_and_the_load_topic(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     import json
 
     from hydro_sdp.cli.main import main
