@@ -7,9 +7,9 @@ import json
 from pathlib import Path
 
 from hydro_sdp.bags import write_bag
-from hydro_sdp.cli import calibrate as cli_calibrate
 from hydro_sdp.cli.calibrate import read_inputs
 from hydro_sdp.cli.main import build_parser, main
+from hydro_sdp.core import calibration as core_calibration
 from hydro_sdp.core.calibration import (
     calibrate, CalibrationSettings, chord_map, split_records)
 from hydro_sdp.core.closed_loop import LoopJoint, run_closed_loop, step_metrics, step_setpoints
@@ -23,6 +23,7 @@ from hydro_sdp.core.static_maps import chord_commands, linearise, PwlMap
 from hydro_sdp.files import load_controller, load_model, load_yaml
 from hydro_sdp.plots import (
     command_unit_of, plot_closed_loop, plot_record, plot_signature, plot_velocity_map)
+from hydro_sdp.report import calibration as report_calibration
 import numpy as np
 import pytest
 
@@ -175,13 +176,13 @@ def test_a_failed_check_designs_again_with_slower_poles(redesigned):
 @pytest.mark.slow
 def test_a_failure_while_writing_leaves_nothing(redesigned, bags, tmp_path, capsys,
                                                 monkeypatch):
-    monkeypatch.setattr(cli_calibrate, 'calibrate', lambda *args, **kwargs: redesigned)
+    monkeypatch.setattr(core_calibration, 'calibrate', lambda *args, **kwargs: redesigned)
 
     def full_disk(folder, result, unit):
         (folder / 'summary.md').parent.mkdir(parents=True)
         (folder / 'summary.md').write_text('half')
         raise OSError('No space left on device')
-    monkeypatch.setattr(cli_calibrate, 'write_report', full_disk)
+    monkeypatch.setattr(report_calibration, 'write_report', full_disk)
     out = tmp_path / 'out'
     code, _, err = run(capsys, 'calibrate', bags[0], '--out', out)
     assert code == 2 and 'No space left' in err
@@ -192,7 +193,7 @@ def test_a_failure_while_writing_leaves_nothing(redesigned, bags, tmp_path, caps
     code, _, _ = run(capsys, 'calibrate', bags[0], '--out', out, '--force')
     assert code == 2 and (out / 'old.txt').read_text() == 'old'
     monkeypatch.undo()
-    monkeypatch.setattr(cli_calibrate, 'calibrate', lambda *args, **kwargs: redesigned)
+    monkeypatch.setattr(core_calibration, 'calibrate', lambda *args, **kwargs: redesigned)
     code, stdout, err = run(capsys, 'calibrate', bags[0], '--out', out, '--force', '--json')
     assert code == 0, err
     assert sorted(p.name for p in out.iterdir()) == ['controller.yaml', 'model.yaml',

@@ -6,21 +6,21 @@ import argparse
 from dataclasses import replace
 import math
 from pathlib import Path
-from typing import Any
+from typing import Any, TYPE_CHECKING
 
 from hydro_sdp.bags import read_bag, STORAGE_SUFFIXES
 from hydro_sdp.cli.common import (
     add_bag_options, finite_float, json_number, Outcome, positive_float, table)
 from hydro_sdp.cli.design import complex_pole
 from hydro_sdp.cli.progress import ProgressBar
-from hydro_sdp.core.calibration import calibrate, CalibrationResult, CalibrationSettings
 from hydro_sdp.core.errors import ConfigurationError
 from hydro_sdp.core.records import Record
 from hydro_sdp.csv_logs import ANGLE_UNITS, read_csv_log
 from hydro_sdp.files import atomic_directory, atomic_write_text, save_controller, save_model
-from hydro_sdp.plots import command_unit_of
-from hydro_sdp.report.calibration import write_report
 import yaml
+
+if TYPE_CHECKING:
+    from hydro_sdp.core.calibration import CalibrationResult
 
 HELP = 'identify, diagnose, design and check a joint in one go, with a report'
 DESCRIPTION = """\
@@ -269,6 +269,10 @@ class _StageBars:
 
 def run(args: argparse.Namespace) -> Outcome:
     """Run ``calibrate``."""
+    from hydro_sdp.core.calibration import calibrate, CalibrationSettings
+    from hydro_sdp.plots import command_unit_of
+    from hydro_sdp.report.calibration import write_report
+
     out = Path(args.out).resolve()
     check_out(out, args.force)
     if args.iterations < 0:

@@ -16,7 +16,6 @@ from hydro_sdp.core.errors import ConfigurationError
 from hydro_sdp.core.records import Record
 from hydro_sdp.core.safety import check_controller_fits, clamp_setpoint, SETPOINT_MARGIN
 from hydro_sdp.files import load_controller, load_model
-from hydro_sdp.plots import plot_closed_loop, save_figure
 import numpy as np
 
 HELP = 'simulate the PIP-IDZ closed loop offline and record it as a bag'
@@ -139,6 +138,8 @@ def run(args: argparse.Namespace) -> Outcome:
         'band': args.band, 'steps': steps,
     }
     if args.plot:
+        from hydro_sdp.plots import plot_closed_loop, save_figure
+
         payload['plot'] = str(save_figure(
             plot_closed_loop([trace], title=f'PIP-IDZ control of joint {model.joint}'),
             args.plot))

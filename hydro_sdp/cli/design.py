@@ -10,7 +10,6 @@ from hydro_sdp.core.errors import ConfigurationError
 from hydro_sdp.core.idz import IDZ_MODES
 from hydro_sdp.core.pip_design import LqWeights
 from hydro_sdp.files import load_model, save_controller
-from hydro_sdp.plots import plot_idz, save_figure
 
 HELP = 'design a PIP controller with inverse dead-zone for a joint model'
 DESCRIPTION = """\
@@ -102,6 +101,8 @@ def run(args: argparse.Namespace) -> Outcome:
     if args.plot:
         if spec.idz is None:
             raise ConfigurationError('--plot draws the inverse dead-zone, and this model has none')
+        from hydro_sdp.plots import plot_idz, save_figure
+
         payload['plot'] = str(save_figure(plot_idz(model, spec.idz, spec.control_period,
                                                    u_limits=spec.u_limits),
                                           args.plot))

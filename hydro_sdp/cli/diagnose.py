@@ -4,26 +4,26 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
-from typing import Any
+from typing import Any, TYPE_CHECKING
 
 from hydro_sdp.cli.common import add_bag_options, json_number, Outcome, table
 from hydro_sdp.cli.progress import ProgressBar
-from hydro_sdp.core.diagnosis import DETECTORS, diagnose, Diagnosis, VOCABULARY
 from hydro_sdp.core.records import Record
 from hydro_sdp.files import load_model, save_model
-from hydro_sdp.report.diagnosis import write_report
 
-_WIDTH = max(len(d.word) for d in DETECTORS)
-_WORDS = '\n'.join(f'  {d.word:{_WIDTH}}  {d.description}' for d in DETECTORS)
+if TYPE_CHECKING:
+    from hydro_sdp.core.diagnosis import Diagnosis
+
 HELP = 'find where a model and the data disagree, name the missing effect, add it'
-DESCRIPTION = f"""\
+#: Filled with the vocabulary when the parser is built (the detectors load scipy).
+DESCRIPTION = """\
 Hold a model against measured bags, name what it misses and add it.
 
 The measured commands are replayed through the model; the velocity residual
 (measured increments against the model's one-step predictions) localises the
 disagreement. Every effect of the vocabulary is added in turn and fitted:
 
-{_WORDS}
+{words}
 
 An effect is named when it removes a significant share of the residual (sign
 test over one-second blocks, z > 3, at least 2 %), the largest first (a stop the
@@ -51,7 +51,12 @@ example:
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the ``diagnose`` command to the command line."""
-    parser = subparsers.add_parser('diagnose', help=HELP, description=DESCRIPTION,
+    from hydro_sdp.core.diagnosis import DETECTORS
+
+    width = max(len(d.word) for d in DETECTORS)
+    words = '\n'.join(f'  {d.word:{width}}  {d.description}' for d in DETECTORS)
+    parser = subparsers.add_parser('diagnose', help=HELP,
+                                   description=DESCRIPTION.format(words=words),
                                    formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument('bags', nargs='+', metavar='BAG', help='measured bags (estimation)')
     parser.add_argument('--model', required=True, help='model file to hold against them')
@@ -88,6 +93,9 @@ def describe(result: Diagnosis) -> dict[str, Any]:
 
 def run(args: argparse.Namespace) -> Outcome:
     """Run ``diagnose``."""
+    from hydro_sdp.core.diagnosis import diagnose, VOCABULARY
+    from hydro_sdp.report.diagnosis import write_report
+
     model = load_model(args.model)
     # Without --command-topic the bags are read from the topic the model remembers.
     joint = args.joint or model.joint

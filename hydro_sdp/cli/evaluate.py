@@ -6,9 +6,7 @@ import argparse
 from pathlib import Path
 
 from hydro_sdp.cli.common import add_bag_options, json_number, Outcome, read_records, table
-from hydro_sdp.core.evaluate import AVERAGES, evaluate, mean_errors, simulated_angles
 from hydro_sdp.files import load_model
-from hydro_sdp.plots import plot_record, save_figure
 
 HELP = 'simulation error of a model and its SDP-DZ and linear benchmarks (Table 2)'
 DESCRIPTION = """\
@@ -44,6 +42,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> Outcome:
     """Run ``evaluate``."""
+    from hydro_sdp.core.evaluate import AVERAGES, evaluate, mean_errors, simulated_angles
+
     model = load_model(args.model)
     # Without --command-topic the bags are read from the topic the model remembers.
     records = read_records(args.bags, args.joint or model.joint, args.command_topic,
@@ -61,6 +61,8 @@ def run(args: argparse.Namespace) -> Outcome:
                                  'mae_time_weighted': AVERAGES['time_weighted']},
                'records': rows, 'model_file': args.model, 'pieces': len(records)}
     if args.plot_dir:
+        from hydro_sdp.plots import plot_record, save_figure
+
         folder = Path(args.plot_dir)
         payload['plots'] = []
         for index, record in enumerate(records, start=1):

@@ -6,17 +6,18 @@ import argparse
 from dataclasses import replace
 import math
 from pathlib import Path
-from typing import Any, Iterator
+from typing import Any, Iterator, TYPE_CHECKING
 
 from hydro_sdp.cli.common import (
     add_bag_options, finite_float, json_number, Outcome, positive_float, read_records_and_topic,
     table)
 from hydro_sdp.cli.progress import ProgressBar
-from hydro_sdp.core.identify import Identification, identify, KINDS
 from hydro_sdp.core.model import JointModel
 from hydro_sdp.files import save_model
-from hydro_sdp.plots import plot_gains, plot_step_responses, plot_velocity_map, save_figure
 import numpy as np
+
+if TYPE_CHECKING:
+    from hydro_sdp.core.identify import Identification
 
 HELP = 'identify a joint model from step or random-level bags'
 DESCRIPTION = """\
@@ -51,6 +52,8 @@ examples:
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the ``identify`` command to the command line."""
+    from hydro_sdp.core.identify import KINDS
+
     parser = subparsers.add_parser('identify', help=HELP, description=DESCRIPTION,
                                    formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument('bags', nargs='+', metavar='BAG', help='rosbag2 bags of one joint')
@@ -105,6 +108,8 @@ def describe(result: Identification) -> dict:
 
 def run(args: argparse.Namespace) -> Outcome:
     """Run ``identify``."""
+    from hydro_sdp.core.identify import identify
+
     records, topic = read_records_and_topic(args.bags, args.joint, args.command_topic)
     stages = ['segmenting', 'estimating the delay', 'fitting the static map',
               'comparing map families on held-out experiments']
@@ -123,6 +128,9 @@ def run(args: argparse.Namespace) -> Outcome:
     if args.out:
         payload['model'] = str(save_model(model, args.out))
     if args.plot_dir:
+        from hydro_sdp.plots import (
+            plot_gains, plot_step_responses, plot_velocity_map, save_figure)
+
         folder = Path(args.plot_dir)
         segmentation = result.segmentation
         moving = [p for p in result.points if p.level != segmentation.rest]

@@ -8,7 +8,9 @@ interrupted (nothing half-written is left behind: files are written atomically).
 This module imports only the standard library at the top: the commands, and
 numpy, scipy and rclpy with them, are imported inside :func:`main`, where a
 Ctrl-C in the first second of a command ends it with exit code 130 and one
-line, not a traceback.
+line, not a traceback. Only the command asked for gets its full parser, and
+its module imports what it needs when it runs (matplotlib only to draw), so
+``hydro-sdp --help`` and ``hydro-sdp identify`` without plots stay light.
 
 """
 
@@ -24,9 +26,11 @@ from typing import Any
 
 from hydro_sdp import __version__
 
-#: Command modules of hydro_sdp.cli, in the order of ``--help``.
-COMMANDS = ('simulate', 'import_csv', 'identify', 'evaluate', 'diagnose', 'design',
-            'closed_loop', 'calibrate', 'demo', 'reindex')
+#: Commands and their modules in hydro_sdp.cli, in the order of ``--help``.
+COMMANDS = {'simulate': 'simulate', 'import': 'import_csv', 'identify': 'identify',
+            'evaluate': 'evaluate', 'diagnose': 'diagnose', 'design': 'design',
+            'closed-loop': 'closed_loop', 'calibrate': 'calibrate', 'demo': 'demo',
+            'reindex': 'reindex'}
 
 DESCRIPTION = """\
 Identify, control and diagnose hydraulic manipulator joints with state-dependent
@@ -41,9 +45,16 @@ start with:
 """
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(only: str | None = None) -> argparse.ArgumentParser:
     """
     Build the argument parser with every command.
+
+    Parameters
+    ----------
+    only : str or None
+        Give only this command its options and description (the others are
+        listed by name and one-line help, which is all ``hydro-sdp --help``
+        shows); default: every command in full.
 
     Returns
     -------
@@ -66,9 +77,18 @@ def build_parser() -> argparse.ArgumentParser:
         return original(name, **kwargs)
 
     subparsers.add_parser = add_parser  # type: ignore[method-assign]  # all get --json
-    for command in COMMANDS:
-        importlib.import_module(f'hydro_sdp.cli.{command}').register(subparsers)
+    for command, name in COMMANDS.items():
+        module = importlib.import_module(f'hydro_sdp.cli.{name}')
+        if only is None or only == command:
+            module.register(subparsers)
+        else:
+            subparsers.add_parser(command, help=module.HELP)
     return parser
+
+
+def _asked(argv: list[str]) -> str:
+    """Return the command named in ``argv``: its first word that is not an option."""
+    return next((word for word in argv if not word.startswith('-')), '')
 
 
 def _fail(message: str, code: int) -> int:
@@ -92,8 +112,8 @@ def main(argv: list[str] | None = None) -> int:
 
     """
     try:
-        parser = build_parser()
-        args = parser.parse_args(argv)
+        words = sys.argv[1:] if argv is None else argv
+        args = build_parser(_asked(words)).parse_args(words)
         from hydro_sdp.cli.common import to_json
         from hydro_sdp.core.errors import HydroSdpError
     except KeyboardInterrupt:

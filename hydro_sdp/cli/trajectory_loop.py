@@ -18,8 +18,6 @@ from hydro_sdp.core.records import Record
 from hydro_sdp.core.safety import check_controller_fits
 from hydro_sdp.core.trajectory import check_trajectory, TrajectorySampler
 from hydro_sdp.files import load_controller, load_model
-from hydro_sdp.plots import plot_closed_loop, save_figure
-from hydro_sdp.plots.trajectory import plot_tip_path
 from hydro_sdp.trajectory_files import load_trajectory, TrajectoryFile
 import numpy as np
 
@@ -200,6 +198,9 @@ def run_trajectory(args: argparse.Namespace) -> Outcome:
         lines.append(f'tip distance from the line in motion: max {worst:.1f} mm, '
                      f'RMS {spread:.1f} mm')
     if args.plot:
+        from hydro_sdp.plots import plot_closed_loop, save_figure
+        from hydro_sdp.plots.trajectory import plot_tip_path
+
         if path is not None and plan.arm is not None and plan.line is not None:
             by_joint = {trace.joint: trace.y for trace in traces}
             x, z = plan.arm.forward_many(by_joint[plan.arm.joints[0]],
