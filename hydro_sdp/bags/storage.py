@@ -18,6 +18,7 @@ import os
 from pathlib import Path
 from typing import Callable, Iterable
 
+from hydro_sdp.bags.sqlite_rows import read_rows, TopicRows
 from hydro_sdp.core.errors import BagError, BagFormatError, BagNotFoundError, BagReadError
 
 JOINT_STATE = 'sensor_msgs/msg/JointState'
@@ -129,6 +130,21 @@ class Collected:
         return sum(len(raws) for raws in self.raws.values())
 
 
+def _collect_rows(collected: Collected, files: list[dict[str, TopicRows]] | None,
+                  progress: Progress | None) -> bool:
+    """Add rows read in bulk; False when there are none (read message by message)."""
+    if files is None:
+        return False
+    for rows in files:
+        for topic, (stamps, raws) in rows.items():
+            collected.topics[topic][1] += len(raws)
+            collected.stamps.setdefault(topic, []).extend(stamps)
+            collected.raws.setdefault(topic, []).extend(raws)
+        if progress is not None:
+            progress(collected.kept)
+    return True
+
+
 def _collect_from(sources: Iterable[Path], keep: Callable[[str], bool],
                   progress: Progress | None) -> Collected:
     from rosbags.rosbag2 import Reader, ReaderError
@@ -143,6 +159,8 @@ def _collect_from(sources: Iterable[Path], keep: Callable[[str], bool],
                     collected.topics.setdefault(connection.topic, [msgtype, 0])
                 wanted = [c for c in reader.connections
                           if keep(_normalise_type(c.msgtype))]
+                if _collect_rows(collected, read_rows(reader, wanted), progress):
+                    continue
                 for connection, timestamp, raw in reader.messages(connections=wanted):
                     topic = connection.topic
                     collected.topics[topic][1] += 1

@@ -1,0 +1,115 @@
+"""
+Reading the messages of sqlite3 storage files in bulk, one query per topic.
+
+rosbags hands out a bag's messages one at a time through two generators, and
+that walk takes longer than decoding them all (:mod:`hydro_sdp.cdr`). For the
+plain case, uncompressed sqlite3 storage, the rows of each wanted topic are
+fetched here in one query instead, with the rules of rosbags' reader: a bag
+folder's topics are matched to each storage file's topics by name, type,
+serialisation, QoS and type hash, the files are read in the order of
+``metadata.yaml``, and the messages of a file come ordered by receive time, ties
+in storage order (the order of rosbag2's ``timestamp_idx``). Anything else
+(mcap, compression, a reader laid out otherwise) gives ``None``: read it
+message by message then.
+
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+import sqlite3
+from typing import Any, Sequence
+
+import numpy as np
+
+#: Rows of one topic: receive times (ns) and raw CDR messages, in reading order.
+TopicRows = tuple[list[int], list[bytes]]
+
+
+def matches(wanted: Any, stored: Any) -> bool:
+    """
+    Whether a storage file's connection feeds a wanted connection (rosbags' rule).
+
+    Parameters
+    ----------
+    wanted : rosbags Connection
+        A connection of the bag as opened (its folder or its storage file).
+    stored : rosbags Connection
+        A connection of one storage file.
+
+    Returns
+    -------
+    bool
+        Same topic, type, serialisation and QoS, and type hashes that agree.
+
+    """
+    return bool(wanted.topic == stored.topic and wanted.msgtype == stored.msgtype and
+                wanted.ext == stored.ext and
+                (not wanted.digest or not stored.digest or wanted.digest == stored.digest))
+
+
+def _storages(reader: Any) -> list[tuple[Path, list[Any]]] | None:
+    """Return each sqlite3 storage file of an open reader with its connections, or None."""
+    if reader.compression_mode:
+        return None
+    storage = reader.storage
+    # A bag folder's reader holds one reader per storage file; a storage file is its own.
+    parts = getattr(storage, 'storages', [storage])
+    out = []
+    for part in parts:
+        path, connections = getattr(part, 'path', None), getattr(part, 'connections', None)
+        if not (isinstance(path, Path) and path.suffix == '.db3' and
+                isinstance(connections, list)):
+            return None
+        out.append((path, connections))
+    return out
+
+
+def _topic_rows(connection: sqlite3.Connection, topic_ids: Sequence[int]) -> TopicRows:
+    """Fetch the rows of some topic ids of one storage file, ordered by time."""
+    marks = ', '.join('?' * len(topic_ids))
+    rows = connection.execute(f'SELECT timestamp, data FROM messages WHERE topic_id IN ({marks})',
+                              tuple(topic_ids)).fetchall()
+    stamps = [row[0] for row in rows]
+    raws = [row[1] for row in rows]
+    times = np.fromiter(stamps, dtype=np.int64, count=len(stamps))
+    if times.size > 1 and bool(np.any(times[1:] < times[:-1])):
+        order = np.argsort(times, kind='stable').tolist()
+        stamps = [stamps[i] for i in order]
+        raws = [raws[i] for i in order]
+    return stamps, raws
+
+
+def read_rows(reader: Any, wanted: Sequence[Any]) -> list[dict[str, TopicRows]] | None:
+    """
+    Read the messages of the wanted connections of an open sqlite3 bag, a query per topic.
+
+    Parameters
+    ----------
+    reader : rosbags.rosbag2.Reader
+        The bag, open (rosbags has checked its metadata and storage files).
+    wanted : sequence of rosbags Connection
+        Connections of that reader whose messages to read.
+
+    Returns
+    -------
+    list of dict or None
+        Per storage file, the rows of each topic that has any; None when the bag
+        is not plain sqlite3 storage.
+
+    """
+    storages = _storages(reader)
+    if storages is None:
+        return None
+    files = []
+    for path, connections in storages:
+        by_topic: dict[str, list[int]] = {}
+        for stored in connections:
+            if any(matches(w, stored) for w in wanted):
+                by_topic.setdefault(stored.topic, []).append(int(stored.id))
+        database = sqlite3.connect(f'{path.resolve().as_uri()}?immutable=1', uri=True)
+        try:
+            files.append({topic: _topic_rows(database, ids) for topic, ids in by_topic.items()})
+        finally:
+            database.close()
+    return files
