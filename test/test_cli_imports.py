@@ -76,3 +76,18 @@ def test_the_light_parser_lists_every_command_as_the_full_one():
 def _subparser(parser, command):
     action = next(a for a in parser._actions if a.dest == 'command')
     return action.choices[command]
+
+
+@pytest.mark.parametrize(('given', 'expected'), [(None, '1'), ('2', '2')])
+def test_blas_runs_one_thread_unless_told(given, expected, tmp_path):
+    environment = dict(os.environ, PYTHONPATH=str(REPO))
+    environment.pop('OPENBLAS_NUM_THREADS', None)
+    if given is not None:
+        environment['OPENBLAS_NUM_THREADS'] = given
+    probe = ('import os, sys\nfrom hydro_sdp.cli.main import main\n'
+             'try:\n    main(["--version"])\nexcept SystemExit:\n    pass\n'
+             'print(os.environ["OPENBLAS_NUM_THREADS"], file=sys.stderr)')
+    done = subprocess.run([sys.executable, '-c', probe], capture_output=True, text=True,
+                          cwd=tmp_path, env=environment, timeout=120)
+    assert done.stdout.startswith('hydro-sdp ')
+    assert done.stderr.strip().splitlines()[-1] == expected
