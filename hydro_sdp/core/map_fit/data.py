@@ -84,6 +84,8 @@ class FitData:
         self.buckets: list[tuple[IntArray, IntArray, FloatArray, npt.NDArray[np.bool_],
                                  FloatArray]] = []
         self.gains: list[FloatArray] = []
+        self._padded: list[IntArray] = []
+        self._flat: list[IntArray | None] = []
         for size in np.unique(sizes):
             members = np.flatnonzero(sizes == size)
             width = int(lengths[members].max())
@@ -98,6 +100,10 @@ class FitData:
                 mask[row, :length] = True
             initial = np.array([initial_all[m] for m in members])
             self.buckets.append((members, index, observed, mask, initial))
+            # Padding reads an extra level whose increment is 0, and the residuals of a
+            # bucket are read at the flat positions of its samples (all of them: None).
+            self._padded.append(np.where(mask, index, self.levels.size))
+            self._flat.append(None if mask.all() else np.flatnonzero(mask.ravel()))
             if gains is not None:
                 gain = np.ones((members.size, width))
                 for row, member in enumerate(members):
@@ -106,8 +112,8 @@ class FitData:
 
     def increments(self, rate: RateFunction) -> list[FloatArray]:
         """Per bucket, ``dt rate(v_{k-tau})`` with padding set to zero."""
-        per_level = self.dt * rate(self.levels)
-        out = [np.where(mask, per_level[index], 0.0) for _, index, _, mask, _ in self.buckets]
+        per_level = np.append(self.dt * rate(self.levels), 0.0)
+        out = [per_level[index] for index in self._padded]
         if self.pole != 0.0:
             p = self.pole
             out = [np.where(mask, lfilter([1.0 - p], [1.0, -p], q, axis=1,
@@ -134,18 +140,25 @@ class FitData:
             One residual per predicted sample.
 
         """
-        out = []
-        for (_, _, observed, mask, initial), q in zip(self.buckets, self.increments(rate)):
+        out = np.empty(self.samples)
+        done = 0
+        for (_, _, observed, _, initial), q, flat in zip(self.buckets, self.increments(rate),
+                                                         self._flat):
             if beta == 0.0:
                 predicted = initial[:, None] + np.cumsum(q, axis=1)
             else:
                 a = 1.0 - beta
                 drive = a * q + beta * observed
                 state, _ = lfilter([1.0], [1.0, -a], drive, axis=1, zi=(a * initial)[:, None])
-                previous = np.concatenate([initial[:, None], state[:, :-1]], axis=1)
-                predicted = previous + q
-            out.append((observed - predicted)[mask])
-        return np.concatenate(out)
+                predicted = np.empty_like(q)
+                predicted[:, :1] = initial[:, None]
+                predicted[:, 1:] = state[:, :-1]
+                predicted += q
+            residual = np.subtract(observed, predicted, out=predicted).ravel()
+            values = residual if flat is None else residual[flat]
+            out[done:done + values.size] = values
+            done += values.size
+        return out
 
     def simulation_mae(self, rate: RateFunction) -> float:
         """Mean absolute simulation error over all predicted samples, degrees."""
