@@ -4,7 +4,9 @@ from pathlib import Path
 
 from hydro_sdp.bags import read_bag, write_bag
 from hydro_sdp.bags import storage
+from hydro_sdp.bags.plain_sqlite import read_plain
 from hydro_sdp.bags.sqlite_rows import read_rows
+from hydro_sdp.core.errors import BagFormatError, BagReadError
 from hydro_sdp.core.records import Record
 import numpy as np
 import pytest
@@ -43,20 +45,23 @@ def _shuffled_bag(path, rng):
     return path
 
 
-def _collected(path, monkeypatch, bulk):
+def _collected(path, monkeypatch, mode):
+    """Collect every message: without rosbags, rosbags with bulk rows, or message by message."""
     with monkeypatch.context() as patch:
-        if not bulk:
+        if mode != 'plain':
+            patch.setattr(storage, 'read_plain', lambda source, keep: None)
+        if mode == 'messages':
             patch.setattr(storage, 'read_rows', lambda reader, wanted: None)
-        collected, sources = storage.collect(Path(path), lambda msgtype: True)
-    return collected, sources
+        return storage.collect(Path(path), lambda msgtype: True)
 
 
-@pytest.mark.parametrize('source', ['folder', 'file'])
-def test_bulk_rows_equal_rosbags_message_order(tmp_path, rng, monkeypatch, source):
+@pytest.mark.parametrize(('source', 'mode'), [('folder', 'plain'), ('folder', 'bulk'),
+                                              ('file', 'bulk')])
+def test_bulk_rows_equal_rosbags_message_order(tmp_path, rng, monkeypatch, source, mode):
     bag = _shuffled_bag(tmp_path / 'bag', rng)
     path = bag if source == 'folder' else next(bag.glob('*.db3'))
-    bulk, bulk_sources = _collected(path, monkeypatch, bulk=True)
-    single, single_sources = _collected(path, monkeypatch, bulk=False)
+    bulk, bulk_sources = _collected(path, monkeypatch, mode)
+    single, single_sources = _collected(path, monkeypatch, 'messages')
     assert bulk_sources == single_sources
     assert bulk.topics == single.topics == {'/joint_states': [STATE, 133],
                                             '/j2/valve_command': [FLOAT, 67]}
@@ -70,22 +75,55 @@ def test_bulk_rows_equal_rosbags_message_order(tmp_path, rng, monkeypatch, sourc
     assert len(set(bulk.stamps['/joint_states'])) < 133
 
 
-def test_sqlite_bags_are_not_read_message_by_message(tmp_path, monkeypatch):
+def _bag(tmp_path, storage='sqlite3'):
     t = 0.01 * np.arange(1, 101)
     record = Record(t, np.sin(t), np.cos(t), joint='j2')
-    bag = write_bag(tmp_path / 'bag', [record])
+    return record, write_bag(tmp_path / 'bag', [record], storage=storage)
 
-    def refuse(*args, **kwargs):
-        raise AssertionError('read message by message')
-    monkeypatch.setattr(Reader, 'messages', refuse)
+
+def _refuse(*args, **kwargs):
+    raise AssertionError('opened with rosbags')
+
+
+def test_plain_sqlite_folders_are_read_without_rosbags(tmp_path, monkeypatch):
+    record, bag = _bag(tmp_path)
+    monkeypatch.setattr(Reader, 'open', _refuse)
     back = read_bag(bag).record()
     np.testing.assert_array_equal(back.v, record.v)
     np.testing.assert_allclose(back.y, record.y, atol=1e-12)
 
 
+def test_storage_files_are_read_in_bulk_through_rosbags(tmp_path, monkeypatch):
+    record, bag = _bag(tmp_path)
+    monkeypatch.setattr(Reader, 'messages', _refuse)
+    back = read_bag(next(bag.glob('*.db3'))).record()
+    np.testing.assert_array_equal(back.v, record.v)
+
+
+@pytest.mark.parametrize('change', ['qos', 'version', 'serialization'])
+def test_other_folders_are_left_to_rosbags(tmp_path, change):
+    _, bag = _bag(tmp_path)
+    metadata = bag / 'metadata.yaml'
+    text = metadata.read_text()
+    if change == 'qos':       # rosbags may still read both texts as the same QoS
+        text = text.replace("offered_qos_profiles: ''", 'offered_qos_profiles: "[]"')
+    elif change == 'version':
+        text = text.replace('version: 8', 'version: 10')
+    else:
+        text = text.replace('serialization_format: cdr', 'serialization_format: xcdr', 1)
+    assert text != metadata.read_text()
+    metadata.write_text(text)
+    assert read_plain(bag, lambda msgtype: True) is None
+    if change == 'qos':
+        assert read_bag(bag).record().y.size == 100
+    else:
+        with pytest.raises(BagFormatError if change == 'serialization' else BagReadError):
+            read_bag(bag)
+
+
 def test_mcap_bags_are_left_to_rosbags(tmp_path):
-    t = 0.01 * np.arange(1, 11)
-    bag = write_bag(tmp_path / 'bag', [Record(t, t, t, joint='j2')], storage='mcap')
+    _, bag = _bag(tmp_path, 'mcap')
+    assert read_plain(bag, lambda msgtype: True) is None
     with Reader(bag) as reader:
         assert read_rows(reader, reader.connections) is None
-    assert read_bag(bag).record().y.size == 10
+    assert read_bag(bag).record().y.size == 100

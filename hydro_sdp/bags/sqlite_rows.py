@@ -65,8 +65,23 @@ def _storages(reader: Any) -> list[tuple[Path, list[Any]]] | None:
     return out
 
 
-def _topic_rows(connection: sqlite3.Connection, topic_ids: Sequence[int]) -> TopicRows:
-    """Fetch the rows of some topic ids of one storage file, ordered by time."""
+def topic_rows(connection: sqlite3.Connection, topic_ids: Sequence[int]) -> TopicRows:
+    """
+    Fetch the messages of some topic ids of one storage file, ordered by receive time.
+
+    Parameters
+    ----------
+    connection : sqlite3.Connection
+        The storage file, open.
+    topic_ids : sequence of int
+        Ids in its ``topics`` table (of one topic name).
+
+    Returns
+    -------
+    tuple
+        Receive times (ns) and raw messages, by time, ties in storage order.
+
+    """
     marks = ', '.join('?' * len(topic_ids))
     rows = connection.execute(f'SELECT timestamp, data FROM messages WHERE topic_id IN ({marks})',
                               tuple(topic_ids)).fetchall()
@@ -109,7 +124,7 @@ def read_rows(reader: Any, wanted: Sequence[Any]) -> list[dict[str, TopicRows]] 
                 by_topic.setdefault(stored.topic, []).append(int(stored.id))
         database = sqlite3.connect(f'{path.resolve().as_uri()}?immutable=1', uri=True)
         try:
-            files.append({topic: _topic_rows(database, ids) for topic, ids in by_topic.items()})
+            files.append({topic: topic_rows(database, ids) for topic, ids in by_topic.items()})
         finally:
             database.close()
     return files

@@ -18,6 +18,7 @@ import os
 from pathlib import Path
 from typing import Callable, Iterable
 
+from hydro_sdp.bags.plain_sqlite import read_plain
 from hydro_sdp.bags.sqlite_rows import read_rows, TopicRows
 from hydro_sdp.core.errors import BagError, BagFormatError, BagNotFoundError, BagReadError
 
@@ -147,10 +148,17 @@ def _collect_rows(collected: Collected, files: list[dict[str, TopicRows]] | None
 
 def _collect_from(sources: Iterable[Path], keep: Callable[[str], bool],
                   progress: Progress | None) -> Collected:
-    from rosbags.rosbag2 import Reader, ReaderError
-
     collected = Collected({}, {}, {})
     for source in sources:
+        plain = read_plain(source, lambda msgtype: keep(_normalise_type(msgtype)))
+        if plain is not None:
+            collected.declared += plain.declared
+            for topic, msgtype in plain.topics:
+                collected.topics.setdefault(topic, [_normalise_type(msgtype), 0])
+            _collect_rows(collected, plain.files, progress)
+            continue
+        from rosbags.rosbag2 import Reader, ReaderError
+
         try:
             with Reader(source) as reader:
                 collected.declared += reader.message_count
