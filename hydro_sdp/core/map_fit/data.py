@@ -86,6 +86,7 @@ class FitData:
         self.gains: list[FloatArray] = []
         self._padded: list[IntArray] = []
         self._flat: list[IntArray | None] = []
+        self._weighted: tuple[float, list[FloatArray]] = (math.nan, [])
         for size in np.unique(sizes):
             members = np.flatnonzero(sizes == size)
             width = int(lengths[members].max())
@@ -142,22 +143,29 @@ class FitData:
         """
         out = np.empty(self.samples)
         done = 0
-        for (_, _, observed, _, initial), q, flat in zip(self.buckets, self.increments(rate),
-                                                         self._flat):
+        if beta != self._weighted[0]:
+            # A finite-difference Jacobian varies beta in one column of several: keep it.
+            self._weighted = (beta, [beta * b[2] for b in self.buckets])
+        for (_, _, observed, _, initial), q, flat, weighted in zip(
+                self.buckets, self.increments(rate), self._flat, self._weighted[1]):
+            count = q.size if flat is None else flat.size
+            # A full bucket's residuals are written where they belong, others gathered.
+            target = out[done:done + count].reshape(q.shape) if flat is None else \
+                np.empty_like(q)
             if beta == 0.0:
-                predicted = initial[:, None] + np.cumsum(q, axis=1)
+                np.add(initial[:, None], np.cumsum(q, axis=1), out=target)
             else:
                 a = 1.0 - beta
-                drive = a * q + beta * observed
+                drive = q * a
+                drive += weighted
                 state, _ = lfilter([1.0], [1.0, -a], drive, axis=1, zi=(a * initial)[:, None])
-                predicted = np.empty_like(q)
-                predicted[:, :1] = initial[:, None]
-                predicted[:, 1:] = state[:, :-1]
-                predicted += q
-            residual = np.subtract(observed, predicted, out=predicted).ravel()
-            values = residual if flat is None else residual[flat]
-            out[done:done + values.size] = values
-            done += values.size
+                # Predicted from the state before: the start for the first sample.
+                np.add(initial[:, None], q[:, :1], out=target[:, :1])
+                np.add(state[:, :-1], q[:, 1:], out=target[:, 1:])
+            np.subtract(observed, target, out=target)
+            if flat is not None:
+                out[done:done + count] = target.ravel()[flat]
+            done += count
         return out
 
     def simulation_mae(self, rate: RateFunction) -> float:
