@@ -153,20 +153,23 @@ def decode_joint_states(raws: Sequence[bytes]) -> DecodedJointStates:
     stamps = np.zeros(count, dtype=np.int64)
     names: dict[str, int] = {}
     rows: list[tuple[np.ndarray, tuple[str, ...], FloatArray]] = []
-    lengths = np.fromiter((len(raw) for raw in raws), dtype=np.int64, count=count)
+    lengths = np.fromiter(map(len, raws), dtype=np.int64, count=count)
     for length in np.unique(lengths):
         index = np.flatnonzero(lengths == length)
         first = raws[int(index[0])]
         layout = joint_state_layout(first)
-        block = np.frombuffer(b''.join([raws[i] for i in index.tolist()]), dtype=np.uint8)
-        block = block.reshape(index.size, int(length))
+        # One publisher's messages all have one length: join them as they are.
+        chosen = raws if index.size == count else [raws[i] for i in index.tolist()]
+        block = np.frombuffer(b''.join(chosen), dtype=np.uint8).reshape(index.size, int(length))
         template = np.frombuffer(first, dtype=np.uint8)
-        fixed = np.r_[0:4, 12:layout.position_offset]
-        same = (block[:, fixed] == template[fixed]).all(axis=1)
+        # Same bytes outside the stamp (4:12) and the positions: header, frame id, names.
+        start = layout.position_offset
+        same = (block[:, :4] == template[:4]).all(axis=1) & \
+            (block[:, 12:start] == template[12:start]).all(axis=1)
         order = '<' if layout.little_endian else '>'
         bulk = index[same]
         if bulk.size:
-            rows_same = block[same]
+            rows_same = block if bulk.size == index.size else block[same]
             sec = np.ascontiguousarray(rows_same[:, 4:8]).view(order + 'i4')[:, 0]
             nanosec = np.ascontiguousarray(rows_same[:, 8:12]).view(order + 'u4')[:, 0]
             stamps[bulk] = sec.astype(np.int64) * 1_000_000_000 + nanosec

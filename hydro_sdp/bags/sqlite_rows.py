@@ -16,6 +16,7 @@ message by message then.
 
 from __future__ import annotations
 
+import gc
 from pathlib import Path
 import sqlite3
 from typing import Any, Sequence
@@ -83,10 +84,20 @@ def topic_rows(connection: sqlite3.Connection, topic_ids: Sequence[int]) -> Topi
 
     """
     marks = ', '.join('?' * len(topic_ids))
-    rows = connection.execute(f'SELECT timestamp, data FROM messages WHERE topic_id IN ({marks})',
-                              tuple(topic_ids)).fetchall()
-    stamps = [row[0] for row in rows]
-    raws = [row[1] for row in rows]
+    # A row is a new tuple: the cyclic collector would walk them all again and again
+    # while they pile up, and tuples of numbers and bytes hold no cycles.
+    collecting = gc.isenabled()
+    gc.disable()
+    try:
+        rows = connection.execute(
+            f'SELECT timestamp, data FROM messages WHERE topic_id IN ({marks})',
+            tuple(topic_ids)).fetchall()
+        stamps = [row[0] for row in rows]
+        raws = [row[1] for row in rows]
+        del rows
+    finally:
+        if collecting:
+            gc.enable()
     times = np.fromiter(stamps, dtype=np.int64, count=len(stamps))
     if times.size > 1 and bool(np.any(times[1:] < times[:-1])):
         order = np.argsort(times, kind='stable').tolist()
