@@ -7,7 +7,7 @@ import sys
 
 from conftest import REPO
 from hydro_sdp.bags import write_bag
-from hydro_sdp.cli.main import build_parser, COMMANDS
+from hydro_sdp.cli.main import build_parser, COMMANDS, main
 from hydro_sdp.core.experiment_records import experiment_record
 import pytest
 
@@ -92,3 +92,26 @@ def test_blas_runs_one_thread_unless_told(given, expected, tmp_path):
                           cwd=tmp_path, env=environment, timeout=120)
     assert done.stdout.startswith('hydro-sdp ')
     assert done.stderr.strip().splitlines()[-1] == expected
+
+
+def test_a_command_loads_no_other_command_module(steps_bag, tmp_path):
+    probe = ('import sys\nfrom hydro_sdp.cli.main import main\n'
+             f'main(["identify", {str(steps_bag)!r}, "--json"])\n'
+             'print(sorted(m for m in sys.modules if m.startswith("hydro_sdp.cli.")), '
+             'file=sys.stderr)')
+    done = subprocess.run([sys.executable, '-c', probe], capture_output=True, text=True,
+                          cwd=tmp_path, env=dict(os.environ, PYTHONPATH=str(REPO)),
+                          check=True, timeout=300)
+    loaded = done.stderr.strip().splitlines()[-1]
+    assert json.loads(done.stdout)['kind'] == 'sdp'
+    assert loaded == str(['hydro_sdp.cli.common', 'hydro_sdp.cli.identify',
+                          'hydro_sdp.cli.main', 'hydro_sdp.cli.progress'])
+
+
+@pytest.mark.parametrize('argv', [['--help', 'identify'], ['--help']])
+def test_the_command_list_keeps_its_help_when_help_comes_first(argv, capsys):
+    with pytest.raises(SystemExit):
+        main(argv)
+    listing = capsys.readouterr().out
+    assert listing == build_parser().format_help()
+    assert 'identify a joint model from step or random-level bags' in listing

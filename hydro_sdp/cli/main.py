@@ -57,9 +57,9 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
     Parameters
     ----------
     only : str or None
-        Give only this command its options and description (the others are
-        listed by name and one-line help, which is all ``hydro-sdp --help``
-        shows); default: every command in full.
+        Give only this command its options and description; the others are
+        listed by name, and with their one-line help (all ``hydro-sdp --help``
+        shows) unless ``only`` names a command; default: every command in full.
 
     Returns
     -------
@@ -83,17 +83,19 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
 
     subparsers.add_parser = add_parser  # type: ignore[method-assign]  # all get --json
     for command, name in COMMANDS.items():
-        module = importlib.import_module(f'hydro_sdp.cli.{name}')
         if only is None or only == command:
-            module.register(subparsers)
+            importlib.import_module(f'hydro_sdp.cli.{name}').register(subparsers)
+        elif only in COMMANDS:
+            subparsers.add_parser(command)      # the list is shown only without a command
         else:
+            module = importlib.import_module(f'hydro_sdp.cli.{name}')
             subparsers.add_parser(command, help=module.HELP)
     return parser
 
 
 def _asked(argv: list[str]) -> str:
-    """Return the command named in ``argv``: its first word that is not an option."""
-    return next((word for word in argv if not word.startswith('-')), '')
+    """Return the command ``argv`` starts with ('' when it starts with an option)."""
+    return argv[0] if argv and not argv[0].startswith('-') else ''
 
 
 def _fail(message: str, code: int) -> int:
