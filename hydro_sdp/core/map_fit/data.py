@@ -143,11 +143,14 @@ class FitData:
         """
         out = np.empty(self.samples)
         done = 0
-        if beta != self._weighted[0]:
-            # A finite-difference Jacobian varies beta in one column of several: keep it.
-            self._weighted = (beta, [beta * b[2] for b in self.buckets])
+        # A finite-difference Jacobian varies beta in one column of several: keep
+        # beta times the angles (read once, so the pair stays whole across threads).
+        cached = self._weighted
+        if cached[0] != beta:
+            cached = (beta, [beta * b[2] for b in self.buckets])
+            self._weighted = cached
         for (_, _, observed, _, initial), q, flat, weighted in zip(
-                self.buckets, self.increments(rate), self._flat, self._weighted[1]):
+                self.buckets, self.increments(rate), self._flat, cached[1]):
             count = q.size if flat is None else flat.size
             # A full bucket's residuals are written where they belong, others gathered.
             target = out[done:done + count].reshape(q.shape) if flat is None else \
