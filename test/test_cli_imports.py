@@ -115,3 +115,11 @@ def test_the_command_list_keeps_its_help_when_help_comes_first(argv, capsys):
     listing = capsys.readouterr().out
     assert listing == build_parser().format_help()
     assert 'identify a joint model from step or random-level bags' in listing
+
+
+def test_blas_threads_are_left_alone_once_numpy_is_loaded(monkeypatch, capsys):
+    monkeypatch.delenv('OPENBLAS_NUM_THREADS', raising=False)
+    with pytest.raises(SystemExit):
+        main(['--version'])
+    assert 'OPENBLAS_NUM_THREADS' not in os.environ   # too late to matter: not set
+    assert capsys.readouterr().out.startswith('hydro-sdp ')

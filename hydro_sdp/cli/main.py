@@ -118,8 +118,10 @@ def main(argv: list[str] | None = None) -> int:
         Exit code.
 
     """
-    # Before numpy loads OpenBLAS (in a fresh process); a value the user set is kept.
-    os.environ.setdefault('OPENBLAS_NUM_THREADS', BLAS_THREADS)
+    # Only before numpy loads OpenBLAS (a fresh process: the console script), where it
+    # is read; a value the user set is kept.
+    if 'numpy' not in sys.modules:
+        os.environ.setdefault('OPENBLAS_NUM_THREADS', BLAS_THREADS)
     try:
         words = sys.argv[1:] if argv is None else argv
         args = build_parser(_asked(words)).parse_args(words)
