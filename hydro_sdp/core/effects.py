@@ -268,11 +268,17 @@ class LoadDependence:
     """
     Speed scaled by the load, each direction on its own (payload, digging force).
 
-    With a measured load ``L`` (the record's ``load``, e.g. a cylinder pressure
-    in bar) the speed becomes ``w max(0.05, 1 + k (L - reference))`` with ``k``
-    = ``positive`` for ``w > 0`` and ``negative`` for ``w < 0``. A record without
-    a load signal takes the factors fitted to it by name (``records``, with
-    ``record_positive`` and ``record_negative``); other records keep factor 1.
+    With a measured load ``L`` (the record's ``load``, e.g. the signed load
+    pressure of the cylinder in bar) the speed ``w`` becomes
+    ``w max(0.05, 1 + k (L - reference)) sqrt(1 + max(0, g (L - onset)))``, with
+    ``k``, ``g`` and ``onset`` those of the direction of ``w``. The first factor is
+    a speed change per load unit; the second is the overrunning load of a
+    load-sensing valve: its pressure compensator holds the meter-in flow, so the
+    load leaves the speed alone until it pulls the actuator along, and beyond
+    ``onset`` the meter-out edge meters it, ``Q = Cd A(x) sqrt(2 dp / rho)`` with
+    ``dp`` growing with the load: the same factor at every opening. A record
+    without a load signal takes the factors fitted to it by name (``records``,
+    with ``record_positive`` and ``record_negative``); other records keep factor 1.
 
     Parameters
     ----------
@@ -284,6 +290,12 @@ class LoadDependence:
         Keys of records (:func:`hydro_sdp.core.exogenous.record_key`) with fitted factors.
     record_positive, record_negative : tuple[float, ...]
         Speed factor of each of those records per direction (> 0).
+    overrun_positive, overrun_negative : float
+        ``g`` in each direction, 1/load unit: the squared speed factor grows by
+        ``|g|`` per load unit beyond the onset (``g < 0``: as the load falls
+        below it); 0 leaves the direction alone.
+    onset_positive, onset_negative : float
+        Load at which the load begins to overrun in each direction, load units.
 
     """
 
@@ -294,6 +306,10 @@ class LoadDependence:
     records: tuple[str, ...] = ()
     record_positive: tuple[float, ...] = ()
     record_negative: tuple[float, ...] = ()
+    overrun_positive: float = 0.0
+    overrun_negative: float = 0.0
+    onset_positive: float = 0.0
+    onset_negative: float = 0.0
 
     def __post_init__(self) -> None:
         key = "key 'effects.load_dependence"
@@ -305,8 +321,11 @@ class LoadDependence:
                                  'one value per record, records named once')
         if not all(np.isfinite(x) and x > 0.0 for x in up + down):
             raise ModelFileError(f"{key}': record factors must be > 0")
-        if not np.all(np.isfinite((self.positive, self.negative, self.reference))):
-            raise ModelFileError(f"{key}': positive, negative and reference must be finite")
+        if not np.all(np.isfinite((self.positive, self.negative, self.reference,
+                                   self.overrun_positive, self.overrun_negative,
+                                   self.onset_positive, self.onset_negative))):
+            raise ModelFileError(f"{key}': positive, negative, reference, overrun_* and "
+                                 'onset_* must be finite')
         object.__setattr__(self, 'records', records)
         object.__setattr__(self, 'record_positive', up)
         object.__setattr__(self, 'record_negative', down)

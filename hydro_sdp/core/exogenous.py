@@ -105,6 +105,41 @@ def exogenous_of(record: Record, dt: float | None = None) -> Exogenous:
     return Exogenous(record.load, speeds, record_key(record))
 
 
+def load_factor(load: FloatArray, slope: float, reference: float, overrun: float = 0.0,
+                onset: float = 0.0) -> FloatArray:
+    """
+    Return one direction's speed factor of ``load_dependence`` at a measured load.
+
+    ``max(0.05, 1 + slope (L - reference)) sqrt(1 + max(0, overrun (L - onset)))``:
+    a change per load unit, and an overrunning load metered by the outlet edge
+    (:class:`~hydro_sdp.core.effects.LoadDependence`).
+
+    Parameters
+    ----------
+    load : FloatArray
+        Measured load at each sample, load units.
+    slope : float
+        Relative speed change per load unit, 1/load unit.
+    reference : float
+        Load at which the slope's factor is 1, load units.
+    overrun : float
+        Growth of the squared factor per load unit beyond ``onset`` (signed), 1/load unit.
+    onset : float
+        Load at which the overrunning begins, load units.
+
+    Returns
+    -------
+    FloatArray
+        Factor per sample.
+
+    """
+    load = np.asarray(load, dtype=np.float64)
+    linear = np.maximum(MIN_LOAD_FACTOR, 1.0 + slope * (load - reference))
+    if overrun == 0.0:
+        return linear
+    return linear * np.sqrt(1.0 + np.maximum(0.0, overrun * (load - onset)))
+
+
 def exogenous_factor(model: JointModel, speed: FloatArray,
                      exogenous: Exogenous | None = None) -> FloatArray | None:
     """
@@ -142,9 +177,10 @@ def exogenous_factor(model: JointModel, speed: FloatArray,
         factor = np.minimum(1.0, sharing.limit / np.maximum(demand, 1e-12))
     if isinstance(load, LoadDependence):
         if exogenous.load is not None:
-            change = exogenous.load - load.reference
-            up = np.maximum(MIN_LOAD_FACTOR, 1.0 + load.positive * change)
-            down = np.maximum(MIN_LOAD_FACTOR, 1.0 + load.negative * change)
+            up = load_factor(exogenous.load, load.positive, load.reference,
+                             load.overrun_positive, load.onset_positive)
+            down = load_factor(exogenous.load, load.negative, load.reference,
+                               load.overrun_negative, load.onset_negative)
         else:
             up_factor, down_factor = load.record_factors(exogenous.key)
             up, down = np.full(speed.size, up_factor), np.full(speed.size, down_factor)

@@ -14,7 +14,7 @@ from hydro_sdp.core.diagnosis.residuals import runs_of
 from hydro_sdp.core.effects import FlowSharing, LoadDependence
 from hydro_sdp.core.errors import DataError, ModelFileError
 from hydro_sdp.core.exogenous import (
-    Exogenous, exogenous_factor, exogenous_of, record_key, smoothed_speeds)
+    Exogenous, exogenous_factor, exogenous_of, load_factor, record_key, smoothed_speeds)
 from hydro_sdp.core.model import JointModel
 from hydro_sdp.core.records import Record
 from hydro_sdp.core.simulation import JointSimulator, simulate
@@ -109,6 +109,25 @@ def test_load_dependence_factor_with_a_load_and_per_record() -> None:
     named = Exogenous(key='a arm at 0.000 s')
     np.testing.assert_allclose(given(exogenous_factor(model, speed, named)), [1.2, 0.9, 1.0])
     np.testing.assert_allclose(given(exogenous_factor(model, speed, Exogenous(key='b'))), 1.0)
+
+
+def test_an_overrunning_load_factor_grows_as_the_root_of_the_load_beyond_its_onset() -> None:
+    # Extending, the load overruns below -10 bar; retracting, above 20 bar.
+    effect = LoadDependence(overrun_positive=-0.1, onset_positive=-10.0,
+                            overrun_negative=0.05, onset_negative=20.0)
+    model = linear_model(effects=(effect,))
+    speed = np.array([5.0, 5.0, 5.0, -5.0, -5.0, 0.0])
+    load = Exogenous(load=np.array([-90.0, -10.0, 40.0, 80.0, -50.0, -90.0]))
+    # sqrt(1 + 0.1 * 80) = 3 and sqrt(1 + 0.05 * 60) = 2; 1 short of the onset and at rest.
+    np.testing.assert_allclose(given(exogenous_factor(model, speed, load)),
+                               [3.0, 1.0, 1.0, 2.0, 1.0, 1.0])
+    np.testing.assert_allclose(load_factor(np.array([-90.0]), 0.01, -40.0, -0.1, -10.0),
+                               [0.5 * 3.0])
+    data = model.to_mapping()
+    assert data['effects']['load_dependence']['onset_negative'] == 20.0
+    assert JointModel.from_mapping(data) == model
+    with pytest.raises(ModelFileError, match='must be finite'):
+        LoadDependence(overrun_positive=math.inf)
 
 
 def test_effects_round_trip_through_the_model_file_and_refuse_bad_values() -> None:
