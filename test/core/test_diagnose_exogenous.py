@@ -181,7 +181,7 @@ def pressure_runs(arm: Machine, payload: float, seed: int) -> list[Record]:
 
 @pytest.fixture(scope='module')
 def pressures(payloads: Payloads) -> tuple[list[Record], Diagnosis]:
-    """Runs without and with 1200 kg carrying their holding pressure; their diagnosis."""
+    """Return runs without and with 1200 kg carrying their holding pressure, diagnosed."""
     arm, model, _ = payloads
     runs = pressure_runs(arm, 0.0, 50) + pressure_runs(arm, 1200.0, 80)
     return runs, diagnose(runs, model, max_iterations=1)
