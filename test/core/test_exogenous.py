@@ -10,6 +10,7 @@ from hydro_sdp.core.diagnosis.context import Context
 from hydro_sdp.core.diagnosis.detectors import detector, VOCABULARY
 from hydro_sdp.core.diagnosis.detectors.base import feature_signature
 from hydro_sdp.core.diagnosis.detectors.exogenous import block_scale
+from hydro_sdp.core.diagnosis.detectors.overrun import fit_overrun
 from hydro_sdp.core.diagnosis.residuals import runs_of
 from hydro_sdp.core.effects import FlowSharing, LoadDependence
 from hydro_sdp.core.errors import DataError, ModelFileError
@@ -128,6 +129,22 @@ def test_an_overrunning_load_factor_grows_as_the_root_of_the_load_beyond_its_ons
     assert JointModel.from_mapping(data) == model
     with pytest.raises(ModelFileError, match='must be finite'):
         LoadDependence(overrun_positive=math.inf)
+
+
+def test_fit_overrun_recovers_the_onset_and_the_growth() -> None:
+    rng = np.random.default_rng(4)
+    load = rng.uniform(-100.0, 100.0, 4000)
+    predicted = rng.uniform(0.05, 0.3, load.size)
+    # The squared factor grows by 0.05 per unit as the load falls below -20.
+    truth = np.sqrt(1.0 + np.maximum(0.0, -0.05 * (load + 20.0)))
+    measured = predicted * truth + rng.normal(0.0, 0.002, load.size)
+    g, onset = fit_overrun(measured, predicted, load)
+    assert g == pytest.approx(-0.05, rel=0.05) and onset == pytest.approx(-20.0, abs=1.5)
+    # No load effect: nothing beats the factor 1 by more than the noise, or a null fit.
+    g, onset = fit_overrun(predicted + rng.normal(0.0, 0.002, load.size), predicted, load)
+    factor = np.sqrt(1.0 + np.maximum(0.0, g * (load - onset)))
+    assert np.max(factor) < 1.02
+    assert fit_overrun(measured, predicted, np.full(load.size, 3.0)) == (0.0, 0.0)
 
 
 def test_effects_round_trip_through_the_model_file_and_refuse_bad_values() -> None:

@@ -9,10 +9,12 @@ without it they are not applicable, with the reason as evidence.
   (one pump for both). Fitted as a shared pump-flow limit
   (:class:`~hydro_sdp.core.effects.FlowSharing`).
 * ``load_dependence``: the speed changes with the load. With a measured load,
-  a relative speed change per load unit in each direction; without one, a
-  speed scale per record and direction, named only when the records' scales at
-  the same command differ beyond their noise (a chi-square test of
-  heterogeneity on block-robust standard errors).
+  an overrunning load (the squared speed factor growing with the load beyond an
+  onset, fitted on the one-step increments) or a relative speed change per load
+  unit in each direction, whichever is significant with the larger gain;
+  without one, a speed scale per record and direction, named only when the
+  records' scales at the same command differ beyond their noise (a chi-square
+  test of heterogeneity on block-robust standard errors).
 
 """
 
@@ -25,6 +27,7 @@ from typing import Any
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.diagnosis.context import Context
 from hydro_sdp.core.diagnosis.detectors.base import EffectDetector
+from hydro_sdp.core.diagnosis.detectors.overrun import fit_overrun, one_step_samples
 from hydro_sdp.core.diagnosis.residuals import mae, Run
 from hydro_sdp.core.diagnosis.results import Candidate, Trial
 from hydro_sdp.core.effects import FlowSharing as Sharing, LoadDependence as Load
@@ -267,63 +270,6 @@ def record_scales(context: Context) -> RecordScales:
     return RecordScales(scales, errors, loads, statistic, freedom, spread)
 
 
-def one_step_samples(context: Context) -> list[tuple[FloatArray, FloatArray, FloatArray]]:
-    """
-    Return the measured and predicted increments (deg) and the load of every run.
-
-    Away from the ends of the range (cushions, impacts) and predicted by the model
-    without its ``load_dependence``, so that a model holding the effect is fitted
-    afresh; samples without a load signal are left out.
-    """
-    base = context.model.without_effect(Load.name)
-    low = min(float(np.min(run.record.y)) for run in context.runs)
-    high = max(float(np.max(run.record.y)) for run in context.runs)
-    margin = END_SHARE * (high - low)
-    out = []
-    for run in context.runs:
-        if run.record.load is None:
-            continue
-        predicted = one_step_increments(base, run.record.v, run.record.y, run.dt,
-                                        start=run.start, v_before=float(run.record.v[0]),
-                                        exogenous=exogenous_of(run.record, run.dt))
-        angle = run.record.y[run.start:-1]
-        inner = (angle > low + margin) & (angle < high - margin)
-        out.append((np.diff(run.record.y[run.start:])[inner], predicted[inner],
-                    run.record.load[run.start + 1:][inner]))
-    return out
-
-
-def fit_overrun(measured: FloatArray, predicted: FloatArray,
-                load: FloatArray) -> tuple[float, float]:
-    """
-    Fit ``measured = predicted sqrt(1 + max(0, g (L - onset)))`` by least squares.
-
-    The one-step increments of one direction, the statistic the block test
-    judges. Started from both signs of ``g`` and three onsets (the load's
-    deciles 1, 5 and 9), since the kink leaves no gradient where it is idle.
-
-    Returns
-    -------
-    tuple[float, float]
-        ``(g, onset)`` in 1/load unit and load units; ``(0, 0)`` when no fit beats
-        the factor 1.
-
-    """
-    span = float(np.ptp(load)) if load.size else 0.0
-    if not span > 0.0 or predicted.size < 10:
-        return 0.0, 0.0
-
-    def misfit(q: FloatArray) -> FloatArray:
-        return measured - predicted * np.sqrt(1.0 + np.maximum(0.0, q[0] * (load / span - q[1])))
-    best, cost = (0.0, 0.0), 0.5 * float(np.sum((measured - predicted) ** 2))
-    for slope in (-4.0, 4.0):
-        for onset in np.quantile(load, (0.1, 0.5, 0.9)).tolist():
-            fit = least_squares(misfit, [slope, onset / span])
-            if float(fit.cost) < cost:
-                best, cost = (float(fit.x[0] / span), float(fit.x[1] * span)), float(fit.cost)
-    return best
-
-
 def _first_significant(context: Context, word: str, models: list[JointModel],
                        parameters: list[dict[str, Any]], evidence: str) -> Trial:
     """Score the models in turn; return the first significant one (else the last)."""
@@ -341,7 +287,7 @@ class LoadDependence(EffectDetector):
 
     word = 'load_dependence'
     description = 'the speed changes with the load (payload, digging)'
-    remedy = 'effect, per load unit (measured load) or per record'
+    remedy = 'effect, overrunning or per load unit (measured load), or per record'
     feature = 'command'
 
     def fit_effect(self, context: Context) -> Trial:
@@ -368,7 +314,7 @@ class LoadDependence(EffectDetector):
         block test scores: a factor fitted to the simulation error alone can improve
         it on average over a stroke while it worsens the speed sample by sample.
         """
-        samples = one_step_samples(context)
+        samples = one_step_samples(context, END_SHARE)
         measured, predicted, load = (np.concatenate([part[i] for part in samples])
                                      for i in range(3))
         factors = [fit_overrun(measured[side], predicted[side], load[side])
