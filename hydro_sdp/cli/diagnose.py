@@ -36,8 +36,10 @@ Two words need more than the joint's own command and angle. `flow_sharing`
 uses the other joints of the same JointState (read whenever the bags have
 them): the joint slowing while another moves is fitted as a shared pump-flow
 limit. `load_dependence` uses a measured load when --load-topic names a Float64
-topic (a cylinder pressure, held between messages like the command): a speed
-change per load unit and direction. Without it, each record gets its own speed
+topic (a load pressure, held between messages like the command): a load that
+overruns the joint speeds it up as the root of the load pressure (the outlet
+edge meters the flow), or a plain speed change per load unit and direction,
+whichever the data show. Without it, each record gets its own speed
 scale per direction, named only when the records' scales at the same command
 differ beyond their noise; those factors hold for the bags they were fitted on.
 Without the signals these words are not applicable.
