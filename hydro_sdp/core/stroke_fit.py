@@ -15,7 +15,7 @@ lowers the simulation error of the experiments.
 
 from __future__ import annotations
 
-from typing import Sequence
+from typing import Literal, Sequence
 
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.effects import StrokeGeometry
@@ -69,7 +69,7 @@ def model_speeds(experiments: Sequence[Experiment], rate_of: object, delay: int,
     return np.concatenate(speeds), np.concatenate(increments), np.concatenate(previous)
 
 
-def _hats(angles: FloatArray, knots: FloatArray) -> FloatArray:
+def hats(angles: FloatArray, knots: FloatArray) -> FloatArray:
     """Piecewise-linear basis: column j is 1 at knot j, 0 at the others, flat beyond."""
     clipped = np.clip(angles, knots[0], knots[-1])
     basis = np.zeros((angles.size, knots.size))
@@ -79,6 +79,172 @@ def _hats(angles: FloatArray, knots: FloatArray) -> FloatArray:
     basis[rows, index] = 1.0 - weight
     basis[rows, index + 1] += weight
     return basis
+
+
+def stroke_knots(angles: FloatArray) -> FloatArray:
+    """
+    Knots over the angles moved through: evenly spread, two more near each end (cushions).
+
+    Parameters
+    ----------
+    angles : FloatArray
+        Angles the joint moved through, degrees.
+
+    Returns
+    -------
+    FloatArray
+        Increasing knots, degrees.
+
+    """
+    first, last = float(np.min(angles)), float(np.max(angles))
+    step = (last - first) / (KNOTS - 1)
+    return np.unique(np.r_[np.linspace(first, last, KNOTS), first + 0.3 * step,
+                           last - 0.3 * step])
+
+
+def penalised_lstsq(blocks: Sequence[FloatArray], smoothed: Sequence[bool],
+                    target: FloatArray, ridge: Sequence[float] | None = None
+                    ) -> tuple[FloatArray, float]:
+    """
+    Least squares over column blocks, those of knot values smoothed by a small penalty.
+
+    A block may also be drawn towards zero (a ridge), so that values the data do not
+    determine stay there instead of taking any value.
+
+    Parameters
+    ----------
+    blocks : sequence of FloatArray
+        Design columns, block by block (a block of knot values has one column a knot).
+    smoothed : sequence of bool
+        Whether each block gets the penalty on second differences of its values.
+    target : FloatArray
+        Values to fit.
+    ridge : sequence of float or None
+        Weight of each block's pull towards zero, relative to the data (default: none).
+
+    Returns
+    -------
+    tuple
+        ``(solution, sse)``: the coefficients and the sum of squared residuals (without
+        the penalty).
+
+    """
+    design = np.hstack(blocks)
+    rows = []
+    column = 0
+    for block, smooth in zip(blocks, smoothed):
+        size = block.shape[1]
+        if smooth and size > 2:
+            row = np.zeros((size - 2, design.shape[1]))
+            row[:, column:column + size] = np.diff(np.eye(size), 2, axis=0)
+            rows.append(row)
+        column += size
+    # Penalties scaled to the data.
+    scale = float(np.sqrt(np.sum(design ** 2) / max(design.shape[0], 1)))
+    scale *= np.sqrt(design.shape[0])
+    rows = [SMOOTHING * row for row in rows]
+    column = 0
+    for block, weight in zip(blocks, ridge or [0.0] * len(blocks)):
+        size = block.shape[1]
+        if weight > 0.0:
+            row = np.zeros((size, design.shape[1]))
+            row[:, column:column + size] = weight * np.eye(size)
+            rows.append(row)
+        column += size
+    penalty = np.vstack(rows) if rows else np.zeros((0, design.shape[1]))
+    solution, *_ = np.linalg.lstsq(np.vstack([design, scale * penalty]),
+                                   np.r_[target, np.zeros(penalty.shape[0])], rcond=None)
+    return solution, float(np.sum((target - design @ solution) ** 2))
+
+
+#: How a part of the factor is fitted: at every knot, one value for all angles, or not at
+#: all (the shared part then stays 1, the per-direction part 0).
+Part = Literal['knots', 'constant', 'none']
+
+
+def fit_factor(angles: FloatArray, drive: FloatArray, target: FloatArray, knots: FloatArray,
+               shared: Part = 'knots', direction: Part = 'knots'
+               ) -> tuple[FloatArray, FloatArray, float]:
+    """
+    Fit ``target ~ drive (s(y) + sign(drive) p(y))``, both parts piecewise-linear in the angle.
+
+    The knot values are one least-squares problem, smoothed by a small penalty on their
+    second differences (:func:`penalised_lstsq`).
+
+    Parameters
+    ----------
+    angles : FloatArray
+        Angle before each sample, degrees.
+    drive : FloatArray
+        The model's increment of each sample, degrees.
+    target : FloatArray
+        The measured increment, degrees.
+    knots : FloatArray
+        Knots, degrees (from :func:`stroke_knots`).
+    shared, direction : Part
+        How the shared part ``s`` and the per-direction part ``p`` are fitted.
+
+    Returns
+    -------
+    tuple
+        ``(s, p, sse)``: the two parts at the knots and the sum of squared residuals,
+        degrees^2.
+
+    """
+    size = knots.size
+    basis = hats(angles, knots)
+    blocks: list[FloatArray] = []
+    smoothed: list[bool] = []
+    for part, column in ((shared, drive), (direction, drive * np.sign(drive))):
+        if part == 'knots':
+            blocks.append(np.asarray(basis * column[:, None], dtype=np.float64))
+        elif part == 'constant':
+            blocks.append(column[:, None])
+        smoothed.append(part == 'knots')
+    rest: FloatArray = target - drive if shared == 'none' else target
+    if not blocks:
+        return np.ones(size), np.zeros(size), float(np.sum(rest ** 2))
+    solution, sse = penalised_lstsq(blocks, [s for s, p in zip(smoothed, (shared, direction))
+                                             if p != 'none'], rest)
+    values = []
+    index = 0
+    for part, default in ((shared, 1.0), (direction, 0.0)):
+        if part == 'knots':
+            values.append(solution[index:index + size])
+            index += size
+        elif part == 'constant':
+            values.append(np.full(size, solution[index]))
+            index += 1
+        else:
+            values.append(np.full(size, default))
+    return values[0], values[1], sse
+
+
+def geometry_of(knots: FloatArray, shared: FloatArray,
+                part: FloatArray | None = None) -> StrokeGeometry | None:
+    """
+    Return the effect of fitted parts (``f = s (1 + sign(w) p / s)``), None if ``s`` is not > 0.
+
+    Parameters
+    ----------
+    knots : FloatArray
+        Knots, degrees.
+    shared : FloatArray
+        Shared part at the knots.
+    part : FloatArray or None
+        Per-direction part at the knots (None: none).
+
+    Returns
+    -------
+    StrokeGeometry or None
+        The effect, or None when the shared factor falls to nearly nothing somewhere.
+
+    """
+    if np.any(shared <= 0.05):
+        return None
+    asymmetry = () if part is None else tuple(np.clip(part / shared, -0.95, 0.95).tolist())
+    return StrokeGeometry(knots=tuple(knots.tolist()), factors=tuple(shared.tolist()),
+                          asymmetry=asymmetry)
 
 
 def fit_stroke_geometry(experiments: Sequence[Experiment], rate_of: object, delay: int,
@@ -124,31 +290,9 @@ def fit_stroke_geometry(experiments: Sequence[Experiment], rate_of: object, dela
     if high <= low or min(covered) < SPAN * (high - low):
         return None
     angles = previous[moving]
-    first, last = float(np.min(angles)), float(np.max(angles))
-    step = (last - first) / (KNOTS - 1)
-    knots = np.unique(np.r_[np.linspace(first, last, KNOTS), first + 0.3 * step,
-                            last - 0.3 * step])
-    basis = _hats(angles, knots)
-    drive = dt * w[moving]
-    direction = np.sign(drive)
-    design = np.hstack([basis * drive[:, None], basis * (drive * direction)[:, None]])
-    target = dy[moving]
-    # Smooth: a small penalty on second differences, scaled to the data.
-    size = knots.size
-    second = np.diff(np.eye(size), 2, axis=0)
-    penalty = np.zeros((2 * (size - 2), 2 * size))
-    penalty[:size - 2, :size] = second
-    penalty[size - 2:, size:] = second
-    scale = SMOOTHING * float(np.sqrt(np.sum(design ** 2) / max(design.shape[0], 1)))
-    scale *= np.sqrt(design.shape[0])
-    solution, *_ = np.linalg.lstsq(np.vstack([design, scale * penalty]),
-                                   np.r_[target, np.zeros(penalty.shape[0])], rcond=None)
-    shared, part = solution[:size], solution[size:]
-    if np.any(shared <= 0.05):
-        return None
-    asymmetry = np.clip(part / shared, -0.95, 0.95)
-    return StrokeGeometry(knots=tuple(knots.tolist()), factors=tuple(shared.tolist()),
-                          asymmetry=tuple(asymmetry.tolist()))
+    knots = stroke_knots(angles)
+    shared, part, _ = fit_factor(angles, dt * w[moving], dy[moving], knots)
+    return geometry_of(knots, shared, part)
 
 
 def speed_gains(experiments: Sequence[Experiment], rate_of: object, delay: int, dt: float,
