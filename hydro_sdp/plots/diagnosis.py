@@ -8,14 +8,17 @@ from hydro_sdp.core.arrays import FloatArray, IntArray
 from hydro_sdp.core.diagnosis.residuals import T_LIMIT
 from hydro_sdp.core.diagnosis.results import Candidate, LedgerStep, Signature
 from hydro_sdp.plots.figures import LIMIT, MEASURED, MODEL, new_figure
+from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 import numpy as np
 
 
-def _binned(x: FloatArray, values: FloatArray,
-            bins: int = 30) -> tuple[FloatArray, FloatArray]:
+def _binned(x: FloatArray, values: FloatArray, bins: int = 30,
+            edges: FloatArray | None = None) -> tuple[FloatArray, FloatArray]:
     """Return bin centres of ``x`` and the mean of ``values`` in bins of more than 5."""
-    edges = np.linspace(np.min(x), np.max(x), bins + 1)
+    if edges is None:
+        edges = np.linspace(np.min(x), np.max(x), bins + 1)
+    bins = edges.size - 1
     index = np.clip(np.digitize(x, edges) - 1, 0, bins - 1)
     counts = np.bincount(index, minlength=bins)
     sums = np.bincount(index, weights=values, minlength=bins)
@@ -40,7 +43,11 @@ def plot_signature(signature: Signature, *, command_unit: str | None = None) -> 
     Draw the residual signature that named an effect, before and after adding it.
 
     Against the delayed command or the angle, the residuals are averaged in bins;
-    after command changes or reversals, over the second after each event.
+    after command changes or reversals, over the second after each event. When the
+    signature holds the direction of motion at every sample (the angle words), each
+    direction is drawn apart, its residual signed by the direction (positive: faster
+    than the model): a factor of the angle shared by both directions shows as one
+    curve twice, a gravity-like one as two mirrored curves.
 
     Parameters
     ----------
@@ -65,6 +72,8 @@ def plot_signature(signature: Signature, *, command_unit: str | None = None) -> 
         for values, colour, name in curves:
             lags, mean = _event_average(signature.triggers, values / dt, span, signature.signs)
             ax.plot(lags, mean, color=colour, linewidth=1.6, label=name)
+    elif signature.signs.size == signature.x.size:
+        _plot_by_direction(ax, signature)
     else:
         for values, colour, name in curves:
             centres, means = _binned(signature.x, values / dt)
@@ -74,10 +83,30 @@ def plot_signature(signature: Signature, *, command_unit: str | None = None) -> 
         label = f'{label} ({command_unit})'
     ax.set_xlabel(label)
     ax.axhline(0.0, color='black', linewidth=0.6)
-    ax.set_ylabel('mean velocity residual (deg/s)')
+    along = signature.x is not None and signature.signs.size == signature.x.size
+    ax.set_ylabel('mean residual along the motion (deg/s)' if along else
+                  'mean velocity residual (deg/s)')
     ax.legend(loc='best', fontsize=8, frameon=False)
     figure.suptitle(f'Residual signature of {signature.effect}', fontsize=11)
     return figure
+
+
+def _plot_by_direction(ax: Axes, signature: Signature) -> None:
+    """Draw the binned residual along the motion for each direction, before and after."""
+    assert signature.x is not None
+    moving = signature.signs != 0.0
+    if not np.any(moving):
+        return
+    edges = np.linspace(np.min(signature.x[moving]), np.max(signature.x[moving]), 31)
+    for values, colour, name in ((signature.before, MODEL, 'before'),
+                                 (signature.after, MEASURED, 'after')):
+        for sign, style, heading in ((1.0, '-', 'moving up'), (-1.0, '--', 'moving down')):
+            mine = signature.signs == sign
+            if np.count_nonzero(mine) > 5:
+                centres, means = _binned(signature.x[mine], sign * values[mine] / signature.dt,
+                                         edges=edges)
+                ax.plot(centres, means, 'o' + style, color=colour, markersize=3,
+                        linewidth=1.2, label=f'{name}, {heading}')
 
 
 def plot_gap(t: FloatArray, measured: FloatArray, before: FloatArray, after: FloatArray, *,

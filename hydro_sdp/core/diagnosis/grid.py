@@ -18,7 +18,7 @@ from typing import Sequence
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.diagnosis.search import diagnose
 from hydro_sdp.core.effects import (
-    AngleDependentVelocity, Backlash, DirectionDependentDelay, ValveLag)
+    AngleDependentVelocity, Backlash, DirectionDependentDelay, StrokeGeometry, ValveLag)
 from hydro_sdp.core.model import JointModel
 from hydro_sdp.core.records import Record
 from hydro_sdp.core.simulation import simulate
@@ -32,11 +32,12 @@ UNITS: dict[str, tuple[tuple[float, float], float]] = {
     'signed_percent': ((-100.0, 100.0), 0.0),
 }
 
-#: The words hidden in turn, and ``none`` (nothing missing).
+#: The words hidden in turn, and ``none`` (nothing missing). Words added later come after
+#: ``none``, so that the draws of the earlier cases (seeded by the word's place) stay the same.
 WORDS: tuple[str, ...] = (
     'dead_zone', 'velocity_saturation', 'asymmetry', 'time_delay',
     'direction_dependent_delay', 'angle_limits', 'valve_lag', 'backlash',
-    'angle_dependent_velocity', 'none')
+    'angle_dependent_velocity', 'none', 'stroke_geometry')
 
 #: The two programs.
 PROGRAMS: tuple[str, ...] = ('random', 'stroke')
@@ -191,7 +192,28 @@ def hide(word: str, rng: np.random.Generator, units: str) -> tuple[JointModel, J
     if word == 'angle_dependent_velocity':
         return truth.with_effect(AngleDependentVelocity(float(rng.uniform(0.2, 0.4)),
                                                         float(rng.uniform(0.0, 360.0)))), truth
+    if word == 'stroke_geometry':
+        return truth.with_effect(stroke_geometry(rng, truth)), truth
     return truth, truth
+
+
+def stroke_geometry(rng: np.random.Generator, truth: JointModel) -> StrokeGeometry:
+    """
+    Return a linkage factor over the stroke of ``truth``, the same for both directions.
+
+    Smooth (a random cosine and a slope over five knots), faster by x1.4-2 at one end
+    of the stroke than at the other, with cushions over 5 % of the stroke at each end.
+    """
+    assert truth.angle_limits is not None
+    low, high = truth.angle_limits
+    share = np.linspace(0.0, 1.0, 5)
+    shape = np.cos(np.pi * share + float(rng.uniform(0.0, np.pi))) + \
+        float(rng.uniform(-1.0, 1.0)) * share
+    shape = (shape - shape.min()) / np.ptp(shape)
+    factors = np.exp(np.log(float(rng.uniform(1.4, 2.0))) * (shape - 0.5))
+    return StrokeGeometry(tuple(low + (high - low) * share), tuple(factors.tolist()),
+                          cushion=0.05 * (high - low),
+                          cushion_factor=float(rng.uniform(0.3, 0.6)))
 
 
 def _levels(rng: np.random.Generator, truth: JointModel, sign: float,

@@ -15,12 +15,13 @@ from hydro_sdp.core.diagnosis.detectors.delays import DirectionDependentDelay, T
 from hydro_sdp.core.diagnosis.detectors.dynamics import Backlash, ValveLag
 from hydro_sdp.core.diagnosis.detectors.exogenous import FlowSharing, LoadDependence
 from hydro_sdp.core.diagnosis.detectors.map_shape import Asymmetry, DeadZone, VelocitySaturation
+from hydro_sdp.core.diagnosis.detectors.stroke import StrokeGeometry
 from hydro_sdp.core.errors import ConfigurationError
 
 #: Every detector, in the order the search tries them (ties in gain go to the first).
 DETECTORS: tuple[Detector, ...] = (
     DeadZone(), VelocitySaturation(), Asymmetry(), TimeDelay(), DirectionDependentDelay(),
-    AngleLimits(), ValveLag(), Backlash(), AngleDependentVelocity(),
+    AngleLimits(), ValveLag(), Backlash(), AngleDependentVelocity(), StrokeGeometry(),
     FlowSharing(), LoadDependence(),
 )
 

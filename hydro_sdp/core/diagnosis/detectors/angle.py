@@ -7,10 +7,11 @@ import math
 
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.diagnosis.context import Context
-from hydro_sdp.core.diagnosis.detectors.base import Detector, EffectDetector
-from hydro_sdp.core.diagnosis.residuals import velocity_residuals
-from hydro_sdp.core.diagnosis.results import Candidate, Trial
+from hydro_sdp.core.diagnosis.detectors.base import Detector, EffectDetector, feature_signature
+from hydro_sdp.core.diagnosis.residuals import Run, velocity_residuals
+from hydro_sdp.core.diagnosis.results import Candidate, Signature, Trial
 from hydro_sdp.core.effects import AngleDependentVelocity as AngleSpeed
+from hydro_sdp.core.model import JointModel
 from hydro_sdp.core.simulation import speed_profile
 import numpy as np
 from scipy.optimize import least_squares
@@ -78,6 +79,37 @@ def held_at_stops(context: Context) -> tuple[float | None, float | None, int]:
     return stops[0], stops[1], contact
 
 
+def directional_signature(word: str, model: JointModel, augmented: JointModel,
+                          run: Run) -> Signature:
+    """
+    Return the residual against the angle with the direction of the model's motion.
+
+    The signature's ``signs`` hold, sample by sample, the sign of the model's speed
+    (0 where it does not move), so that the report draws the two directions apart: a
+    factor shared by both shows the same curve for both once each residual is signed
+    by its direction, a gravity-like one mirrored curves.
+
+    Parameters
+    ----------
+    word : str
+        Vocabulary word.
+    model, augmented : JointModel
+        The model given and the augmented model.
+    run : Run
+        The run to draw.
+
+    Returns
+    -------
+    Signature
+        The residuals, the angle and the direction of motion, aligned sample by sample.
+
+    """
+    signature = feature_signature(word, 'angle', model, augmented, run)
+    record = run.record
+    speed = speed_profile(model, record.v, run.dt, v_before=float(record.v[0]))
+    return replace(signature, signs=np.sign(speed[run.start + 1:]))
+
+
 class AngleLimits(Detector):
     """The joint stops at end stops the model lacks: take the stops seen in the data."""
 
@@ -109,6 +141,10 @@ class AngleLimits(Detector):
         # else could shrink the residual there; stops moved (backlash shifts where the
         # sensor stops) compete on gain like any other word.
         return replace(trial, signature_match=current is None and trial.significant), augmented
+
+    def signature(self, model: JointModel, augmented: JointModel, run: Run) -> Signature:
+        """Return the residual against the angle, the two directions of motion apart."""
+        return directional_signature(self.word, model, augmented, run)
 
 
 class AngleDependentVelocity(EffectDetector):
@@ -150,3 +186,7 @@ class AngleDependentVelocity(EffectDetector):
                              {'amplitude': amplitude, 'phase': phase},
                              f'the speed for a given command changes with the angle by '
                              f'{100 * amplitude:.3g} % (phase {phase:.3g} deg)')
+
+    def signature(self, model: JointModel, augmented: JointModel, run: Run) -> Signature:
+        """Return the residual against the angle, the two directions of motion apart."""
+        return directional_signature(self.word, model, augmented, run)
