@@ -103,7 +103,8 @@ def stroke_knots(angles: FloatArray) -> FloatArray:
 
 
 def penalised_lstsq(blocks: Sequence[FloatArray], smoothed: Sequence[bool],
-                    target: FloatArray, ridge: Sequence[float] | None = None
+                    target: FloatArray,
+                    ridge: Sequence[float | FloatArray] | None = None
                     ) -> tuple[FloatArray, float]:
     """
     Least squares over column blocks, those of knot values smoothed by a small penalty.
@@ -119,8 +120,9 @@ def penalised_lstsq(blocks: Sequence[FloatArray], smoothed: Sequence[bool],
         Whether each block gets the penalty on second differences of its values.
     target : FloatArray
         Values to fit.
-    ridge : sequence of float or None
-        Weight of each block's pull towards zero, relative to the data (default: none).
+    ridge : sequence of float or FloatArray, or None
+        Weight of each block's pull towards zero, relative to the data, for the whole
+        block or column by column (default: none).
 
     Returns
     -------
@@ -146,9 +148,9 @@ def penalised_lstsq(blocks: Sequence[FloatArray], smoothed: Sequence[bool],
     column = 0
     for block, weight in zip(blocks, ridge or [0.0] * len(blocks)):
         size = block.shape[1]
-        if weight > 0.0:
+        if np.any(np.asarray(weight) > 0.0):
             row = np.zeros((size, design.shape[1]))
-            row[:, column:column + size] = weight * np.eye(size)
+            row[:, column:column + size] = np.diag(np.broadcast_to(weight, (size,)))
             rows.append(row)
         column += size
     penalty = np.vstack(rows) if rows else np.zeros((0, design.shape[1]))

@@ -23,7 +23,7 @@ def test_a_shared_factor_is_fitted_where_it_is_and_not_where_the_factor_is_oppos
     case = make_case('stroke_geometry', 'stroke', 'signed_percent', 0)
     truth = case.truth.effect('stroke_geometry')
     context = context_of(case)
-    parts = factor_parts(context, stroke_samples(context))
+    parts = factor_parts(stroke_samples(context))
     # Beyond the map and the transients, the shared factor explains the residual, the
     # opposite one far less.
     assert parts.signature
@@ -40,7 +40,7 @@ def test_a_shared_factor_is_fitted_where_it_is_and_not_where_the_factor_is_oppos
     # A gravity-like factor (opposite for the two directions) is not this word's.
     gravity = make_case('angle_dependent_velocity', 'stroke', 'signed_percent', 0)
     context = context_of(gravity)
-    parts = factor_parts(context, stroke_samples(context))
+    parts = factor_parts(stroke_samples(context))
     assert not parts.signature
     assert parts.command - parts.opposite > 3.0 * (parts.command - parts.shared)
     found, augmented = detector('stroke_geometry').fit(context)

@@ -51,13 +51,12 @@ class Parts(NamedTuple):
 
     Parameters
     ----------
-    total : float
-        Squared residual of the model under test, every sample, degrees^2.
     base : float
-        The same over the samples the parts are compared on.
+        Squared residual of the model under test over the samples the parts are
+        compared on, degrees^2.
     command : float
-        Left by factors of the model's speed and of the time since the command changed,
-        per direction (what a refitted map, delay or lag does).
+        Left by factors of the model's speed (per direction) and of the time since the
+        command changed (both directions alike): what a refitted map, delay or lag does.
     shared : float
         Left by that and a factor of the angle shared by both directions.
     opposite : float
@@ -65,7 +64,6 @@ class Parts(NamedTuple):
 
     """
 
-    total: float
     base: float
     command: float
     shared: float
@@ -167,13 +165,13 @@ def stroke_samples(context: Context) -> Samples:
     return Samples(y[keep], drive[keep], dy[keep], since[keep])
 
 
-def factor_parts(context: Context, samples: Samples) -> Parts:
+def factor_parts(samples: Samples) -> Parts:
     """
     Return what a shared and an opposite angle factor each explain beyond map and transients.
 
     Both are fitted on top of a factor of the model's speed per direction and one of
-    the time since the command changed per direction (up to :data:`TRANSIENT`), so
-    that an error of the map (a function of the command, which a program may tie to the
+    the time since the command changed (up to :data:`TRANSIENT`, alike for both
+    directions), so that an error of the map (a function of the command, which a program may tie to the
     angle) or of the delay or lag (a transient where runs start, at the ends of the
     stroke) passes for neither. Only where both directions are seen at the same angles
     can the two be told apart (elsewhere either fits the one direction there): the
@@ -183,8 +181,6 @@ def factor_parts(context: Context, samples: Samples) -> Parts:
 
     Parameters
     ----------
-    context : Context
-        The model under test and the data.
     samples : Samples
         The samples a factor is fitted on.
 
@@ -194,7 +190,6 @@ def factor_parts(context: Context, samples: Samples) -> Parts:
         The squared residuals, degrees^2.
 
     """
-    total = float(sum(np.sum(r * r) for r in context.base))
     y, up = samples.angles, samples.drive > 0.0
     inside = np.zeros(y.size, dtype=bool)
     if np.any(up) and not np.all(up):
@@ -205,7 +200,7 @@ def factor_parts(context: Context, samples: Samples) -> Parts:
     drive, target = samples.drive[inside], samples.target[inside]
     base = float(np.sum((target - drive) ** 2))
     if np.count_nonzero(inside) < 50 * KNOTS:
-        return Parts(total, base, base, base, base)
+        return Parts(base, base, base, base)
     sign = np.sign(drive)[:, None]
     speed = np.abs(drive)
     by_speed = hats(speed, stroke_knots(speed)) * drive[:, None] if np.ptp(speed) > 0.0 \
@@ -217,7 +212,7 @@ def factor_parts(context: Context, samples: Samples) -> Parts:
         known.append(hats(time, stroke_knots(time))[:, :-1] * drive[:, None])
     by_angle = hats(y[inside], stroke_knots(y[inside])) * drive[:, None]
     smooth = [True] * (len(known) + 1)
-    return Parts(total, base, penalised_lstsq(known, smooth[1:], target)[1],
+    return Parts(base, penalised_lstsq(known, smooth[1:], target)[1],
                  penalised_lstsq(known + [by_angle], smooth, target)[1],
                  penalised_lstsq(known + [by_angle * sign], smooth, target)[1])
 
@@ -227,8 +222,9 @@ def fit_shape(samples: Samples, knots: FloatArray) -> tuple[FloatArray, FloatArr
     Fit the shared factor and its per-direction part (cushions, load) at ``knots``.
 
     As :func:`hydro_sdp.core.stroke_fit.fit_factor`, with the per-direction part drawn
-    towards zero (:data:`RIDGE`): where one direction alone is seen, the factor there is
-    taken as shared, not left to any split between the parts.
+    towards zero (:data:`RIDGE`) at the knots where one direction alone is seen (the
+    other has under a tenth of its samples there): the factor there is taken as shared,
+    not left to any split between the parts.
 
     Parameters
     ----------
@@ -243,9 +239,14 @@ def fit_shape(samples: Samples, knots: FloatArray) -> tuple[FloatArray, FloatArr
         The shared factor and the per-direction part at the knots.
 
     """
-    by_angle = hats(samples.angles, knots) * samples.drive[:, None]
+    basis = hats(samples.angles, knots)
+    up = samples.drive > 0.0
+    seen = np.minimum(basis[up].sum(axis=0), basis[~up].sum(axis=0))
+    alone = seen < 0.1 * np.maximum(basis[up].sum(axis=0), basis[~up].sum(axis=0))
+    by_angle = basis * samples.drive[:, None]
     solution, _ = penalised_lstsq([by_angle, by_angle * np.sign(samples.drive)[:, None]],
-                                  [True, True], samples.target, ridge=[0.0, RIDGE])
+                                  [True, True], samples.target,
+                                  ridge=[0.0, np.where(alone, RIDGE, 0.0)])
     return solution[:knots.size], solution[knots.size:]
 
 
@@ -264,7 +265,7 @@ class StrokeGeometry(EffectDetector):
         if samples.angles.size < 50 * KNOTS or np.ptp(samples.angles) <= 0.0:
             return Candidate(self.word, True, evidence='too little steady motion away from '
                              'the stops to fit a factor along the stroke'), None
-        parts = factor_parts(context, samples)
+        parts = factor_parts(samples)
         shares = (f'beyond the map, a shared factor removes '
                   f'{100 * (parts.command - parts.shared) / max(parts.base, 1e-300):.3g} % of '
                   f'the residual where both directions are seen, an opposite one '
