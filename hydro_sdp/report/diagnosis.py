@@ -53,6 +53,16 @@ def write_report(folder: Path, result: Diagnosis, *, command_unit: str | None = 
     ledger = [f'| {i} | {s.effect} | {s.mae_before:.4g} | {s.mae_after:.4g} |'
               for i, s in enumerate(result.ledger, start=1)]
     added = len(result.ledger)
+    signature = result.signature
+    reading = []
+    if signature is not None and signature.x is not None and \
+            signature.signs.size == signature.x.size:
+        reading = ['The signature draws the velocity residual against the angle for each '
+                   'direction of motion apart, signed by the motion (positive: faster than the '
+                   'model). A factor of the angle shared by both directions (linkage: '
+                   '`stroke_geometry`) shows as one curve twice; a gravity-like one '
+                   '(`angle_dependent_velocity`) as two mirrored curves; a stop as the residual '
+                   'of one direction at one end.', '']
     summary = '\n'.join([
         '# Discrepancy report', '',
         f'**Named effect: `{result.effect}`.** Validation MAE {result.mae_before:.4g} deg '
@@ -65,7 +75,8 @@ def write_report(folder: Path, result: Diagnosis, *, command_unit: str | None = 
         'statistic over one-second blocks, (better - worse) / sqrt(better + worse) '
         '(significant: z > 3 and at least 2 %).', '',
         '| effect | significant | gain (%) | z | evidence |', '|---|---|---|---|---|', *rows,
-        '', '## Figures', '', *[f'![{Path(f).stem}]({Path(f).name})' for f in figures], '',
+        '', '## Figures', '', *reading, *[f'![{Path(f).stem}]({Path(f).name})' for f in figures],
+        '',
         '## Augmented model', '', '```yaml', dump_model(result.model).rstrip(), '```', ''])
     atomic_write_text(folder / 'summary.md', summary)
     return [str(f) for f in figures] + [str(folder / 'summary.md')]

@@ -109,3 +109,17 @@ def test_the_linkage_of_the_physics_plant_is_named_and_the_gap_shrinks(plant):
     assert result.effect == 'stroke_geometry' == result.candidates[0].effect
     assert result.candidates[0].signature_match
     assert result.mae_after <= 0.7 * result.mae_before
+
+
+def test_the_report_shows_the_residual_against_the_angle_per_direction(tmp_path):
+    from hydro_sdp.report.diagnosis import write_report
+    case = make_case('stroke_geometry', 'stroke', 'signed_percent', 0)
+    result = diagnose(case.estimation, case.model, validation=case.validation,
+                      max_iterations=1)
+    assert result.effect == 'stroke_geometry'
+    assert result.signature.signs.size == result.signature.x.size
+    written = write_report(tmp_path, result)
+    assert str(tmp_path / 'signature.png') in written
+    summary = (tmp_path / 'summary.md').read_text()
+    assert 'for each direction of motion apart, signed by the motion' in summary
+    assert summary.index('for each direction') < summary.index('![signature](signature.png)')
