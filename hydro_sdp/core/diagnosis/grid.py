@@ -201,8 +201,8 @@ def stroke_geometry(rng: np.random.Generator, truth: JointModel) -> StrokeGeomet
     """
     Return a linkage factor over the stroke of ``truth``, the same for both directions.
 
-    Smooth (a random cosine and a slope over five knots), faster by x1.4-2 at one end
-    of the stroke than at the other, with cushions over 5 % of the stroke at each end.
+    Smooth (a random cosine and a slope over five knots), the fastest part of the
+    stroke x1.4-2 the slowest, with cushions over 5 % of the stroke at each end.
     """
     assert truth.angle_limits is not None
     low, high = truth.angle_limits
