@@ -167,17 +167,17 @@ def stroke_samples(context: Context) -> Samples:
 
 def factor_parts(samples: Samples) -> Parts:
     """
-    Return what a shared and an opposite angle factor each explain beyond map and transients.
+    Return what a shared and an opposite angle factor explain beyond map and transients.
 
     Both are fitted on top of a factor of the model's speed per direction and one of
     the time since the command changed (up to :data:`TRANSIENT`, alike for both
-    directions), so that an error of the map (a function of the command, which a program may tie to the
-    angle) or of the delay or lag (a transient where runs start, at the ends of the
-    stroke) passes for neither. Only where both directions are seen at the same angles
-    can the two be told apart (elsewhere either fits the one direction there): the
-    comparison is made over the angles both directions move through; where that
-    overlap is under :data:`MIN_OVERLAP` of the angles moved through, neither part
-    explains anything.
+    directions), so that an error of the map (a function of the command, which a
+    program may tie to the angle) or of the delay or lag (a transient where runs start,
+    at the ends of the stroke) passes for neither. Only where both directions are seen
+    at the same angles can the two be told apart (elsewhere either fits the one
+    direction there): the comparison is made over the angles both directions move
+    through; where that overlap is under :data:`MIN_OVERLAP` of the angles moved
+    through, neither part explains anything.
 
     Parameters
     ----------
