@@ -109,6 +109,10 @@ def test_the_linkage_of_the_physics_plant_is_named_and_the_gap_shrinks(plant):
     assert result.effect == 'stroke_geometry' == result.candidates[0].effect
     assert result.candidates[0].signature_match
     assert result.mae_after <= 0.7 * result.mae_before
+    # Each full-stroke run moves one way; the signature spans runs, so it shows both.
+    moving = result.signature.signs[result.signature.signs != 0.0]
+    assert {-1.0, 1.0} <= set(np.unique(moving))
+    assert result.signature.x.size == result.signature.before.size
 
 
 def test_the_report_shows_the_residual_against_the_angle_per_direction(tmp_path):

@@ -1,5 +1,7 @@
 """The parts of the discrepancy workflow: one detector registry, runs, signatures, evidence."""
 
+from dataclasses import replace
+
 from conftest import REPO
 from hydro_sdp.core.diagnosis import (
     detector, DETECTORS, diagnose, runs_of, simulate_record, velocity_residuals, VOCABULARY)
@@ -120,3 +122,21 @@ def test_the_diagnosis_carries_its_evidence(j2):
     assert np.array_equal(result.gap.after, simulate_record(result.model, check)[check.start:])
     assert np.mean(np.abs(result.gap.measured - result.gap.after)) < \
         0.5 * np.mean(np.abs(result.gap.measured - result.gap.before))
+
+
+def test_signatures_of_several_runs_join_with_their_events_shifted():
+    from hydro_sdp.core.diagnosis.results import Signature
+    first = Signature('valve_lag', 'events', 'x', 0.01, np.zeros(5), np.ones(5), None,
+                      np.array([1, 3]), np.array([1.0, -1.0]))
+    second = Signature('valve_lag', 'events', 'x', 0.01, np.zeros(4), np.ones(4), None,
+                       np.array([0, 2]), np.array([-1.0, 1.0]))
+    joined = Signature.joined([first, second])
+    assert joined.before.size == joined.after.size == 9 and joined.x is None
+    assert joined.triggers.tolist() == [1, 3, 5, 7]
+    assert joined.signs.tolist() == [1.0, -1.0, -1.0, 1.0]
+    angle = Signature('stroke_geometry', 'angle', 'x', 0.01, np.zeros(2), np.ones(2),
+                      np.array([10.0, 11.0]), np.zeros(0, dtype=np.int64), np.array([1.0, 1.0]))
+    both = Signature.joined([angle, replace(angle, x=np.array([30.0, 29.0]),
+                                            signs=np.array([-1.0, -1.0]))])
+    assert both.x.tolist() == [10.0, 11.0, 30.0, 29.0]
+    assert both.signs.tolist() == [1.0, 1.0, -1.0, -1.0]

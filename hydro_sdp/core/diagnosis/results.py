@@ -3,10 +3,11 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any, Literal
+from typing import Any, Literal, Sequence
 
 from hydro_sdp.core.arrays import FloatArray, IntArray
 from hydro_sdp.core.model import JointModel
+import numpy as np
 
 #: What a residual signature is drawn against: the delayed command or the angle (residual
 #: averaged in bins), or the samples after command changes or reversals (event average), or
@@ -104,7 +105,8 @@ class Signature:
     triggers : IntArray
         Residual indices of the events (``events``, ``reversals``); empty otherwise.
     signs : FloatArray
-        Sign of each event (direction of the change or of the new motion).
+        Sign of each event (direction of the change or of the new motion); for the
+        angle words, the direction of the model's motion at every sample instead.
 
     """
 
@@ -117,6 +119,35 @@ class Signature:
     x: FloatArray | None
     triggers: IntArray
     signs: FloatArray
+
+    @classmethod
+    def joined(cls, parts: Sequence[Signature]) -> Signature:
+        """
+        Return the signatures of several runs as one, runs one after the other.
+
+        Parameters
+        ----------
+        parts : sequence of Signature
+            Signatures of one effect on successive runs (at least one).
+
+        Returns
+        -------
+        Signature
+            Residuals, feature and directions concatenated; event indices shifted to
+            the joined residuals.
+
+        """
+        first = parts[0]
+        offsets = np.cumsum([0] + [part.before.size for part in parts[:-1]])
+        xs = [part.x for part in parts]
+        return cls(first.effect, first.feature, first.label, first.dt,
+                   np.concatenate([part.before for part in parts]),
+                   np.concatenate([part.after for part in parts]),
+                   None if any(x is None for x in xs) else np.concatenate(
+                       [x for x in xs if x is not None]),
+                   np.concatenate([part.triggers + offset
+                                   for part, offset in zip(parts, offsets)]).astype(np.int64),
+                   np.concatenate([part.signs for part in parts]))
 
 
 @dataclass(frozen=True, eq=False)

@@ -17,11 +17,33 @@ from typing import Callable, Sequence
 from hydro_sdp.core.diagnosis.context import Context
 from hydro_sdp.core.diagnosis.detectors import detector, DETECTORS
 from hydro_sdp.core.diagnosis.residuals import mae, Run, runs_of, simulate_record
-from hydro_sdp.core.diagnosis.results import Candidate, Diagnosis, Gap, LedgerStep, Trial
+from hydro_sdp.core.diagnosis.results import (
+    Candidate, Diagnosis, Gap, LedgerStep, Signature, Trial)
 from hydro_sdp.core.errors import DataError, HydroSdpError
 from hydro_sdp.core.model import JointModel
 from hydro_sdp.core.records import Record
 import numpy as np
+
+
+#: Residual samples the signature figure draws at most (whole runs, the first ones).
+SIGNATURE_SAMPLES = 60_000
+
+
+def _signature(word: str, model: JointModel, augmented: JointModel,
+               runs: Sequence[Run]) -> Signature:
+    """
+    Return the signature of ``word`` over the first runs, up to :data:`SIGNATURE_SAMPLES`.
+
+    Several runs, because one may not show it: a full-stroke run moves one way only.
+    """
+    parts: list[Signature] = []
+    samples = 0
+    for run in runs:
+        if parts and samples + run.record.y.size - run.start > SIGNATURE_SAMPLES:
+            break
+        parts.append(detector(word).signature(model, augmented, run))
+        samples += parts[-1].before.size
+    return Signature.joined(parts)
 
 
 def _round(context: Context, progress: Callable[[str], None] | None) -> list[Trial]:
@@ -106,8 +128,7 @@ def diagnose(records: Sequence[Record], model: JointModel, *,
         candidate, current, after = chosen
         ledger.append(LedgerStep(candidate.effect, candidate.parameters, current_mae, after))
         current_mae = after
-    signature = detector(ledger[0].effect).signature(model, current, runs[0]) if ledger \
-        else None
+    signature = _signature(ledger[0].effect, model, current, runs) if ledger else None
     return Diagnosis(effect=ledger[0].effect if ledger else 'none', model=current,
                      ledger=tuple(ledger), candidates=rounds[0] if rounds else (),
                      rounds=tuple(rounds), mae_before=before, mae_after=current_mae,
