@@ -116,7 +116,8 @@ def table(rows: list[list[str]], header: list[str]) -> list[str]:
 
 
 def read_records(bags: list[str], joint: str | None, command_topic: str | None,
-                 label: str = 'reading bags', *, preferred_topic: str | None = None) -> list:
+                 label: str = 'reading bags', *, preferred_topic: str | None = None,
+                 load_topic: str | None = None, others: bool = False) -> list:
     """
     Read one joint's record from each bag, cut at gaps in its time stamps, with a progress bar.
 
@@ -133,6 +134,11 @@ def read_records(bags: list[str], joint: str | None, command_topic: str | None,
         Progress bar label.
     preferred_topic : str or None
         Topic remembered by a model file (its ``command_topic``).
+    load_topic : str or None
+        Float64 topic of a measured load, carried as the records' ``load``.
+    others : bool
+        Carry the other joints' angles of the JointState as the records' ``others``
+        (what ``flow_sharing`` needs).
 
     Returns
     -------
@@ -142,12 +148,14 @@ def read_records(bags: list[str], joint: str | None, command_topic: str | None,
 
     """
     return read_records_and_topic(bags, joint, command_topic, label,
-                                  preferred_topic=preferred_topic)[0]
+                                  preferred_topic=preferred_topic, load_topic=load_topic,
+                                  others=others)[0]
 
 
 def read_records_and_topic(bags: list[str], joint: str | None, command_topic: str | None,
                            label: str = 'reading bags', *,
-                           preferred_topic: str | None = None) -> tuple[list, str | None]:
+                           preferred_topic: str | None = None, load_topic: str | None = None,
+                           others: bool = False) -> tuple[list, str | None]:
     """
     Read records as :func:`read_records` does, and name the command topic they came from.
 
@@ -163,6 +171,8 @@ def read_records_and_topic(bags: list[str], joint: str | None, command_topic: st
         Progress bar label.
     preferred_topic : str or None
         Topic used when ``command_topic`` is None and the bag has it.
+    load_topic, others
+        As :func:`read_records`.
 
     Returns
     -------
@@ -186,7 +196,8 @@ def read_records_and_topic(bags: list[str], joint: str | None, command_topic: st
                 asked = preferred_topic
             topic = data.command_topic(name, asked)
             topics.add(topic)
-            records.extend(split_at_gaps(data.record(name, topic)).records)
+            record = data.record(name, topic, load_topic=load_topic, others=others)
+            records.extend(split_at_gaps(record).records)
             bar.update(done)
     return records, (topics.pop() if len(topics) == 1 else None)
 

@@ -6,9 +6,8 @@ import argparse
 from pathlib import Path
 from typing import Any, TYPE_CHECKING
 
-from hydro_sdp.cli.common import add_bag_options, json_number, Outcome, table
+from hydro_sdp.cli.common import add_bag_options, json_number, Outcome, read_records, table
 from hydro_sdp.cli.progress import ProgressBar
-from hydro_sdp.core.records import Record
 from hydro_sdp.files import load_model, save_model
 
 if TYPE_CHECKING:
@@ -101,10 +100,14 @@ def run(args: argparse.Namespace) -> Outcome:
     model = load_model(args.model)
     # Without --command-topic the bags are read from the topic the model remembers.
     joint = args.joint or model.joint
-    records = read_records(args.bags, joint, args.command_topic, model.command_topic,
-                           args.load_topic)
-    validation = read_records(args.validation, joint, args.command_topic, model.command_topic,
-                              args.load_topic) if args.validation else []
+    # With the other joints and the load: the signals flow_sharing and load_dependence need.
+    records = read_records(args.bags, joint, args.command_topic,
+                           preferred_topic=model.command_topic, load_topic=args.load_topic,
+                           others=True)
+    validation = read_records(
+        args.validation, joint, args.command_topic, 'reading validation bags',
+        preferred_topic=model.command_topic, load_topic=args.load_topic,
+        others=True) if args.validation else []
     effects = list(VOCABULARY)
     with ProgressBar('diagnose', len(effects) * args.iterations) as bar:
         done = [0]
@@ -133,51 +136,6 @@ def run(args: argparse.Namespace) -> Outcome:
     if args.out:
         lines.append(f'wrote {payload["model_file"]}')
     return Outcome(payload, lines)
-
-
-def read_records(bags: list[str], joint: str | None, command_topic: str | None,
-                 preferred_topic: str | None, load_topic: str | None) -> list[Record]:
-    """
-    Read one joint's records with the other joints' angles and the load, cut at gaps.
-
-    As :func:`hydro_sdp.cli.common.read_records`, with the signals ``flow_sharing``
-    and ``load_dependence`` need.
-
-    Parameters
-    ----------
-    bags : list of str
-        Bag paths.
-    joint : str or None
-        Joint name (default: the only joint of each bag).
-    command_topic : str or None
-        Command topic asked for.
-    preferred_topic : str or None
-        Topic the model file remembers, used when the bag has it.
-    load_topic : str or None
-        Float64 load topic (``--load-topic``).
-
-    Returns
-    -------
-    list of Record
-        The pieces of every bag.
-
-    """
-    from hydro_sdp.bags import read_bag
-    from hydro_sdp.core.records import split_at_gaps
-
-    records: list[Record] = []
-    with ProgressBar('reading bags', len(bags)) as bar:
-        for done, bag in enumerate(bags, start=1):
-            data = read_bag(bag)
-            name = data.choose_joint(joint)
-            asked = command_topic
-            if asked is None and preferred_topic is not None and preferred_topic in data.floats:
-                asked = preferred_topic
-            record = data.record(name, data.command_topic(name, asked), load_topic=load_topic,
-                                 others=True)
-            records.extend(split_at_gaps(record).records)
-            bar.update(done)
-    return records
 
 
 def _short(value: Any) -> str:
