@@ -228,10 +228,12 @@ class BagData:
         return series.data[order], command_in_force(t, series.t[order])
 
     def _others(self, joint: str) -> tuple[tuple[str, ...], FloatArray | None]:
-        """Names and angles (degrees) of the other joints present wherever ``joint`` is."""
+        """Names and angles (degrees) of the other joints measured wherever ``joint`` is."""
         mask = self.present[:, self.names.index(joint)]
+        # A joint the publisher cannot measure (NaN) is left out, as a joint not sent.
         columns = [i for i, name in enumerate(self.names)
-                   if name != joint and bool(np.all(self.present[mask, i]))]
+                   if name != joint and bool(np.all(self.present[mask, i]))
+                   and bool(np.all(np.isfinite(self.positions[mask, i])))]
         if not columns:
             return (), None
         return (tuple(self.names[i] for i in columns),

@@ -164,7 +164,8 @@ def read_inputs(paths: list[str], args: argparse.Namespace, label: str,
                     asked = preferred_topic
                 topic = data.command_topic(joint, asked)
                 topics.add(topic)
-                records.append(data.record(joint, topic))
+                # With the other joints, so the diagnosis can name flow_sharing.
+                records.append(data.record(joint, topic, others=True))
             bar.update(done)
     return records, (topics.pop() if len(topics) == 1 else None)
 

@@ -41,7 +41,8 @@ edge meters the flow), or a plain speed change per load unit and direction,
 whichever the data show. Without it, each record gets its own speed
 scale per direction, named only when the records' scales at the same command
 differ beyond their noise; those factors hold for the bags they were fitted on.
-Without the signals these words are not applicable.
+`flow_sharing` is not applicable without other joints, nor the measured-load
+forms without --load-topic; `evaluate` reads the same signals.
 
 example:
   hydro-sdp diagnose run1 run2 --model j2_model.yaml --validation run3 \\

@@ -36,6 +36,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument('bags', nargs='+', metavar='BAG', help='evaluation bags')
     parser.add_argument('--model', required=True, help='model file')
     add_bag_options(parser)
+    parser.add_argument('--load-topic', metavar='TOPIC',
+                        help='Float64 topic of a measured load, for a model whose '
+                             'load_dependence was fitted on one (as diagnose --load-topic)')
     parser.add_argument('--plot-dir', help='folder for a Fig. 4 style plot of each run')
     parser.set_defaults(run=run)
 
@@ -46,8 +49,11 @@ def run(args: argparse.Namespace) -> Outcome:
 
     model = load_model(args.model)
     # Without --command-topic the bags are read from the topic the model remembers.
+    # With the other joints and the load, so flow_sharing and load_dependence act as in
+    # diagnose.
     records = read_records(args.bags, args.joint or model.joint, args.command_topic,
-                           preferred_topic=model.command_topic)
+                           preferred_topic=model.command_topic, load_topic=args.load_topic,
+                           others=True)
     scores = evaluate(records, model)
     # A bag with gaps in its time stamps is read as several pieces, one row each.
     rows = [{'bag': record.source, 'samples': s.samples, 'model': s.model,

@@ -231,8 +231,8 @@ class FlowSharing:
     than one lifted). The speed becomes
     ``w min(1, limit / (own demand + other joints' demand))``: when the demands
     add up to more than the pump's ``limit``, every joint gets its share. The
-    full speeds are set to the model's top speeds, so that ``limit`` reads in
-    full demands of this joint.
+    full speeds are set to the model's top speeds at the commands recorded, so
+    that ``limit`` reads in full demands of this joint.
 
     Parameters
     ----------

@@ -8,8 +8,8 @@ each sample, the other joints' speeds over each sample interval (a trailing
 mean over 0.1 s, so that sensor noise does not read as motion) and the record's key,
 by which a model holds per-record load factors. :func:`exogenous_factor` is
 the speed factor of the effects ``flow_sharing`` and ``load_dependence``
-(:mod:`hydro_sdp.core.effects`); without the signals it is what a record with
-the load at its reference and the other joints standing still would get.
+(:mod:`hydro_sdp.core.effects`); without the signals it is 1 for the load (the
+measured-load forms need the load) and what the other joints standing still give.
 
 """
 

@@ -128,7 +128,8 @@ class Record:
         for name, what in (('load', 'load'), ('others', 'other-joint angle')):
             values = getattr(self, name)
             if values is not None:
-                bad = np.flatnonzero(~np.isfinite(values).reshape(n, -1).all(axis=1))
+                bad = np.flatnonzero(~np.isfinite(values).reshape(values.shape[0], -1)
+                                     .all(axis=1))
                 if bad.size:
                     raise DataError(f'{self._label()}: {bad.size} {what} samples are NaN or '
                                     f'infinite (first at sample {bad[0]})')

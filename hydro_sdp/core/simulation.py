@@ -338,7 +338,7 @@ class JointSimulator:
             self._lag_state = (1.0 - self._lag_p) * speed + self._lag_p * self._lag_state
             speed = self._lag_state
         if self._exogenous:
-            # No signals here: the load at its reference, the other joints still.
+            # No signals here: no load factor, the other joints still.
             factor = exogenous_factor(self.model, np.array([speed]))
             speed *= 1.0 if factor is None else float(factor[0])
         previous = self._actuator

@@ -35,6 +35,7 @@ import math
 from typing import Sequence
 
 from hydro_sdp.core.arrays import FloatArray, IntArray
+from hydro_sdp.core.errors import DataError
 from hydro_sdp.core.experiments import Experiment
 from hydro_sdp.core.timing import delayed_at
 import numpy as np
@@ -258,12 +259,21 @@ def fit_delay_and_lag(experiments: Sequence[Experiment], dt: float, max_delay: i
         constant (s, 0 for none) and, per candidate delay 1..max_delay, the share
         of the windows' squared increments explained with the best lag tried there.
 
+    Raises
+    ------
+    DataError
+        If no command change can show in the experiments.
+
     """
     windows = ChangeWindows(experiments, max_delay)
+    if windows.windows == 0:
+        # Without a change every pair would explain everything: say so instead.
+        raise DataError('the command never changes in a way the delay could show in '
+                        f'(changes at least {max_delay} samples apart are needed)')
     best = {delay: (windows.residual(delay, 0.0), 0.0) for delay in range(1, max_delay + 1)}
     pure_score, pure = min((score, delay) for delay, (score, _) in best.items())
-    # A lag of T samples moves the best pure delay later by about 0.7 T: the dead time
-    # with the lag lies between T + 3 samples below it and 2 above.
+    # A lag of T samples moves the best pure delay later by less than T (0.3-0.4 T on
+    # J2 steps): the dead time with the lag lies between T + 3 samples below it and 2 above.
     for factor in LAG_GRID[1:]:
         pole = lag_pole(factor * dt, dt)
         for delay in range(max(1, pure - math.ceil(factor) - 3), min(pure + 2, max_delay) + 1):

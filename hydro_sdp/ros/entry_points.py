@@ -15,30 +15,25 @@ from __future__ import annotations
 import signal
 import sys
 
-# Installed first, before anything slow is imported: a Ctrl-C from here on is noted.
-_interrupted: list[int] = []
-
-
-def _note(signum: int, frame: object) -> None:
-    _interrupted.append(signum)
-
-
-# A shell's background job ignores SIGINT; that choice is kept.
-_previous_handler = signal.getsignal(signal.SIGINT)
-if _previous_handler is not signal.SIG_IGN:
-    signal.signal(signal.SIGINT, _note)
-
 
 def _run(module: str) -> None:
     import importlib
 
+    # Installed before anything slow is imported: a Ctrl-C from here on is only noted.
+    interrupted: list[int] = []
+    previous = signal.getsignal(signal.SIGINT)
+    # A shell's background job ignores SIGINT; that choice is kept.
+    if previous is not signal.SIG_IGN:
+        signal.signal(signal.SIGINT, lambda signum, frame: interrupted.append(signum))
     try:
         main = importlib.import_module(f'hydro_sdp.ros.{module}').main
     except KeyboardInterrupt:
         sys.exit(130)
     finally:
-        signal.signal(signal.SIGINT, _previous_handler)
-    if _interrupted:
+        # None: a handler installed from C, which Python cannot put back; the default then.
+        signal.signal(signal.SIGINT, signal.default_int_handler if previous is None
+                      else previous)
+    if interrupted:
         sys.exit(130)
     main()
 

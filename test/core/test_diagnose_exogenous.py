@@ -1,4 +1,4 @@
-"""The diagnosis names flow sharing and load dependence on the physics plant (issue 13)."""
+"""The diagnosis names flow sharing and load dependence on the physics plant."""
 
 from dataclasses import replace
 from pathlib import Path

@@ -13,7 +13,7 @@ from hydro_sdp.core.diagnosis.detectors.exogenous import block_scale
 from hydro_sdp.core.diagnosis.detectors.overrun import fit_overrun
 from hydro_sdp.core.diagnosis.residuals import runs_of
 from hydro_sdp.core.effects import FlowSharing, LoadDependence
-from hydro_sdp.core.errors import DataError, ModelFileError
+from hydro_sdp.core.errors import DataError, ModelFileError, TopicNotFoundError
 from hydro_sdp.core.exogenous import (
     Exogenous, exogenous_factor, exogenous_of, load_factor, record_key, smoothed_speeds)
 from hydro_sdp.core.model import JointModel
@@ -232,8 +232,22 @@ def test_a_bag_gives_the_other_joints_and_the_held_load(tmp_path: Path) -> None:
     np.testing.assert_allclose(given(record.load), pressure[:-1], atol=1e-9)
     np.testing.assert_allclose(given(record.others)[:, 0], boom.y[1:], atol=1e-9)
     np.testing.assert_allclose(record.y, arm.y[1:], atol=1e-9)
-    with pytest.raises(Exception, match='no .* load topic /missing'):
+    with pytest.raises(TopicNotFoundError, match='no .* load topic /missing'):
         data.record('arm', load_topic='/missing')
+
+
+def test_a_joint_the_publisher_cannot_measure_is_left_out_of_the_others(tmp_path: Path) -> None:
+    # JointState publishers send NaN for a joint they cannot measure: that joint is not
+    # one of the others, and the record reads as without it.
+    t = DT * np.arange(1, 201)
+    arm = Record(t, np.full(200, 0.5), np.linspace(0.0, 10.0, 200), 'arm')
+    boom = Record(t, np.zeros(200), np.linspace(5.0, -5.0, 200), 'boom')
+    bucket = Record(t, np.zeros(200), np.zeros(200), 'bucket')
+    data = read_bag(write_bag(tmp_path / 'three', [arm, boom, bucket]))
+    data.positions[50, data.names.index('bucket')] = np.nan
+    record = data.record('arm', others=True)
+    assert record.other_joints == ('boom',)
+    np.testing.assert_allclose(given(record.others)[:, 0], boom.y[-len(record):], atol=1e-9)
 
 
 def loaded_records(effect: LoadDependence, loads: Sequence[float],
@@ -312,3 +326,12 @@ def test_diagnose_command_reads_the_other_joints_and_the_load_topic(
     with pytest.raises(SystemExit):
         main(['diagnose', '--help'])
     assert '--load-topic' in capsys.readouterr().out
+    # evaluate reads the other joints too: the true model's error is the noise-free 0, and
+    # the model without the effect keeps its error.
+    save_model(linear_model(effects=(hidden,)), tmp_path / 'true.yaml')
+    errors = {}
+    for name in ('true', 'arm'):
+        assert main(['evaluate', *bags, '--model', str(tmp_path / f'{name}.yaml'),
+                     '--json']) == 0
+        errors[name] = json.loads(capsys.readouterr().out)['mae']['model']
+    assert errors['true'] < 1e-6 < 0.3 * errors['arm']

@@ -32,8 +32,8 @@ UNITS: dict[str, tuple[tuple[float, float], float]] = {
     'signed_percent': ((-100.0, 100.0), 0.0),
 }
 
-#: The words hidden in turn, and ``none`` (nothing missing). Words added later come after
-#: ``none``, so that the draws of the earlier cases (seeded by the word's place) stay the same.
+#: The words hidden in turn, and ``none`` (nothing missing); each case is seeded by its
+#: word's place here.
 WORDS: tuple[str, ...] = (
     'dead_zone', 'velocity_saturation', 'asymmetry', 'time_delay',
     'direction_dependent_delay', 'angle_limits', 'valve_lag', 'backlash',

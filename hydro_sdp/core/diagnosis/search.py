@@ -51,7 +51,8 @@ def _round(context: Context, progress: Callable[[str], None] | None) -> list[Tri
     Try every detector on the model under test, ranked: significant first, by gain.
 
     A significant candidate whose signature the data show (motion ending at one angle
-    whenever it is driven there: a stop) goes before the others.
+    whenever it is driven there: a stop; a speed that changes along the stroke alike in
+    both directions: the linkage) goes before the others.
     """
     results: list[Trial] = []
     for each in DETECTORS:

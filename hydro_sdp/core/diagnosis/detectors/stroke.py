@@ -266,10 +266,11 @@ class StrokeGeometry(EffectDetector):
             return Candidate(self.word, True, evidence='too little steady motion away from '
                              'the stops to fit a factor along the stroke'), None
         parts = factor_parts(samples)
+        # Shares of what the map, delay and lag leave: the base of the signature test.
         shares = (f'beyond the map, a shared factor removes '
-                  f'{100 * (parts.command - parts.shared) / max(parts.base, 1e-300):.3g} % of '
-                  f'the residual where both directions are seen, an opposite one '
-                  f'{100 * (parts.command - parts.opposite) / max(parts.base, 1e-300):.3g} %')
+                  f'{100 * (parts.command - parts.shared) / max(parts.command, 1e-300):.3g} % '
+                  f'of the residual where both directions are seen, an opposite one '
+                  f'{100 * (parts.command - parts.opposite) / max(parts.command, 1e-300):.3g} %')
         if not parts.signature:
             # Without its signature the word is not tried: an opposite factor is
             # angle_dependent_velocity, a speed scale the map's.
