@@ -10,7 +10,10 @@ and ``sqlite3``, by rosbags' rules: the folder's topics come from the metadata,
 a storage topic feeds one when name, type, serialisation, QoS and type hash
 agree, and its messages come as :func:`~hydro_sdp.bags.sqlite_rows.topic_rows`
 reads them. Anything else, or anything that fails here, gives ``None``, and the
-bag is opened with rosbags, which reads it or says what is wrong with it.
+bag is opened with rosbags, which reads it or says what is wrong with it. Bags
+of ``ros2 bag record`` on Jazzy write their QoS as a YAML list, not text: they
+take the rosbags route (still with the bulk rows of ``sqlite_rows``); the bags
+this package writes (recorder, ``import``, ``simulate``) take this one.
 
 """
 

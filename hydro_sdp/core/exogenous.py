@@ -16,6 +16,7 @@ measured-load forms need the load) and what the other joints standing still give
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import PurePath
 
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.effects import FlowSharing, LoadDependence
@@ -59,9 +60,15 @@ class Exogenous:
 
 
 def record_key(record: Record) -> str:
-    """Return the name a model gives a record's own factors: source, joint and start, s."""
+    """
+    Return the name a model gives a record's own factors: source, joint and start, s.
+
+    The source is the bag's folder name, not the path as typed, so that the same bag
+    given as ``run1``, ``./run1`` or an absolute path (or moved) keeps its factors.
+    """
     start = record.since_start(float(record.t[0])) if len(record) else 0.0
-    return f'{record.source or "record"} {record.joint} at {start:.3f} s'
+    source = PurePath(record.source).name if record.source else 'record'
+    return f'{source} {record.joint} at {start:.3f} s'
 
 
 def smoothed_speeds(angles: FloatArray, dt: float) -> FloatArray:

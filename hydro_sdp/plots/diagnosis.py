@@ -26,13 +26,14 @@ def _binned(x: FloatArray, values: FloatArray, bins: int = 30,
     return 0.5 * (edges[1:] + edges[:-1])[keep], (sums / np.maximum(counts, 1))[keep]
 
 
-def _event_average(triggers: IntArray, values: FloatArray, span: int,
-                   signs: FloatArray) -> tuple[IntArray, FloatArray]:
+def _event_average(signature: Signature, values: FloatArray,
+                   span: int) -> tuple[IntArray, FloatArray]:
     """Return lags and the mean of ``values`` over the ``span`` samples after each trigger."""
     # Each event's residual is flipped by the sign of its change, so that rising and
-    # falling changes add up instead of cancelling.
-    rows = [sign * values[k:k + span] for k, sign in zip(triggers, signs)
-            if k + span <= values.size]
+    # falling changes add up instead of cancelling; a window never runs into the next run.
+    rows = [sign * values[k:k + span]
+            for k, sign in zip(signature.triggers.tolist(), signature.signs)
+            if k + span <= signature.part_end(k)]
     if not rows:
         return np.arange(span), np.zeros(span)
     return np.arange(span), np.mean(rows, axis=0)
@@ -70,7 +71,7 @@ def plot_signature(signature: Signature, *, command_unit: str | None = None) -> 
     if signature.x is None:
         span = int(round(1.0 / dt))
         for values, colour, name in curves:
-            lags, mean = _event_average(signature.triggers, values / dt, span, signature.signs)
+            lags, mean = _event_average(signature, values / dt, span)
             ax.plot(lags, mean, color=colour, linewidth=1.6, label=name)
     elif signature.signs.size == signature.x.size:
         _plot_by_direction(ax, signature)

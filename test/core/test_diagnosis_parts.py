@@ -134,6 +134,13 @@ def test_signatures_of_several_runs_join_with_their_events_shifted():
     assert joined.before.size == joined.after.size == 9 and joined.x is None
     assert joined.triggers.tolist() == [1, 3, 5, 7]
     assert joined.signs.tolist() == [1.0, -1.0, -1.0, 1.0]
+    assert [joined.part_end(k) for k in (0, 4, 5, 8)] == [5, 5, 9, 9]
+    assert first.part_end(2) == 5
+    # An event's window never runs into the next run: 3 and 7 are too close to their end.
+    from hydro_sdp.plots.diagnosis import _event_average
+    values = np.arange(9.0)
+    lags, mean = _event_average(joined, values, 3)
+    np.testing.assert_allclose(mean, np.mean([values[1:4], -values[5:8]], axis=0))
     angle = Signature('stroke_geometry', 'angle', 'x', 0.01, np.zeros(2), np.ones(2),
                       np.array([10.0, 11.0]), np.zeros(0, dtype=np.int64), np.array([1.0, 1.0]))
     both = Signature.joined([angle, replace(angle, x=np.array([30.0, 29.0]),

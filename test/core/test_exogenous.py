@@ -77,6 +77,9 @@ def test_smoothed_speeds_of_a_ramp_and_the_record_key() -> None:
     record = Record(DT * np.arange(1, 51), np.zeros(50), np.zeros(50), 'arm', 'run 1',
                     origin=0.0, others=angles)
     assert record_key(record) == 'run 1 arm at 0.010 s'
+    # The bag's folder name, however its path was typed.
+    for typed in ('bags/run 1', './bags/../bags/run 1/', '/data/bags/run 1'):
+        assert record_key(replace(record, source=typed)) == 'run 1 arm at 0.010 s'
     exogenous = exogenous_of(record)
     assert exogenous.load is None and exogenous.key == 'run 1 arm at 0.010 s'
     np.testing.assert_allclose(given(exogenous.other_speeds)[10:, 0], 20.0)

@@ -107,6 +107,9 @@ class Signature:
     signs : FloatArray
         Sign of each event (direction of the change or of the new motion); for the
         angle words, the direction of the model's motion at every sample instead.
+    ends : IntArray or None
+        Where each run ends in the residuals when several are joined (exclusive);
+        None for one run.
 
     """
 
@@ -119,6 +122,14 @@ class Signature:
     x: FloatArray | None
     triggers: IntArray
     signs: FloatArray
+    ends: IntArray | None = None
+
+    def part_end(self, index: int) -> int:
+        """Return the end (exclusive) of the run that residual ``index`` belongs to."""
+        if self.ends is None or self.ends.size == 0:
+            return int(self.before.size)
+        return int(self.ends[min(int(np.searchsorted(self.ends, index, side='right')),
+                                 self.ends.size - 1)])
 
     @classmethod
     def joined(cls, parts: Sequence[Signature]) -> Signature:
@@ -134,11 +145,12 @@ class Signature:
         -------
         Signature
             Residuals, feature and directions concatenated; event indices shifted to
-            the joined residuals.
+            the joined residuals, and where each run ends.
 
         """
         first = parts[0]
-        offsets = np.cumsum([0] + [part.before.size for part in parts[:-1]])
+        ends = np.cumsum([part.before.size for part in parts]).astype(np.int64)
+        offsets = np.r_[0, ends[:-1]]
         xs = [part.x for part in parts]
         return cls(first.effect, first.feature, first.label, first.dt,
                    np.concatenate([part.before for part in parts]),
@@ -147,7 +159,7 @@ class Signature:
                        [x for x in xs if x is not None]),
                    np.concatenate([part.triggers + offset
                                    for part, offset in zip(parts, offsets)]).astype(np.int64),
-                   np.concatenate([part.signs for part in parts]))
+                   np.concatenate([part.signs for part in parts]), ends)
 
 
 @dataclass(frozen=True, eq=False)
