@@ -13,7 +13,7 @@ reads them. Anything else, or anything that fails here, gives ``None``, and the
 bag is opened with rosbags, which reads it or says what is wrong with it. Bags
 of ``ros2 bag record`` on Jazzy write their QoS as a YAML list, not text: they
 take the rosbags route (still with the bulk rows of ``sqlite_rows``); the bags
-this package writes (recorder, ``import``, ``simulate``) take this one.
+:func:`~hydro_sdp.bags.write_bag` writes (``simulate``, ``import``) take this one.
 
 """
 
