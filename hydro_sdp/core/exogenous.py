@@ -71,12 +71,14 @@ def record_key(record: Record) -> str:
     return f'{source} {record.joint} at {start:.3f} s'
 
 
-def smoothed_speeds(angles: FloatArray, dt: float) -> FloatArray:
+def smoothed_speeds(angles: FloatArray, dt: float, t: FloatArray | None = None) -> FloatArray:
     """
     Return the speed of each column of ``angles`` over each sample interval, deg/s.
 
     A trailing mean over :data:`SMOOTHING` seconds (the interval ending at the
     sample and those before it), so that sensor noise does not read as motion.
+    With the time stamps ``t`` (s) the span is the time between the samples, so a
+    sample missing from a recording does not read as faster motion.
     """
     angles = np.asarray(angles, dtype=np.float64).reshape(len(angles), -1)
     n = angles.shape[0]
@@ -85,8 +87,12 @@ def smoothed_speeds(angles: FloatArray, dt: float) -> FloatArray:
     width = max(1, int(round(SMOOTHING / dt)))
     index = np.arange(n)
     behind = np.maximum(index - width, 0)
-    speed = (angles - angles[behind]) / (np.maximum(index - behind, 1)[:, None] * dt)
-    return speed
+    if t is None:
+        span = np.maximum(index - behind, 1) * dt
+    else:
+        stamps = np.asarray(t, dtype=np.float64)
+        span = np.where(index > behind, stamps - stamps[behind], dt)
+    return (angles - angles[behind]) / span[:, None]
 
 
 def exogenous_of(record: Record, dt: float | None = None) -> Exogenous:
@@ -108,7 +114,7 @@ def exogenous_of(record: Record, dt: float | None = None) -> Exogenous:
     """
     speeds = None
     if record.others is not None and record.others.shape[1] and len(record) > 1:
-        speeds = smoothed_speeds(record.others, dt or record.sample_period)
+        speeds = smoothed_speeds(record.others, dt or record.sample_period, record.t)
     return Exogenous(record.load, speeds, record_key(record))
 
 

@@ -74,6 +74,11 @@ def test_smoothed_speeds_of_a_ramp_and_the_record_key() -> None:
     assert speeds[0].tolist() == [0.0, 0.0]
     np.testing.assert_allclose(speeds[1:, 0], 20.0)
     np.testing.assert_allclose(speeds[:, 1], 0.0)
+    # A sample missing from the recording: with the stamps the speed stays 20 deg/s.
+    stamps = DT * np.delete(np.arange(51), 30)
+    ramp = 20.0 * stamps[:, None]
+    np.testing.assert_allclose(smoothed_speeds(ramp, DT, stamps)[1:, 0], 20.0)
+    assert smoothed_speeds(ramp, DT)[35, 0] > 21.0
     record = Record(DT * np.arange(1, 51), np.zeros(50), np.zeros(50), 'arm', 'run 1',
                     origin=0.0, others=angles)
     assert record_key(record) == 'run 1 arm at 0.010 s'
