@@ -118,6 +118,17 @@ def exogenous_of(record: Record, dt: float | None = None) -> Exogenous:
     return Exogenous(record.load, speeds, record_key(record))
 
 
+def summed_other_speeds(record: Record, dt: float, start: int) -> FloatArray | None:
+    """
+    Return the other joints' speeds summed, per increment from sample ``start`` on, deg/s.
+
+    Absolute speeds (:func:`smoothed_speeds`) added over the other joints: how much
+    of the pump they draw; None when the record carries no other joints.
+    """
+    speeds = exogenous_of(record, dt).other_speeds
+    return None if speeds is None else np.abs(speeds).sum(axis=1)[start + 1:]
+
+
 def load_factor(load: FloatArray, slope: float, reference: float, overrun: float = 0.0,
                 onset: float = 0.0) -> FloatArray:
     """

@@ -17,7 +17,7 @@ from hydro_sdp.core.diagnosis.context import Context
 from hydro_sdp.core.diagnosis.residuals import Run, velocity_residuals
 from hydro_sdp.core.diagnosis.results import Candidate, Feature, Signature, Trial
 from hydro_sdp.core.effects import Effect
-from hydro_sdp.core.exogenous import exogenous_of
+from hydro_sdp.core.exogenous import summed_other_speeds
 from hydro_sdp.core.model import JointModel
 from hydro_sdp.core.simulation import speed_profile
 from hydro_sdp.core.timing import delayed_at
@@ -168,8 +168,8 @@ def feature_signature(word: str, feature: Feature, model: JointModel, augmented:
     elif feature == 'angle':
         x = record.y[start:-1]
     elif feature == 'others':
-        speeds = exogenous_of(record, run.dt).other_speeds
-        x = np.zeros(samples.size) if speeds is None else np.abs(speeds).sum(axis=1)[start + 1:]
+        summed = summed_other_speeds(record, run.dt, start)
+        x = np.zeros(samples.size) if summed is None else summed
     elif feature == 'events':
         triggers = np.flatnonzero(np.diff(command)) + 1
         signs = np.sign(np.diff(command)[triggers - 1])

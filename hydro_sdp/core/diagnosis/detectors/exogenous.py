@@ -27,11 +27,12 @@ from typing import Any
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.diagnosis.context import Context
 from hydro_sdp.core.diagnosis.detectors.base import EffectDetector
-from hydro_sdp.core.diagnosis.detectors.overrun import fit_overrun, one_step_samples
+from hydro_sdp.core.diagnosis.detectors.overrun import (
+    fit_overrun, inner_range, one_step_samples)
 from hydro_sdp.core.diagnosis.residuals import mae, Run
 from hydro_sdp.core.diagnosis.results import Candidate, Trial
 from hydro_sdp.core.effects import FlowSharing as Sharing, LoadDependence as Load
-from hydro_sdp.core.exogenous import exogenous_of, record_key
+from hydro_sdp.core.exogenous import exogenous_of, record_key, summed_other_speeds
 from hydro_sdp.core.model import JointModel
 from hydro_sdp.core.simulation import one_step_increments
 from hydro_sdp.core.timing import delayed_at
@@ -49,11 +50,7 @@ END_SHARE = 0.1
 
 def other_speed_sums(context: Context) -> list[FloatArray | None]:
     """Return the summed other joints' speed per residual sample of each run, deg/s."""
-    out: list[FloatArray | None] = []
-    for run in context.runs:
-        speeds = exogenous_of(run.record, run.dt).other_speeds
-        out.append(None if speeds is None else np.abs(speeds).sum(axis=1)[run.start + 1:])
-    return out
+    return [summed_other_speeds(run.record, run.dt, run.start) for run in context.runs]
 
 
 def _predicted(context: Context) -> list[FloatArray]:
@@ -233,13 +230,11 @@ def record_scales(context: Context) -> RecordScales:
     groups: dict[tuple[int, int], list[tuple[float, float]]] = {}
     width = 0.05 * context.scale
     # The ends of the range (cushions, impacts on the stops) are left out of the scales.
-    low = min(float(np.min(run.record.y)) for run in context.runs)
-    high = max(float(np.max(run.record.y)) for run in context.runs)
-    margin = END_SHARE * (high - low)
+    low, high = inner_range(context, END_SHARE)
     for run, p in zip(context.runs, predicted):
         measured = np.diff(run.record.y[run.start:])
         angle = run.record.y[run.start:-1]
-        inner = (angle > low + margin) & (angle < high - margin)
+        inner = (angle > low) & (angle < high)
         samples = np.arange(run.start + 1, len(run.record))
         command = delayed_at(run.record.v, samples, context.model.delay_samples(run.dt))
         load = run.record.load[run.start + 1:] if run.record.load is not None else None

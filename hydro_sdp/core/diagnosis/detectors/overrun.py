@@ -22,6 +22,14 @@ import numpy as np
 from scipy.optimize import least_squares
 
 
+def inner_range(context: Context, end_share: float) -> tuple[float, float]:
+    """Return the angles, deg, between which the ends of the range (``end_share`` each) lie."""
+    low = min(float(np.min(run.record.y)) for run in context.runs)
+    high = max(float(np.max(run.record.y)) for run in context.runs)
+    margin = end_share * (high - low)
+    return low + margin, high - margin
+
+
 def one_step_samples(context: Context,
                      end_share: float) -> list[tuple[FloatArray, FloatArray, FloatArray]]:
     """
@@ -33,9 +41,7 @@ def one_step_samples(context: Context,
     are left out.
     """
     base = context.model.without_effect(Load.name)
-    low = min(float(np.min(run.record.y)) for run in context.runs)
-    high = max(float(np.max(run.record.y)) for run in context.runs)
-    margin = end_share * (high - low)
+    low, high = inner_range(context, end_share)
     out = []
     for run in context.runs:
         if run.record.load is None:
@@ -44,7 +50,7 @@ def one_step_samples(context: Context,
                                         start=run.start, v_before=float(run.record.v[0]),
                                         exogenous=exogenous_of(run.record, run.dt))
         angle = run.record.y[run.start:-1]
-        inner = (angle > low + margin) & (angle < high - margin)
+        inner = (angle > low) & (angle < high)
         out.append((np.diff(run.record.y[run.start:])[inner], predicted[inner],
                     run.record.load[run.start + 1:][inner]))
     return out
