@@ -42,10 +42,55 @@ def test_the_model_file_keeps_the_command_topic_next_to_the_joint(j2, tmp_path):
 
 
 @pytest.mark.parametrize('value', [3, '', '  ', '/arm pwm', ['/arm/pwm']])
-def test_a_bad_command_topic_is_refused_naming_the_key(j2, value):
-    mapping = dict(j2.to_mapping(), command_topic=value)
-    with pytest.raises(ModelFileError, match='command_topic'):
+@pytest.mark.parametrize('key', ['command_topic', 'load_topic'])
+def test_a_bad_topic_is_refused_naming_the_key(j2, key, value):
+    mapping = dict(j2.to_mapping(), **{key: value})
+    with pytest.raises(ModelFileError, match=key):
         JointModel.from_mapping(mapping)
+
+
+def test_the_model_file_keeps_the_load_topic(j2, tmp_path):
+    model = replace(j2, command_topic='/arm/pwm', load_topic='/arm/pressure')
+    mapping = model.to_mapping()
+    assert list(mapping)[:5] == ['format', 'joint', 'command_topic', 'load_topic', 'kind']
+    assert load_model(save_model(model, tmp_path / 'm.yaml')) == model
+    assert 'load_topic' not in j2.to_mapping()
+
+
+def test_diagnose_remembers_the_load_topic_and_evaluate_reads_it(tmp_path, capsys):
+    from hydro_sdp.core.effects import LoadDependence
+    from hydro_sdp.core.exogenous import Exogenous
+    from hydro_sdp.core.records import Record
+    from hydro_sdp.core.simulation import simulate
+    from hydro_sdp.core.static_maps import LinearMap
+    # A linear joint 0.3 % faster per unit of load, in runs at four loads.
+    model = JointModel('arm', LinearMap(gain=10.0), 0.05)
+    hidden = LoadDependence(positive=0.003, negative=0.003, reference=0.0)
+    rng = np.random.default_rng(2)
+    bags = []
+    for i, load in enumerate((0.0, 100.0, 200.0, 50.0)):
+        v = np.r_[np.zeros(50), np.repeat(rng.choice([-2.0, -1.0, 1.0, 2.0], 20), 100)]
+        t = 0.01 * np.arange(1, v.size + 1)
+        y = simulate(replace(model, effects=(hidden,)), v, 0.01, 0.0,
+                     exogenous=Exogenous(load=np.full(v.size, load)))
+        y = y + rng.normal(0.0, 0.01, v.size)
+        bags.append(str(write_bag(tmp_path / f'run{i}', [Record(t, v, y, 'arm')],
+                                  setpoints={'arm_load': np.full(v.size, np.degrees(load))})))
+    save_model(model, tmp_path / 'arm.yaml')
+    assert main(['diagnose', *bags[:3], '--validation', bags[3], '--model',
+                 str(tmp_path / 'arm.yaml'), '--load-topic', '/arm_load/setpoint',
+                 '--iterations', '1', '--out', str(tmp_path / 'loaded.yaml'), '--json']) == 0
+    assert json.loads(capsys.readouterr().out)['effect'] == 'load_dependence'
+    loaded = load_model(tmp_path / 'loaded.yaml')
+    assert loaded.load_topic == '/arm_load/setpoint'
+    # evaluate reads the remembered topic: the load-dependent model fits the run at load
+    # 50 that it never saw, the plain model does not.
+    errors = {}
+    for name in ('arm', 'loaded'):
+        assert main(['evaluate', bags[3], '--model', str(tmp_path / f'{name}.yaml'),
+                     '--json']) == 0
+        errors[name] = json.loads(capsys.readouterr().out)['mae']['model']
+    assert errors['loaded'] < 0.3 * errors['arm']
 
 
 @pytest.fixture(scope='module')

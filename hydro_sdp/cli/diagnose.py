@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+from dataclasses import replace
 from pathlib import Path
 from typing import Any, TYPE_CHECKING
 
@@ -68,7 +69,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     add_bag_options(parser)
     parser.add_argument('--load-topic', metavar='TOPIC',
                         help='Float64 topic of a measured load (e.g. a cylinder pressure) for '
-                             'load_dependence (default: none; per-record speed scales)')
+                             'load_dependence; the augmented model remembers it (default: the '
+                             "model file's load_topic, else per-record speed scales)")
     parser.add_argument('--iterations', type=int, default=4,
                         help='most effects added (default: 4)')
     parser.add_argument('--out', help='augmented model file to write')
@@ -102,12 +104,13 @@ def run(args: argparse.Namespace) -> Outcome:
     # Without --command-topic the bags are read from the topic the model remembers.
     joint = args.joint or model.joint
     # With the other joints and the load: the signals flow_sharing and load_dependence need.
+    load_topic = args.load_topic or model.load_topic
     records = read_records(args.bags, joint, args.command_topic,
-                           preferred_topic=model.command_topic, load_topic=args.load_topic,
+                           preferred_topic=model.command_topic, load_topic=load_topic,
                            others=True)
     validation = read_records(
         args.validation, joint, args.command_topic, 'reading validation bags',
-        preferred_topic=model.command_topic, load_topic=args.load_topic,
+        preferred_topic=model.command_topic, load_topic=load_topic,
         others=True) if args.validation else []
     effects = list(VOCABULARY)
     with ProgressBar('diagnose', len(effects) * args.iterations) as bar:
@@ -118,6 +121,9 @@ def run(args: argparse.Namespace) -> Outcome:
             bar.update(done[0])
         result = diagnose(records, model, validation=validation or None,
                           max_iterations=args.iterations, progress=tick)
+    if load_topic and result.model.effect('load_dependence') is not None:
+        # The model remembers the load its effect was fitted on, as it does the command.
+        result = replace(result, model=replace(result.model, load_topic=load_topic))
     payload = describe(result)
     if args.out:
         payload['model_file'] = str(save_model(result.model, args.out))

@@ -38,7 +38,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     add_bag_options(parser)
     parser.add_argument('--load-topic', metavar='TOPIC',
                         help='Float64 topic of a measured load, for a model whose '
-                             'load_dependence was fitted on one (as diagnose --load-topic)')
+                             'load_dependence was fitted on one (default: the model '
+                             "file's load_topic)")
     parser.add_argument('--plot-dir', help='folder for a Fig. 4 style plot of each run')
     parser.set_defaults(run=run)
 
@@ -52,8 +53,8 @@ def run(args: argparse.Namespace) -> Outcome:
     # With the other joints and the load, so flow_sharing and load_dependence act as in
     # diagnose.
     records = read_records(args.bags, args.joint or model.joint, args.command_topic,
-                           preferred_topic=model.command_topic, load_topic=args.load_topic,
-                           others=True)
+                           preferred_topic=model.command_topic,
+                           load_topic=args.load_topic or model.load_topic, others=True)
     scores = evaluate(records, model)
     # A bag with gaps in its time stamps is read as several pieces, one row each.
     rows = [{'bag': record.source, 'samples': s.samples, 'model': s.model,

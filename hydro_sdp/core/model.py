@@ -24,8 +24,8 @@ import numpy as np
 
 MODEL_FORMAT = 'hydro_sdp/model/v1'
 
-_COMMON_KEYS = ('format', 'joint', 'command_topic', 'kind', 'delay', 'angle_limits',
-                'input_limits')
+_COMMON_KEYS = ('format', 'joint', 'command_topic', 'load_topic', 'kind', 'delay',
+                'angle_limits', 'input_limits')
 _ALL_MAP_KEYS = tuple(dict.fromkeys(key for cls in MAP_KINDS.values() for key in cls.keys))
 
 
@@ -54,6 +54,10 @@ class JointModel:
         ``/arm/pwm``), or ``None`` (key absent: the bag readers' default, the
         only topic ending in ``valve_command``). Commands that read bags use it
         when no ``--command-topic`` is given.
+    load_topic : str or None
+        Float64 topic of the measured load a ``load_dependence`` effect was fitted
+        on (key ``load_topic``, written by ``diagnose --load-topic``), or ``None``.
+        ``evaluate`` and ``diagnose`` read it when no ``--load-topic`` is given.
 
     """
 
@@ -64,15 +68,17 @@ class JointModel:
     input_limits: tuple[float, float] | None = None
     effects: tuple[Effect, ...] = field(default=())
     command_topic: str | None = None
+    load_topic: str | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.joint, str) or not self.joint.strip():
             raise ModelFileError(f"key 'joint': expected a non-empty name, got {self.joint!r}")
-        topic = self.command_topic
-        if topic is not None and (not isinstance(topic, str) or not topic.strip()
-                                  or any(c.isspace() for c in topic)):
-            raise ModelFileError(f"key 'command_topic': expected a topic name without spaces, "
-                                 f'got {topic!r}')
+        for key in ('command_topic', 'load_topic'):
+            topic = getattr(self, key)
+            if topic is not None and (not isinstance(topic, str) or not topic.strip()
+                                      or any(c.isspace() for c in topic)):
+                raise ModelFileError(f"key '{key}': expected a topic name without spaces, "
+                                     f'got {topic!r}')
         if not (math.isfinite(self.delay) and self.delay >= 0.0):
             raise ModelFileError(f"key 'delay': must be a finite number >= 0 s, got {self.delay}")
         names = [effect.name for effect in self.effects]
@@ -166,6 +172,8 @@ class JointModel:
         }
         if self.command_topic is not None:
             data['command_topic'] = self.command_topic
+        if self.load_topic is not None:
+            data['load_topic'] = self.load_topic
         data.update({
             'kind': self.kind,
             'delay': self.delay,
@@ -217,9 +225,10 @@ class JointModel:
         joint = data['joint']
         if not isinstance(joint, str):
             raise ModelFileError(f"key 'joint': expected a name, got {joint!r}")
-        topic = data.get('command_topic')
-        if topic is not None and not isinstance(topic, str):
-            raise ModelFileError(f"key 'command_topic': expected a topic name, got {topic!r}")
+        topics = {key: data.get(key) for key in ('command_topic', 'load_topic')}
+        for key, topic in topics.items():
+            if topic is not None and not isinstance(topic, str):
+                raise ModelFileError(f"key '{key}': expected a topic name, got {topic!r}")
         return cls(
             joint=joint,
             static_map=map_cls.from_mapping(data),
@@ -228,7 +237,8 @@ class JointModel:
             input_limits=_optional_limits(data, 'input_limits'),
             effects=tuple(effect_from_mapping(str(name), params)
                           for name, params in effects.items()),
-            command_topic=topic,
+            command_topic=topics['command_topic'],
+            load_topic=topics['load_topic'],
         )
 
 
