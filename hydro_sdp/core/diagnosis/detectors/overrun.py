@@ -23,7 +23,7 @@ from scipy.optimize import least_squares
 
 
 def inner_range(context: Context, end_share: float) -> tuple[float, float]:
-    """Return the angles, deg, between which the ends of the range (``end_share`` each) lie."""
+    """Return the angles, deg, of the range seen with ``end_share`` of it left out at each end."""
     low = min(float(np.min(run.record.y)) for run in context.runs)
     high = max(float(np.max(run.record.y)) for run in context.runs)
     margin = end_share * (high - low)
