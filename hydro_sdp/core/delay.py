@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import math
 from typing import Sequence
 
-from hydro_sdp.core.arrays import FloatArray, IntArray
+from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import DataError
 from hydro_sdp.core.experiments import Experiment
 from hydro_sdp.core.timing import delayed_at
@@ -72,38 +72,6 @@ class DelayEstimate:
         """Whether the other estimators are within one sample of the fit."""
         others = [d for d in (self.onset, self.xcorr) if d is not None]
         return all(abs(d - self.fit) <= 1 for d in others)
-
-
-def level_groups(experiments: Sequence[Experiment],
-                 delay: int) -> tuple[FloatArray, IntArray, FloatArray]:
-    """
-    Differenced angles grouped by experiment and delayed command level.
-
-    Parameters
-    ----------
-    experiments : sequence of Experiment
-        The experiments.
-    delay : int
-        Delay, samples.
-
-    Returns
-    -------
-    tuple
-        ``(dy, group, levels)``: every predicted sample's angle increment, its
-        group index, and the command of each group.
-
-    """
-    increments, groups, levels = [], [], []
-    offset = 0
-    for experiment in experiments:
-        k = np.arange(experiment.start + 1, experiment.y.size)
-        delayed = delayed_at(experiment.v, k, delay)
-        values, inverse = np.unique(delayed, return_inverse=True)
-        increments.append(experiment.y[k] - experiment.y[k - 1])
-        groups.append(inverse + offset)
-        levels.append(values)
-        offset += values.size
-    return np.concatenate(increments), np.concatenate(groups), np.concatenate(levels)
 
 
 def _onset(experiments: Sequence[Experiment], noise: float, max_delay: int,
