@@ -118,14 +118,14 @@ def exogenous_of(record: Record, dt: float | None = None) -> Exogenous:
     return Exogenous(record.load, speeds, record_key(record))
 
 
-def summed_other_speeds(record: Record, dt: float, start: int) -> FloatArray | None:
+def summed_other_speeds(signals: Exogenous, start: int) -> FloatArray | None:
     """
     Return the other joints' speeds summed, per increment from sample ``start`` on, deg/s.
 
-    Absolute speeds (:func:`smoothed_speeds`) added over the other joints: how much
-    of the pump they draw; None when the record carries no other joints.
+    Absolute speeds (:func:`smoothed_speeds`, from :func:`exogenous_of`) added over
+    the other joints: how much of the pump they draw; None without other joints.
     """
-    speeds = exogenous_of(record, dt).other_speeds
+    speeds = signals.other_speeds
     return None if speeds is None else np.abs(speeds).sum(axis=1)[start + 1:]
 
 

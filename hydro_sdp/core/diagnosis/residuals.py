@@ -13,13 +13,14 @@ error is the per-record mean of :func:`hydro_sdp.core.evaluate.evaluate`.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 import math
 from typing import Sequence
 
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.effects import AngleDependentVelocity, Backlash
 from hydro_sdp.core.evaluate import simulated_angles
-from hydro_sdp.core.exogenous import exogenous_of
+from hydro_sdp.core.exogenous import Exogenous, exogenous_of
 from hydro_sdp.core.experiments import check_record
 from hydro_sdp.core.model import JointModel
 from hydro_sdp.core.records import Record
@@ -54,6 +55,12 @@ class Run:
     record: Record
     dt: float
     start: int
+
+    # Fits simulate a run hundreds of times; its signals do not change.
+    @cached_property
+    def exogenous(self) -> Exogenous:
+        """Return the record's load and other joints' speeds, built once per run."""
+        return exogenous_of(self.record, self.dt)
 
 
 def _settled_start(record: Record, hold: int, fallback: int) -> int:
@@ -118,7 +125,7 @@ def simulate_record(model: JointModel, run: Run, backlash_offset: float = 0.0) -
     record = run.record
     return simulate(model, record.v, run.dt, float(record.y[run.start]),
                     v_before=float(record.v[run.start]), start=run.start,
-                    backlash_offset=backlash_offset, exogenous=exogenous_of(record, run.dt))
+                    backlash_offset=backlash_offset, exogenous=run.exogenous)
 
 
 def _record_mae(model: JointModel, run: Run) -> float:
@@ -173,7 +180,7 @@ def velocity_residuals(model: JointModel, runs: Sequence[Run]) -> list[FloatArra
         else:
             predicted = one_step_increments(model, record.v, record.y, run.dt,
                                             start=run.start, v_before=float(record.v[0]),
-                                            exogenous=exogenous_of(record, run.dt))
+                                            exogenous=run.exogenous)
         out.append(np.diff(record.y[run.start:]) - predicted)
     return out
 
@@ -190,7 +197,7 @@ def _play_at_stops(model: JointModel, run: Run) -> FloatArray:
     assert isinstance(play, Backlash) and model.angle_limits is not None
     half = 0.5 * play.play
     speed = speed_profile(model, record.v, run.dt, v_before=float(record.v[0]),
-                          exogenous=exogenous_of(record, run.dt))[run.start + 1:]
+                          exogenous=run.exogenous)[run.start + 1:]
     increment = run.dt * speed
     offset = bounded_cumsum(0.0, -increment, -half, half)
     previous = record.y[run.start:-1]

@@ -168,7 +168,7 @@ def feature_signature(word: str, feature: Feature, model: JointModel, augmented:
     elif feature == 'angle':
         x = record.y[start:-1]
     elif feature == 'others':
-        summed = summed_other_speeds(record, run.dt, start)
+        summed = summed_other_speeds(run.exogenous, start)
         x = np.zeros(samples.size) if summed is None else summed
     elif feature == 'events':
         triggers = np.flatnonzero(np.diff(command)) + 1

@@ -32,7 +32,7 @@ from hydro_sdp.core.diagnosis.detectors.overrun import (
 from hydro_sdp.core.diagnosis.residuals import mae, Run
 from hydro_sdp.core.diagnosis.results import Candidate, Trial
 from hydro_sdp.core.effects import FlowSharing as Sharing, LoadDependence as Load
-from hydro_sdp.core.exogenous import exogenous_of, record_key, summed_other_speeds
+from hydro_sdp.core.exogenous import record_key, summed_other_speeds
 from hydro_sdp.core.model import JointModel
 from hydro_sdp.core.simulation import one_step_increments
 from hydro_sdp.core.timing import delayed_at
@@ -50,14 +50,14 @@ END_SHARE = 0.1
 
 def other_speed_sums(context: Context) -> list[FloatArray | None]:
     """Return the summed other joints' speed per residual sample of each run, deg/s."""
-    return [summed_other_speeds(run.record, run.dt, run.start) for run in context.runs]
+    return [summed_other_speeds(run.exogenous, run.start) for run in context.runs]
 
 
 def _predicted(context: Context) -> list[FloatArray]:
     """One-step increments of the model under test, per run, deg."""
     return [one_step_increments(context.model, run.record.v, run.record.y, run.dt,
                                 start=run.start, v_before=float(run.record.v[0]),
-                                exogenous=exogenous_of(run.record, run.dt))
+                                exogenous=run.exogenous)
             for run in context.runs]
 
 

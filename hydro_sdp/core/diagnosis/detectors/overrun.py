@@ -16,7 +16,6 @@ from __future__ import annotations
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.diagnosis.context import Context
 from hydro_sdp.core.effects import LoadDependence as Load
-from hydro_sdp.core.exogenous import exogenous_of
 from hydro_sdp.core.simulation import one_step_increments
 import numpy as np
 from scipy.optimize import least_squares
@@ -48,7 +47,7 @@ def one_step_samples(context: Context,
             continue
         predicted = one_step_increments(base, run.record.v, run.record.y, run.dt,
                                         start=run.start, v_before=float(run.record.v[0]),
-                                        exogenous=exogenous_of(run.record, run.dt))
+                                        exogenous=run.exogenous)
         angle = run.record.y[run.start:-1]
         inner = (angle > low) & (angle < high)
         out.append((np.diff(run.record.y[run.start:])[inner], predicted[inner],
