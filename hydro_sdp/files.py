@@ -19,9 +19,10 @@ import tempfile
 import threading
 from typing import Any, Callable, Iterator, Mapping
 
-from hydro_sdp.core.controller_spec import ControllerSpec
+from hydro_sdp.core.controller_spec import ControllerSpec, design_from_model
 from hydro_sdp.core.errors import HydroSdpError, ModelFileError
 from hydro_sdp.core.model import JointModel
+from hydro_sdp.core.safety import check_controller_fits
 import yaml
 
 
@@ -340,6 +341,34 @@ def load_controller(path: str | os.PathLike[str]) -> ControllerSpec:
 
     """
     return _load(path, ControllerSpec.from_mapping)
+
+
+def controller_for(model: JointModel, path: str | os.PathLike[str] | None,
+                   control_period: float) -> ControllerSpec:
+    """
+    Return the controller of ``path`` checked against ``model``, or one designed from it.
+
+    Parameters
+    ----------
+    model : JointModel
+        The joint's model.
+    path : str, PathLike or None
+        Controller file (checked to be for this joint and valve range), or None to
+        design the PIP-IDZ controller from the model.
+    control_period : float
+        Control period of a designed controller, s.
+
+    Returns
+    -------
+    ControllerSpec
+        The controller.
+
+    """
+    if path:
+        spec = load_controller(path)
+        check_controller_fits(spec, model)
+        return spec
+    return design_from_model(model, control_period=control_period)
 
 
 def save_controller(spec: ControllerSpec, path: str | os.PathLike[str]) -> Path:

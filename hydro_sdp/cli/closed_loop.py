@@ -11,11 +11,10 @@ from hydro_sdp.cli.common import finite_float, non_negative_float, Outcome, posi
 from hydro_sdp.cli.progress import ProgressBar
 from hydro_sdp.cli.trajectory_loop import add_trajectory_options, run_trajectory
 from hydro_sdp.core.closed_loop import LoopJoint, run_closed_loop, step_metrics, step_setpoints
-from hydro_sdp.core.controller_spec import design_from_model
 from hydro_sdp.core.errors import ConfigurationError
 from hydro_sdp.core.records import Record
-from hydro_sdp.core.safety import check_controller_fits, clamp_setpoint, SETPOINT_MARGIN
-from hydro_sdp.files import load_controller, load_model
+from hydro_sdp.core.safety import clamp_setpoint, SETPOINT_MARGIN
+from hydro_sdp.files import controller_for, load_model
 import numpy as np
 
 HELP = 'simulate the PIP-IDZ closed loop offline and record it as a bag'
@@ -99,11 +98,8 @@ def run(args: argparse.Namespace) -> Outcome:
         raise ConfigurationError('--setpoints drives one joint: give one model (and at most '
                                  'one controller)')
     model = load_model(args.model[0])
-    if args.controller:
-        spec = load_controller(args.controller[0])
-        check_controller_fits(spec, model)
-    else:
-        spec = design_from_model(model, control_period=args.control_period)
+    spec = controller_for(model, args.controller[0] if args.controller else None,
+                          args.control_period)
     y0 = args.y0
     if y0 is None:
         limits = model.angle_limits

@@ -10,14 +10,13 @@ from hydro_sdp.cli.common import non_negative_float, Outcome, table
 from hydro_sdp.cli.progress import ProgressBar
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.closed_loop import LoopJoint, LoopTrace, run_closed_loop
-from hydro_sdp.core.controller_spec import ControllerSpec, design_from_model
+from hydro_sdp.core.controller_spec import ControllerSpec
 from hydro_sdp.core.errors import ConfigurationError
 from hydro_sdp.core.kinematics import distance_to_segment
 from hydro_sdp.core.model import JointModel
 from hydro_sdp.core.records import Record
-from hydro_sdp.core.safety import check_controller_fits
 from hydro_sdp.core.trajectory import check_trajectory, TrajectorySampler
-from hydro_sdp.files import load_controller, load_model
+from hydro_sdp.files import controller_for, load_model
 from hydro_sdp.trajectory_files import load_trajectory, TrajectoryFile
 import numpy as np
 
@@ -154,16 +153,11 @@ def run_trajectory(args: argparse.Namespace) -> Outcome:
     names = [model.joint for model in models]
     if len(set(names)) != len(names):
         raise ConfigurationError(f'two models of the same joint: {names}')
-    if args.controller:
-        if len(args.controller) != len(models):
-            raise ConfigurationError(f'give one controller per model ({len(models)}), got '
-                                     f'{len(args.controller)}')
-        specs = [load_controller(path) for path in args.controller]
-        for spec, model in zip(specs, models):
-            check_controller_fits(spec, model)
-    else:
-        specs = [design_from_model(model, control_period=args.control_period)
-                 for model in models]
+    if args.controller and len(args.controller) != len(models):
+        raise ConfigurationError(f'give one controller per model ({len(models)}), got '
+                                 f'{len(args.controller)}')
+    specs = [controller_for(model, path, args.control_period)
+             for model, path in zip(models, args.controller or [None] * len(models))]
     plan = load_trajectory(args.trajectory, args.kinematics)
     total = int(round((args.start_at + plan.trajectory.duration + args.settle)
                       / args.sample_period)) + 1

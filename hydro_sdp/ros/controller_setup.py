@@ -15,12 +15,11 @@ from functools import partial
 from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticArray
-from hydro_sdp.core.controller_spec import design_from_model
 from hydro_sdp.core.errors import ConfigurationError
 from hydro_sdp.core.health import joint_health
-from hydro_sdp.core.safety import check_controller_fits, setpoint_range
+from hydro_sdp.core.safety import setpoint_range
 from hydro_sdp.core.scheduling import seconds_to_ns, watchdog_period_ns
-from hydro_sdp.files import load_controller, load_model
+from hydro_sdp.files import controller_for, load_model
 from hydro_sdp.ros import qos
 from hydro_sdp.ros.conversions import CONTROLLER_STATE_LABELS
 from hydro_sdp.ros.diagnostics import diagnostic_array
@@ -77,11 +76,7 @@ class ControllerSetup:
         loops = []
         for joint, model_file, controller_file in self._file_lists():
             model = load_model(model_file)
-            if controller_file:
-                spec = load_controller(controller_file)
-                check_controller_fits(spec, model)
-            else:
-                spec = design_from_model(model, control_period=period)
+            spec = controller_for(model, controller_file, period)
             if not joint:
                 if not node.has_parameter('joint'):
                     declare(node, 'joint', spec.joint, 'joint name in JointState',
