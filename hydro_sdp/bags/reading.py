@@ -193,12 +193,7 @@ class BagData:
         joint = self.choose_joint(joint)
         topic = self.command_topic(joint, command_topic)
         t, y = self.angles(joint)
-        series = self.floats[topic]
-        if series.t.size == 0:
-            raise DataError(f'{self.path}: command topic {topic} has no messages')
-        order = np.argsort(series.t, kind='stable')
-        command_t, command = series.t[order], series.data[order]
-        index = command_in_force(t, command_t)
+        command, index = self._held(topic, t, 'command')
         keep = index >= 0
         if not keep.any():
             raise DataError(f'{self.path}: no {topic} message arrives before the last '
@@ -223,7 +218,13 @@ class BagData:
         if topic not in self.floats:
             raise TopicNotFoundError(f'{self.path}: no {FLOAT64} load topic {topic} '
                                      f'(topics: {self.info.describe()})')
+        return self._held(topic, t, 'load')
+
+    def _held(self, topic: str, t: FloatArray, what: str) -> tuple[FloatArray, IntArray]:
+        """Values of a Float64 topic in time order, and the index of the one in force at ``t``."""
         series = self.floats[topic]
+        if series.t.size == 0:
+            raise DataError(f'{self.path}: {what} topic {topic} has no messages')
         order = np.argsort(series.t, kind='stable')
         return series.data[order], command_in_force(t, series.t[order])
 
