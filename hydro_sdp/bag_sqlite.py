@@ -87,7 +87,6 @@ class Sqlite3BagWriter:
         self._types: set[str] = set()
         self.counts: dict[int, int] = {}
         self.pending = 0
-        self.commits = 0
         self._last_commit = clock()
 
     @property
@@ -183,7 +182,6 @@ class Sqlite3BagWriter:
         db = self._connection()
         if db.in_transaction:
             db.execute('COMMIT')
-            self.commits += 1
         self.pending = 0
         self._last_commit = self._clock()
 

@@ -13,9 +13,6 @@ from hydro_sdp.plots import (
 from hydro_sdp.report.diagnosis import write_report as write_diagnosis
 import numpy as np
 
-#: Figures of the report, by file name.
-FIGURES = ('velocity_map.png', 'evaluation.png', 'closed_loop.png', 'ramp.png')
-
 
 def _seconds(value: float) -> str:
     return 'never' if not math.isfinite(value) else f'{value:.2f}'

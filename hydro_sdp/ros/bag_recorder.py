@@ -115,7 +115,6 @@ class BagRecorderNode(Node):
         if not topics:
             topics = ['joint_states'] + [f'{j}/{t}' for j in joints
                                          for t in ('valve_command', 'setpoint')]
-        self.messages = 0
         self.closed = False
         # Refuses an existing output before anything is subscribed.
         self._writer = Sqlite3BagWriter(output, flush_period=flush_period)
@@ -138,6 +137,11 @@ class BagRecorderNode(Node):
             f"{', '.join(f'{t} ({m})' for t, m in self.recorded.items()) or 'nothing yet'}"
             f'{waiting}')
         self._announced = True
+
+    @property
+    def messages(self) -> int:
+        """Messages written so far (committed or not)."""
+        return self._writer.message_count
 
     @property
     def waiting(self) -> set[str]:
@@ -187,7 +191,6 @@ class BagRecorderNode(Node):
         if self.closed:
             return
         self._writer.write(self._ids[topic], self.get_clock().now().nanoseconds, raw)
-        self.messages += 1
 
     def _flush(self) -> None:
         if not self.closed:
