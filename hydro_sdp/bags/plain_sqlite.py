@@ -24,7 +24,7 @@ from pathlib import Path, PurePath
 import sqlite3
 from typing import Any, Callable
 
-from hydro_sdp.bags.sqlite_rows import topic_rows, TopicRows
+from hydro_sdp.bags.sqlite_rows import digests_agree, open_immutable, topic_rows, TopicRows
 import yaml
 
 
@@ -121,7 +121,7 @@ def read_plain(folder: Path, keep: Callable[[str], bool]) -> PlainBag | None:
             return None
         files = []
         for path in paths:
-            database = sqlite3.connect(f'{path.resolve().as_uri()}?immutable=1', uri=True)
+            database = open_immutable(path)
             try:
                 ids: dict[str, list[int]] = {}
                 for topic_id, name, msgtype, encoding, qos_text, digest in \
@@ -131,7 +131,7 @@ def read_plain(folder: Path, keep: Callable[[str], bool]) -> PlainBag | None:
                             continue
                         if qos != _qos(qos_text):
                             return None     # rosbags may still match them: let it judge
-                        if not wanted_digest or not digest or wanted_digest == digest:
+                        if digests_agree(wanted_digest, digest):
                             if keep(msgtype):
                                 ids.setdefault(name, []).append(int(topic_id))
                             break

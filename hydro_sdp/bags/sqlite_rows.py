@@ -45,8 +45,17 @@ def matches(wanted: Any, stored: Any) -> bool:
 
     """
     return bool(wanted.topic == stored.topic and wanted.msgtype == stored.msgtype and
-                wanted.ext == stored.ext and
-                (not wanted.digest or not stored.digest or wanted.digest == stored.digest))
+                wanted.ext == stored.ext and digests_agree(wanted.digest, stored.digest))
+
+
+def digests_agree(wanted: str, stored: str) -> bool:
+    """Return whether two type hashes agree, as rosbags judges them (an empty one agrees)."""
+    return not wanted or not stored or wanted == stored
+
+
+def open_immutable(path: Path) -> sqlite3.Connection:
+    """Open a storage file read-only and unlocked (a finished bag does not change)."""
+    return sqlite3.connect(f'{path.resolve().as_uri()}?immutable=1', uri=True)
 
 
 def _storages(reader: Any) -> list[tuple[Path, list[Any]]] | None:
@@ -133,7 +142,7 @@ def read_rows(reader: Any, wanted: Sequence[Any]) -> list[dict[str, TopicRows]] 
         for stored in connections:
             if any(matches(w, stored) for w in wanted):
                 by_topic.setdefault(stored.topic, []).append(int(stored.id))
-        database = sqlite3.connect(f'{path.resolve().as_uri()}?immutable=1', uri=True)
+        database = open_immutable(path)
         try:
             files.append({topic: topic_rows(database, ids) for topic, ids in by_topic.items()})
         finally:
