@@ -152,6 +152,13 @@ def read_records(bags: list[str], joint: str | None, command_topic: str | None,
                                   others=others)[0]
 
 
+def pieces_note(bags: list[str], records: list) -> list[str]:
+    """Return the line saying the bags were cut at gaps into more records, if they were."""
+    if len(records) == len(bags):
+        return []
+    return [f'{len(bags)} bags read as {len(records)} pieces (cut at gaps in the time stamps)']
+
+
 def read_records_and_topic(bags: list[str], joint: str | None, command_topic: str | None,
                            label: str = 'reading bags', *,
                            preferred_topic: str | None = None, load_topic: str | None = None,

@@ -5,7 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from hydro_sdp.cli.common import add_bag_options, json_number, Outcome, read_records, table
+from hydro_sdp.cli.common import (
+    add_bag_options, json_number, Outcome, pieces_note, read_records, table)
 from hydro_sdp.files import load_model
 
 HELP = 'simulation error of a model and its SDP-DZ and linear benchmarks (Table 2)'
@@ -77,8 +78,7 @@ def run(args: argparse.Namespace) -> Outcome:
                                  title=f'Model evaluation, run {index} (West et al. 2018, '
                                        'Fig. 4)')
             payload['plots'].append(str(save_figure(figure, folder / f'evaluation_{index}.png')))
-    lines = [] if len(records) == len(args.bags) else [
-        f'{len(args.bags)} bags read as {len(records)} pieces (cut at gaps in the time stamps)']
+    lines = pieces_note(args.bags, records)
     lines += [f'mean absolute simulation error (deg) of {args.model} and its benchmarks:']
     lines += table([[Path(r['bag']).name, f"{r['model']:.4f}", _format(r['sdp_dz']),
                      f"{r['linear']:.4f}"] for r in rows] +

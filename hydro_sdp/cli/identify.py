@@ -9,8 +9,8 @@ from pathlib import Path
 from typing import Any, Iterator, TYPE_CHECKING
 
 from hydro_sdp.cli.common import (
-    add_bag_options, finite_float, json_number, Outcome, positive_float, read_records_and_topic,
-    table)
+    add_bag_options, finite_float, json_number, Outcome, pieces_note, positive_float,
+    read_records_and_topic, table)
 from hydro_sdp.cli.progress import ProgressBar
 from hydro_sdp.core.model import JointModel
 from hydro_sdp.files import save_model
@@ -147,8 +147,7 @@ def run(args: argparse.Namespace) -> Outcome:
                 folder / 'velocity_map.png')),
         ]
     segmentation = result.segmentation
-    lines = [] if len(records) == len(args.bags) else [
-        f'{len(args.bags)} bags read as {len(records)} pieces (cut at gaps in the time stamps)']
+    lines = pieces_note(args.bags, records)
     lines.append(f'joint {model.joint}: {len(segmentation.experiments)} experiments '
                  f'({segmentation.steps} steps, {segmentation.runs} runs), '
                  f'{len(segmentation.dropped)} segments dropped, sample period '
