@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from hydro_sdp.cli.common import table
 from hydro_sdp.cli.demo_report import Report
 from hydro_sdp.cli.trajectory_loop import simulate_trajectory
 from hydro_sdp.core.controller_spec import design_from_model
@@ -25,27 +24,22 @@ def bucket_line(report: Report) -> None:
         raise DataError('config/lucie_line.yaml must be a line with its kinematics')
     run = simulate_trajectory(models, specs, plan, dt=SAMPLE_PERIOD, start_at=START_AT,
                               settle=SETTLE, feedforward=True)
-    path = run.path_error_mm
-    if path is None:
+    path, in_motion = run.path_error_mm, run.path_in_motion()
+    if path is None or in_motion is None or run.tip is None:
         raise DataError('the bucket line run measured no path error')
-    by_joint = {trace.joint: trace.y for trace in run.traces}
-    x, z = plan.arm.forward_many(by_joint[plan.arm.joints[0]], by_joint[plan.arm.joints[1]])
-    t = run.traces[0].t
-    moving = (t >= run.motion[0]) & (t <= run.motion[1])
-    worst, rms = float(np.max(path[moving])), float(np.sqrt(np.mean(path[moving] ** 2)))
+    worst, rms = in_motion
     (x0, z0), (x1, z1) = plan.line
     figure = report.figure(plot_bucket_line(
-        x, z, plan.line, path, run.traces, run.motion,
+        *run.tip, plan.line, path, run.traces, run.motion,
         title='Bucket tip on an oblique straight line (LUCIE paper, Fig. 7 style)'),
         'bucket_line.png')
-    names = [trace.joint for trace in run.traces]
-    rows = [[name, f'{run.rms_error[name]:.3f}', f'{run.final_error[name]:+.3f}']
-            for name in names]
+    rows = [[trace.joint, f'{run.rms_error[trace.joint]:.3f}',
+             f'{run.final_error[trace.joint]:+.3f}'] for trace in run.traces]
     length = float(np.hypot(x1 - x0, z1 - z0))
     report.lines += ['', f'bucket tip on a straight line ({length:.2f} m in '
                      f'{run.motion[1] - run.motion[0]:.1f} s): path error max {worst:.2f} mm, '
                      f'RMS {rms:.2f} mm']
-    report.lines += table(rows, ['joint', 'RMS error in motion (deg)', 'final error (deg)'])
+    report.lines += run.error_table()
     report.sections.append('\n'.join([
         '## A straight bucket path', '',
         f'The boom and dipper follow the joint trajectory that keeps the bucket tip on the '

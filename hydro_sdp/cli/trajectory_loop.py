@@ -51,6 +51,8 @@ class TrajectoryRun:
         RMS of ``y - d`` during the motion and ``y - d`` at the end, per joint, degrees.
     path_error_mm : FloatArray or None
         Distance of the tip from the line at every sample, mm (line files only).
+    tip : tuple of FloatArray or None
+        Tip position ``(x, z)`` at every sample, m (line files only).
 
     """
 
@@ -59,6 +61,21 @@ class TrajectoryRun:
     rms_error: dict[str, float]
     final_error: dict[str, float]
     path_error_mm: FloatArray | None
+    tip: tuple[FloatArray, FloatArray] | None = None
+
+    def path_in_motion(self) -> tuple[float, float] | None:
+        """Return the largest and the RMS distance from the line during the motion, mm."""
+        if self.path_error_mm is None:
+            return None
+        t = self.traces[0].t
+        path = self.path_error_mm[(t >= self.motion[0]) & (t <= self.motion[1])]
+        return float(np.max(path)), float(np.sqrt(np.mean(path ** 2)))
+
+    def error_table(self) -> list[str]:
+        """Return the per-joint table of the RMS error in motion and the final error."""
+        rows = [[trace.joint, f'{self.rms_error[trace.joint]:.3f}',
+                 f'{self.final_error[trace.joint]:+.3f}'] for trace in self.traces]
+        return table(rows, ['joint', 'RMS error in motion (deg)', 'final error (deg)'])
 
 
 def simulate_trajectory(models: list[JointModel], specs: list[ControllerSpec],
@@ -133,15 +150,15 @@ def simulate_trajectory(models: list[JointModel], specs: list[ControllerSpec],
     rms = {trace.joint: float(np.sqrt(np.mean((trace.y - trace.setpoint)[moving] ** 2)))
            for trace in traces}
     final = {trace.joint: float(trace.y[-1] - trace.setpoint[-1]) for trace in traces}
-    path = None
+    path = tip = None
     if plan.arm is not None and plan.line is not None:
         by_joint = {trace.joint: trace.y for trace in traces}
         missing = [name for name in plan.arm.joints if name not in by_joint]
         if missing:
             raise ConfigurationError(f"the line needs a model of joint {', '.join(missing)}")
-        x, z = plan.arm.forward_many(by_joint[plan.arm.joints[0]], by_joint[plan.arm.joints[1]])
-        path = 1000.0 * distance_to_segment(x, z, *plan.line)
-    return TrajectoryRun(traces, (start_at, end), rms, final, path)
+        tip = plan.arm.forward_many(by_joint[plan.arm.joints[0]], by_joint[plan.arm.joints[1]])
+        path = 1000.0 * distance_to_segment(*tip, *plan.line)
+    return TrajectoryRun(traces, (start_at, end), rms, final, path, tip)
 
 
 def run_trajectory(args: argparse.Namespace) -> Outcome:
@@ -180,14 +197,10 @@ def run_trajectory(args: argparse.Namespace) -> Outcome:
     lines = [f'trajectory of joints {", ".join(names)}: motion from {result.motion[0]:g} to '
              f'{result.motion[1]:g} s, control every {specs[0].control_period:g} s, '
              f"feed-forward {'on' if args.feedforward else 'off'}"]
-    rows = [[name, f'{result.rms_error[name]:.3f}', f'{result.final_error[name]:+.3f}']
-            for name in names]
-    lines += table(rows, ['joint', 'RMS error in motion (deg)', 'final error (deg)'])
-    path = result.path_error_mm
-    if path is not None:
-        t = traces[0].t
-        moving = (t >= result.motion[0]) & (t <= result.motion[1])
-        worst, spread = float(np.max(path[moving])), float(np.sqrt(np.mean(path[moving] ** 2)))
+    lines += result.error_table()
+    in_motion = result.path_in_motion()
+    if in_motion is not None:
+        worst, spread = in_motion
         payload['path_error_mm'] = {'max': worst, 'rms': spread}
         lines.append(f'tip distance from the line in motion: max {worst:.1f} mm, '
                      f'RMS {spread:.1f} mm')
@@ -195,11 +208,10 @@ def run_trajectory(args: argparse.Namespace) -> Outcome:
         from hydro_sdp.plots import plot_closed_loop, save_figure
         from hydro_sdp.plots.trajectory import plot_tip_path
 
-        if path is not None and plan.arm is not None and plan.line is not None:
-            by_joint = {trace.joint: trace.y for trace in traces}
-            x, z = plan.arm.forward_many(by_joint[plan.arm.joints[0]],
-                                         by_joint[plan.arm.joints[1]])
-            figure = plot_tip_path(traces[0].t, x, z, plan.line, path, motion=result.motion,
+        if result.tip is not None and result.path_error_mm is not None and \
+                plan.line is not None:
+            figure = plot_tip_path(traces[0].t, *result.tip, plan.line, result.path_error_mm,
+                                   motion=result.motion,
                                    title='PIP-IDZ control: bucket tip on a straight line')
         else:
             figure = plot_closed_loop(traces, title='PIP-IDZ control along a trajectory')
