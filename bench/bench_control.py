@@ -11,8 +11,8 @@ Python method call (the floor any Python controller pays).
 
 import timeit
 
-from hydro_sdp.core.controller_spec import design_from_model
-from hydro_sdp.files import default_model_path, load_model
+from hydro_sdp.core.control.controller_spec import design_from_model
+from hydro_sdp.io.model_files import default_model_path, load_model
 import numpy as np
 
 

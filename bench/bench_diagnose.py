@@ -12,10 +12,10 @@ repeats).
 import time
 
 from hydro_sdp.core.diagnosis import diagnose, VOCABULARY
-from hydro_sdp.core.effects import ValveLag
-from hydro_sdp.core.experiment_records import experiment_record
-from hydro_sdp.core.simulation import simulate
-from hydro_sdp.files import default_model_path, load_model
+from hydro_sdp.core.model.effects import ValveLag
+from hydro_sdp.core.model.simulation import simulate
+from hydro_sdp.core.synthetic.joint_experiments import experiment_record
+from hydro_sdp.io.model_files import default_model_path, load_model
 
 
 def main():

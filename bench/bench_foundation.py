@@ -4,7 +4,7 @@ Benchmark the foundation: simulation speed and bag reading, each against a basel
 Run with ``make bench`` or ``python bench/bench_foundation.py``. Prints, from
 one run on this machine:
 
-* samples per second of :func:`hydro_sdp.core.simulation.simulate` on the J2
+* samples per second of :func:`hydro_sdp.core.model.simulation.simulate` on the J2
   ``sdp`` model with end stops, against a plain per-sample Python loop of the
   same equations (target: at least 20x faster);
 * seconds to read a one-hour 100 Hz bag (JointState + Float64, 720,000
@@ -20,10 +20,10 @@ import tempfile
 import time
 
 from hydro_sdp.bags import read_bag, write_bag
-from hydro_sdp.core.programs import random_program
-from hydro_sdp.core.records import Record
-from hydro_sdp.core.simulation import JointSimulator, simulate
-from hydro_sdp.files import default_model_path, load_model
+from hydro_sdp.core.model.records import Record
+from hydro_sdp.core.model.simulation import JointSimulator, simulate
+from hydro_sdp.core.synthetic.programs import random_program
+from hydro_sdp.io.model_files import default_model_path, load_model
 import numpy as np
 
 

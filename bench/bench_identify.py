@@ -25,15 +25,16 @@ from typing import Callable, Sequence
 from bench_foundation import best_of, rosbags_baseline
 from hydro_sdp.bags import write_bag
 from hydro_sdp.core.arrays import FloatArray
-from hydro_sdp.core.delay import level_speeds
-from hydro_sdp.core.experiment_records import experiment_record
-from hydro_sdp.core.experiments import Experiment
-from hydro_sdp.core.map_fit import fit_sdp, FitData, initial_sdp, sdp_from_rate_vector
-from hydro_sdp.core.model import JointModel
-from hydro_sdp.core.programs import command_span
-from hydro_sdp.core.simulation import simulate
-from hydro_sdp.core.static_maps import SdpMap
-from hydro_sdp.files import default_model_path, load_model
+from hydro_sdp.core.identification.delay import level_speeds
+from hydro_sdp.core.identification.map_fit import (
+    fit_sdp, FitData, initial_sdp, sdp_from_rate_vector)
+from hydro_sdp.core.identification.segmentation import Experiment
+from hydro_sdp.core.model.joint_model import JointModel
+from hydro_sdp.core.model.simulation import simulate
+from hydro_sdp.core.model.static_maps import SdpMap
+from hydro_sdp.core.synthetic.joint_experiments import experiment_record
+from hydro_sdp.core.synthetic.programs import command_span
+from hydro_sdp.io.model_files import default_model_path, load_model
 import numpy as np
 from scipy.optimize import minimize
 

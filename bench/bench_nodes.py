@@ -32,10 +32,10 @@ import sys
 import time
 from typing import Any, NamedTuple
 
-from hydro_sdp.core.online import OnlineSdpIdentifier, OnlineSettings
-from hydro_sdp.core.programs import random_program
-from hydro_sdp.core.simulation import simulate
-from hydro_sdp.files import default_model_path, load_model
+from hydro_sdp.core.identification.online import OnlineSdpIdentifier, OnlineSettings
+from hydro_sdp.core.model.simulation import simulate
+from hydro_sdp.core.synthetic.programs import random_program
+from hydro_sdp.io.model_files import default_model_path, load_model
 import numpy as np
 
 ECHO = """

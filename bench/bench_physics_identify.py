@@ -1,7 +1,7 @@
 """
 Benchmark identification on the physics plant against the first paper's method.
 
-Run with ``python bench/bench_physics_identify.py``. The plant (hydro_sdp.core.physics,
+Run with ``python bench/bench_physics_identify.py``. The plant (hydro_sdp.core.synthetic.physics,
 presets config/physics_arm.yaml and physics_boom.yaml) is not an SDP model: spool
 valve with overlap and orifice flow, cylinder and linkage, load, cushions, stops.
 Its full-stroke constant-duty runs (40..100 % duty, both directions, 100 Hz) are
@@ -9,7 +9,7 @@ identified two ways in the same run:
 
 * ``identify`` (hydro_sdp), default options;
 * the paper's method: eq. (5) with a pure delay, fitted by Nelder-Mead on the
-  output error (:func:`hydro_sdp.core.paper_baseline.paper_model`, the objective
+  output error (:func:`hydro_sdp.core.identification.paper_baseline.paper_model`, the objective
   of bench_identify.py's baseline, vectorised), given the same experiments and
   end stops.
 
@@ -22,13 +22,13 @@ both MAEs, their ratio (target >= 2) and the ratio of identification times.
 
 import time
 
-from hydro_sdp.core.evaluate import evaluate, mean_errors
-from hydro_sdp.core.identify import identify
-from hydro_sdp.core.paper_baseline import paper_model
-from hydro_sdp.core.physics import load_machine
-from hydro_sdp.core.physics.plant import with_payload
-from hydro_sdp.core.physics.programs import full_stroke_runs
-from hydro_sdp.files import shipped_config
+from hydro_sdp.core.identification.evaluation import evaluate, mean_errors
+from hydro_sdp.core.identification.identify import identify
+from hydro_sdp.core.identification.paper_baseline import paper_model
+from hydro_sdp.core.synthetic.physics.plant import with_payload
+from hydro_sdp.core.synthetic.physics.runs import full_stroke_runs
+from hydro_sdp.io.documents import shipped_config
+from hydro_sdp.io.plant_files import load_machine
 
 DUTIES = (40, 50, 60, 70, 80, 90, 100)
 PAYLOADS = {'arm': (250.0, 0.0), 'boom': (600.0, 0.0)}

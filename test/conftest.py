@@ -4,7 +4,7 @@ import importlib.util
 import os
 from pathlib import Path
 
-from hydro_sdp.files import default_model_path, load_model
+from hydro_sdp.io.model_files import default_model_path, load_model
 import numpy as np
 import pytest
 

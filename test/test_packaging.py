@@ -90,7 +90,7 @@ def test_installed_command_runs_and_finds_the_shipped_model(install_prefix, tmp_
         env=environment, cwd=tmp_path, capture_output=True, text=True, timeout=120)
     assert result.returncode == 0, result.stderr
     assert '"samples"' in result.stdout
-    code = ('from hydro_sdp.files import default_model_path; print(default_model_path())')
+    code = ('from hydro_sdp.io.model_files import default_model_path; print(default_model_path())')
     where = subprocess.run([sys.executable, '-c', code], env=environment, cwd=tmp_path,
                            capture_output=True, text=True, timeout=60)
     assert where.stdout.strip() == str(install_prefix / 'share' / PACKAGE / 'config' /

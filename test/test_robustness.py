@@ -10,10 +10,10 @@ import shutil
 
 from hydro_sdp.bags import read_bag, write_bag
 from hydro_sdp.core.errors import HydroSdpError
-from hydro_sdp.core.identify import identify
-from hydro_sdp.core.model import JointModel
-from hydro_sdp.core.records import Record
-from hydro_sdp.files import default_model_path, dump_model, load_model
+from hydro_sdp.core.identification.identify import identify
+from hydro_sdp.core.model.joint_model import JointModel
+from hydro_sdp.core.model.records import Record
+from hydro_sdp.io.model_files import default_model_path, dump_model, load_model
 from hypothesis import example, given, HealthCheck, settings, strategies as st
 import numpy as np
 import pytest
@@ -97,7 +97,7 @@ def test_bag_reader_answers_records_or_a_typed_error(tmp_path_factory, small_bag
 def test_identification_returns_a_valid_model_or_a_typed_error(levels, noise):
     model = load_model(default_model_path())
     v = np.concatenate([np.full(n, level) for level, n in levels])
-    from hydro_sdp.core.simulation import simulate
+    from hydro_sdp.core.model.simulation import simulate
     y = simulate(model, v, 0.01, 25.0) + np.random.default_rng(0).normal(0.0, noise, v.size)
     try:
         result = identify([Record(np.arange(1, v.size + 1) * 0.01, v, y, joint='j2')])

@@ -4,9 +4,9 @@ Reading a bag's joint angles and commands into records.
 Bags hold ``/joint_states`` (``sensor_msgs/msg/JointState``, radians) and one
 ``std_msgs/msg/Float64`` valve command topic per joint (docs/interfaces.md
 section 2). :func:`read_bag` turns a bag into arrays; :meth:`BagData.record`
-picks one joint and its command and returns a :class:`~hydro_sdp.core.records.Record`
+picks one joint and its command and returns a :class:`~hydro_sdp.core.model.records.Record`
 in degrees, pairing each angle sample with the command in force
-(:func:`hydro_sdp.core.timing.command_in_force`). Anything that cannot be used
+(:func:`hydro_sdp.core.model.timing.command_in_force`). Anything that cannot be used
 is refused with a typed error that says why: an empty bag, a missing topic or
 joint.
 
@@ -19,14 +19,13 @@ import os
 from pathlib import Path
 from typing import Mapping, Sequence
 
+from hydro_sdp.bags.cdr import decode_float64, decode_joint_states
 from hydro_sdp.bags.storage import (
     BagInfo, collect, EmptyBagError, FLOAT64, JOINT_STATE, Progress, TopicInfo)
-from hydro_sdp.cdr import decode_float64, decode_joint_states
 from hydro_sdp.core.arrays import FloatArray, IntArray
-from hydro_sdp.core.errors import (
-    BagFormatError, DataError, JointNotFoundError, TopicNotFoundError)
-from hydro_sdp.core.records import Record
-from hydro_sdp.core.timing import command_in_force
+from hydro_sdp.core.errors import BagFormatError, DataError, JointNotFoundError, TopicNotFoundError
+from hydro_sdp.core.model.records import Record
+from hydro_sdp.core.model.timing import command_in_force
 import numpy as np
 
 
@@ -178,7 +177,7 @@ class BagData:
             Float64 command topic; default: the only topic ending in ``valve_command``.
         load_topic : str or None
             Float64 topic of a measured load (a cylinder pressure, say), held like
-            the command (:func:`hydro_sdp.core.timing.command_in_force`) into the
+            the command (:func:`hydro_sdp.core.model.timing.command_in_force`) into the
             record's ``load``; angle samples before its first message are dropped.
         others : bool
             Whether to carry the angles of the bag's other joints (those named in

@@ -2,7 +2,7 @@
 Reading the messages of sqlite3 storage files in bulk, one query per topic.
 
 rosbags hands out a bag's messages one at a time through two generators, and
-that walk takes longer than decoding them all (:mod:`hydro_sdp.cdr`). For the
+that walk takes longer than decoding them all (:mod:`hydro_sdp.bags.cdr`). For the
 plain case, uncompressed sqlite3 storage, the rows of each wanted topic are
 fetched here in one query instead, with the rules of rosbags' reader: a bag
 folder's topics are matched to each storage file's topics by name, type,

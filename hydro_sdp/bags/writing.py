@@ -1,7 +1,7 @@
 """
 Writing records as a rosbag2 bag (sqlite3 or mcap), whole or not at all.
 
-Commands are stamped by :func:`hydro_sdp.core.timing.command_stamps_for`, so
+Commands are stamped by :func:`hydro_sdp.core.model.timing.command_stamps_for`, so
 that the bag reader pairs each one with the sample it belongs to again.
 
 """
@@ -12,13 +12,13 @@ import os
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
+from hydro_sdp.bags.cdr import encode_float64, encode_joint_states
 from hydro_sdp.bags.storage import FLOAT64, JOINT_STATE, STORAGES
-from hydro_sdp.cdr import encode_float64, encode_joint_states
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import DataError
-from hydro_sdp.core.records import Record
-from hydro_sdp.core.timing import command_stamps_for
-from hydro_sdp.files import atomic_directory
+from hydro_sdp.core.model.records import Record
+from hydro_sdp.core.model.timing import command_stamps_for
+from hydro_sdp.io.atomic import atomic_directory
 import numpy as np
 
 
@@ -58,7 +58,7 @@ def write_bag(path: str | os.PathLike[str], records: Sequence[Record], *,
 
     """
     from rosbags.rosbag2 import StoragePlugin, Writer
-    from rosbags.typesys import Stores, get_typestore
+    from rosbags.typesys import get_typestore, Stores
 
     if storage not in STORAGES:
         raise ValueError(f"storage must be one of {', '.join(STORAGES)}, got {storage!r}")

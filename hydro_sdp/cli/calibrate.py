@@ -14,9 +14,11 @@ from hydro_sdp.cli.common import (
 from hydro_sdp.cli.design import complex_pole
 from hydro_sdp.cli.progress import ProgressBar
 from hydro_sdp.core.errors import ConfigurationError
-from hydro_sdp.core.records import Record
-from hydro_sdp.csv_logs import ANGLE_UNITS, read_csv_log
-from hydro_sdp.files import atomic_directory, atomic_write_text, save_controller, save_model
+from hydro_sdp.core.model.records import Record
+from hydro_sdp.io.atomic import atomic_directory, atomic_write_text
+from hydro_sdp.io.controller_files import save_controller
+from hydro_sdp.io.csv_logs import ANGLE_UNITS, read_csv_log
+from hydro_sdp.io.model_files import save_model
 import yaml
 
 if TYPE_CHECKING:

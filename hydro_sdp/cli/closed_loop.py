@@ -10,11 +10,13 @@ from hydro_sdp.bags import STORAGES, write_bag
 from hydro_sdp.cli.common import finite_float, non_negative_float, Outcome, positive_float, table
 from hydro_sdp.cli.progress import ProgressBar
 from hydro_sdp.cli.trajectory_loop import add_trajectory_options, run_trajectory
-from hydro_sdp.core.closed_loop import LoopJoint, run_closed_loop, step_metrics, step_setpoints
+from hydro_sdp.core.control.loop_simulation import (
+    LoopJoint, run_closed_loop, step_metrics, step_setpoints)
+from hydro_sdp.core.control.safety import clamp_setpoint, SETPOINT_MARGIN
 from hydro_sdp.core.errors import ConfigurationError
-from hydro_sdp.core.records import Record
-from hydro_sdp.core.safety import clamp_setpoint, SETPOINT_MARGIN
-from hydro_sdp.files import controller_for, load_model
+from hydro_sdp.core.model.records import Record
+from hydro_sdp.io.controller_files import controller_for
+from hydro_sdp.io.model_files import load_model
 import numpy as np
 
 HELP = 'simulate the PIP-IDZ closed loop offline and record it as a bag'

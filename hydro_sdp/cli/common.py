@@ -144,7 +144,7 @@ def read_records(bags: list[str], joint: str | None, command_topic: str | None,
     -------
     list of Record
         One per bag, or several where a stalled recording left a hole
-        (:func:`hydro_sdp.core.records.split_at_gaps`).
+        (:func:`hydro_sdp.core.model.records.split_at_gaps`).
 
     """
     return read_records_and_topic(bags, joint, command_topic, label,
@@ -190,7 +190,7 @@ def read_records_and_topic(bags: list[str], joint: str | None, command_topic: st
     """
     from hydro_sdp.bags import read_bag
     from hydro_sdp.cli.progress import ProgressBar
-    from hydro_sdp.core.records import split_at_gaps
+    from hydro_sdp.core.model.records import split_at_gaps
 
     records: list = []
     topics: set[str] = set()

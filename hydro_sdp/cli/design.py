@@ -5,11 +5,12 @@ from __future__ import annotations
 import argparse
 
 from hydro_sdp.cli.common import finite_float, non_negative_float, Outcome, positive_float, table
-from hydro_sdp.core.controller_spec import ControllerSpec, design_from_model, format_pole
+from hydro_sdp.core.control.controller_spec import ControllerSpec, design_from_model, format_pole
+from hydro_sdp.core.control.idz import IDZ_MODES
+from hydro_sdp.core.control.pip_design import LqWeights
 from hydro_sdp.core.errors import ConfigurationError
-from hydro_sdp.core.idz import IDZ_MODES
-from hydro_sdp.core.pip_design import LqWeights
-from hydro_sdp.files import load_model, save_controller
+from hydro_sdp.io.controller_files import save_controller
+from hydro_sdp.io.model_files import load_model
 
 HELP = 'design a PIP controller with inverse dead-zone for a joint model'
 DESCRIPTION = """\

@@ -9,7 +9,7 @@ from typing import Any, TYPE_CHECKING
 
 from hydro_sdp.cli.common import add_bag_options, json_number, Outcome, read_records, table
 from hydro_sdp.cli.progress import ProgressBar
-from hydro_sdp.files import load_model, save_model
+from hydro_sdp.io.model_files import load_model, save_model
 
 if TYPE_CHECKING:
     from hydro_sdp.core.diagnosis import Diagnosis

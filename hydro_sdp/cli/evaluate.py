@@ -7,7 +7,7 @@ from pathlib import Path
 
 from hydro_sdp.cli.common import (
     add_bag_options, json_number, Outcome, pieces_note, read_records, table)
-from hydro_sdp.files import load_model
+from hydro_sdp.io.model_files import load_model
 
 HELP = 'simulation error of a model and its SDP-DZ and linear benchmarks (Table 2)'
 DESCRIPTION = """\
@@ -47,7 +47,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> Outcome:
     """Run ``evaluate``."""
-    from hydro_sdp.core.evaluate import AVERAGES, evaluate, mean_errors, simulated_angles
+    from hydro_sdp.core.identification.evaluation import (
+        AVERAGES, evaluate, mean_errors, simulated_angles)
 
     model = load_model(args.model)
     # Without --command-topic the bags are read from the topic the model remembers.

@@ -12,12 +12,12 @@ from hydro_sdp.cli.common import (
     add_bag_options, finite_float, json_number, Outcome, pieces_note, positive_float,
     read_records_and_topic, table)
 from hydro_sdp.cli.progress import ProgressBar
-from hydro_sdp.core.model import JointModel
-from hydro_sdp.files import save_model
+from hydro_sdp.core.model.joint_model import JointModel
+from hydro_sdp.io.model_files import save_model
 import numpy as np
 
 if TYPE_CHECKING:
-    from hydro_sdp.core.identify import Identification
+    from hydro_sdp.core.identification.identify import Identification
 
 HELP = 'identify a joint model from step or random-level bags'
 DESCRIPTION = """\
@@ -52,7 +52,7 @@ examples:
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     """Add the ``identify`` command to the command line."""
-    from hydro_sdp.core.identify import KINDS
+    from hydro_sdp.core.identification.identify import KINDS
 
     parser = subparsers.add_parser('identify', help=HELP, description=DESCRIPTION,
                                    formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -108,7 +108,7 @@ def describe(result: Identification) -> dict:
 
 def run(args: argparse.Namespace) -> Outcome:
     """Run ``identify``."""
-    from hydro_sdp.core.identify import identify
+    from hydro_sdp.core.identification.identify import identify
 
     records, topic = read_records_and_topic(args.bags, args.joint, args.command_topic)
     stages = ['segmenting', 'estimating the delay', 'fitting the static map',

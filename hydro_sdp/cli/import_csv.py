@@ -8,7 +8,7 @@ from pathlib import Path
 from hydro_sdp.bags import STORAGES, write_bag
 from hydro_sdp.cli.common import Outcome
 from hydro_sdp.core.errors import ConfigurationError
-from hydro_sdp.csv_logs import ANGLE_UNITS, CsvLog, read_csv_log
+from hydro_sdp.io.csv_logs import ANGLE_UNITS, CsvLog, read_csv_log
 
 HELP = 'convert CSV logs (time, angle, command columns) into bags for identify'
 DESCRIPTION = """\

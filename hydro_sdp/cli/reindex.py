@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from hydro_sdp.bag_reindex import METADATA_VERSION, reindex
+from hydro_sdp.bags.reindex import METADATA_VERSION, reindex
 from hydro_sdp.cli.common import Outcome, table
 
 HELP = 'rebuild metadata.yaml of a bag from its sqlite3 storage files (a crashed recording)'

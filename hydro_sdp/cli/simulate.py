@@ -6,8 +6,8 @@ import argparse
 
 from hydro_sdp.bags import STORAGES, write_bag
 from hydro_sdp.cli.common import finite_float, non_negative_float, Outcome, positive_float
-from hydro_sdp.core.experiment_records import experiment_record
-from hydro_sdp.files import load_model
+from hydro_sdp.core.synthetic.joint_experiments import experiment_record
+from hydro_sdp.io.model_files import load_model
 
 HELP = 'open-loop step or random-level experiments on a model, recorded as a bag'
 DESCRIPTION = """\

@@ -9,15 +9,16 @@ from hydro_sdp.bags import write_bag
 from hydro_sdp.cli.common import non_negative_float, Outcome, table
 from hydro_sdp.cli.progress import ProgressBar
 from hydro_sdp.core.arrays import FloatArray
-from hydro_sdp.core.closed_loop import LoopJoint, LoopTrace, run_closed_loop
-from hydro_sdp.core.controller_spec import ControllerSpec
+from hydro_sdp.core.control.controller_spec import ControllerSpec
+from hydro_sdp.core.control.kinematics import distance_to_segment
+from hydro_sdp.core.control.loop_simulation import LoopJoint, LoopTrace, run_closed_loop
+from hydro_sdp.core.control.trajectory import check_trajectory, TrajectorySampler
 from hydro_sdp.core.errors import ConfigurationError
-from hydro_sdp.core.kinematics import distance_to_segment
-from hydro_sdp.core.model import JointModel
-from hydro_sdp.core.records import Record
-from hydro_sdp.core.trajectory import check_trajectory, TrajectorySampler
-from hydro_sdp.files import controller_for, load_model
-from hydro_sdp.trajectory_files import load_trajectory, TrajectoryFile
+from hydro_sdp.core.model.joint_model import JointModel
+from hydro_sdp.core.model.records import Record
+from hydro_sdp.io.controller_files import controller_for
+from hydro_sdp.io.model_files import load_model
+from hydro_sdp.io.trajectory_files import load_trajectory, TrajectoryFile
 import numpy as np
 
 

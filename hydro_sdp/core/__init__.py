@@ -5,14 +5,14 @@ The names users need most are re-exported here.
 
 """
 
-from hydro_sdp.core.effects import (
-    AngleDependentVelocity, Backlash, DirectionDependentDelay, Effect, ValveLag)
 from hydro_sdp.core.errors import (
     BagError, ConfigurationError, DataError, HydroSdpError, ModelFileError)
-from hydro_sdp.core.model import JointModel
-from hydro_sdp.core.records import Record
-from hydro_sdp.core.simulation import JointSimulator, simulate
-from hydro_sdp.core.static_maps import LinearMap, SdpDzMap, SdpMap
+from hydro_sdp.core.model.effects import (
+    AngleDependentVelocity, Backlash, DirectionDependentDelay, Effect, ValveLag)
+from hydro_sdp.core.model.joint_model import JointModel
+from hydro_sdp.core.model.records import Record
+from hydro_sdp.core.model.simulation import JointSimulator, simulate
+from hydro_sdp.core.model.static_maps import LinearMap, SdpDzMap, SdpMap
 
 __all__ = [
     'AngleDependentVelocity', 'Backlash', 'BagError', 'ConfigurationError', 'DataError',

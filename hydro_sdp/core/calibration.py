@@ -18,15 +18,15 @@ from dataclasses import dataclass, field, replace
 import math
 from typing import Any, Callable, Sequence
 
-from hydro_sdp.core.controller_spec import ControllerSpec, design_from_model, format_pole
+from hydro_sdp.core.control.controller_spec import ControllerSpec, design_from_model, format_pole
+from hydro_sdp.core.control.loop_check import check_loop, CheckSettings, LoopCheck, slower_poles
 from hydro_sdp.core.diagnosis import DETECTORS, diagnose, Diagnosis
 from hydro_sdp.core.errors import DataError, HydroSdpError
-from hydro_sdp.core.evaluate import evaluate, RecordScore
-from hydro_sdp.core.identify import Identification, identify
-from hydro_sdp.core.loop_check import check_loop, CheckSettings, LoopCheck, slower_poles
-from hydro_sdp.core.model import JointModel
-from hydro_sdp.core.records import Record
-from hydro_sdp.core.static_maps import CHORD_SPEED_FRACTION, LinearMap, SdpDzMap, SdpMap
+from hydro_sdp.core.identification.evaluation import evaluate, RecordScore
+from hydro_sdp.core.identification.identify import Identification, identify
+from hydro_sdp.core.model.joint_model import JointModel
+from hydro_sdp.core.model.records import Record
+from hydro_sdp.core.model.static_maps import CHORD_SPEED_FRACTION, LinearMap, SdpDzMap, SdpMap
 import numpy as np
 
 #: The stages, in order, as :func:`calibrate` reports them.

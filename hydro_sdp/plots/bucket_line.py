@@ -5,7 +5,7 @@ from __future__ import annotations
 from typing import Sequence
 
 from hydro_sdp.core.arrays import FloatArray
-from hydro_sdp.core.closed_loop import LoopTrace
+from hydro_sdp.core.control.loop_simulation import LoopTrace
 from hydro_sdp.plots.figures import LIMIT, MEASURED, MODEL
 from matplotlib.axes import Axes
 from matplotlib.backends.backend_agg import FigureCanvasAgg

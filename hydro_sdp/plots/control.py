@@ -4,9 +4,9 @@ from __future__ import annotations
 
 from typing import Sequence
 
-from hydro_sdp.core.closed_loop import LoopTrace
-from hydro_sdp.core.idz import InverseDeadZone
-from hydro_sdp.core.model import JointModel
+from hydro_sdp.core.control.idz import InverseDeadZone
+from hydro_sdp.core.control.loop_simulation import LoopTrace
+from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.plots.figures import (
     label_command_axes, LIMIT, mark_dead_zone, MEASURED, MODEL, new_figure)
 from hydro_sdp.plots.units import UNKNOWN_UNIT

@@ -14,8 +14,8 @@ import os
 from pathlib import Path
 from typing import Literal
 
-from hydro_sdp.core.model import JointModel
-from hydro_sdp.files import atomic_write_bytes
+from hydro_sdp.core.model.joint_model import JointModel
+from hydro_sdp.io.atomic import atomic_write_bytes
 from hydro_sdp.plots.units import command_unit_of
 from matplotlib.axes import Axes
 from matplotlib.backends.backend_agg import FigureCanvasAgg

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 from typing import Sequence
 
-from hydro_sdp.core.delay import LevelSpeed
-from hydro_sdp.core.experiments import Experiment
-from hydro_sdp.core.model import JointModel
-from hydro_sdp.core.records import Record
+from hydro_sdp.core.identification.delay import LevelSpeed
+from hydro_sdp.core.identification.segmentation import Experiment
+from hydro_sdp.core.model.joint_model import JointModel
+from hydro_sdp.core.model.records import Record
 from hydro_sdp.plots.figures import (
     label_command_axes, LIMIT, mark_dead_zone, mark_limits, matplotlib_colormap, MEASURED, MODEL,
     new_figure)

@@ -10,7 +10,7 @@ range when that range is a usual one, and is otherwise what the user says.
 
 from __future__ import annotations
 
-from hydro_sdp.core.model import JointModel
+from hydro_sdp.core.model.joint_model import JointModel
 
 #: Input ranges whose unit is clear: percent duty, and the +-10 V of a valve amplifier.
 KNOWN_RANGES: dict[tuple[float, float], str] = {

@@ -6,8 +6,9 @@ import math
 from pathlib import Path
 
 from hydro_sdp.core.calibration import CalibrationResult
-from hydro_sdp.core.evaluate import simulated_angles
-from hydro_sdp.files import atomic_write_text, dump_model
+from hydro_sdp.core.identification.evaluation import simulated_angles
+from hydro_sdp.io.atomic import atomic_write_text
+from hydro_sdp.io.model_files import dump_model
 from hydro_sdp.plots import (
     plot_closed_loop, plot_record, plot_velocity_map, save_figure)
 from hydro_sdp.report.diagnosis import write_report as write_diagnosis

@@ -5,7 +5,8 @@ from __future__ import annotations
 from pathlib import Path
 
 from hydro_sdp.core.diagnosis import Diagnosis
-from hydro_sdp.files import atomic_write_text, dump_model
+from hydro_sdp.io.atomic import atomic_write_text
+from hydro_sdp.io.model_files import dump_model
 from hydro_sdp.plots import command_unit_of, plot_gap, plot_ledger, plot_signature, save_figure
 from hydro_sdp.plots.diagnosis import plot_candidates, plot_record_scales
 

@@ -22,7 +22,7 @@ import importlib
 import sys
 from typing import Any, Callable
 
-from hydro_sdp.bag_sqlite import Sqlite3BagWriter
+from hydro_sdp.bags.live_writer import Sqlite3BagWriter
 from hydro_sdp.core.errors import ConfigurationError
 from hydro_sdp.ros.params import declare
 from hydro_sdp.ros.runner import run_node

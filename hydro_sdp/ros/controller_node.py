@@ -8,15 +8,15 @@ empty controller file name designs from the model). Per joint it subscribes to
 ``<joint>/controller_state`` (the layout of
 :data:`~hydro_sdp.ros.conversions.CONTROLLER_STATE_LABELS`); one ``joint_states``
 feeds every joint, and ``joint_trajectory`` (``trajectory_msgs/JointTrajectory``)
-moves the set-points as :mod:`~hydro_sdp.core.trajectory` says, with the set-point
+moves the set-points as :mod:`~hydro_sdp.core.control.trajectory` says, with the set-point
 rate fed forward through the IDZ when ``feedforward`` is true (a trajectory is
 refused whole, with a warning naming the offenders, if it names a joint not
 controlled or leaves the end stops less ``setpoint_margin``, or if the node is not
 active or has had no feedback from a joint it names). ``/diagnostics``
-gets one status per joint every ``diagnostic_period`` (:mod:`~hydro_sdp.core.health`).
+gets one status per joint every ``diagnostic_period`` (:mod:`~hydro_sdp.core.control.health`).
 
-The core :class:`~hydro_sdp.core.pip_controller.PipIdzController` does the
-control and the core :mod:`~hydro_sdp.core.scheduling` decides when: the first
+The core :class:`~hydro_sdp.core.control.pip_controller.PipIdzController` does the
+control and the core :mod:`~hydro_sdp.core.control.scheduling` decides when: the first
 JointState sample at or after each control instant is controlled (so the
 feedback-to-command latency is the computation time); a duplicate or
 out-of-order sample is ignored; a sample that cannot be used (NaN, joint
@@ -25,7 +25,7 @@ from the node's clock) is refused for that joint with a throttled warning and it
 valve is closed; if no valid feedback arrives for ``feedback_timeout`` the
 watchdog closes the valve, and control resumes from the next valid sample
 without a bump. Set-points are kept ``setpoint_margin`` degrees inside the end
-stops (:mod:`~hydro_sdp.core.safety`).
+stops (:mod:`~hydro_sdp.core.control.safety`).
 
 Lifecycle: configure loads the files and designs, and declares the joints'
 parameters; activate starts commanding (every joint first holds where it is
@@ -45,14 +45,13 @@ from __future__ import annotations
 import math
 from typing import Any
 
+from hydro_sdp.core.control.safety import clamp_setpoint, SETPOINT_MARGIN, setpoint_range
+from hydro_sdp.core.control.scheduling import seconds_to_ns, watchdog_period_ns
+from hydro_sdp.core.control.trajectory import check_trajectory, start_time, TrajectorySampler
 from hydro_sdp.core.errors import ConfigurationError, DataError, HydroSdpError
-from hydro_sdp.core.safety import clamp_setpoint, SETPOINT_MARGIN, setpoint_range
-from hydro_sdp.core.scheduling import seconds_to_ns, watchdog_period_ns
-from hydro_sdp.core.trajectory import check_trajectory, start_time, TrajectorySampler
-from hydro_sdp.files import default_model_path
+from hydro_sdp.io.model_files import default_model_path
 from hydro_sdp.ros.controller_setup import ControllerSetup
-from hydro_sdp.ros.conversions import fill_controller_state, joint_angle, \
-    trajectory_from_message
+from hydro_sdp.ros.conversions import fill_controller_state, joint_angle, trajectory_from_message
 from hydro_sdp.ros.first_joint import first_joint
 from hydro_sdp.ros.joint_loop import JointLoop
 from hydro_sdp.ros.params import declare, value_of

@@ -15,11 +15,12 @@ from functools import partial
 from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticArray
+from hydro_sdp.core.control.health import joint_health
+from hydro_sdp.core.control.safety import setpoint_range
+from hydro_sdp.core.control.scheduling import seconds_to_ns, watchdog_period_ns
 from hydro_sdp.core.errors import ConfigurationError
-from hydro_sdp.core.health import joint_health
-from hydro_sdp.core.safety import setpoint_range
-from hydro_sdp.core.scheduling import seconds_to_ns, watchdog_period_ns
-from hydro_sdp.files import controller_for, load_model
+from hydro_sdp.io.controller_files import controller_for
+from hydro_sdp.io.model_files import load_model
 from hydro_sdp.ros import qos
 from hydro_sdp.ros.conversions import CONTROLLER_STATE_LABELS
 from hydro_sdp.ros.diagnostics import diagnostic_array

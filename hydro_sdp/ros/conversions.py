@@ -13,8 +13,8 @@ import math
 from math import degrees, isfinite
 from typing import Any, Sequence
 
+from hydro_sdp.core.control.trajectory import JointTrajectory
 from hydro_sdp.core.errors import DataError
-from hydro_sdp.core.trajectory import JointTrajectory
 import numpy as np
 
 

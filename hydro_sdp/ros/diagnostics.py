@@ -1,11 +1,11 @@
-"""``diagnostic_msgs/DiagnosticArray`` from :class:`~hydro_sdp.core.health.HealthStatus`."""
+"""DiagnosticArray from :class:`~hydro_sdp.core.control.health.HealthStatus`."""
 
 from __future__ import annotations
 
 from typing import Sequence
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-from hydro_sdp.core.health import HealthStatus
+from hydro_sdp.core.control.health import HealthStatus
 from hydro_sdp.ros.conversions import fill_stamp
 
 
@@ -20,7 +20,7 @@ def diagnostic_status(node_name: str, joint: str, health: HealthStatus) -> Diagn
     joint : str
         Joint name.
     health : HealthStatus
-        Level, message and key-values from :func:`~hydro_sdp.core.health.joint_health`.
+        Level, message and key-values from :func:`~hydro_sdp.core.control.health.joint_health`.
 
     Returns
     -------

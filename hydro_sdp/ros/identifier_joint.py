@@ -12,10 +12,10 @@ from dataclasses import asdict
 import math
 from typing import Any
 
-from hydro_sdp.core.health import JointSnapshot
-from hydro_sdp.core.model import JointModel
-from hydro_sdp.core.online import OnlineSdpIdentifier, SdpEstimate
-from hydro_sdp.core.recalibration import Decision, Recalibration, RecalibrationPolicy
+from hydro_sdp.core.control.health import JointSnapshot
+from hydro_sdp.core.control.idz_recalibration import Decision, Recalibration, RecalibrationPolicy
+from hydro_sdp.core.identification.online import OnlineSdpIdentifier, SdpEstimate
+from hydro_sdp.core.model.joint_model import JointModel
 from rcl_interfaces.msg import Parameter as ParameterMessage, ParameterType, ParameterValue
 
 

@@ -5,7 +5,7 @@ One node identifies one joint (``model_file``) or several (``joints`` with
 ``model_files`` in the same order). Per joint it pairs each ``joint_states`` sample
 with the last ``<joint>/valve_command`` received before it (the command in force
 over the interval that ends at the sample, as in a recorded bag), feeds the core
-:class:`~hydro_sdp.core.online.OnlineSdpIdentifier`, and publishes the estimates
+:class:`~hydro_sdp.core.identification.online.OnlineSdpIdentifier`, and publishes the estimates
 and their standard deviations on ``<joint>/sdp/...`` (``std_msgs/Float64``):
 
 * ``dead_zone_lower``, ``dead_zone_upper``: edges, input units;
@@ -17,7 +17,7 @@ and their standard deviations on ``<joint>/sdp/...`` (``std_msgs/Float64``):
   ``idz.slopes`` parameter, deg per control sample per input unit;
 * ``recalibration_needed`` (``std_msgs/Bool``).
 
-The core :class:`~hydro_sdp.core.recalibration.Recalibration` decides when the
+The core :class:`~hydro_sdp.core.control.idz_recalibration.Recalibration` decides when the
 estimates call for a new IDZ; with ``auto_recalibrate`` the node then sets the
 controller's ``<joint>.idz.dead_zone`` and ``<joint>.idz.slopes`` parameters
 (a one-joint controller keeps its plain ``idz.*`` names in step). ``/diagnostics``
@@ -35,14 +35,14 @@ import math
 from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticArray
-from hydro_sdp.core.controller_spec import idz_for_model
+from hydro_sdp.core.control.controller_spec import idz_for_model
+from hydro_sdp.core.control.health import joint_health
+from hydro_sdp.core.control.idz import InverseDeadZone
+from hydro_sdp.core.control.idz_recalibration import recalibrated_idz, RecalibrationPolicy
 from hydro_sdp.core.errors import ConfigurationError, DataError, HydroSdpError
-from hydro_sdp.core.health import joint_health
-from hydro_sdp.core.idz import InverseDeadZone
-from hydro_sdp.core.model import JointModel
-from hydro_sdp.core.online import input_scale, OnlineSdpIdentifier, OnlineSettings
-from hydro_sdp.core.recalibration import recalibrated_idz, RecalibrationPolicy
-from hydro_sdp.files import default_model_path, load_model
+from hydro_sdp.core.identification.online import input_scale, OnlineSdpIdentifier, OnlineSettings
+from hydro_sdp.core.model.joint_model import JointModel
+from hydro_sdp.io.model_files import default_model_path, load_model
 from hydro_sdp.ros import conversions, qos
 from hydro_sdp.ros.diagnostics import diagnostic_array
 from hydro_sdp.ros.first_joint import first_joint

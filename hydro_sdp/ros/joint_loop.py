@@ -13,13 +13,13 @@ from __future__ import annotations
 from dataclasses import replace
 from typing import Any
 
-from hydro_sdp.core.controller_spec import ControllerSpec
-from hydro_sdp.core.health import JointSnapshot
-from hydro_sdp.core.idz import idz_mode, IDZ_MODES, InverseDeadZone
-from hydro_sdp.core.model import JointModel
-from hydro_sdp.core.pip_controller import PipIdzController
-from hydro_sdp.core.pip_design import PipGains
-from hydro_sdp.core.scheduling import ControlSchedule, FeedbackGate, seconds_to_ns
+from hydro_sdp.core.control.controller_spec import ControllerSpec
+from hydro_sdp.core.control.health import JointSnapshot
+from hydro_sdp.core.control.idz import idz_mode, IDZ_MODES, InverseDeadZone
+from hydro_sdp.core.control.pip_controller import PipIdzController
+from hydro_sdp.core.control.pip_design import PipGains
+from hydro_sdp.core.control.scheduling import ControlSchedule, FeedbackGate, seconds_to_ns
+from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.ros.params import pair, value_of
 from rclpy.parameter import Parameter
 

@@ -4,9 +4,9 @@ Simulated hydraulic joints as a ROS node (``ros2 run hydro_sdp plant_node``).
 The node owns the only timer of a simulated machine. On each tick it applies,
 for every joint, the last valve command received before the tick (the command
 in force over the interval that ends now: the rule of
-:func:`~hydro_sdp.core.timing.command_in_force`, here in arrival order since a
+:func:`~hydro_sdp.core.model.timing.command_in_force`, here in arrival order since a
 Float64 carries no stamp), advances the core
-:class:`~hydro_sdp.core.simulation.JointSimulator` one sample, and publishes one
+:class:`~hydro_sdp.core.model.simulation.JointSimulator` one sample, and publishes one
 ``joint_states`` with every joint (REP 103: position in rad, velocity in rad/s,
 the simulated motion over the last sample, without measurement noise). Angle
 parameters are in degrees. With ``use_sim_time`` the tick follows ``/clock``, so
@@ -25,10 +25,10 @@ import math
 from typing import Any
 
 from hydro_sdp.core.errors import ConfigurationError, HydroSdpError
-from hydro_sdp.core.programs import start_angle
-from hydro_sdp.core.simulation import JointSimulator
-from hydro_sdp.core.static_maps import shifted_map
-from hydro_sdp.files import default_model_path, load_model
+from hydro_sdp.core.model.simulation import JointSimulator
+from hydro_sdp.core.model.static_maps import shifted_map
+from hydro_sdp.core.synthetic.programs import start_angle
+from hydro_sdp.io.model_files import default_model_path, load_model
 from hydro_sdp.ros import conversions, qos
 from hydro_sdp.ros.params import declare, pair
 from hydro_sdp.ros.runner import run_node

@@ -15,9 +15,9 @@ import time
 
 from hydro_sdp.bags import write_bag
 from hydro_sdp.cli.main import main
-from hydro_sdp.core.effects import ValveLag
-from hydro_sdp.core.experiment_records import experiment_record
-from hydro_sdp.files import load_model
+from hydro_sdp.core.model.effects import ValveLag
+from hydro_sdp.core.synthetic.joint_experiments import experiment_record
+from hydro_sdp.io.model_files import load_model
 from hydro_sdp.ros import qos
 from outside import Processes
 import pytest

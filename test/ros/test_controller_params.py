@@ -8,10 +8,11 @@ process from an outside rclpy client (what ``ros2 param set`` does).
 from dataclasses import replace
 import math
 
-from hydro_sdp.core.controller_spec import design_from_model
+from hydro_sdp.core.control.controller_spec import design_from_model
+from hydro_sdp.core.control.pip_controller import PipIdzController
 from hydro_sdp.core.errors import ConfigurationError
-from hydro_sdp.core.pip_controller import PipIdzController
-from hydro_sdp.files import default_model_path, load_model, save_controller
+from hydro_sdp.io.controller_files import save_controller
+from hydro_sdp.io.model_files import default_model_path, load_model
 from hydro_sdp.ros.controller_node import PipControllerNode
 from hydro_sdp.ros.testing import RosHarness
 from outside import node_process_fixture, NodeProcess

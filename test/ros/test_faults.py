@@ -15,8 +15,8 @@ import subprocess
 import sys
 import time
 
-from hydro_sdp.core.simulation import JointSimulator
-from hydro_sdp.files import default_model_path, load_model
+from hydro_sdp.core.model.simulation import JointSimulator
+from hydro_sdp.io.model_files import default_model_path, load_model
 from hydro_sdp.ros.controller_node import PipControllerNode
 from hydro_sdp.ros.testing import RosHarness
 import numpy as np

@@ -3,11 +3,11 @@
 from dataclasses import replace
 import math
 
-from hydro_sdp.core.controller_spec import idz_for_model
-from hydro_sdp.core.model import JointModel
-from hydro_sdp.core.online import SdpEstimate
-from hydro_sdp.core.static_maps import SdpMap
-from hydro_sdp.files import default_model_path, load_model, save_model
+from hydro_sdp.core.control.controller_spec import idz_for_model
+from hydro_sdp.core.identification.online import SdpEstimate
+from hydro_sdp.core.model.joint_model import JointModel
+from hydro_sdp.core.model.static_maps import SdpMap
+from hydro_sdp.io.model_files import default_model_path, load_model, save_model
 from hydro_sdp.ros.controller_node import PipControllerNode
 from hydro_sdp.ros.identifier_node import IdentifierNode
 from hydro_sdp.ros.scenarios import wear_and_recalibration

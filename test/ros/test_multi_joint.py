@@ -3,10 +3,10 @@
 import math
 
 from conftest import REPO
-from hydro_sdp.core.closed_loop import LoopJoint, run_closed_loop
-from hydro_sdp.core.controller_spec import design_from_model
-from hydro_sdp.core.trajectory import JointTrajectory, TrajectorySampler
-from hydro_sdp.files import load_model
+from hydro_sdp.core.control.controller_spec import design_from_model
+from hydro_sdp.core.control.loop_simulation import LoopJoint, run_closed_loop
+from hydro_sdp.core.control.trajectory import JointTrajectory, TrajectorySampler
+from hydro_sdp.io.model_files import load_model
 from hydro_sdp.ros.controller_node import PipControllerNode
 from hydro_sdp.ros.conversions import CONTROLLER_STATE_LABELS
 from hydro_sdp.ros.plant_node import PlantNode
@@ -179,8 +179,8 @@ def test_a_new_trajectory_replaces_the_rest_and_a_setpoint_ends_it(ros):
 
 @pytest.mark.slow
 def test_boom_and_dipper_processes_follow_a_ramp(monkeypatch, capsys):
-    from outside import ARM, CONTROLLER, Processes
     from hydro_sdp.ros.conversions import fill_trajectory
+    from outside import ARM, CONTROLLER, Processes
     nodes = Processes(monkeypatch, ('plant_node', ARM), ('controller_node', CONTROLLER))
     try:
         client = nodes.node
@@ -226,7 +226,7 @@ class _ShiftedEstimator:
     delay = 10
 
     def __init__(self, model, edges, std=1.0):
-        from hydro_sdp.core.online import SdpEstimate
+        from hydro_sdp.core.identification.online import SdpEstimate
         static = model.static_map
         self.model = model
         self.named = SdpEstimate(edges[0], edges[1], *static.saturation_velocity,
@@ -240,7 +240,7 @@ class _ShiftedEstimator:
 
     def estimate(self):
         from dataclasses import replace
-        from hydro_sdp.core.static_maps import SdpMap
+        from hydro_sdp.core.model.static_maps import SdpMap
         static = self.model.static_map
         return replace(self.model, static_map=SdpMap(
             dead_zone=self.named.edges, saturation_velocity=static.saturation_velocity,

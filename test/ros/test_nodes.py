@@ -5,12 +5,12 @@ import time
 
 from conftest import REPO
 from hydro_sdp.bags import read_bag
-from hydro_sdp.core.closed_loop import LoopJoint, run_closed_loop, valve_reversals
-from hydro_sdp.core.controller_spec import design_from_model
+from hydro_sdp.core.control.controller_spec import design_from_model
+from hydro_sdp.core.control.loop_simulation import LoopJoint, run_closed_loop, valve_reversals
 from hydro_sdp.core.errors import ConfigurationError
-from hydro_sdp.core.identify import identify
-from hydro_sdp.core.programs import random_program
-from hydro_sdp.files import default_model_path, load_model
+from hydro_sdp.core.identification.identify import identify
+from hydro_sdp.core.synthetic.programs import random_program
+from hydro_sdp.io.model_files import default_model_path, load_model
 from hydro_sdp.ros.bag_player import BagPlayerNode
 from hydro_sdp.ros.bag_recorder import BagRecorderNode
 from hydro_sdp.ros.controller_node import PipControllerNode

@@ -9,7 +9,7 @@ does).
 import math
 import time
 
-from hydro_sdp.files import default_model_path, load_model
+from hydro_sdp.io.model_files import default_model_path, load_model
 from hydro_sdp.ros.plant_node import PlantNode
 from hydro_sdp.ros.testing import Lockstep, RosHarness
 import numpy as np

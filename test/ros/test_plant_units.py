@@ -2,7 +2,7 @@
 
 import math
 
-from hydro_sdp.files import default_model_path, load_model
+from hydro_sdp.io.model_files import default_model_path, load_model
 from hydro_sdp.ros.controller_node import PipControllerNode
 from hydro_sdp.ros.plant_node import PlantNode
 from hydro_sdp.ros.testing import Lockstep, RosHarness

@@ -13,7 +13,7 @@ import math
 from pathlib import Path
 import time
 
-from hydro_sdp.files import default_model_path, load_model
+from hydro_sdp.io.model_files import default_model_path, load_model
 from hydro_sdp.ros import qos
 from outside import node_process_fixture, Processes
 import pytest

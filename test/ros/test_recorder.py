@@ -15,7 +15,7 @@ import subprocess
 import time
 
 from hydro_sdp.bags import read_bag, write_bag
-from hydro_sdp.core.records import Record
+from hydro_sdp.core.model.records import Record
 import numpy as np
 from outside import required_script
 import pytest

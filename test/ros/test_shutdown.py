@@ -21,7 +21,7 @@ import sys
 import time
 
 from hydro_sdp.bags import write_bag
-from hydro_sdp.core.records import Record
+from hydro_sdp.core.model.records import Record
 import numpy as np
 import pytest
 import rclpy

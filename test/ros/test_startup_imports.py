@@ -41,4 +41,4 @@ def test_plant_node_construction_imports_no_scipy():
 
 def test_the_probe_sees_an_import():
     # The check above would pass vacuously if the report were broken.
-    assert 'scipy.signal' in _heavy_modules_after('import hydro_sdp.core.riv')
+    assert 'scipy.signal' in _heavy_modules_after('import hydro_sdp.core.identification.riv')

@@ -14,13 +14,13 @@ import math
 from typing import Any, NamedTuple
 
 from hydro_sdp.core.arrays import FloatArray
-from hydro_sdp.core.delay import level_speeds
 from hydro_sdp.core.diagnosis.context import Context
 from hydro_sdp.core.diagnosis.residuals import velocity_residuals
 from hydro_sdp.core.errors import HydroSdpError
-from hydro_sdp.core.map_fit import fit_sdp, FitData
-from hydro_sdp.core.model import JointModel
-from hydro_sdp.core.static_maps import LinearMap, SdpDzMap, SdpMap, StaticMap
+from hydro_sdp.core.identification.delay import level_speeds
+from hydro_sdp.core.identification.map_fit import fit_sdp, FitData
+from hydro_sdp.core.model.joint_model import JointModel
+from hydro_sdp.core.model.static_maps import LinearMap, SdpDzMap, SdpMap, StaticMap
 import numpy as np
 from scipy.optimize import least_squares
 

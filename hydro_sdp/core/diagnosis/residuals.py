@@ -6,7 +6,7 @@ one-step increments, docs/methods.md section 8.1) localises a discrepancy in tim
 without the drift of the simulation error. Two models are compared on it block by
 block: a sign test over one-second blocks, robust to the residuals' autocorrelation
 and not swayed by a few blocks of end-stop impacts (section 8.3). The validation
-error is the per-record mean of :func:`hydro_sdp.core.evaluate.evaluate`.
+error is the per-record mean of :func:`hydro_sdp.core.identification.evaluation.evaluate`.
 
 """
 
@@ -18,13 +18,13 @@ import math
 from typing import Sequence
 
 from hydro_sdp.core.arrays import FloatArray
-from hydro_sdp.core.effects import AngleDependentVelocity, Backlash
-from hydro_sdp.core.evaluate import simulated_angles
-from hydro_sdp.core.exogenous import Exogenous, exogenous_of
-from hydro_sdp.core.experiments import check_record
-from hydro_sdp.core.model import JointModel
-from hydro_sdp.core.records import Record
-from hydro_sdp.core.simulation import (
+from hydro_sdp.core.identification.evaluation import simulated_angles
+from hydro_sdp.core.identification.segmentation import check_record
+from hydro_sdp.core.model.effects import AngleDependentVelocity, Backlash
+from hydro_sdp.core.model.exogenous_signals import Exogenous, exogenous_of
+from hydro_sdp.core.model.joint_model import JointModel
+from hydro_sdp.core.model.records import Record
+from hydro_sdp.core.model.simulation import (
     bounded_cumsum, one_step_increments, simulate, speed_profile)
 import numpy as np
 
@@ -150,9 +150,9 @@ def mae(model: JointModel, runs: Sequence[Run]) -> float:
     Return the mean absolute simulation error, averaged per record as `evaluate` does, deg.
 
     A record that starts at the model's rest command is simulated as
-    :func:`hydro_sdp.core.evaluate.evaluate` does, so the two agree; one that starts in
-    motion (the command before it unknown), or a model with backlash, from the
-    record's settled start.
+    :func:`~hydro_sdp.core.identification.evaluation.evaluate` does, so the two
+    agree; one that starts in motion (the command before it unknown), or a model
+    with backlash, from the record's settled start.
 
     Parameters
     ----------

@@ -6,7 +6,7 @@ from dataclasses import dataclass, field
 from typing import Any, Literal, Sequence
 
 from hydro_sdp.core.arrays import FloatArray, IntArray
-from hydro_sdp.core.model import JointModel
+from hydro_sdp.core.model.joint_model import JointModel
 import numpy as np
 
 #: What a residual signature is drawn against: the delayed command or the angle (residual

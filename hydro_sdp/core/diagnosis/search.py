@@ -20,8 +20,8 @@ from hydro_sdp.core.diagnosis.residuals import mae, Run, runs_of, simulate_recor
 from hydro_sdp.core.diagnosis.results import (
     Candidate, Diagnosis, Gap, LedgerStep, Signature, Trial)
 from hydro_sdp.core.errors import DataError, HydroSdpError
-from hydro_sdp.core.model import JointModel
-from hydro_sdp.core.records import Record
+from hydro_sdp.core.model.joint_model import JointModel
+from hydro_sdp.core.model.records import Record
 import numpy as np
 
 

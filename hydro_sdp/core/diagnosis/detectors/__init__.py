@@ -13,9 +13,9 @@ from hydro_sdp.core.diagnosis.detectors.angle import AngleDependentVelocity, Ang
 from hydro_sdp.core.diagnosis.detectors.base import Detector, feature_signature
 from hydro_sdp.core.diagnosis.detectors.delays import DirectionDependentDelay, TimeDelay
 from hydro_sdp.core.diagnosis.detectors.dynamics import Backlash, ValveLag
-from hydro_sdp.core.diagnosis.detectors.exogenous import FlowSharing, LoadDependence
 from hydro_sdp.core.diagnosis.detectors.map_shape import Asymmetry, DeadZone, VelocitySaturation
-from hydro_sdp.core.diagnosis.detectors.stroke import StrokeGeometry
+from hydro_sdp.core.diagnosis.detectors.pump_and_load import FlowSharing, LoadDependence
+from hydro_sdp.core.diagnosis.detectors.stroke_shape import StrokeGeometry
 from hydro_sdp.core.errors import ConfigurationError
 
 #: Every detector, in the order the search tries them (ties in gain go to the first).

@@ -10,9 +10,9 @@ from hydro_sdp.core.diagnosis.context import Context
 from hydro_sdp.core.diagnosis.detectors.base import Detector, EffectDetector, feature_signature
 from hydro_sdp.core.diagnosis.residuals import Run, velocity_residuals
 from hydro_sdp.core.diagnosis.results import Candidate, Signature, Trial
-from hydro_sdp.core.effects import AngleDependentVelocity as AngleSpeed
-from hydro_sdp.core.model import JointModel
-from hydro_sdp.core.simulation import speed_profile
+from hydro_sdp.core.model.effects import AngleDependentVelocity as AngleSpeed
+from hydro_sdp.core.model.joint_model import JointModel
+from hydro_sdp.core.model.simulation import speed_profile
 import numpy as np
 from scipy.optimize import least_squares
 

@@ -16,11 +16,11 @@ from typing import Callable, ClassVar
 from hydro_sdp.core.diagnosis.context import Context
 from hydro_sdp.core.diagnosis.residuals import Run, velocity_residuals
 from hydro_sdp.core.diagnosis.results import Candidate, Feature, Signature, Trial
-from hydro_sdp.core.effects import Effect
-from hydro_sdp.core.exogenous import summed_other_speeds
-from hydro_sdp.core.model import JointModel
-from hydro_sdp.core.simulation import speed_profile
-from hydro_sdp.core.timing import delayed_at
+from hydro_sdp.core.model.effects import Effect
+from hydro_sdp.core.model.exogenous_signals import summed_other_speeds
+from hydro_sdp.core.model.joint_model import JointModel
+from hydro_sdp.core.model.simulation import speed_profile
+from hydro_sdp.core.model.timing import delayed_at
 import numpy as np
 
 #: What the x axis of each feature's signature shows.
@@ -92,7 +92,7 @@ class Detector(ABC):
 
 class EffectDetector(Detector):
     """
-    An effect of :mod:`hydro_sdp.core.effects`, tried on a model without it.
+    An effect of :mod:`hydro_sdp.core.model.effects`, tried on a model without it.
 
     The word is the effect's name. Subclasses implement :meth:`fit_effect`; those
     that set :attr:`refits` are also tried on a model that has the effect, which

@@ -4,13 +4,13 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-from hydro_sdp.core.delay import estimate_delay
 from hydro_sdp.core.diagnosis.context import Context
 from hydro_sdp.core.diagnosis.detectors.base import Detector
 from hydro_sdp.core.diagnosis.residuals import block_sums
 from hydro_sdp.core.diagnosis.results import Candidate, Trial
-from hydro_sdp.core.effects import DirectionDependentDelay as Split
-from hydro_sdp.core.experiments import thin
+from hydro_sdp.core.identification.delay import estimate_delay
+from hydro_sdp.core.identification.segmentation import thin
+from hydro_sdp.core.model.effects import DirectionDependentDelay as Split
 
 
 class TimeDelay(Detector):

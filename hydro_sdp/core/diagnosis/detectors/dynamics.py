@@ -5,7 +5,7 @@ from __future__ import annotations
 from hydro_sdp.core.diagnosis.context import Context
 from hydro_sdp.core.diagnosis.detectors.base import EffectDetector
 from hydro_sdp.core.diagnosis.results import Trial
-from hydro_sdp.core.effects import Backlash as Play, ValveLag as Lag
+from hydro_sdp.core.model.effects import Backlash as Play, ValveLag as Lag
 
 
 class ValveLag(EffectDetector):

@@ -9,8 +9,8 @@ from hydro_sdp.core.diagnosis.context import Context
 from hydro_sdp.core.diagnosis.detectors.base import Detector
 from hydro_sdp.core.diagnosis.refit import map_features, map_parameters, refit_map
 from hydro_sdp.core.diagnosis.results import Candidate, Trial
-from hydro_sdp.core.model import JointModel
-from hydro_sdp.core.static_maps import SdpMap
+from hydro_sdp.core.model.joint_model import JointModel
+from hydro_sdp.core.model.static_maps import SdpMap
 
 
 class MapShapeDetector(Detector):

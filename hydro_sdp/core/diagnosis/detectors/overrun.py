@@ -5,7 +5,7 @@ With a measured load ``L`` the speed of a pressure-compensated valve is the
 compensated one until the load pulls the actuator along; beyond an onset the
 outlet edge meters it and the speed grows as the root of the load pressure:
 ``dy = dy^ sqrt(1 + max(0, g (L - onset)))`` per direction
-(:class:`~hydro_sdp.core.effects.LoadDependence`). The fit is on the residual the
+(:class:`~hydro_sdp.core.model.effects.LoadDependence`). The fit is on the residual the
 block test scores, so a candidate that lowers it sample by sample is the one
 scored.
 
@@ -15,8 +15,8 @@ from __future__ import annotations
 
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.diagnosis.context import Context
-from hydro_sdp.core.effects import LoadDependence as Load
-from hydro_sdp.core.simulation import one_step_increments
+from hydro_sdp.core.model.effects import LoadDependence as Load
+from hydro_sdp.core.model.simulation import one_step_increments
 import numpy as np
 from scipy.optimize import least_squares
 

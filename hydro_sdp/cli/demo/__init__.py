@@ -1,0 +1,1 @@
+"""``hydro-sdp demo``: the command (:mod:`.command`), its stages and its report folder."""

@@ -1,0 +1,192 @@
+"""
+When the online estimate calls for a new inverse dead-zone (IDZ), and which edges.
+
+The controller's IDZ edges are the reference. An edge is recalibrated when its
+estimate differs from the reference significantly for the estimate's own
+uncertainty (``|change| > significance * std``, and at least ``min_change``),
+when the estimate has settled (over the last ``settle`` seconds it moved less
+than its standard deviation: not an estimate still on its way to a new value),
+and when that standard deviation is small next to the dead-zone's width
+(``confidence``). Every threshold is relative to the noise and the data but
+``min_change``, the smallest change worth acting on. Edges that did not change
+keep the reference. The decision is pure: the caller gives the time of each
+estimate and reports what the controller accepted.
+
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import dataclass, replace
+import math
+
+from hydro_sdp.core.control.controller_spec import idz_for_model
+from hydro_sdp.core.control.idz import InverseDeadZone
+from hydro_sdp.core.errors import ConfigurationError
+from hydro_sdp.core.identification.online import SdpEstimate
+from hydro_sdp.core.model.joint_model import JointModel
+from hydro_sdp.core.model.static_maps import SdpMap
+from hydro_sdp.core.validation import require_positive_fields
+
+
+@dataclass(frozen=True)
+class RecalibrationPolicy:
+    """
+    Thresholds of the recalibration decision.
+
+    Parameters
+    ----------
+    significance : float
+        Change of an edge, in its standard deviations, that counts as real.
+    settle : float
+        Time over which an edge estimate must have moved less than its standard
+        deviation, s.
+    confidence : float
+        Largest edge standard deviation to act on, as a fraction of the estimated
+        dead-zone width.
+    min_change : float
+        Smallest edge change worth a recalibration, input units.
+    cooldown : float
+        Least time between recalibrations, s.
+
+    """
+
+    significance: float = 3.0
+    settle: float = 2.0
+    confidence: float = 0.1
+    min_change: float = 0.03
+    cooldown: float = 5.0
+
+    def __post_init__(self) -> None:
+        require_positive_fields(self, ('significance', 'confidence'))
+        require_positive_fields(self, ('settle', 'min_change', 'cooldown'), zero_allowed=True)
+
+
+@dataclass(frozen=True)
+class Decision:
+    """
+    The outcome for one estimate.
+
+    Parameters
+    ----------
+    needed : bool
+        Some edge differs from the reference significantly and has settled.
+    due : bool
+        ``needed``, and the cooldown since the last recalibration has passed.
+    edges : tuple[float, float]
+        The IDZ edges to set: the estimate for the edges that changed, the
+        reference for the others, input units.
+    z : tuple[float, float]
+        Change of each edge from the reference in its standard deviations.
+
+    """
+
+    needed: bool
+    due: bool
+    edges: tuple[float, float]
+    z: tuple[float, float]
+
+
+class Recalibration:
+    """
+    The recalibration decision of one joint, fed with successive estimates.
+
+    Parameters
+    ----------
+    reference : tuple[float, float]
+        The IDZ edges the controller uses, input units.
+    policy : RecalibrationPolicy
+        Thresholds; may be replaced at any time (``self.policy = ...``).
+
+    """
+
+    def __init__(self, reference: tuple[float, float],
+                 policy: RecalibrationPolicy = RecalibrationPolicy()) -> None:
+        self.reference = (float(reference[0]), float(reference[1]))
+        self.policy = policy
+        self.last_attempt: float | None = None
+        self._history: deque[tuple[float, float, float]] = deque()
+
+    def _settled(self, time: float, edge: int, std: float) -> bool:
+        # The history starts at or before time - settle; the edge spans less than its std.
+        if self._history[0][0] > time - self.policy.settle:
+            return False
+        values = [entry[1 + edge] for entry in self._history]
+        return max(values) - min(values) <= std
+
+    def observe(self, time: float, estimate: SdpEstimate) -> Decision:
+        """
+        Take the estimate at ``time`` and decide.
+
+        Parameters
+        ----------
+        time : float
+            Time of the estimate, s (any origin; increasing).
+        estimate : SdpEstimate
+            The online estimate.
+
+        Returns
+        -------
+        Decision
+            Whether a recalibration is needed and due, and to which edges.
+
+        """
+        policy = self.policy
+        edges, stds = estimate.edges, estimate.edges_std
+        if self._history and time < self._history[-1][0]:
+            self._history.clear()                  # time went back (a replayed bag)
+        self._history.append((time, edges[0], edges[1]))
+        while len(self._history) > 1 and self._history[1][0] <= time - policy.settle:
+            self._history.popleft()
+        width = edges[1] - edges[0]
+        new = list(self.reference)
+        z = []
+        for edge in (0, 1):
+            change = edges[edge] - self.reference[edge]
+            std = stds[edge]
+            score = abs(change) / std if std > 0.0 else math.inf
+            z.append(score if math.isfinite(change) else math.nan)
+            if (math.isfinite(change) and math.isfinite(std) and score > policy.significance
+                    and abs(change) >= policy.min_change
+                    and std <= policy.confidence * width
+                    and self._settled(time, edge, std)):
+                new[edge] = edges[edge]
+        needed = (new[0], new[1]) != self.reference and new[0] < new[1]
+        cooled = self.last_attempt is None or time - self.last_attempt >= policy.cooldown
+        return Decision(needed=needed, due=needed and cooled, edges=(new[0], new[1]),
+                        z=(z[0], z[1]))
+
+    def attempted(self, time: float) -> None:
+        """Start the cooldown: a recalibration was requested at ``time`` (s)."""
+        self.last_attempt = time
+
+    def accepted(self, edges: tuple[float, float]) -> None:
+        """Take the edges the controller accepted as the new reference."""
+        self.reference = (float(edges[0]), float(edges[1]))
+
+
+def recalibrated_idz(estimate: JointModel, edges: tuple[float, float],
+                     control_period: float) -> InverseDeadZone:
+    """
+    IDZ of the estimated model with the decided edges, at the control period.
+
+    Parameters
+    ----------
+    estimate : JointModel
+        The online estimate as a model (kind ``sdp``).
+    edges : tuple[float, float]
+        Dead-zone edges to use (:attr:`Decision.edges`), input units.
+    control_period : float
+        Control period of the controller, s.
+
+    Returns
+    -------
+    InverseDeadZone
+        Edges and chord slopes (deg per control sample per input unit).
+
+    """
+    static_map = estimate.static_map
+    if not isinstance(static_map, SdpMap):
+        raise ConfigurationError(f'recalibration needs a kind sdp estimate, not {estimate.kind}')
+    model = replace(estimate, static_map=replace(static_map, dead_zone=edges))
+    return idz_for_model(model, control_period)

@@ -1,0 +1,256 @@
+"""
+The closed-loop check of a designed controller on a joint model, and slower re-designs.
+
+:func:`check_loop` runs a controller on a model with all its effects (a valve lag,
+an angle factor...) over set-point steps across the stroke, up and down, and a
+ramp, and judges it: every step settles into the band within a bound, overshoots
+by at most 10 %, and no hold ends in a limit cycle (the valve hunting across
+rest, or the angle wandering more than the band). :func:`slower_poles` moves a
+design's dominant poles toward 1, for the re-design when the check fails.
+
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+import math
+from typing import Callable, Sequence
+
+from hydro_sdp.core.control.controller_spec import ControllerSpec
+from hydro_sdp.core.control.loop_simulation import (
+    LoopJoint, LoopTrace, run_closed_loop, step_metrics, StepMetrics, valve_reversals)
+from hydro_sdp.core.errors import ConfigurationError
+from hydro_sdp.core.model.joint_model import JointModel
+import numpy as np
+
+#: Fractions of the stroke (between the end stops) the check steps between.
+STROKE_LEVELS = (0.2, 0.5, 0.8)
+#: Largest overshoot allowed, percent of the step.
+MAX_OVERSHOOT = 10.0
+#: Valve reversals in the last seconds of a hold that make a limit cycle.
+CYCLE_REVERSALS = 4
+
+
+@dataclass(frozen=True)
+class CheckSettings:
+    """
+    What the closed-loop check asks of a controller.
+
+    Parameters
+    ----------
+    dt : float
+        Plant sample period, s.
+    settling : float
+        Settling time allowed on top of the travel at a quarter of full speed, s.
+    band : float
+        Settling band around the set-point, degrees.
+    hold : float
+        Time each set-point is held, s (at least the allowed settling plus ``tail``).
+    tail : float
+        Last seconds of each hold watched for a limit cycle, s.
+
+    """
+
+    dt: float = 0.01
+    settling: float = 6.0
+    band: float = 0.5
+    hold: float = 10.0
+    tail: float = 2.0
+
+
+@dataclass(frozen=True, eq=False)
+class LoopCheck:
+    """
+    The verdict of one closed-loop check.
+
+    Parameters
+    ----------
+    passed : bool
+        Whether every step and the ramp passed.
+    steps : tuple[StepMetrics, ...]
+        Settling time and overshoot of each step across the stroke.
+    bounds : tuple[float, ...]
+        Settling time allowed for each step, s.
+    ramp_error : float
+        Largest tracking error while following the ramp, degrees.
+    ramp_settling : float
+        Settling time after the ramp ends, s (``inf``: never).
+    cycles : int
+        Holds that end in a limit cycle.
+    failures : tuple[str, ...]
+        Why it failed, one line each (empty when it passed).
+    steps_trace, ramp_trace : LoopTrace
+        The two runs, for the report.
+
+    """
+
+    passed: bool
+    steps: tuple[StepMetrics, ...]
+    bounds: tuple[float, ...]
+    ramp_error: float
+    ramp_settling: float
+    cycles: int
+    failures: tuple[str, ...]
+    steps_trace: LoopTrace
+    ramp_trace: LoopTrace
+
+
+def stroke_levels(stroke: tuple[float, float]) -> tuple[float, ...]:
+    """Return the set-points at 20, 50 and 80 % of the stroke, degrees."""
+    low, high = stroke
+    if not (math.isfinite(low) and math.isfinite(high) and high > low):
+        raise ConfigurationError(f'the stroke must be an increasing pair, got {stroke}')
+    return tuple(low + fraction * (high - low) for fraction in STROKE_LEVELS)
+
+
+def full_speed(model: JointModel) -> float:
+    """
+    Slower of the two directions' largest speeds, deg/s.
+
+    Parameters
+    ----------
+    model : JointModel
+        The joint.
+
+    Returns
+    -------
+    float
+        The speed at the input limits (or the saturation speed), the smaller direction.
+
+    """
+    saturation = getattr(model.static_map, 'saturation_velocity', None)
+    if saturation is not None:
+        return float(min(abs(saturation[0]), abs(saturation[1])))
+    limits = model.input_limits
+    if limits is None:
+        rest = model.rest_command
+        span = 10.0 if model.dead_zone is None else 4.0 * max(
+            abs(model.dead_zone[0] - rest), abs(model.dead_zone[1] - rest), 1e-3)
+        limits = (rest - span, rest + span)
+    speeds = np.abs(model.rate(np.array(limits, dtype=np.float64)))
+    return float(max(np.min(speeds), 1e-6))
+
+
+def _cycles(trace: LoopTrace, ends: Sequence[int], settings: CheckSettings, rest: float) -> int:
+    """Count the holds (ending at ``ends``) whose last ``tail`` seconds hunt or wander."""
+    tail = max(2, int(round(settings.tail / settings.dt)))
+    count = 0
+    for end in ends:
+        window = slice(max(0, end - tail), end)
+        hunting = valve_reversals(trace.v[window], rest) >= CYCLE_REVERSALS
+        wandering = float(np.ptp(trace.y[window])) > settings.band
+        count += int(hunting or wandering)
+    return count
+
+
+def check_loop(model: JointModel, spec: ControllerSpec, stroke: tuple[float, float], *,
+               settings: CheckSettings | None = None,
+               on_sample: Callable[[int, int], None] | None = None) -> LoopCheck:
+    """
+    Run a controller on a model over steps across the stroke and a ramp, and judge it.
+
+    The steps start at 20 % of the stroke and go to 50 %, 80 %, back to 50 % and
+    20 % (two up, two down); the ramp then runs from 20 % to 80 % at a quarter
+    of the joint's full speed and holds there.
+
+    Parameters
+    ----------
+    model : JointModel
+        The simulated joint, with its effects.
+    spec : ControllerSpec
+        The controller.
+    stroke : tuple[float, float]
+        Range between the end stops (or the angles the joint was seen at), degrees.
+    settings : CheckSettings or None
+        Bounds and timing; default :class:`CheckSettings`.
+    on_sample : callable or None
+        Progress, as ``on_sample(done, total)``.
+
+    Returns
+    -------
+    LoopCheck
+        The metrics, the verdict and the traces.
+
+    """
+    settings = settings if settings is not None else CheckSettings()
+    low, middle, high = stroke_levels(stroke)
+    speed = full_speed(model)
+    rest = model.rest_command
+    levels = [middle, high, middle, low]
+    hold = max(settings.hold, settings.settling + settings.tail
+               + abs(high - middle) / (0.25 * speed))
+    per_level = int(round(hold / settings.dt))
+    setpoint = np.repeat(np.array(levels), per_level)
+    ramp_time = (high - low) / (0.25 * speed)
+    t = np.arange(int(round((1.0 + ramp_time + hold) / settings.dt))) * settings.dt
+    ramp = np.interp(t, [0.0, 1.0, 1.0 + ramp_time], [low, low, high])
+    total = setpoint.size + ramp.size
+
+    def progress(offset: int) -> Callable[[int, int], None] | None:
+        if on_sample is None:
+            return None
+        return lambda done, _: on_sample(offset + done, total)
+
+    steps_trace = run_closed_loop([LoopJoint(model, spec.controller(), setpoint, low)],
+                                  dt=settings.dt, control_period=spec.control_period,
+                                  on_sample=progress(0))[0]
+    ramp_trace = run_closed_loop([LoopJoint(model, spec.controller(), ramp, low)],
+                                 dt=settings.dt, control_period=spec.control_period,
+                                 on_sample=progress(setpoint.size))[0]
+    metrics = tuple(step_metrics(steps_trace, band=settings.band, initial=low))
+    bounds = tuple(settings.settling + abs(m.size) / (0.25 * speed) for m in metrics)
+    ended = t >= 1.0 + ramp_time
+    error = np.abs(ramp_trace.y - ramp_trace.setpoint)
+    outside = np.flatnonzero(error[ended] > settings.band)
+    if outside.size == 0:
+        ramp_settling = 0.0
+    elif outside[-1] == int(np.count_nonzero(ended)) - 1:
+        ramp_settling = math.inf
+    else:
+        ramp_settling = (outside[-1] + 1) * settings.dt
+    cycles = (_cycles(steps_trace, range(per_level, setpoint.size + 1, per_level), settings,
+                      rest)
+              + _cycles(ramp_trace, [ramp.size], settings, rest))
+    failures = []
+    for m, bound in zip(metrics, bounds):
+        if not m.settling_time <= bound:
+            failures.append(f'the {m.size:+.1f} deg step at {m.start:.0f} s does not settle into '
+                            f'+-{settings.band:g} deg within {bound:.1f} s')
+        if m.overshoot > MAX_OVERSHOOT:
+            failures.append(f'the {m.size:+.1f} deg step at {m.start:.0f} s overshoots by '
+                            f'{m.overshoot:.1f} %')
+    ramp_bound = settings.settling
+    if not ramp_settling <= ramp_bound:
+        failures.append(f'the ramp does not settle within {ramp_bound:.1f} s of its end')
+    if cycles:
+        failures.append(f'{cycles} hold{"s" if cycles != 1 else ""} end in a limit cycle')
+    return LoopCheck(not failures, metrics, bounds, float(np.max(error[~ended])),
+                     ramp_settling, cycles, tuple(failures), steps_trace, ramp_trace)
+
+
+def slower_poles(poles: Sequence[complex], factor: float = 0.7) -> list[complex]:
+    """
+    Move the dominant poles toward 1: ``p -> 1 - factor (1 - p)``.
+
+    Poles at least half as large as the largest are moved (conjugate pairs stay
+    pairs); the fast ones, such as the deadbeat poles at 0, stay where they are.
+
+    Parameters
+    ----------
+    poles : sequence of complex
+        Closed-loop poles of a design.
+    factor : float
+        Fraction of the distance to 1 kept, in (0, 1).
+
+    Returns
+    -------
+    list of complex
+        The slower poles.
+
+    """
+    if not 0.0 < factor < 1.0:
+        raise ConfigurationError(f'the pole factor must be in (0, 1), got {factor}')
+    values = [complex(p) for p in poles]
+    largest = max((abs(p) for p in values), default=0.0)
+    return [1.0 - factor * (1.0 - p) if abs(p) >= 0.5 * largest and largest > 0.0 else p
+            for p in values]

@@ -1,0 +1,376 @@
+"""
+Joint trajectories as a ROS ``JointTrajectoryController`` user expects them.
+
+* A trajectory holds joint names and points: time from its start (s),
+  positions (deg) and, optionally, velocities (deg/s).
+* It starts at its header stamp, or at once when the stamp is zero.
+* Before its start the joints keep the set-point in force; its first segment
+  runs from the set-point held at its start time to its first point.
+* Between points the set-point is interpolated linearly, or by a cubic
+  Hermite where velocities are given; after the last point it holds that
+  point's position (rate 0).
+* A new trajectory replaces the rest of the old one from its own start time,
+  for the joints it names; the other joints go on as before.
+* A trajectory naming a joint not controlled, or with a position beyond the
+  end stops less the set-point margin, is refused whole, with one message
+  naming every offender (:func:`check_trajectory`).
+
+"""
+
+from __future__ import annotations
+
+from bisect import bisect_right
+from dataclasses import dataclass
+import math
+from typing import Mapping, Sequence
+
+from hydro_sdp.core.arrays import FloatArray
+from hydro_sdp.core.control.safety import SETPOINT_MARGIN, setpoint_range
+from hydro_sdp.core.errors import DataError
+import numpy as np
+
+
+@dataclass(frozen=True, eq=False)
+class JointTrajectory:
+    """
+    Points for several joints, as ``trajectory_msgs/JointTrajectory`` in degrees.
+
+    Parameters
+    ----------
+    joint_names : tuple of str
+        Joints, unique.
+    times : FloatArray
+        Time from start of each point, s: finite, >= 0, strictly increasing.
+    positions : FloatArray
+        Positions, degrees, one row per point and one column per joint.
+    velocities : FloatArray or None
+        Velocities, deg/s, same shape as ``positions`` (``None``: linear interpolation).
+
+    Raises
+    ------
+    DataError
+        Naming what is wrong (names, lengths, times, values).
+
+    """
+
+    joint_names: tuple[str, ...]
+    times: FloatArray
+    positions: FloatArray
+    velocities: FloatArray | None = None
+
+    def __post_init__(self) -> None:
+        names = tuple(self.joint_names)
+        if not names or any(not isinstance(name, str) or not name for name in names):
+            raise DataError(f'a trajectory needs joint names, got {list(names)}')
+        repeated = sorted({name for name in names if names.count(name) > 1})
+        if repeated:
+            raise DataError(f"joint names must be unique; repeated: {', '.join(repeated)}")
+        times = np.asarray(self.times, dtype=np.float64).reshape(-1)
+        positions = np.asarray(self.positions, dtype=np.float64)
+        if times.size == 0:
+            raise DataError('a trajectory needs at least one point')
+        if positions.shape != (times.size, len(names)):
+            raise DataError(f'positions must have one row per point and one value per joint '
+                            f'({times.size} x {len(names)}), got shape {positions.shape}')
+        if not np.all(np.isfinite(times)) or times[0] < 0.0:
+            raise DataError('times from start must be finite and >= 0 s')
+        if np.any(np.diff(times) <= 0.0):
+            raise DataError('times from start must be strictly increasing')
+        if not np.all(np.isfinite(positions)):
+            raise DataError('positions must be finite')
+        velocities = self.velocities
+        if velocities is not None:
+            velocities = np.asarray(velocities, dtype=np.float64)
+            if velocities.shape != positions.shape:
+                raise DataError(f'velocities must have the shape of the positions '
+                                f'{positions.shape}, got {velocities.shape}')
+            if not np.all(np.isfinite(velocities)):
+                raise DataError('velocities must be finite')
+            velocities.setflags(write=False)
+        times.setflags(write=False)
+        positions.setflags(write=False)
+        object.__setattr__(self, 'joint_names', names)
+        object.__setattr__(self, 'times', times)
+        object.__setattr__(self, 'positions', positions)
+        object.__setattr__(self, 'velocities', velocities)
+
+    @property
+    def duration(self) -> float:
+        """Time from start of the last point, s."""
+        return float(self.times[-1])
+
+
+def check_trajectory(trajectory: JointTrajectory,
+                     angle_limits: Mapping[str, tuple[float, float] | None],
+                     margin: float = SETPOINT_MARGIN) -> None:
+    """
+    Refuse a trajectory for joints not controlled or beyond the end stops.
+
+    Parameters
+    ----------
+    trajectory : JointTrajectory
+        The trajectory.
+    angle_limits : mapping of str to (float, float) or None
+        End stops of each controlled joint, degrees (``None``: no stops).
+    margin : float
+        Distance kept from the stops, degrees (as :func:`~.safety.setpoint_range`).
+
+    Raises
+    ------
+    DataError
+        One message naming every joint not controlled and every joint whose
+        positions leave the allowed range (its extreme position and the range).
+
+    """
+    unknown = [name for name in trajectory.joint_names if name not in angle_limits]
+    beyond = []
+    for column, name in enumerate(trajectory.joint_names):
+        if name in unknown:
+            continue
+        allowed = setpoint_range(angle_limits[name], margin)
+        if allowed is None:
+            continue
+        values = trajectory.positions[:, column]
+        low, high = float(values.min()), float(values.max())
+        if low < allowed[0] or high > allowed[1]:
+            worst = low if low < allowed[0] else high
+            beyond.append(f'{name} reaches {worst:g} deg (allowed [{allowed[0]:g}, '
+                          f'{allowed[1]:g}])')
+    problems = []
+    if unknown:
+        problems.append(f"joints not controlled: {', '.join(unknown)}")
+    if beyond:
+        problems.append(f"beyond the end stops less {margin:g} deg: {'; '.join(beyond)}")
+    if problems:
+        raise DataError(f"trajectory refused: {'; '.join(problems)}")
+
+
+def start_time(stamp: float, now: float) -> float:
+    """
+    Return when a trajectory starts: its stamp, or ``now`` when the stamp is zero.
+
+    Parameters
+    ----------
+    stamp : float
+        Header stamp, s (0: start now).
+    now : float
+        Time of arrival, s.
+
+    Returns
+    -------
+    float
+        Start time, s.
+
+    """
+    return float(now) if stamp == 0.0 else float(stamp)
+
+
+@dataclass(frozen=True, eq=False)
+class _Piece:
+    """One joint's part of a trajectory, in absolute time, anchor point included."""
+
+    times: tuple[float, ...]
+    positions: tuple[float, ...]
+    velocities: tuple[float, ...] | None
+
+    @property
+    def start(self) -> float:
+        return self.times[0]
+
+    def sample(self, t: float) -> tuple[float, float]:
+        times, positions = self.times, self.positions
+        if t >= times[-1]:
+            return positions[-1], 0.0
+        i = max(bisect_right(times, t) - 1, 0)
+        span = times[i + 1] - times[i]
+        s = (t - times[i]) / span
+        p0, p1 = positions[i], positions[i + 1]
+        if self.velocities is None:
+            return p0 + s * (p1 - p0), (p1 - p0) / span
+        # Cubic Hermite on [0, 1] with the end tangents scaled by the span.
+        m0, m1 = self.velocities[i] * span, self.velocities[i + 1] * span
+        s2, s3 = s * s, s * s * s
+        position = ((2 * s3 - 3 * s2 + 1) * p0 + (s3 - 2 * s2 + s) * m0
+                    + (-2 * s3 + 3 * s2) * p1 + (s3 - s2) * m1)
+        slope = ((6 * s2 - 6 * s) * p0 + (3 * s2 - 4 * s + 1) * m0
+                 + (-6 * s2 + 6 * s) * p1 + (3 * s2 - 2 * s) * m1)
+        return position, slope / span
+
+
+class TrajectorySampler:
+    """
+    The set-point and set-point rate of each joint at any time.
+
+    Parameters
+    ----------
+    setpoints : mapping of str to float
+        Controlled joints and the set-point each holds until a trajectory
+        comes, degrees.
+
+    """
+
+    def __init__(self, setpoints: Mapping[str, float]) -> None:
+        self._hold = {name: float(value) for name, value in setpoints.items()}
+        for name, value in self._hold.items():
+            if not math.isfinite(value):
+                raise DataError(f'the set-point of joint {name} must be finite, got {value}')
+        self._pieces: dict[str, list[_Piece]] = {name: [] for name in self._hold}
+
+    @property
+    def joints(self) -> tuple[str, ...]:
+        """Return the controlled joints."""
+        return tuple(self._hold)
+
+    def sample(self, joint: str, t: float) -> tuple[float, float]:
+        """
+        Return the set-point (deg) and its rate (deg/s) of ``joint`` at time ``t`` (s).
+
+        Parameters
+        ----------
+        joint : str
+            Joint name.
+        t : float
+            Time, s.
+
+        Returns
+        -------
+        tuple[float, float]
+            ``(setpoint, rate)``.
+
+        """
+        pieces = self._pieces[joint]
+        for piece in reversed(pieces):
+            if piece.start <= t:
+                return piece.sample(t)
+        return self._hold[joint], 0.0
+
+    def sample_all(self, t: float) -> dict[str, tuple[float, float]]:
+        """Return ``(setpoint, rate)`` of every joint at time ``t`` (s): deg and deg/s."""
+        return {joint: self.sample(joint, t) for joint in self._hold}
+
+    def setpoint(self, joint: str, t: float) -> float:
+        """Return the set-point of ``joint`` at time ``t`` (s), degrees."""
+        return self.sample(joint, t)[0]
+
+    def feedforward(self, joint: str, t: float, control_period: float, lead: int) -> float:
+        """
+        Set-point increment over one control period ending ``lead`` periods after ``t``.
+
+        This is the set-point rate taken ``lead`` control samples ahead, in
+        degrees per control sample, as the controller's feed-forward wants it:
+        with ``lead`` equal to the loop's delay (in control samples) the
+        delayed integrator ``y_k = y_{k-1} + u_{k-lead}`` driven by it alone
+        follows the set-point exactly. On straight segments it equals
+        ``rate * control_period``.
+
+        Parameters
+        ----------
+        joint : str
+            Joint name.
+        t : float
+            Control instant, s.
+        control_period : float
+            Control period, s.
+        lead : int
+            Delay of the loop, control samples (>= 1).
+
+        Returns
+        -------
+        float
+            Degrees per control sample.
+
+        """
+        ahead = t + lead * control_period
+        return self.setpoint(joint, ahead) - self.setpoint(joint, ahead - control_period)
+
+    def end_time(self, joint: str) -> float:
+        """Time after which ``joint`` holds its last set-point, s (``-inf`` if never moved)."""
+        pieces = self._pieces[joint]
+        return pieces[-1].times[-1] if pieces else -math.inf
+
+    def hold(self, joint: str, position: float, start: float) -> None:
+        """
+        Hold ``joint`` at ``position`` (deg) from ``start`` (s) on, replacing what follows.
+
+        Parameters
+        ----------
+        joint : str
+            Joint name.
+        position : float
+            Set-point, degrees.
+        start : float
+            Time from which it holds, s.
+
+        """
+        point = np.full((1, 1), float(position))
+        self.replace(JointTrajectory((joint,), np.zeros(1), point), start)
+
+    def replace(self, trajectory: JointTrajectory, start: float) -> None:
+        """
+        Follow ``trajectory`` from ``start`` on, replacing the rest of what was planned.
+
+        For each joint it names, what was planned from ``start`` on is
+        dropped; its first segment runs from the set-point (and, when the
+        trajectory has velocities, the rate) in force at ``start`` to its first
+        point. A first point at time 0 is a jump to that point.
+
+        Parameters
+        ----------
+        trajectory : JointTrajectory
+            The new trajectory; check it first with :func:`check_trajectory`.
+        start : float
+            Its start time, s (see :func:`start_time`).
+
+        Raises
+        ------
+        DataError
+            If it names a joint not controlled here, or ``start`` is not finite.
+
+        """
+        if not math.isfinite(start):
+            raise DataError(f'the start time must be finite, got {start}')
+        unknown = [name for name in trajectory.joint_names if name not in self._hold]
+        if unknown:
+            raise DataError(f"trajectory refused: joints not controlled: {', '.join(unknown)}")
+        times = [start + float(t) for t in trajectory.times]
+        for column, name in enumerate(trajectory.joint_names):
+            anchor, rate = self.sample(name, start)
+            positions = [float(p) for p in trajectory.positions[:, column]]
+            velocities = (None if trajectory.velocities is None
+                          else [float(v) for v in trajectory.velocities[:, column]])
+            piece_times = list(times)
+            if times[0] > start:
+                piece_times.insert(0, start)
+                positions.insert(0, anchor)
+                if velocities is not None:
+                    velocities.insert(0, rate)
+            kept = [piece for piece in self._pieces[name] if piece.start < start]
+            kept.append(_Piece(tuple(piece_times), tuple(positions),
+                               None if velocities is None else tuple(velocities)))
+            self._pieces[name] = kept
+
+    def prune(self, now: float) -> None:
+        """Forget the pieces no sample at or after ``now`` (s) can reach."""
+        for name, pieces in self._pieces.items():
+            in_force = [i for i, piece in enumerate(pieces) if piece.start <= now]
+            if in_force:
+                self._pieces[name] = pieces[in_force[-1]:]
+
+    def setpoints(self, joint: str, times: Sequence[float] | FloatArray) -> FloatArray:
+        """
+        Return the set-points of ``joint`` at many times.
+
+        Parameters
+        ----------
+        joint : str
+            Joint name.
+        times : sequence of float
+            Times, s.
+
+        Returns
+        -------
+        FloatArray
+            Set-points, degrees.
+
+        """
+        return np.array([self.setpoint(joint, float(t)) for t in times], dtype=np.float64)

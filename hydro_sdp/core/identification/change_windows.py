@@ -1,0 +1,300 @@
+"""
+Dead time and first-order valve lag of a joint, identified together.
+
+A real valve answers a step with a dead time (electronics, pilot stage) and
+then a rise (the spool's travel): ``w_k = p w_{k-1} + (1 - p) rate(v_{k-tau})``
+with ``p = exp(-dt / T)``, the model's ``valve_lag`` effect, and the joint
+integrates ``w``. The pair ``(tau, T)`` is found from the measured increments
+around every change of the command, free of any map shape (the
+differenced-output fit of docs/methods.md section 1.5, with the lag):
+
+* each change gets a window: from :data:`BEFORE` samples before the earliest
+  place it can show (dead time 1) to :data:`AFTER` samples after the latest
+  (``max_delay``), cut where a neighbouring change could show; so every
+  candidate pair is scored on the same samples;
+* inside the window the speed the map gives is one level before the delayed
+  change and a level with a linear drift after it (the speed changes along the
+  stroke); the lag filters it, starting from a *free* speed at the window's
+  first sample, so whatever came before (an earlier transient, a stop) is
+  explained exactly and nothing is assumed about it;
+* the model is linear in those four numbers: a least-squares fit per window,
+  and the residual summed over all windows scores the pair.
+
+Fitting the measured increments (not increments with the lag inverted, which
+amplifies their noise by ``1 / (1 - p)``), carrying the lag's state across
+every change and scoring every pair on the same samples keep the score
+unbiased, so a long lag is not traded for a longer delay. Every dead time near
+the best pure delay is tried with every lag of :data:`LAG_GRID`, and the best
+time constant is then refined continuously.
+
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Sequence
+
+from hydro_sdp.core.arrays import FloatArray, IntArray
+from hydro_sdp.core.errors import DataError
+from hydro_sdp.core.identification.segmentation import Experiment
+from hydro_sdp.core.model.timing import delayed_at
+import numpy as np
+from scipy.optimize import minimize_scalar
+from scipy.signal import lfilter
+
+#: Candidate lag time constants, in sample periods (0: pure delay).
+LAG_GRID = (0.0, 1.0, 1.5, 2.0, 3.0, 4.0, 5.0, 6.0, 8.0, 10.0, 12.0, 15.0, 20.0, 25.0, 30.0)
+#: A lag is kept only when it lowers the residual of the best pure delay by this share.
+LAG_GAIN = 0.02
+#: Samples of the old command scored before the earliest place a change can show.
+BEFORE = 30
+#: Samples of the new command scored after the latest (five times the grid's longest lag).
+AFTER = 150
+#: Parameters of each window: old level, new level, its drift, free initial speed.
+_PER_WINDOW = 4
+
+
+def lag_pole(time_constant: float, dt: float) -> float:
+    """Return ``p = exp(-dt / T)`` (0 for no lag)."""
+    return math.exp(-dt / time_constant) if time_constant > 0.0 else 0.0
+
+
+class ChangeWindows:
+    """
+    The measured increments around every change of the command.
+
+    Each window holds the samples where the change can show for any dead time
+    from 1 to ``max_delay``, and no other change can: the same samples are
+    scored for every dead time, so their residuals compare directly.
+
+    Parameters
+    ----------
+    experiments : sequence of Experiment
+        The experiments.
+    max_delay : int
+        Largest dead time, samples.
+
+    """
+
+    def __init__(self, experiments: Sequence[Experiment], max_delay: int) -> None:
+        increments, firsts, lengths, earliest = [], [], [], []
+        offset = 0
+        for experiment in experiments:
+            n = experiment.y.size - experiment.start - 1
+            # The command change at v[m] shows in increment m - start - 1 + delay.
+            shows = np.flatnonzero(experiment.v[1:] != experiment.v[:-1]) - experiment.start
+            increments.append(np.diff(experiment.y[experiment.start:]))
+            offset += n
+            if shows.size == 0:
+                continue
+            previous = np.r_[-np.inf, shows[:-1]]
+            following = np.r_[shows[1:], np.inf]
+            first = np.maximum.reduce([shows + 1 - BEFORE, previous + max_delay + 1,
+                                       np.zeros(shows.size)])
+            last = np.minimum.reduce([shows + 1 + max_delay + AFTER, following + 1,
+                                      np.full(shows.size, n)])
+            keep = (last > first) & (shows + max_delay >= 0) & (shows + 1 < n)
+            firsts.append(offset - n + first[keep].astype(np.int64))
+            lengths.append((last - first)[keep].astype(np.int64))
+            earliest.append((shows + 1 - first)[keep].astype(np.int64))
+        dy = np.concatenate(increments) if increments else np.zeros(0)
+        at = np.concatenate(firsts) if firsts else np.zeros(0, np.int64)
+        #: Samples in each window.
+        self.length: IntArray = np.concatenate(lengths) if lengths else at
+        #: Where in its window each change shows with a dead time of one sample.
+        self.earliest: IntArray = np.concatenate(earliest) if earliest else at
+        width = int(self.length.max()) if at.size else 0
+        t = np.arange(width)
+        mask = t < self.length[:, None]
+        gathered = dy[np.clip(at[:, None] + t, 0, max(dy.size - 1, 0))] if dy.size else 0.0
+        #: Increments of each window from its first sample, 0 past its end.
+        self.dy: FloatArray = np.where(mask, gathered, 0.0)
+        self.windows = int(at.size)
+        self.energy = float(np.sum(self.dy ** 2))
+
+    def residual(self, delay: int, pole: float) -> float:
+        """
+        Residual sum of squares with dead time ``delay`` and lag pole ``pole``.
+
+        Parameters
+        ----------
+        delay : int
+            Dead time, samples.
+        pole : float
+            Lag pole ``p`` (0: pure delay).
+
+        Returns
+        -------
+        float
+            Sum over the windows of the squared residuals, degrees squared.
+
+        """
+        if self.windows == 0:
+            return 0.0
+        p = float(pole)
+        width = self.dy.shape[1]
+        t = np.arange(width, dtype=np.float64)
+        # Where the change shows in each window; windows share a few such places.
+        places, place_of = np.unique(self.earliest + delay - 1, return_inverse=True)
+        i = t[None, :] - places[:, None]
+        after = i >= 0.0
+        # The old level, filtered and continued past the change, and the free initial
+        # speed decaying from the window's first sample span the same responses as
+        # {1 then p^(i+1)} and {p^(t+1)}.
+        decay = np.where(after, p ** np.maximum(i + 1.0, 0.0), 1.0) if p > 0.0 else \
+            (~after).astype(np.float64)
+        step = np.where(after, 1.0 - decay, 0.0)
+        drift = np.where(after, i / AFTER, 0.0)
+        ramp = lfilter([1.0 - p], [1.0, -p], drift, axis=1) if p > 0.0 else drift
+        free = np.broadcast_to(p ** (t + 1.0) if p > 0.0 else np.zeros(width), i.shape)
+        basis = np.stack([decay, step, ramp, free], axis=2)
+        rhs = np.einsum('wt,wtj->wj', self.dy, basis[place_of])
+        # Each window's Gram matrix: partial sums from its first sample to its last.
+        grams = np.cumsum(basis[:, :, :, None] * basis[:, :, None, :], axis=1)
+        gram = grams[place_of, self.length - 1]
+        # Unit diagonal, then a tiny ridge: columns may vanish (no lag) or coincide
+        # (a change at the window's first sample).
+        diagonal = np.einsum('wjj->wj', gram)
+        norm = np.where(diagonal > 0.0, 1.0 / np.sqrt(np.where(diagonal > 0.0, diagonal, 1.0)),
+                        0.0)
+        gram = gram * norm[:, :, None] * norm[:, None, :] + 1e-10 * np.eye(_PER_WINDOW)
+        rhs = rhs * norm
+        theta = np.linalg.solve(gram, rhs[:, :, None])[:, :, 0]
+        return max(self.energy - float(np.sum(theta * rhs)), 0.0)
+
+
+# The paper baseline's delay (:mod:`.paper_baseline`): one mean speed with a drift
+# per stretch of the delayed command, the lag inverted in the increments.
+
+
+def _rows(experiments: Sequence[Experiment], delay: int, window: int
+          ) -> tuple[FloatArray, np.ndarray, np.ndarray, FloatArray, int]:
+    """Increments, stretch indices and time within the stretch, one padded row each."""
+    width = max(e.y.size - e.start - 1 for e in experiments)
+    dy = np.zeros((len(experiments), width))
+    group = np.zeros((len(experiments), width), dtype=np.int64)
+    mask = np.zeros((len(experiments), width), dtype=bool)
+    time = np.zeros((len(experiments), width))
+    offset = 0
+    for row, experiment in enumerate(experiments):
+        k = np.arange(experiment.start + 1, experiment.y.size)
+        delayed = delayed_at(experiment.v, k, delay)
+        # One group per stretch of one delayed command, its first `window` samples.
+        changed = np.r_[True, delayed[1:] != delayed[:-1]]
+        stretch = np.cumsum(changed) - 1
+        since = np.arange(k.size) - np.flatnonzero(changed)[stretch]
+        dy[row, :k.size] = experiment.y[k] - experiment.y[k - 1]
+        group[row, :k.size] = stretch + offset
+        time[row, :k.size] = since
+        mask[row, :k.size] = since < window
+        offset += int(stretch[-1]) + 1 if stretch.size else 0
+    return dy, group, mask, time, offset
+
+
+def lagged_residual(experiments: Sequence[Experiment], delay: int, pole: float) -> float:
+    """
+    Squared error of the increments explained by lagged per-level mean speeds.
+
+    Parameters
+    ----------
+    experiments : sequence of Experiment
+        The experiments.
+    delay : int
+        Dead time, samples.
+    pole : float
+        Lag pole ``p`` (0: pure delay).
+
+    Returns
+    -------
+    float
+        Sum of squared residuals of the increments, degrees squared.
+
+    """
+    return _residual(*_rows(experiments, delay, 2 * delay + 50), pole)
+
+
+def _residual(dy: FloatArray, group: np.ndarray, mask: np.ndarray, time: FloatArray,
+              groups: int, pole: float) -> float:
+    raw: FloatArray = dy
+    if pole > 0.0:
+        previous = np.concatenate([dy[:, :1], dy[:, :-1]], axis=1)
+        raw = np.asarray((dy - pole * previous) / (1.0 - pole), dtype=np.float64)
+    # Each stretch: a mean speed with a linear drift over its first samples (the speed
+    # changes along the stroke; a lag or a delay shows where the command changes).
+    g, t, r = group[mask], time[mask], raw[mask]
+    n = np.bincount(g, minlength=groups).astype(np.float64)
+    st = np.bincount(g, weights=t, minlength=groups)
+    stt = np.bincount(g, weights=t * t, minlength=groups)
+    sr = np.bincount(g, weights=r, minlength=groups)
+    srt = np.bincount(g, weights=r * t, minlength=groups)
+    denominator = n * stt - st * st
+    safe = np.where(denominator > 0.0, denominator, 1.0)
+    slope = np.where(denominator > 0.0, (n * srt - st * sr) / safe, 0.0)
+    intercept = (sr - slope * st) / np.maximum(n, 1.0)
+    predicted = np.where(mask, intercept[group] + slope[group] * time, 0.0)
+    if pole > 0.0:
+        predicted, _ = lfilter([1.0 - pole], [1.0, -pole], predicted, axis=1,
+                               zi=pole * predicted[:, :1])
+    return float(np.sum(((dy - predicted) * mask) ** 2))
+
+
+def fit_delay_and_lag(experiments: Sequence[Experiment], dt: float, max_delay: int
+                      ) -> tuple[int, float, FloatArray]:
+    """
+    Dead time and lag time constant that explain the increments best.
+
+    Parameters
+    ----------
+    experiments : sequence of Experiment
+        Experiments with at least ``max_delay`` samples of command history.
+    dt : float
+        Sample period, s.
+    max_delay : int
+        Largest dead time, samples.
+
+    Returns
+    -------
+    tuple
+        ``(delay, time_constant, explained)``: dead time (samples), lag time
+        constant (s, 0 for none) and, per candidate delay 1..max_delay, the share
+        of the windows' squared increments explained with the best lag tried there.
+
+    Raises
+    ------
+    DataError
+        If no command change can show in the experiments.
+
+    """
+    windows = ChangeWindows(experiments, max_delay)
+    if windows.windows == 0:
+        # Without a change every pair would explain everything: say so instead.
+        raise DataError('the command never changes in a way the delay could show in '
+                        f'(changes at least {max_delay} samples apart are needed)')
+    best = {delay: (windows.residual(delay, 0.0), 0.0) for delay in range(1, max_delay + 1)}
+    pure_score, pure = min((score, delay) for delay, (score, _) in best.items())
+    # A lag of T samples moves the best pure delay later by less than T (0.3-0.4 T on
+    # J2 steps): the dead time with the lag lies between T + 3 samples below it and 2 above.
+    for factor in LAG_GRID[1:]:
+        pole = lag_pole(factor * dt, dt)
+        for delay in range(max(1, pure - math.ceil(factor) - 3), min(pure + 2, max_delay) + 1):
+            best[delay] = min(best[delay], (windows.residual(delay, pole), factor * dt))
+    score, delay, lag = min((score, delay, lag) for delay, (score, lag) in best.items())
+    if lag > 0.0:
+        # Between the neighbours of the best time constant of the grid, on the best dead
+        # time and the ones beside it (the two trade a little at the grid's steps).
+        index = LAG_GRID.index(round(lag / dt, 9))
+        low = LAG_GRID[max(index - 1, 1)] * dt
+        high = LAG_GRID[min(index + 1, len(LAG_GRID) - 1)] * dt
+        for near in range(max(1, delay - 1), min(max_delay, delay + 1) + 1):
+            result = minimize_scalar(
+                lambda x, d=near: windows.residual(d, lag_pole(math.exp(x), dt)),
+                bounds=(math.log(low), math.log(high)), method='bounded',
+                options={'xatol': 0.01})
+            if float(result.fun) < best[near][0]:
+                best[near] = (float(result.fun), math.exp(float(result.x)))
+        score, delay, lag = min((score, delay, lag) for delay, (score, lag) in best.items())
+    energy = windows.energy if windows.energy > 0.0 else 1.0
+    explained = np.array([1.0 - best[d][0] / energy for d in sorted(best)])
+    if lag > 0.0 and score < (1.0 - LAG_GAIN) * pure_score:
+        return delay, lag, explained
+    return pure, 0.0, explained

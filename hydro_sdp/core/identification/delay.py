@@ -1,0 +1,241 @@
+"""
+Dead time (and valve lag) of a hydraulic joint, estimated three ways.
+
+A small step moves the joint slowly, so its motion crosses any threshold late
+and looks like extra delay; the estimators here avoid that:
+
+* **fit** (the answer): for each candidate dead time and first-order valve lag,
+  the differenced angle around every command change is explained by one speed
+  before the change and one (with a drift) after it, passed through the lag
+  from a free initial speed; the pair that explains most of it wins, scored on
+  the same samples for every pair (:mod:`hydro_sdp.core.identification.change_windows`). This
+  is the differenced-output fit of docs/methods.md section 1.5, free of any map
+  shape.
+* **onset**: on the fastest steps, the first sample where the speed reaches half
+  of the step's final speed, moved back by the time the fitted lag takes to
+  rise half way (so twitches before the motion and the lag's rise do not count).
+* **cross-correlation**: the lag where changes of speed line up with changes
+  of command.
+
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+import math
+from typing import Sequence
+
+from hydro_sdp.core.arrays import FloatArray
+from hydro_sdp.core.errors import DataError
+from hydro_sdp.core.identification.change_windows import fit_delay_and_lag, lag_pole
+from hydro_sdp.core.identification.segmentation import Experiment
+from hydro_sdp.core.model.timing import delayed_at
+import numpy as np
+from scipy.signal import lfilter
+
+
+@dataclass(frozen=True)
+class DelayEstimate:
+    """
+    The delay, and what each estimator found.
+
+    Parameters
+    ----------
+    samples : int
+        Chosen delay, samples (from the fit).
+    seconds : float
+        The same in seconds.
+    fit : int
+        Delay that explains the differenced angle best.
+    onset : int or None
+        Delay from motion onsets of the fastest steps (None without steps).
+    xcorr : int or None
+        Delay from cross-correlation of speed and command changes.
+    explained : FloatArray
+        Share of the squared increments around the command changes explained at
+        each candidate delay 1..max_delay, with the best lag tried there.
+    lag : float
+        First-order valve lag time constant found with the delay, s (0: none).
+
+    """
+
+    samples: int
+    seconds: float
+    fit: int
+    onset: int | None
+    xcorr: int | None
+    explained: FloatArray
+    lag: float = 0.0
+
+    @property
+    def agree(self) -> bool:
+        """Whether the other estimators are within one sample of the fit."""
+        others = [d for d in (self.onset, self.xcorr) if d is not None]
+        return all(abs(d - self.fit) <= 1 for d in others)
+
+
+def _onset(experiments: Sequence[Experiment], noise: float, max_delay: int,
+           pole: float) -> int | None:
+    # Samples the lag needs to reach half of a step in speed (0 without lag).
+    rise = math.ceil(math.log(0.5) / math.log(pole)) - 1 if pole > 0.0 else 0
+    found = []
+    for experiment in experiments:
+        if experiment.kind != 'step':
+            continue
+        start = experiment.start
+        held = np.flatnonzero(experiment.v[start + 1:] != experiment.level)
+        length = int(held[0]) if held.size else experiment.v.size - start - 1
+        window = experiment.y[start:start + 1 + min(length, experiment.y.size)]
+        if window.size < max_delay + 20:
+            continue
+        # Speed over five samples centred on each one: a step in speed reaches half
+        # height exactly where it happens.
+        speed = np.r_[np.full(2, 0.0), (window[5:] - window[:-5]) / 5.0, np.full(2, 0.0)]
+        final = float(np.median(speed[speed.size // 2:]))
+        if abs(final) < 20.0 * max(noise, 1e-9) / 5.0:
+            continue
+        above = np.sign(final) * speed >= 0.5 * abs(final)
+        sustained = above[:-3] & above[1:-2] & above[2:-1] & above[3:]
+        crossing = np.flatnonzero(sustained)
+        if crossing.size == 0:
+            continue
+        # speed[j] is centred on the increment y[start + j] - y[start + j - 1], j >= 1:
+        # the first command v[start + 1] shows first in increment 1 + delay.
+        found.append((abs(final), int(crossing[0]) + 1 - 1 - rise))
+    if len(found) < 2:
+        return None
+    found.sort(reverse=True)
+    fastest = [onset for _, onset in found[:max(2, len(found) // 3)]]
+    return int(round(float(np.median(fastest))))
+
+
+def _xcorr(experiments: Sequence[Experiment], max_delay: int, pole: float) -> int | None:
+    score = np.zeros(max_delay + 1)
+    for experiment in experiments:
+        acceleration = np.diff(experiment.y, 2)
+        change = np.diff(experiment.v)[:-1]
+        if acceleration.size <= max_delay or not np.any(change):
+            continue
+        if pole > 0.0:
+            # Through the lag a change of command changes the speed over the samples
+            # after the dead time: correlate with that shape, not with a spike.
+            change = lfilter([1.0 - pole], [1.0, -pole], change)
+        for lag in range(1, max_delay + 1):
+            score[lag] += float(np.dot(acceleration[lag:], change[:change.size - lag]))
+    if not np.any(score):
+        return None
+    # A command change between v[i] and v[i+1] changes the speed in y[i+1+delay]: the
+    # second difference centred one sample earlier, so the lag is delay - 1.
+    return int(np.argmax(score)) + 1
+
+
+def estimate_delay(experiments: Sequence[Experiment], dt: float, *, max_delay: int,
+                   rest: float = 0.0, noise: float = 0.0) -> DelayEstimate:
+    """
+    Estimate the pure delay from experiments.
+
+    Parameters
+    ----------
+    experiments : sequence of Experiment
+        Step or run experiments, each with at least ``max_delay`` samples of history.
+    dt : float
+        Sample period, s.
+    max_delay : int
+        Largest delay considered, samples.
+    rest : float
+        Rest command.
+    noise : float
+        Angle noise standard deviation, degrees.
+
+    Returns
+    -------
+    DelayEstimate
+        The delay (from the fit) and the other estimators' answers.
+
+    """
+    if not experiments:
+        raise DataError('no experiments to estimate the delay from')
+    best, lag, explained = fit_delay_and_lag(experiments, dt, max_delay)
+    return DelayEstimate(samples=best, seconds=best * dt, fit=best,
+                         onset=_onset(experiments, noise, max_delay, lag_pole(lag, dt)),
+                         xcorr=_xcorr(experiments, max_delay, lag_pole(lag, dt)),
+                         explained=explained, lag=lag)
+
+
+@dataclass(frozen=True)
+class LevelSpeed:
+    """
+    Mean speed of the joint while one command level acted on it.
+
+    Parameters
+    ----------
+    level : float
+        Command, input units.
+    speed : float
+        Mean angular velocity, deg/s.
+    standard_error : float
+        Its standard error, deg/s.
+    samples : int
+        Samples averaged.
+    gain : float
+        The SDP gain ``b_tau = speed dt / (level - rest)``, deg per sample per unit
+        (NaN at rest).
+
+    """
+
+    level: float
+    speed: float
+    standard_error: float
+    samples: int
+    gain: float
+
+
+def level_speeds(experiments: Sequence[Experiment], delay: int, dt: float, *,
+                 rest: float = 0.0, skip: int = 0, min_samples: int = 5) -> list[LevelSpeed]:
+    """
+    Mean speed per experiment and delayed command level (the points of Figs. 2 and 3).
+
+    For a step experiment this is the RIV estimate of ``b_tau`` of West et al.
+    (docs/methods.md section 1.10): with the integrator known, the integrated-input SRIV is
+    least squares, and its speed is the mean of the differenced angle.
+
+    Parameters
+    ----------
+    experiments : sequence of Experiment
+        The experiments.
+    delay : int
+        Delay, samples.
+    dt : float
+        Sample period, s.
+    rest : float
+        Rest command.
+    skip : int
+        Samples left out after each level change (valve transients).
+    min_samples : int
+        Fewest samples for a point.
+
+    Returns
+    -------
+    list of LevelSpeed
+        One point per experiment and level, sorted by level.
+
+    """
+    points = []
+    for experiment in experiments:
+        k = np.arange(experiment.start + 1, experiment.y.size)
+        delayed = delayed_at(experiment.v, k, delay)
+        dy = experiment.y[k] - experiment.y[k - 1]
+        changed = np.r_[True, delayed[1:] != delayed[:-1]]
+        since_change = np.arange(k.size) - np.maximum.accumulate(
+            np.where(changed, np.arange(k.size), 0))
+        keep = since_change >= skip
+        for level in np.unique(delayed[keep]):
+            values = dy[keep & (delayed == level)]
+            if values.size < min_samples:
+                continue
+            mean = float(np.mean(values))
+            error = float(np.std(values, ddof=1) / np.sqrt(values.size))
+            gain = mean / (level - rest) if level != rest else float('nan')
+            points.append(LevelSpeed(float(level), mean / dt, error / dt, int(values.size),
+                                     gain))
+    return sorted(points, key=lambda p: p.level)

@@ -1,0 +1,221 @@
+"""
+Model evaluation as in Table 2 of West et al. (2018).
+
+Each record is simulated with its measured commands from its measured angle
+at the first sample whose delayed command is known (sample ``tau``; the
+command before a record is unknown), and the mean absolute error (MAE) from
+there on is reported for the model, for its
+SDP-DZ linearisation (eq. (6): chords from the dead-zone edges to the commands
+where the speed reaches two thirds of saturation, with the same delay and end
+stops) and for the linear model (eq. (2), gain optimised for each record).
+:func:`mean_errors` averages the records two ways: the per-record mean of
+Table 2 (every run counts once) and the time-weighted mean (every sample
+counts once, as a residual over the whole recording does).
+
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+import math
+from typing import Sequence
+
+from hydro_sdp.core.arrays import FloatArray
+from hydro_sdp.core.identification.segmentation import check_record
+from hydro_sdp.core.model.exogenous_signals import exogenous_of
+from hydro_sdp.core.model.joint_model import JointModel
+from hydro_sdp.core.model.records import Record
+from hydro_sdp.core.model.simulation import simulate
+from hydro_sdp.core.model.static_maps import (
+    chord_commands, CHORD_SPEED_FRACTION, linearise, LinearMap, PwlMap, SdpDzMap, SdpMap)
+import numpy as np
+from scipy.optimize import minimize_scalar
+
+
+@dataclass(frozen=True)
+class RecordScore:
+    """
+    Errors of the three models on one record.
+
+    Parameters
+    ----------
+    source : str
+        The record's origin.
+    samples : int
+        Samples compared.
+    model : float
+        MAE of the model, degrees.
+    sdp_dz : float
+        MAE of its SDP-DZ linearisation (NaN when the map has no dead-zone form).
+    linear : float
+        MAE of the linear model with its best gain.
+    linear_gain : float
+        That gain, deg/s per input unit.
+
+    """
+
+    source: str
+    samples: int
+    model: float
+    sdp_dz: float
+    linear: float
+    linear_gain: float
+
+
+def sdp_dz_benchmark(model: JointModel) -> JointModel | None:
+    """
+    Return the SDP-DZ linearisation of a model, or None if its map has no dead-zone form.
+
+    Parameters
+    ----------
+    model : JointModel
+        The model.
+
+    Returns
+    -------
+    JointModel or None
+        Same delay and end stops, chord map, no effects.
+
+    """
+    static_map = model.static_map
+    if isinstance(static_map, SdpMap):
+        chord = linearise(static_map, *chord_commands(static_map))
+    elif isinstance(static_map, SdpDzMap):
+        chord = static_map
+    elif isinstance(static_map, PwlMap) and static_map.dead_zone is not None:
+        low, high = static_map.dead_zone
+        knots, speeds = np.array(static_map.knots), np.array(static_map.speeds)
+        slopes = []
+        for edge, end, sign in ((low, speeds[0], -1.0), (high, speeds[-1], 1.0)):
+            target = CHORD_SPEED_FRACTION * end
+            side = knots < low if sign < 0 else knots > high
+            if not side.any() or end == 0.0:
+                return None
+            # Where the map reaches two thirds of its end speed, by interpolation.
+            order = np.argsort(np.abs(speeds[side]))
+            command = float(np.interp(abs(target), np.abs(speeds[side])[order],
+                                      knots[side][order]))
+            slopes.append(target / (command - edge))
+        chord = SdpDzMap(dead_zone=(low, high), slope=(slopes[0], slopes[1]))
+    else:
+        return None
+    return replace(model, static_map=chord, effects=())
+
+
+def _start(model: JointModel, dt: float, samples: int) -> int:
+    return min(model.delay_samples(dt), samples - 2)
+
+
+def _mae(model: JointModel, record: Record, dt: float, start: int) -> float:
+    simulated = simulate(model, record.v, dt, float(record.y[start]),
+                         v_before=float(record.v[0]), start=start,
+                         exogenous=exogenous_of(record, dt))
+    return float(np.mean(np.abs(record.y[start:] - simulated[start:])))
+
+
+def best_linear_gain(record: Record, model: JointModel, dt: float) -> tuple[float, float]:
+    """
+    Gain of eq. (2) that minimises the record's MAE, and that MAE.
+
+    Parameters
+    ----------
+    record : Record
+        The record.
+    model : JointModel
+        Supplies the delay.
+    dt : float
+        Sample period, s.
+
+    Returns
+    -------
+    tuple[float, float]
+        ``(gain, mae)``; gain in deg/s per input unit.
+
+    """
+    linear = JointModel(model.joint, LinearMap(1.0), model.delay)
+    tau = model.delay_samples(dt)
+    start = _start(model, dt, len(record))
+    delayed = np.r_[np.full(tau, record.v[0]), record.v[:-tau]][start:]
+    integrated = dt * np.cumsum(np.r_[0.0, delayed[1:]])
+    rise = record.y[start:] - record.y[start]
+    denominator = float(np.dot(integrated, integrated))
+    guess = abs(float(np.dot(integrated, rise)) / denominator) if denominator > 0 else 1.0
+    guess = max(guess, 1e-9)
+
+    def cost(log_gain: float) -> float:
+        return _mae(replace(linear, static_map=LinearMap(math.exp(log_gain))), record, dt,
+                    start)
+
+    result = minimize_scalar(cost, bounds=(math.log(guess) - 5.0, math.log(guess) + 5.0),
+                             method='bounded', options={'xatol': 1e-4})
+    return math.exp(result.x), float(result.fun)
+
+
+def evaluate(records: Sequence[Record], model: JointModel) -> list[RecordScore]:
+    """
+    Table-2 comparison of a model with its SDP-DZ and linear benchmarks.
+
+    Parameters
+    ----------
+    records : sequence of Record
+        Evaluation records (random-level runs in the paper).
+    model : JointModel
+        The model to evaluate.
+
+    Returns
+    -------
+    list of RecordScore
+        One row per record.
+
+    """
+    benchmark = sdp_dz_benchmark(model)
+    scores = []
+    for record in records:
+        dt = check_record(record, min_samples=2)
+        start = _start(model, dt, len(record))
+        gain, linear = best_linear_gain(record, model, dt)
+        scores.append(RecordScore(
+            source=record.source, samples=len(record) - start,
+            model=_mae(model, record, dt, start),
+            sdp_dz=_mae(benchmark, record, dt, start) if benchmark is not None else math.nan,
+            linear=linear, linear_gain=gain))
+    return scores
+
+
+def simulated_angles(model: JointModel, record: Record) -> FloatArray:
+    """Simulate ``model`` over a record as :func:`evaluate` does (for plots)."""
+    dt = check_record(record, min_samples=2)
+    start = _start(model, dt, len(record))
+    return simulate(model, record.v, dt, float(record.y[start]), v_before=float(record.v[0]),
+                    start=start, exogenous=exogenous_of(record, dt))
+
+
+#: The two ways :func:`mean_errors` averages, by name.
+AVERAGES = {'per_record': 'mean over records, each counted once (Table 2)',
+            'time_weighted': 'mean over all compared samples (records weighted by length)'}
+
+
+def mean_errors(scores: Sequence[RecordScore]) -> dict[str, dict[str, float]]:
+    """
+    Average each model's MAE per record and weighted by time.
+
+    Parameters
+    ----------
+    scores : sequence of RecordScore
+        One per record, from :func:`evaluate`.
+
+    Returns
+    -------
+    dict
+        ``{'per_record': {...}, 'time_weighted': {...}}``, each mapping ``model``,
+        ``sdp_dz`` and ``linear`` to degrees (NaN where undefined).
+
+    """
+    weights = np.array([s.samples for s in scores], dtype=np.float64)
+    out: dict[str, dict[str, float]] = {'per_record': {}, 'time_weighted': {}}
+    for key in ('model', 'sdp_dz', 'linear'):
+        values = np.array([getattr(s, key) for s in scores], dtype=np.float64)
+        out['per_record'][key] = float(np.mean(values)) if values.size else math.nan
+        out['time_weighted'][key] = float(np.sum(weights * values) / np.sum(weights)) \
+            if values.size and np.sum(weights) > 0 else math.nan
+    return out

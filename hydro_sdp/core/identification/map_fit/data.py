@@ -1,0 +1,236 @@
+"""
+Experiments arranged for fast residual evaluation, and what a fit returns.
+
+Every experiment predicts its angles from its initial state with
+``pred_k = x_{k-1} + dt w_k``, ``Z_k = y_k - pred_k`` and
+``x_k = pred_k + beta Z_k`` (docs/methods.md section 2), where ``w_k`` is
+``rate(v_{k-tau})``, passed through the first-order valve lag when there is one. The recursion is a
+first-order filter, so each residual evaluation is a few numpy and ``lfilter``
+calls over all experiments at once (experiments of similar length share one
+padded 2-D array), and the map is evaluated once per distinct command level.
+
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+import math
+from typing import Callable, Generic, get_args, Literal, Sequence, TypeVar
+
+from hydro_sdp.core.arrays import FloatArray, IntArray
+from hydro_sdp.core.errors import DataError
+from hydro_sdp.core.identification.segmentation import Experiment
+from hydro_sdp.core.model.static_maps import StaticMap
+from hydro_sdp.core.model.timing import delayed_at
+import numpy as np
+import numpy.typing as npt
+from scipy.signal import lfilter
+
+RateFunction = Callable[[FloatArray], FloatArray]
+#: How a map is fitted to the raw angles: regret-regression or output error.
+FitMethod = Literal['rr', 'oe']
+FIT_METHODS: tuple[FitMethod, ...] = get_args(FitMethod)
+
+#: Trust-region solver of the bounded fits on the raw angles: LSMR works on the tall
+#: Jacobian (one row per sample) directly, where the exact solver takes its SVD at
+#: every step, the cost of a fit on a long record.
+TR_SOLVER: Literal['lsmr'] = 'lsmr'
+
+MapT = TypeVar('MapT', bound=StaticMap, covariant=True)
+
+
+class FitData:
+    """
+    Experiments arranged for fast residual evaluation.
+
+    Parameters
+    ----------
+    experiments : sequence of Experiment
+        The experiments.
+    delay : int
+        Delay, samples.
+    dt : float
+        Sample period, s.
+    lag : float
+        Valve lag time constant, s (0: none); each experiment's lag starts in
+        steady state at its first delayed command.
+    gains : sequence of FloatArray or None
+        Per experiment, a factor on the speed of each predicted sample (the
+        stroke geometry at the measured angle before it); default: 1.
+
+    """
+
+    def __init__(self, experiments: Sequence[Experiment], delay: int, dt: float,
+                 lag: float = 0.0, gains: Sequence[FloatArray] | None = None) -> None:
+        if not experiments:
+            raise DataError('no experiments to fit')
+        self.experiments = tuple(experiments)
+        self.delay = delay
+        self.dt = dt
+        self.lag = lag
+        self.pole = math.exp(-dt / lag) if lag > 0.0 else 0.0
+        delayed_all, observed_all, initial_all = [], [], []
+        for experiment in experiments:
+            k = np.arange(experiment.start + 1, experiment.y.size)
+            delayed_all.append(delayed_at(experiment.v, k, delay))
+            observed_all.append(experiment.y[k])
+            initial_all.append(float(experiment.y[experiment.start]))
+        self.levels, inverse = np.unique(np.concatenate(delayed_all), return_inverse=True)
+        self.samples = int(inverse.size)
+        lengths = np.array([d.size for d in delayed_all])
+        # Pad experiments of similar length (same power of two) into one 2-D block.
+        sizes = 2 ** np.ceil(np.log2(np.maximum(lengths, 1))).astype(int)
+        offsets = np.r_[0, np.cumsum(lengths)]
+        self.buckets: list[tuple[IntArray, IntArray, FloatArray, npt.NDArray[np.bool_],
+                                 FloatArray]] = []
+        self.gains: list[FloatArray] = []
+        self._padded: list[IntArray] = []
+        self._flat: list[IntArray | None] = []
+        self._weighted: tuple[float, list[FloatArray]] = (math.nan, [])
+        for size in np.unique(sizes):
+            members = np.flatnonzero(sizes == size)
+            width = int(lengths[members].max())
+            index = np.zeros((members.size, width), dtype=np.int64)
+            observed = np.zeros((members.size, width))
+            mask = np.zeros((members.size, width), dtype=bool)
+            for row, member in enumerate(members):
+                length = lengths[member]
+                index[row, :length] = inverse[offsets[member]:offsets[member] + length]
+                observed[row, :length] = observed_all[member]
+                observed[row, length:] = observed_all[member][-1] if length else 0.0
+                mask[row, :length] = True
+            initial = np.array([initial_all[m] for m in members])
+            self.buckets.append((members, index, observed, mask, initial))
+            # Padding reads an extra level whose increment is 0, and the residuals of a
+            # bucket are read at the flat positions of its samples (all of them: None).
+            self._padded.append(np.where(mask, index, self.levels.size))
+            self._flat.append(None if mask.all() else np.flatnonzero(mask.ravel()))
+            if gains is not None:
+                gain = np.ones((members.size, width))
+                for row, member in enumerate(members):
+                    gain[row, :lengths[member]] = gains[int(member)]
+                self.gains.append(gain)
+
+    def increments(self, rate: RateFunction) -> list[FloatArray]:
+        """Per bucket, ``dt rate(v_{k-tau})`` with padding set to zero."""
+        per_level = np.append(self.dt * rate(self.levels), 0.0)
+        out = [per_level[index] for index in self._padded]
+        if self.pole != 0.0:
+            p = self.pole
+            out = [np.where(mask, lfilter([1.0 - p], [1.0, -p], q, axis=1,
+                                          zi=p * q[:, :1])[0], 0.0)
+                   for q, (_, _, _, mask, _) in zip(out, self.buckets)]
+        if self.gains:
+            out = [q * gain for q, gain in zip(out, self.gains)]
+        return out
+
+    def residuals(self, rate: RateFunction, beta: float = 0.0) -> FloatArray:
+        """
+        Prediction errors ``Z`` of every sample, concatenated (regret-regression form).
+
+        Parameters
+        ----------
+        rate : callable
+            The map, commands to deg/s.
+        beta : float
+            Gain on the state residuals (0: simulation error).
+
+        Returns
+        -------
+        FloatArray
+            One residual per predicted sample.
+
+        """
+        out = np.empty(self.samples)
+        done = 0
+        # A finite-difference Jacobian varies beta in one column of several: keep
+        # beta times the angles (read once, so the pair stays whole across threads).
+        cached = self._weighted
+        if cached[0] != beta:
+            cached = (beta, [beta * b[2] for b in self.buckets])
+            self._weighted = cached
+        for (_, _, observed, _, initial), q, flat, weighted in zip(
+                self.buckets, self.increments(rate), self._flat, cached[1]):
+            count = q.size if flat is None else flat.size
+            # A full bucket's residuals are written where they belong, others gathered.
+            target = out[done:done + count].reshape(q.shape) if flat is None else \
+                np.empty_like(q)
+            if beta == 0.0:
+                np.add(initial[:, None], np.cumsum(q, axis=1), out=target)
+            else:
+                a = 1.0 - beta
+                drive = q * a
+                drive += weighted
+                state, _ = lfilter([1.0], [1.0, -a], drive, axis=1, zi=(a * initial)[:, None])
+                # Predicted from the state before: the start for the first sample.
+                np.add(initial[:, None], q[:, :1], out=target[:, :1])
+                np.add(state[:, :-1], q[:, 1:], out=target[:, 1:])
+            np.subtract(observed, target, out=target)
+            if flat is not None:
+                out[done:done + count] = target.ravel()[flat]
+            done += count
+        return out
+
+    def simulation_mae(self, rate: RateFunction) -> float:
+        """Mean absolute simulation error over all predicted samples, degrees."""
+        return float(np.mean(np.abs(self.residuals(rate, 0.0))))
+
+    def mean_experiment_sse(self, rate: RateFunction) -> float:
+        """Mean over experiments of the summed squared simulation error (West et al.)."""
+        return float(np.sum(self.residuals(rate, 0.0) ** 2) / len(self.experiments))
+
+
+@dataclass(frozen=True, eq=False)
+class MapFit(Generic[MapT]):
+    """
+    A fitted static map.
+
+    Parameters
+    ----------
+    static_map : StaticMap
+        The map.
+    method : str
+        ``rr``, ``oe`` or ``points`` (fitted to the per-level speeds).
+    beta : float
+        Regret-regression gain (0 for ``oe``).
+    cost : float
+        Sum of squared residuals at the optimum.
+    standard_errors : dict
+        Standard error of each parameter, by model-file name.
+    evaluations : int
+        Objective evaluations used.
+    starts : int
+        Starting points tried.
+
+    """
+
+    static_map: MapT
+    method: Literal['rr', 'oe', 'points']
+    beta: float
+    cost: float
+    standard_errors: dict[str, float] = field(default_factory=dict)
+    evaluations: int = 0
+    starts: int = 1
+
+
+def covariance_errors(jacobian: FloatArray, cost: float, samples: int) -> FloatArray:
+    """Return standard errors from a least-squares Jacobian and cost (half the SSE)."""
+    parameters = jacobian.shape[1]
+    variance = 2.0 * cost / max(samples - parameters, 1)
+    try:
+        covariance = variance * np.linalg.pinv(jacobian.T @ jacobian)
+    except np.linalg.LinAlgError:
+        return np.full(parameters, np.inf)
+    return np.sqrt(np.clip(np.diag(covariance), 0.0, None))
+
+
+def numeric_jacobian(function: Callable[[FloatArray], FloatArray], x: FloatArray) -> FloatArray:
+    """Return the forward-difference Jacobian of ``function`` at ``x``."""
+    base = function(x)
+    columns = []
+    for i in range(x.size):
+        step = 1e-6 * max(abs(x[i]), 1e-3)
+        shifted = x.copy()
+        shifted[i] += step
+        columns.append((function(shifted) - base) / step)
+    return np.column_stack(columns)

@@ -1,0 +1,84 @@
+"""
+Fitting the second paper's polynomial gain map (``poly``).
+
+The gain polynomials are fitted to the per-level speeds (the second paper's
+way) in the command from rest; given experiments, the coefficients are then
+refined on the raw angles by regret-regression (``rr``) or output error (``oe``).
+
+"""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+from hydro_sdp.core.errors import DataError
+from hydro_sdp.core.identification.delay import LevelSpeed
+from hydro_sdp.core.identification.map_fit.data import FitData, FitMethod, MapFit, TR_SOLVER
+from hydro_sdp.core.model.static_maps import PolyMap
+import numpy as np
+from scipy.optimize import least_squares
+
+
+def fit_poly(points: Sequence[LevelSpeed], rest: float, *, degree: int = 3,
+             data: FitData | None = None, method: FitMethod = 'rr') -> MapFit[PolyMap]:
+    """
+    Fit the second paper's polynomial gain ``b(u)``, ``u = v - rest``, per direction.
+
+    Parameters
+    ----------
+    points : sequence of LevelSpeed
+        Per-level speeds.
+    rest : float
+        Rest command (the gain divides by the command's distance from it).
+    degree : int
+        Highest polynomial degree (lowered when a side has few points).
+    data : FitData or None
+        Experiments to refine the coefficients on (default: the points' fit).
+    method : str
+        ``rr`` or ``oe`` for that refinement.
+
+    Returns
+    -------
+    MapFit
+        The fitted ``poly`` map.
+
+    """
+    levels = np.array([p.level for p in points]) - rest
+    speeds = np.array([p.speed for p in points])
+    errors = np.array([p.standard_error for p in points])
+    coefficients = []
+    residual = 0.0
+    for side in (levels < 0.0, levels > 0.0):
+        count = int(np.sum(side))
+        if count < 2:
+            raise DataError('the polynomial gain map needs at least two levels on each side')
+        order = int(min(degree, count - 2)) if count > 2 else 0
+        gain = speeds[side] / levels[side]
+        weights = np.abs(levels[side]) / np.maximum(errors[side], 1e-9)
+        fit = np.polynomial.polynomial.polyfit(levels[side], gain, order, w=weights)
+        coefficients.append(tuple(fit.tolist()))
+        predicted = levels[side] * np.polynomial.polynomial.polyval(levels[side], fit)
+        residual += float(np.sum((predicted - speeds[side]) ** 2))
+    command_range = (float(levels.min()) + rest, float(levels.max()) + rest)
+    static_map = PolyMap(gain_negative=coefficients[0], gain_positive=coefficients[1],
+                         command_range=command_range, rest=rest)
+    if data is None:
+        return MapFit(static_map, 'points', 0.0, 0.5 * residual)
+    sizes = [len(c) for c in coefficients]
+
+    def build(x: np.ndarray) -> PolyMap:
+        return PolyMap(tuple(x[:sizes[0]]), tuple(x[sizes[0]:sizes[0] + sizes[1]]),
+                       command_range, rest)
+
+    start = np.r_[coefficients[0], coefficients[1]]
+    if method == 'rr':
+        result = least_squares(lambda x: data.residuals(build(x).rate, float(x[-1])),
+                               np.r_[start, 0.5], bounds=(
+                                   np.r_[np.full(start.size, -np.inf), 0.0],
+                                   np.r_[np.full(start.size, np.inf), 1.0]), x_scale='jac',
+                               tr_solver=TR_SOLVER)
+        beta = float(result.x[-1])
+    else:
+        result = least_squares(lambda x: data.residuals(build(x).rate), start, method='lm')
+        beta = 0.0
+    return MapFit(build(result.x), method, beta, float(result.cost), {}, int(result.nfev))

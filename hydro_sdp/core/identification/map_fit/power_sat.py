@@ -1,0 +1,114 @@
+"""
+Fitting the saturating power-law map (``power_sat``) to experiments.
+
+The parameters are bounded by what the per-level speeds show: saturation
+speeds between 0.7 and 1.5 times the fastest measured speed, each edge between
+rest and the innermost level that moves the joint, exponents 0.5..8. The start
+is the best of a few exponents fitted to the per-level speeds from the edges
+of an ``sdp`` fit; the map is then fitted to the raw angles by
+regret-regression (``rr``) or by output error (``oe``: ``beta = 0``).
+
+"""
+
+from __future__ import annotations
+
+from typing import Any, Sequence
+
+from hydro_sdp.core.arrays import FloatArray
+from hydro_sdp.core.identification.delay import LevelSpeed
+from hydro_sdp.core.identification.map_fit.data import (
+    covariance_errors, FitData, FitMethod, MapFit, TR_SOLVER)
+from hydro_sdp.core.model.static_maps import power_sat_rate, PowerSatMap, SdpMap
+import numpy as np
+from scipy.optimize import least_squares
+
+NAMES = ('saturation_velocity[0]', 'curvature[0]', 'exponent[0]', 'dead_zone[0]',
+         'saturation_velocity[1]', 'curvature[1]', 'exponent[1]', 'dead_zone[1]')
+#: Exponents tried as starts.
+START_EXPONENTS = (1.0, 2.0, 3.0, 5.0)
+
+
+def _rate(x: FloatArray) -> Any:
+    return lambda v: power_sat_rate(v, *(float(value) for value in x[:8]))
+
+
+def _bounds(levels: FloatArray, speeds: FloatArray, rest: float
+            ) -> tuple[FloatArray, FloatArray]:
+    """Bounds of ``(vn, cn, nn, a3, vp, cp, np, a6)`` from the per-level speeds."""
+    scale = max(float(np.max(np.abs(levels - rest))), 1e-9)
+    peak = max(float(np.max(np.abs(speeds))), 1e-9)
+    lower, upper = [], []
+    for sign in (-1.0, 1.0):
+        side = sign * (levels - rest) > 0.0
+        fastest = max(float(np.max(sign * speeds[side], initial=0.0)), 1e-3 * peak)
+        moving = side & (sign * speeds > 0.02 * peak)
+        # The edge lies between rest and the innermost level that moves the joint.
+        inner = float(np.min(sign * (levels[moving] - rest), initial=scale))
+        edge = (rest - inner, rest) if sign < 0 else (rest, rest + inner)
+        if sign < 0:
+            lower += [-1.5 * fastest, 1e-3 / scale, 0.5, edge[0]]
+            upper += [-0.7 * fastest, 1e3 / scale, 8.0, edge[1]]
+        else:
+            lower += [0.7 * fastest, 1e-3 / scale, 0.5, edge[0]]
+            upper += [1.5 * fastest, 1e3 / scale, 8.0, edge[1]]
+    return np.array(lower), np.array(upper)
+
+
+def fit_power_sat(data: FitData, points: Sequence[LevelSpeed], rest: float, start: SdpMap, *,
+                  method: FitMethod = 'rr') -> MapFit[PowerSatMap]:
+    """
+    Fit the saturating power-law map by regret-regression or output error.
+
+    Parameters
+    ----------
+    data : FitData
+        The experiments.
+    points : sequence of LevelSpeed
+        Per-level speeds, for the start.
+    rest : float
+        Rest command.
+    start : SdpMap
+        An ``sdp`` fit: its edges and saturation speeds start the search.
+    method : str
+        ``rr`` (``beta`` estimated) or ``oe`` (``beta = 0``, the simulation error).
+
+    Returns
+    -------
+    MapFit
+        The fitted ``power_sat`` map.
+
+    """
+    levels = np.array([p.level for p in points])
+    speeds = np.array([p.speed for p in points])
+    weights = 1.0 / np.maximum([p.standard_error for p in points], 1e-3 * np.max(np.abs(speeds)))
+    lower, upper = _bounds(levels, speeds, rest)
+    low, high = start.dead_zone
+    best: tuple[float, FloatArray] | None = None
+    for exponent in START_EXPONENTS:
+        x0 = np.array([lower[0], 0.0, exponent, low, upper[4], 0.0, exponent, high])
+        reach = [max(low - float(np.min(levels)), 1e-6), max(float(np.max(levels)) - high, 1e-6)]
+        x0[[1, 5]] = 1.0 / np.array(reach)
+        x0 = np.clip(x0, lower + 1e-9 * np.abs(lower), upper - 1e-9 * np.abs(upper))
+        result = least_squares(lambda x: (_rate(x)(levels) - speeds) * weights, x0,
+                               bounds=(lower, upper), x_scale='jac')
+        if best is None or result.cost < best[0]:
+            best = (float(result.cost), np.asarray(result.x))
+    assert best is not None
+    if method == 'rr':
+        result = least_squares(lambda x: data.residuals(_rate(x), float(x[8])),
+                               np.r_[best[1], 0.5], bounds=(np.r_[lower, 0.0], np.r_[upper, 1.0]),
+                               x_scale='jac', tr_solver=TR_SOLVER)
+        beta = float(result.x[8])
+    else:
+        result = least_squares(lambda x: data.residuals(_rate(x)), best[1],
+                               bounds=(lower, upper), x_scale='jac', tr_solver=TR_SOLVER)
+        beta = 0.0
+    x = np.asarray(result.x)
+    errors = covariance_errors(np.asarray(result.jac), float(result.cost), data.samples)
+    names = NAMES + (('beta',) if method == 'rr' else ())
+    static_map = PowerSatMap(dead_zone=(float(x[3]), float(x[7])),
+                             saturation_velocity=(float(x[0]), float(x[4])),
+                             curvature=(float(x[1]), float(x[5])),
+                             exponent=(float(x[2]), float(x[6])))
+    return MapFit(static_map, method, beta, float(result.cost), dict(zip(names, errors.tolist())),
+                  int(result.nfev), len(START_EXPONENTS))

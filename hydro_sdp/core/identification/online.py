@@ -1,0 +1,367 @@
+"""
+Online identification of the SDP map (docs/methods.md section 7), one sample at a time.
+
+A random-walk Kalman filter tracks ``theta = (a1 .. a6)`` of eq. (5) (per-sample
+units at the records' sample period) from ``dy_k = q(v_{k-tau}; theta) + noise``.
+Its gradient is taken from a soft-edged copy of ``q`` so that a dead-zone edge
+that has moved inwards can still be learned (inside the estimated dead-zone the
+exact gradient is zero). Samples are skipped while the static model does not
+hold: just after a command change (valve transients), near an end stop, for
+non-finite data and for outliers. The estimator is what lets a PIP-IDZ loop
+recalibrate itself after wear or a part replacement, the first paper's promise.
+
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+import math
+from typing import Any
+
+from hydro_sdp.core.arrays import FloatArray
+from hydro_sdp.core.errors import ConfigurationError
+from hydro_sdp.core.model.joint_model import JointModel
+from hydro_sdp.core.model.static_maps import sdp_rate, SdpMap
+from hydro_sdp.core.model.timing import check_sample_period, DelayLine
+from hydro_sdp.core.validation import require_positive_fields
+import numpy as np
+
+#: Process noise of the random walk, as a ratio to the measurement noise variance.
+NOISE_VARIANCE_RATIOS = (1e-6, 1e-5, 1e-5, 1e-6, 1e-5, 1e-5)
+
+
+@dataclass(frozen=True)
+class OnlineSettings:
+    """
+    Tuning of the online identifier (defaults from docs/methods.md 7.2, for +-10 V commands).
+
+    Every command-side setting is in input units, used as given; for another command
+    range build the settings with :meth:`for_input_limits`, which scales them once.
+
+    Parameters
+    ----------
+    noise_std : float
+        Angle measurement noise, degrees.
+    kappa : float
+        Width of the soft edges of the gradient, input units (0.05 V).
+    change_gate : float
+        Command change that suspends updates, input units (0.5 V).
+    hold_off : int
+        Samples skipped after such a change.
+    margin : float
+        Distance from an end stop inside which updates stop, degrees.
+    outlier : float
+        Normalised innovation beyond which a sample is an outlier.
+    input_scale : float
+        Size of the command range relative to +-10 V (1 for volts); scales the start
+        covariance, the random walk and the box of the edges and curvatures.
+    change_level : float
+        Mean normalised innovation squared (about 1 while the model holds) above
+        which the joint is taken to have changed and the covariance is reset.
+    change_memory : float
+        Samples the mean of the normalised innovation squared remembers.
+    cusum_drift : float
+        Drift ``k`` of the CUSUM tests on the normalised innovations.
+    cusum_limit : float
+        Threshold ``h`` of those tests (the mean run length between false
+        alarms grows roughly as ``exp(2 k h)``).
+
+    """
+
+    noise_std: float = 0.03
+    kappa: float = 0.05
+    change_gate: float = 0.5
+    hold_off: int = 3
+    margin: float = 1.0
+    outlier: float = 6.0
+    input_scale: float = 1.0
+    change_level: float = 4.0
+    change_memory: float = 100.0
+    cusum_drift: float = 0.5
+    cusum_limit: float = 15.0
+
+    def __post_init__(self) -> None:
+        require_positive_fields(self, ('noise_std', 'kappa', 'change_gate', 'margin', 'outlier',
+                                       'input_scale', 'change_level', 'change_memory',
+                                       'cusum_drift', 'cusum_limit'))
+        if self.hold_off < 0:
+            raise ConfigurationError(f'hold_off must be >= 0, got {self.hold_off}')
+
+    @classmethod
+    def for_input_limits(cls, input_limits: tuple[float, float] | None,
+                         **overrides: Any) -> OnlineSettings:
+        """
+        Return the defaults scaled to a command range (the one place they are scaled).
+
+        Parameters
+        ----------
+        input_limits : tuple[float, float] or None
+            The valve's command range, input units (e.g. ``(0, 100)`` % duty: scale 10);
+            None for +-10 V.
+        **overrides : Any
+            Other settings (``noise_std``...), in input units where they are commands.
+
+        Returns
+        -------
+        OnlineSettings
+            ``kappa`` 0.05 and ``change_gate`` 0.5 times the scale, and ``input_scale``.
+
+        """
+        scale = input_scale(input_limits)
+        values: dict[str, Any] = {'kappa': cls.kappa * scale,
+                                  'change_gate': cls.change_gate * scale,
+                                  'input_scale': scale}
+        values.update(overrides)
+        return cls(**values)
+
+
+def input_scale(input_limits: tuple[float, float] | None) -> float:
+    """
+    Size of a command range relative to +-10 V.
+
+    Parameters
+    ----------
+    input_limits : tuple[float, float] or None
+        Command range, input units; None for +-10 V.
+
+    Returns
+    -------
+    float
+        The largest command magnitude over 10 (1 for +-10 V, 10 for 0..100 %).
+
+    """
+    if input_limits is None:
+        return 1.0
+    scale = max(abs(input_limits[0]), abs(input_limits[1])) / 10.0
+    if not (math.isfinite(scale) and scale > 0.0):
+        raise ConfigurationError(f'input_limits must hold a non-zero finite command, '
+                                 f'got {list(input_limits)}')
+    return scale
+
+
+@dataclass(frozen=True)
+class SdpEstimate:
+    """
+    The online estimate of an SDP map by name, with standard deviations.
+
+    Parameters
+    ----------
+    dead_zone_lower, dead_zone_upper : float
+        Dead-zone edges, input units.
+    saturation_negative, saturation_positive : float
+        Saturation speeds, deg/s.
+    curvature_negative, curvature_positive : float
+        Curvatures, 1/input unit.
+    dead_zone_lower_std, dead_zone_upper_std, saturation_negative_std, \
+saturation_positive_std, curvature_negative_std, curvature_positive_std : float
+        Their standard deviations, same units.
+
+    """
+
+    dead_zone_lower: float
+    dead_zone_upper: float
+    saturation_negative: float
+    saturation_positive: float
+    curvature_negative: float
+    curvature_positive: float
+    dead_zone_lower_std: float
+    dead_zone_upper_std: float
+    saturation_negative_std: float
+    saturation_positive_std: float
+    curvature_negative_std: float
+    curvature_positive_std: float
+
+    @property
+    def edges(self) -> tuple[float, float]:
+        """Return the dead-zone edges, input units."""
+        return self.dead_zone_lower, self.dead_zone_upper
+
+    @property
+    def edges_std(self) -> tuple[float, float]:
+        """Return the standard deviations of the edges, input units."""
+        return self.dead_zone_lower_std, self.dead_zone_upper_std
+
+
+def _softplus(x: float, kappa: float) -> float:
+    # kappa ln(1 + e^{x/kappa}), computed without overflow.
+    z = x / kappa
+    return kappa * (z + math.log1p(math.exp(-z))) if z > 0 else kappa * math.log1p(math.exp(z))
+
+
+class OnlineSdpIdentifier:
+    """
+    Random-walk Kalman filter on the six coefficients of eq. (5).
+
+    Parameters
+    ----------
+    model : JointModel
+        Starting point (kind ``sdp``) and the delay and end stops to use.
+    dt : float
+        Sample period of the incoming samples, s.
+    settings : OnlineSettings
+        Tuning.
+
+    """
+
+    def __init__(self, model: JointModel, dt: float,
+                 settings: OnlineSettings = OnlineSettings()) -> None:
+        if not isinstance(model.static_map, SdpMap):
+            raise ConfigurationError(f'the online identifier tracks kind sdp models, not '
+                                     f'{model.kind}')
+        self.model = model
+        self.dt = check_sample_period(dt)
+        self.settings = settings
+        self.delay = model.delay_samples(self.dt)
+        s = settings.input_scale
+        self.theta = np.array(model.alpha(self.dt), dtype=np.float64)
+        speed = (self.dt / 0.01) ** 2
+        self._P0 = np.diag([0.01 * speed, 1.0 / s ** 2, 0.5 * s ** 2,
+                            0.01 * speed, 1.0 / s ** 2, 0.5 * s ** 2])
+        self.P = self._P0.copy()
+        # Mean normalised innovation squared: about 1 while the model holds.
+        self.nis = 1.0
+        # Two-sided CUSUM of the normalised innovations, for commands below and above the
+        # middle of the dead-zone: a moved edge or a changed speed biases one side.
+        self._cusum = np.zeros(4)
+        self.resets = 0
+        self._since_reset = 0
+        self._ratios = np.array(NOISE_VARIANCE_RATIOS) * np.array(
+            [speed, 1.0 / s ** 2, s ** 2, speed, 1.0 / s ** 2, s ** 2])
+        self.r = 2.0 * settings.noise_std ** 2
+        self._r_min = 0.25 * self.r
+        a1, a4 = self.theta[0], self.theta[3]
+        low, high = model.static_map.dead_zone
+        self._lower = np.array([5.0 * a1, 0.1 / s, -4.0 * s * max(1.0, abs(low)),
+                                0.0, 0.1 / s, low])
+        self._upper = np.array([0.0, 10.0 / s, high, 5.0 * a4, 10.0 / s,
+                                4.0 * s * max(1.0, abs(high))])
+        # v_{k-tau} and v_{k-tau-1}: the gate needs the command before the delayed one too.
+        self._commands = DelayLine(self.delay + 1, before=math.nan)
+        self._pushed = 0
+        self._last_angle: float | None = None
+        self._quiet = 0
+        self.samples = 0
+        self.updates = 0
+
+    @property
+    def standard_errors(self) -> FloatArray:
+        """Return the standard deviations of ``theta``."""
+        return np.sqrt(np.maximum(np.diag(self.P), 0.0))
+
+    def static_map(self) -> SdpMap:
+        """Return the current estimate as a rate-based map."""
+        return SdpMap.from_alpha(tuple(self.theta), self.dt)
+
+    def estimate(self) -> JointModel:
+        """Return the model with the current estimate of its map."""
+        return replace(self.model, static_map=self.static_map())
+
+    def named_estimate(self) -> SdpEstimate:
+        """Return the current estimate and its standard deviations by name."""
+        a1, a2, a3, a4, a5, a6 = (float(a) for a in self.theta)
+        s1, s2, s3, s4, s5, s6 = (float(s) for s in self.standard_errors)
+        dt = self.dt
+        return SdpEstimate(a3, a6, a1 / dt, a4 / dt, a2, a5, s3, s6, s1 / dt, s4 / dt, s2, s5)
+
+    def _q(self, u: float) -> float:
+        # theta is eq. (5) in per-sample form: (a1, a2, a3) below, (a4, a5, a6) above.
+        a1, a2, a3, a4, a5, a6 = self.theta
+        return float(sdp_rate(u, a1, a2, a3, a4, a5, a6))
+
+    def _gradient(self, u: float) -> FloatArray:
+        """Gradient of the soft-edged map: smooth min/max replace the kinks at the edges."""
+        a1, a2, a3, a4, a5, a6 = self.theta
+        kappa = self.settings.kappa
+        below = -_softplus(-(u - a3), kappa)            # smooth min(u - a3, 0)
+        above = _softplus(u - a6, kappa)                # smooth max(u - a6, 0)
+        e = math.exp(a2 * below)
+        g = math.exp(-a5 * above)
+        sigma_below = 1.0 / (1.0 + math.exp(min((u - a3) / kappa, 700.0)))
+        sigma_above = 1.0 / (1.0 + math.exp(min(-(u - a6) / kappa, 700.0)))
+        return np.array([
+            1.0 - e, -a1 * below * e, a1 * a2 * e * sigma_below,
+            1.0 - g, a4 * above * g, -a4 * a5 * g * sigma_above])
+
+    def update(self, v: float, y: float) -> bool:
+        """
+        Take one sample: the command in force up to ``t_k`` and the angle at ``t_k``.
+
+        Parameters
+        ----------
+        v : float
+            Command (input units).
+        y : float
+            Angle, degrees.
+
+        Returns
+        -------
+        bool
+            Whether the sample updated the estimate (False when gated).
+
+        """
+        self.samples += 1
+        if not (math.isfinite(v) and math.isfinite(y)):
+            self._quiet = self.settings.hold_off
+            return False
+        self._commands.push(v)
+        self._pushed += 1
+        previous, self._last_angle = self._last_angle, float(y)
+        if previous is None or self._pushed < self.delay + 2:
+            return False
+        u = self._commands.delayed(self.delay)
+        if abs(u - self._commands.delayed(self.delay + 1)) > self.settings.change_gate:
+            self._quiet = self.settings.hold_off
+            return False
+        if self._quiet > 0:
+            self._quiet -= 1
+            return False
+        limits = self.model.angle_limits
+        if limits is not None and (min(y, previous) < limits[0] + self.settings.margin or
+                                   max(y, previous) > limits[1] - self.settings.margin):
+            return False
+        P = self.P + np.diag(self._ratios * self.r)
+        psi = self._gradient(u)
+        innovation = (y - previous) - self._q(u)
+        Ppsi = P @ psi
+        spread = float(psi @ Ppsi)
+        S = self.r + spread
+        # A joint that changed (wear, a new valve) shows as innovations persistently larger
+        # than the filter expects: then the covariance is reset so that it re-learns fast,
+        # instead of creeping along its slow random walk (or rejecting the news as outliers).
+        z = innovation / math.sqrt(S)
+        normalised = min(z * z, 100.0)
+        self.nis += (normalised - self.nis) / self.settings.change_memory
+        side = 0 if u < 0.5 * (self.theta[2] + self.theta[5]) else 2
+        drift = self.settings.cusum_drift
+        z = min(max(z, -10.0), 10.0)
+        self._cusum[side] = max(0.0, self._cusum[side] + z - drift)
+        self._cusum[side + 1] = max(0.0, self._cusum[side + 1] - z - drift)
+        self._since_reset += 1
+        lower = float(self._cusum[:2].max()) > self.settings.cusum_limit
+        upper = float(self._cusum[2:].max()) > self.settings.cusum_limit
+        if self.nis > self.settings.change_level:
+            lower = upper = True
+        if (lower or upper) and self._since_reset > 5 * self.settings.change_memory:
+            # Dead-zone edges are what wear moves: forget the edge of the side that changed;
+            # its speed and curvature, poorly excited while a set-point is held, keep most
+            # of what they know, and the other side keeps everything.
+            weights = np.array([0.01, 0.01, 1.0])
+            forget = np.r_[weights * lower, weights * upper]
+            P = P + self._P0 @ np.diag(forget)
+            Ppsi = P @ psi
+            spread = float(psi @ Ppsi)
+            S = self.r + spread
+            self.nis = 1.0
+            self._cusum[:] = 0.0
+            self._since_reset = 0
+            self.resets += 1
+        elif self.updates > 100 and innovation * innovation > self.settings.outlier ** 2 * S:
+            self.P = P
+            return False
+        gain = Ppsi / S
+        self.theta = np.clip(self.theta + gain * innovation, self._lower, self._upper)
+        self.P = P - np.outer(gain, Ppsi)
+        # Track the noise level slowly, never below a quarter of the start value.
+        self.r = max(self._r_min, 0.999 * self.r + 0.001 * (innovation * innovation - spread))
+        self.updates += 1
+        return True

@@ -1,0 +1,55 @@
+"""
+The first paper's identification as a plain baseline: eq. (5) by simplex on the output error.
+
+West et al. (2018) fit the six coefficients of eq. (5) by Nelder-Mead on the
+mean over experiments of the summed squared simulation error, with a pure
+delay and no other dynamics. Here it gets the same experiments and end stops
+as :func:`hydro_sdp.core.identification.identify.identify` (the segmentation is not what is
+compared) and the pure delay that explains the differenced angle best.
+
+"""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+from hydro_sdp.core.identification.change_windows import lagged_residual
+from hydro_sdp.core.identification.delay import level_speeds
+from hydro_sdp.core.identification.identify import _records_dt, PIECE_SAMPLES
+from hydro_sdp.core.identification.map_fit import fit_sdp, FitData
+from hydro_sdp.core.identification.segmentation import segment_records, split_long
+from hydro_sdp.core.model.joint_model import JointModel
+from hydro_sdp.core.model.records import Record
+
+
+def paper_model(records: Sequence[Record], *, max_delay: float = 0.5,
+                rest: float | None = None) -> JointModel:
+    """
+    Identify eq. (5) with a pure delay by the paper's output-error simplex fit.
+
+    Parameters
+    ----------
+    records : sequence of Record
+        Records of one joint.
+    max_delay : float
+        Largest delay considered, s.
+    rest : float or None
+        Rest command (default: as :func:`~.segmentation.segment_records`).
+
+    Returns
+    -------
+    JointModel
+        An ``sdp`` model with the end stops seen in the data and no effects.
+
+    """
+    dt = _records_dt(records)
+    most = max(2, int(round(max_delay / dt)))
+    segmentation = segment_records(records, max_delay=most, rest=rest)
+    pieces = split_long(segmentation.experiments, PIECE_SAMPLES, most)
+    delay = min(range(1, most + 1), key=lambda d: lagged_residual(pieces, d, 0.0))
+    points = level_speeds(pieces, delay, dt, rest=segmentation.rest)
+    fit = fit_sdp(FitData(pieces, delay, dt), points, segmentation.rest, method='oe', starts=2)
+    low, high = segmentation.end_stops
+    limits = (low, high) if low is not None and high is not None else None
+    return JointModel(records[0].joint or 'joint', fit.static_map, round(delay * dt, 9),
+                      angle_limits=limits)

@@ -1,0 +1,419 @@
+"""
+Experiments: the pieces of a record that identification fits.
+
+A record is cut where the command leaves its rest value and where it returns.
+A block of one held command is a *step* experiment (West et al. 2018, Fig. 1);
+a block of changing commands (random levels, closed-loop traffic) is a *run*.
+Each experiment keeps some samples of command history before its start, so
+that the delayed input of its first samples is known (docs/methods.md section 2.3), and
+ends before the joint is clamped by an end stop: an end stop makes the joint
+stand still although the command drives it, which no static map explains.
+A step that starts at a stop (known or detected) and drives into it is
+dropped whole, "held against an end stop". What is dropped is kept with the
+reason.
+
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+import math
+from typing import Sequence
+
+from hydro_sdp.core.arrays import FloatArray
+from hydro_sdp.core.errors import DataError
+from hydro_sdp.core.identification.end_stops import clamp_start, pushes_into_stop, stop_window
+from hydro_sdp.core.identification.rest import estimate_rest_command
+from hydro_sdp.core.model.records import Record
+import numpy as np
+
+__all__ = ['Dropped', 'Experiment', 'MIN_SAMPLES', 'Segmentation', 'check_record',
+           'estimate_rest_command', 'noise_level', 'segment_record', 'segment_records',
+           'split_long', 'thin']
+
+#: Samples an experiment needs beyond its start to be worth fitting.
+MIN_SAMPLES = 10
+
+
+@dataclass(frozen=True, eq=False)
+class Experiment:
+    """
+    One segment of a record, with command history before its start.
+
+    Parameters
+    ----------
+    v : FloatArray
+        Commands from the start of the history to the end.
+    y : FloatArray
+        Angles alongside ``v``, degrees.
+    start : int
+        Index of the initial state: fits predict ``y[start + 1:]`` from ``y[start]``.
+    kind : str
+        ``step`` (one held command) or ``run``.
+    level : float
+        The held command of a step; NaN for a run.
+    t0 : float
+        Record time of ``y[start]``, s.
+    source : str
+        Where the record came from.
+
+    """
+
+    v: FloatArray
+    y: FloatArray
+    start: int
+    kind: str
+    level: float
+    t0: float
+    source: str = ''
+
+    @property
+    def samples(self) -> int:
+        """Return the number of predicted samples."""
+        return int(self.y.size - self.start - 1)
+
+
+@dataclass(frozen=True)
+class Dropped:
+    """
+    A segment that was not used, and why.
+
+    Parameters
+    ----------
+    t0 : float
+        Record time where it started, s.
+    reason : str
+        Why it was not used.
+    source : str
+        Where the record came from.
+    since_start : float
+        The same time counted from the start of the record's bag, s (for messages).
+
+    """
+
+    t0: float
+    reason: str
+    source: str = ''
+    since_start: float = math.nan
+
+
+@dataclass(frozen=True, eq=False)
+class Segmentation:
+    """
+    Experiments cut from records, with what was dropped and the noise level.
+
+    Parameters
+    ----------
+    experiments : tuple[Experiment, ...]
+        Usable experiments.
+    dropped : tuple[Dropped, ...]
+        Segments not used, with reasons.
+    rest : float
+        Command taken as rest.
+    noise_std : float
+        Angle measurement noise estimated at rest, degrees.
+    end_stops : tuple[float | None, float | None]
+        Angles where the joint was seen clamped (lower, upper), degrees.
+
+    """
+
+    experiments: tuple[Experiment, ...]
+    dropped: tuple[Dropped, ...]
+    rest: float
+    noise_std: float
+    end_stops: tuple[float | None, float | None]
+
+    @property
+    def steps(self) -> int:
+        """Return the number of step experiments."""
+        return sum(e.kind == 'step' for e in self.experiments)
+
+    @property
+    def runs(self) -> int:
+        """Return the number of run experiments."""
+        return sum(e.kind == 'run' for e in self.experiments)
+
+
+def check_record(record: Record, *, min_samples: int = 50, max_gap: float = 3.0) -> float:
+    """
+    Check that a record can be identified from, and return its sample period.
+
+    Parameters
+    ----------
+    record : Record
+        The record.
+    min_samples : int
+        Fewest samples accepted.
+    max_gap : float
+        Largest accepted spacing of time stamps, in sample periods.
+
+    Returns
+    -------
+    float
+        Median sample period, s.
+
+    Raises
+    ------
+    DataError
+        Naming the problem: too few samples, or a gap in the time stamps
+        (records are cut at gaps by :func:`hydro_sdp.core.model.records.split_at_gaps`
+        when they are read from bags).
+
+    """
+    label = record.source or 'record'
+    if len(record) < min_samples:
+        raise DataError(f'{label}: too few samples ({len(record)}; need at least {min_samples})')
+    steps = np.diff(record.t)
+    period = float(np.median(steps))
+    gaps = np.flatnonzero(steps > max_gap * period)
+    if gaps.size:
+        k = int(gaps[0])
+        raise DataError(f'{label}: gap of {steps[k]:.3f} s in the time stamps '
+                        f'{record.since_start(record.t[k]):.3f} s from the start (sample period '
+                        f'{period:.4f} s); cut the record there (split_at_gaps)')
+    return period
+
+
+def noise_level(record: Record, rest: float, settle: int) -> float:
+    """
+    Estimate the angle noise from samples taken well after the command went to rest.
+
+    Parameters
+    ----------
+    record : Record
+        The record.
+    rest : float
+        Rest command.
+    settle : int
+        Samples after the command reaches rest before the joint is taken as still.
+
+    Returns
+    -------
+    float
+        Standard deviation of the angle noise, degrees (robust, from differences).
+
+    """
+    at_rest = record.v == rest
+    # A sample counts when the command has rested for `settle` samples before it.
+    run = np.convolve(at_rest.astype(np.int64), np.ones(settle + 1, dtype=np.int64))[
+        :at_rest.size] == settle + 1
+    differences = np.diff(record.y)[run[1:]]
+    if differences.size < 10:
+        differences = np.diff(np.diff(record.y)) / math.sqrt(3.0)
+    deviation = np.median(np.abs(differences - np.median(differences)))
+    return float(1.4826 * deviation / math.sqrt(2.0))
+
+
+def _blocks(v: FloatArray, rest: float) -> list[tuple[int, int]]:
+    active = v != rest
+    edges = np.flatnonzero(np.diff(np.r_[0, active.astype(np.int8), 0]))
+    return list(zip(edges[::2].tolist(), edges[1::2].tolist()))
+
+
+def segment_record(record: Record, *, max_delay: int, rest: float | None = None,
+                   angle_limits: tuple[float, float] | None = None,
+                   min_samples: int = MIN_SAMPLES) -> Segmentation:
+    """
+    Cut a record into step and run experiments.
+
+    Parameters
+    ----------
+    record : Record
+        The record.
+    max_delay : int
+        Largest delay considered, samples: the history kept before each
+        experiment and the tail kept after its command returns to rest.
+    rest : float or None
+        Rest command; default: :func:`~hydro_sdp.core.identification.rest.estimate_rest_command`.
+    angle_limits : tuple[float, float] or None
+        Known end stops; default: detected where the joint is held still while driven.
+    min_samples : int
+        Fewest predicted samples an experiment needs.
+
+    Returns
+    -------
+    Segmentation
+        The experiments and what was dropped.
+
+    """
+    v, y = record.v, record.y
+    rest = estimate_rest_command([(v, y)]) if rest is None else rest
+    noise = noise_level(record, rest, max_delay)
+    blocks = _blocks(v, rest)
+    window = stop_window(float(np.median(np.diff(record.t)))) if len(record) > 1 else 5
+    extremes = (float(np.min(y)), float(np.max(y))) if len(record) else (0.0, 0.0)
+    experiments: list[Experiment] = []
+    dropped: list[Dropped] = []
+    stops: list[list[float]] = [[], []]
+    for index, (begin, end) in enumerate(blocks):
+        start = max(begin - 1, 0)
+        next_begin = blocks[index + 1][0] if index + 1 < len(blocks) else v.size
+        block_stop = min(end + max_delay, next_begin, v.size)
+        held = np.all(v[begin:end] == v[begin])
+        if block_stop - start - 1 < min_samples:
+            dropped.append(Dropped(float(record.t[start]),
+                                   f'too short ({max(block_stop - start - 1, 0)} samples)',
+                                   record.source, record.since_start(record.t[start])))
+            continue
+        # A block may meet the end stops several times: cut out each stretch the joint
+        # is held, and go on where it leaves the stop.
+        while block_stop - start - 1 >= min_samples:
+            clamp = clamp_start(y, v, start, block_stop, delay=max_delay, noise=noise,
+                                window=window, limits=angle_limits, extremes=extremes,
+                                rest=rest)
+            stop = block_stop if clamp is None else clamp[0]
+            if stop - start - 1 >= min_samples:
+                history = max(start - max_delay, 0)
+                experiments.append(Experiment(
+                    v=v[history:stop], y=y[history:stop], start=start - history,
+                    kind='step' if held else 'run',
+                    level=float(v[begin]) if held else math.nan, t0=float(record.t[start]),
+                    source=record.source))
+            if clamp is None:
+                break
+            # The joint leaves the stop only once the command that holds it there has
+            # changed and the change has come through the delay.
+            changed = np.flatnonzero(v[stop:block_stop] != v[stop])
+            released = min(stop + int(changed[0]) + max_delay, block_stop) \
+                if changed.size else block_stop
+            stops[clamp[2]].append(clamp[1])
+            dropped.append(Dropped(float(record.t[stop]), 'clamped by an end stop',
+                                   record.source, record.since_start(record.t[stop])))
+            start = released
+    # A joint cannot be held beyond its stop: the outermost angle held is the stop.
+    end_stops = (float(np.min(stops[0])) if stops[0] else None,
+                 float(np.max(stops[1])) if stops[1] else None)
+    if angle_limits is not None:
+        end_stops = angle_limits
+    kept, at_stop = _drop_held(experiments, end_stops, rest, record)
+    return Segmentation(kept, tuple(dropped) + at_stop, rest, noise, end_stops)
+
+
+def _drop_held(experiments: Sequence[Experiment], stops: tuple[float | None, float | None],
+               rest: float, record: Record) -> tuple[tuple[Experiment, ...],
+                                                     tuple[Dropped, ...]]:
+    # Steps that start at a stop and push into it: zero speed there is true but
+    # says nothing about the valve.
+    held = [e for e in experiments if e.kind == 'step'
+            and pushes_into_stop(e.y[e.start:], e.level, rest, stops)]
+    return (tuple(e for e in experiments if e not in held),
+            tuple(Dropped(e.t0, 'held against an end stop', record.source,
+                          record.since_start(e.t0)) for e in held))
+
+
+def split_long(experiments: Sequence[Experiment], max_samples: int,
+               history: int) -> list[Experiment]:
+    """
+    Cut experiments longer than ``max_samples`` into consecutive pieces.
+
+    Each piece restarts from its measured angle with ``history`` samples of
+    commands before it, so fits see many medium-length pieces instead of one
+    long run (an output-error fit would otherwise drift over an hour).
+
+    Parameters
+    ----------
+    experiments : sequence of Experiment
+        The experiments.
+    max_samples : int
+        Longest piece, predicted samples.
+    history : int
+        Command history kept before each piece, samples.
+
+    Returns
+    -------
+    list of Experiment
+        The pieces, in order.
+
+    """
+    pieces = []
+    for experiment in experiments:
+        if experiment.samples <= max_samples:
+            pieces.append(experiment)
+            continue
+        for start in range(experiment.start, experiment.y.size - 1, max_samples):
+            first = max(start - history, 0)
+            stop = min(start + max_samples + 1, experiment.y.size)
+            if stop - start - 1 < MIN_SAMPLES:
+                break
+            pieces.append(Experiment(experiment.v[first:stop], experiment.y[first:stop],
+                                     start - first, experiment.kind, experiment.level,
+                                     experiment.t0, experiment.source))
+    return pieces
+
+
+def thin(experiments: Sequence[Experiment], max_samples: int) -> list[Experiment]:
+    """
+    Keep evenly spread experiments up to about ``max_samples`` predicted samples.
+
+    Parameters
+    ----------
+    experiments : sequence of Experiment
+        The experiments.
+    max_samples : int
+        Sample budget.
+
+    Returns
+    -------
+    list of Experiment
+        All of them when within budget, else every k-th.
+
+    """
+    total = sum(e.samples for e in experiments)
+    if total <= max_samples:
+        return list(experiments)
+    stride = math.ceil(total / max_samples)
+    return list(experiments[::stride])
+
+
+def segment_records(records: Sequence[Record], *, max_delay: int,
+                    angle_limits: tuple[float, float] | None = None,
+                    rest: float | None = None,
+                    input_limits: tuple[float, float] | None = None) -> Segmentation:
+    """
+    Segment several records of one joint and pool the experiments.
+
+    The records are put in a canonical order first (by source, start time and
+    content), so the order they are given in changes nothing.
+
+    Parameters
+    ----------
+    records : sequence of Record
+        Records of the same joint at the same sample period.
+    max_delay : int
+        Largest delay considered, samples.
+    angle_limits : tuple[float, float] or None
+        Known end stops.
+    rest : float or None
+        Rest (neutral) command; default: from the data
+        (:func:`~hydro_sdp.core.identification.rest.estimate_rest_command`).
+    input_limits : tuple[float, float] or None
+        Command range of the valve (its middle is the preferred rest when it excludes 0).
+
+    Returns
+    -------
+    Segmentation
+        Pooled experiments; rest and noise from all records; each end stop the
+        outermost angle the joint was held at.
+
+    """
+    if not records:
+        raise DataError('no records to identify from')
+    ordered = sorted(records, key=_record_key)
+    if rest is None:
+        rest = estimate_rest_command([(r.v, r.y) for r in ordered], input_limits=input_limits)
+    parts = [segment_record(r, max_delay=max_delay, rest=rest, angle_limits=angle_limits)
+             for r in ordered]
+    lows = [p.end_stops[0] for p in parts if p.end_stops[0] is not None]
+    highs = [p.end_stops[1] for p in parts if p.end_stops[1] is not None]
+    stops = (min(lows) if lows else None, max(highs) if highs else None)
+    # A stop seen in one record holds in the others.
+    held = [_drop_held(p.experiments, stops, rest, r) for p, r in zip(parts, ordered)]
+    return Segmentation(
+        tuple(e for kept, _ in held for e in kept),
+        tuple(d for p, (_, more) in zip(parts, held) for d in p.dropped + more), rest,
+        float(np.median([p.noise_std for p in parts])), stops)
+
+
+def _record_key(record: Record) -> tuple[str, float, int, float, float]:
+    return (record.source, float(record.t[0]) if len(record) else 0.0, len(record),
+            float(np.sum(record.v)), float(np.sum(record.y)))

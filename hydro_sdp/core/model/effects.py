@@ -1,0 +1,406 @@
+"""
+Effects: composable additions to a joint model.
+
+Each effect is one word of the discrepancy vocabulary (docs/interfaces.md section 5)
+that cannot be expressed by the base parameters of a static map. An effect is a
+frozen dataclass whose fields are its parameters in the model file's
+``effects`` mapping, e.g. ``effects: {valve_lag: {time_constant: 0.08}}``. The
+simulation in :mod:`hydro_sdp.core.model.simulation` applies them.
+
+"""
+
+from __future__ import annotations
+
+from bisect import bisect_right
+from dataclasses import asdict, dataclass, fields, MISSING
+from typing import Any, ClassVar, Mapping, Union
+
+from hydro_sdp.core.arrays import FloatArray
+from hydro_sdp.core.errors import ModelFileError
+from hydro_sdp.core.validation import require_float, require_float_list
+import numpy as np
+
+
+@dataclass(frozen=True)
+class ValveLag:
+    """
+    First-order lag between the static map and the joint speed.
+
+    ``w_k = p w_{k-1} + (1 - p) rate(v_{k-tau})`` with ``p = exp(-dt / time_constant)``;
+    the joint integrates ``w``.
+
+    Parameters
+    ----------
+    time_constant : float
+        Lag time constant, s (> 0).
+
+    """
+
+    name: ClassVar[str] = 'valve_lag'
+    time_constant: float
+
+    def __post_init__(self) -> None:
+        if not self.time_constant > 0.0:
+            raise ModelFileError(
+                f"key 'effects.valve_lag.time_constant': must be > 0, got {self.time_constant}")
+
+
+@dataclass(frozen=True)
+class Backlash:
+    """
+    Play between actuator and angle sensor (a play operator on the output).
+
+    After a reversal the measured angle stands still until the actuator has
+    taken up the play, then follows it again.
+
+    Parameters
+    ----------
+    play : float
+        Total play ``2b`` in degrees (>= 0).
+
+    """
+
+    name: ClassVar[str] = 'backlash'
+    play: float
+
+    def __post_init__(self) -> None:
+        if self.play < 0.0:
+            raise ModelFileError(f"key 'effects.backlash.play': must be >= 0, got {self.play}")
+
+
+@dataclass(frozen=True)
+class AngleDependentVelocity:
+    """
+    Speed that depends on the joint angle (linkage geometry, gravity load).
+
+    The speed becomes ``w + amplitude |w| cos(y + phase)``, i.e. motion is faster
+    by the factor ``1 + amplitude cos(y + phase)`` in the positive direction and
+    ``1 - amplitude cos(y + phase)`` in the negative one.
+
+    Parameters
+    ----------
+    amplitude : float
+        Relative size of the effect, ``|amplitude| < 1``.
+    phase : float
+        Angle offset, degrees.
+
+    """
+
+    name: ClassVar[str] = 'angle_dependent_velocity'
+    amplitude: float
+    phase: float = 0.0
+
+    def __post_init__(self) -> None:
+        if not abs(self.amplitude) < 1.0:
+            raise ModelFileError(
+                "key 'effects.angle_dependent_velocity.amplitude': must be inside (-1, 1), "
+                f'got {self.amplitude}')
+
+
+@dataclass(frozen=True)
+class DirectionDependentDelay:
+    """
+    Different pure delays for the two directions of motion.
+
+    The positive part of the speed is delayed by ``positive`` seconds and the
+    negative part by ``negative`` seconds; they replace the model's ``delay``.
+
+    Parameters
+    ----------
+    positive : float
+        Delay of motion in the positive direction, s (>= 0).
+    negative : float
+        Delay of motion in the negative direction, s (>= 0).
+
+    """
+
+    name: ClassVar[str] = 'direction_dependent_delay'
+    positive: float
+    negative: float
+
+    def __post_init__(self) -> None:
+        for label, value in (('positive', self.positive), ('negative', self.negative)):
+            if value < 0.0:
+                raise ModelFileError(
+                    f"key 'effects.direction_dependent_delay.{label}': must be >= 0, "
+                    f'got {value}')
+
+
+@dataclass(frozen=True)
+class StrokeGeometry:
+    """
+    Speed scaled by a smooth factor of the angle along the stroke (linkage geometry, cushions).
+
+    The cylinder's stroke maps to the joint angle through the linkage, so at
+    one valve flow the joint moves faster in some parts of its range than in
+    others, the same way for both directions (unlike the gravity-like
+    ``angle_dependent_velocity``). The speed becomes ``w f(y, sign w)`` with
+    ``f = interp(y, knots, factors) (1 + sign(w) interp(y, knots, asymmetry))``,
+    held flat beyond the end knots, and within ``cushion`` degrees of the end
+    knot the joint is heading for, times a factor falling linearly to
+    ``cushion_factor`` at that knot (the cylinder's end cushions).
+
+    Parameters
+    ----------
+    knots : tuple[float, ...]
+        Angles, degrees, strictly increasing (two or more); model-file key ``knots``.
+    factors : tuple[float, ...]
+        Shared speed factor at each knot (> 0); key ``factors``.
+    asymmetry : tuple[float, ...]
+        Per-direction part at each knot, inside (-1, 1), or empty for none; key ``asymmetry``.
+    cushion : float
+        Length of the end cushions, degrees (>= 0, 0: none); key ``cushion``.
+    cushion_factor : float
+        Speed factor at the very end of a cushion, in (0, 1]; key ``cushion_factor``.
+
+    """
+
+    name: ClassVar[str] = 'stroke_geometry'
+    knots: tuple[float, ...]
+    factors: tuple[float, ...]
+    asymmetry: tuple[float, ...] = ()
+    cushion: float = 0.0
+    cushion_factor: float = 1.0
+
+    def __post_init__(self) -> None:
+        key = "key 'effects.stroke_geometry"
+        knots = tuple(float(x) for x in self.knots)
+        factors = tuple(float(x) for x in self.factors)
+        asymmetry = tuple(float(x) for x in self.asymmetry)
+        if len(knots) < 2 or len(factors) != len(knots) or len(asymmetry) not in (0, len(knots)):
+            raise ModelFileError(f"{key}': knots and factors (and asymmetry, if given) need "
+                                 'two or more values each, of equal number')
+        if not np.all(np.isfinite(knots + factors + asymmetry)) or np.any(np.diff(knots) <= 0.0):
+            raise ModelFileError(f"{key}.knots': must be finite and strictly increasing")
+        if min(factors) <= 0.0:
+            raise ModelFileError(f"{key}.factors': must be > 0, got {list(factors)}")
+        if asymmetry and max(abs(a) for a in asymmetry) >= 1.0:
+            raise ModelFileError(f"{key}.asymmetry': must be inside (-1, 1)")
+        if self.cushion < 0.0 or not 0.0 < self.cushion_factor <= 1.0:
+            raise ModelFileError(f"{key}': cushion must be >= 0 and cushion_factor in (0, 1], "
+                                 f'got {self.cushion} and {self.cushion_factor}')
+        object.__setattr__(self, 'knots', knots)
+        object.__setattr__(self, 'factors', factors)
+        object.__setattr__(self, 'asymmetry', asymmetry)
+
+    def factor_at(self, angle: float, speed: float) -> float:
+        """
+        Return the speed factor at ``angle`` (degrees) for motion of sign ``speed``.
+
+        Plain float arithmetic, so that the sample-by-sample and the vectorised
+        simulations give the same numbers.
+        """
+        knots = self.knots
+        if angle <= knots[0]:
+            index, weight = 0, 0.0
+        elif angle >= knots[-1]:
+            index, weight = len(knots) - 2, 1.0
+        else:
+            index = bisect_right(knots, angle) - 1
+            weight = (angle - knots[index]) / (knots[index + 1] - knots[index])
+        factor = self.factors[index] + weight * (self.factors[index + 1] - self.factors[index])
+        direction = 1.0 if speed > 0.0 else -1.0 if speed < 0.0 else 0.0
+        if self.asymmetry:
+            part = self.asymmetry[index] + weight * (self.asymmetry[index + 1] -
+                                                     self.asymmetry[index])
+            factor *= 1.0 + direction * part
+        if self.cushion > 0.0 and direction != 0.0:
+            distance = knots[-1] - angle if direction > 0.0 else angle - knots[0]
+            share = min(max(distance / self.cushion, 0.0), 1.0)
+            factor *= self.cushion_factor + (1.0 - self.cushion_factor) * share
+        return factor
+
+    def factor(self, angles: FloatArray, speeds: FloatArray) -> FloatArray:
+        """Return :meth:`factor_at` for arrays of angles and speeds."""
+        return np.array([self.factor_at(a, w) for a, w in
+                         zip(np.asarray(angles, dtype=np.float64).tolist(),
+                             np.asarray(speeds, dtype=np.float64).tolist())])
+
+
+@dataclass(frozen=True)
+class FlowSharing:
+    """
+    Speed cut when other joints draw on the same pump (a shared pump-flow limit).
+
+    Demands are normalised: the joint's own is ``w / full_positive`` or
+    ``-w / full_negative`` (1 at its top speed in that direction, where one
+    joint alone takes the whole pump), the other joints' ``sum_j (s_j+ / other_positive + s_j- /
+    other_negative)`` with ``s_j+`` and ``s_j-`` the measured speed of other joint
+    ``j`` in its positive and negative direction (deg/s, from the record's
+    ``others``, smoothed over 0.1 s; a joint lowered by gravity draws less flow
+    than one lifted). The speed becomes
+    ``w min(1, limit / (own demand + other joints' demand))``: when the demands
+    add up to more than the pump's ``limit``, every joint gets its share. The
+    full speeds are set to the model's top speeds at the commands recorded, so
+    that ``limit`` reads in full demands of this joint.
+
+    Parameters
+    ----------
+    limit : float
+        Pump flow in full demands of this joint (> 0; >= 1 leaves the joint alone
+        as fast as its map says).
+    full_positive, full_negative : float
+        Speed of this joint in each direction that counts as one full demand, deg/s (> 0).
+    other_positive, other_negative : float
+        Speed of the other joints in their positive and negative directions that
+        counts as one full demand, deg/s (> 0).
+
+    """
+
+    name: ClassVar[str] = 'flow_sharing'
+    limit: float
+    full_positive: float
+    full_negative: float
+    other_positive: float
+    other_negative: float
+
+    def __post_init__(self) -> None:
+        for label in ('limit', 'full_positive', 'full_negative', 'other_positive',
+                      'other_negative'):
+            value = getattr(self, label)
+            if not (np.isfinite(value) and value > 0.0):
+                raise ModelFileError(f"key 'effects.flow_sharing.{label}': must be > 0, "
+                                     f'got {value}')
+
+
+@dataclass(frozen=True)
+class LoadDependence:
+    """
+    Speed scaled by the load, each direction on its own (payload, digging force).
+
+    With a measured load ``L`` (the record's ``load``, e.g. the signed load
+    pressure of the cylinder in bar) the speed ``w`` becomes
+    ``w max(0.05, 1 + k (L - reference)) sqrt(1 + max(0, g (L - onset)))``, with
+    ``k``, ``g`` and ``onset`` those of the direction of ``w``. The first factor is
+    a speed change per load unit; the second is the overrunning load of a
+    load-sensing valve: its pressure compensator holds the meter-in flow, so the
+    load leaves the speed alone until it pulls the actuator along, and beyond
+    ``onset`` the meter-out edge meters it, ``Q = Cd A(x) sqrt(2 dp / rho)`` with
+    ``dp`` growing with the load: the same factor at every opening. A record
+    without a load signal takes the factors fitted to it by name (``records``,
+    with ``record_positive`` and ``record_negative``); other records keep factor 1.
+
+    Parameters
+    ----------
+    positive, negative : float
+        Relative speed change per load unit in each direction, 1/load unit.
+    reference : float
+        Load at which the map holds, load units.
+    records : tuple[str, ...]
+        Keys of records (:func:`~.exogenous_signals.record_key`) with fitted factors.
+    record_positive, record_negative : tuple[float, ...]
+        Speed factor of each of those records per direction (> 0).
+    overrun_positive, overrun_negative : float
+        ``g`` in each direction, 1/load unit: the squared speed factor grows by
+        ``|g|`` per load unit beyond the onset (``g < 0``: as the load falls
+        below it); 0 leaves the direction alone.
+    onset_positive, onset_negative : float
+        Load at which the load begins to overrun in each direction, load units.
+
+    """
+
+    name: ClassVar[str] = 'load_dependence'
+    positive: float = 0.0
+    negative: float = 0.0
+    reference: float = 0.0
+    records: tuple[str, ...] = ()
+    record_positive: tuple[float, ...] = ()
+    record_negative: tuple[float, ...] = ()
+    overrun_positive: float = 0.0
+    overrun_negative: float = 0.0
+    onset_positive: float = 0.0
+    onset_negative: float = 0.0
+
+    def __post_init__(self) -> None:
+        key = "key 'effects.load_dependence"
+        records = tuple(str(r) for r in self.records)
+        up = tuple(float(x) for x in self.record_positive)
+        down = tuple(float(x) for x in self.record_negative)
+        if not len(up) == len(down) == len(records) or len(set(records)) != len(records):
+            raise ModelFileError(f"{key}': records, record_positive and record_negative need "
+                                 'one value per record, records named once')
+        if not all(np.isfinite(x) and x > 0.0 for x in up + down):
+            raise ModelFileError(f"{key}': record factors must be > 0")
+        if not np.all(np.isfinite((self.positive, self.negative, self.reference,
+                                   self.overrun_positive, self.overrun_negative,
+                                   self.onset_positive, self.onset_negative))):
+            raise ModelFileError(f"{key}': positive, negative, reference, overrun_* and "
+                                 'onset_* must be finite')
+        object.__setattr__(self, 'records', records)
+        object.__setattr__(self, 'record_positive', up)
+        object.__setattr__(self, 'record_negative', down)
+
+    def record_factors(self, key: str) -> tuple[float, float]:
+        """Return the factors of the record called ``key`` (1, 1 when it has none)."""
+        if key in self.records:
+            index = self.records.index(key)
+            return self.record_positive[index], self.record_negative[index]
+        return 1.0, 1.0
+
+
+Effect = Union[ValveLag, Backlash, AngleDependentVelocity, DirectionDependentDelay,
+               StrokeGeometry, FlowSharing, LoadDependence]
+
+#: Effect classes by vocabulary word, in the order the simulation applies them.
+EFFECT_TYPES: dict[str, type[Effect]] = {
+    cls.name: cls
+    for cls in (DirectionDependentDelay, ValveLag, FlowSharing, LoadDependence, StrokeGeometry,
+                AngleDependentVelocity, Backlash)
+}
+
+
+def effect_from_mapping(name: str, params: Any) -> Effect:
+    """
+    Build one effect from its model-file entry.
+
+    Parameters
+    ----------
+    name : str
+        Vocabulary word, a key of :data:`EFFECT_TYPES`.
+    params : Any
+        The mapping of parameters read from the file.
+
+    Returns
+    -------
+    Effect
+        The validated effect.
+
+    """
+    if name not in EFFECT_TYPES:
+        known = ', '.join(EFFECT_TYPES)
+        raise ModelFileError(f"key 'effects': unknown effect {name!r} (known: {known})")
+    cls = EFFECT_TYPES[name]
+    if not isinstance(params, Mapping):
+        raise ModelFileError(f"key 'effects.{name}': expected a mapping of parameters")
+    names = [field.name for field in fields(cls)]
+    unknown = sorted(set(params) - set(names))
+    if unknown:
+        raise ModelFileError(f"key 'effects.{name}': unknown parameter {unknown[0]!r} "
+                             f"(parameters: {', '.join(names)})")
+    values: dict[str, Any] = {}
+    for field in fields(cls):
+        if field.name in params:
+            key = f'effects.{name}.{field.name}'
+            value = params[field.name]
+            if str(field.type) == 'tuple[str, ...]':
+                if not isinstance(value, list) or not all(isinstance(x, str) for x in value):
+                    raise ModelFileError(f'key {key!r}: expected a list of names')
+                values[field.name] = tuple(value)
+            elif str(field.type).startswith('tuple'):
+                values[field.name] = require_float_list(value, key)
+            else:
+                values[field.name] = require_float(value, key)
+        elif field.default is MISSING:
+            raise ModelFileError(f"key 'effects.{name}': missing parameter {field.name!r}")
+    return cls(**values)
+
+
+def effect_to_mapping(effect: Effect) -> dict[str, float | list[float] | list[str]]:
+    """Return the model-file parameters of ``effect`` (lists for the tables)."""
+    out: dict[str, float | list[float] | list[str]] = {}
+    for key, value in asdict(effect).items():
+        if isinstance(value, tuple):
+            out[key] = [str(x) for x in value] if key == 'records' else [float(x) for x in value]
+        else:
+            out[key] = float(value)
+    return out

@@ -1,0 +1,356 @@
+"""
+Simulation of a joint model at any sample period.
+
+``y_k = clamp(y_{k-1} + dt * w_k, y_min, y_max)`` with ``w_k = rate(v_{k-tau})``
+(eqs. (3)-(4) of West et al., docs/methods.md sections 3.1-3.2) plus the model's effects.
+:func:`simulate` processes a whole command sequence with numpy; the end-stop
+clamp, a recursion, is solved exactly by reflecting the cumulative sum at one
+stop at a time (:func:`hydro_sdp.core.model.bounded_sum.bounded_cumsum`). Effects that need
+signals beyond the joint's own (other joints' motion, a measured load) take them
+as an :class:`~hydro_sdp.core.model.exogenous_signals.Exogenous` (``exogenous=``).
+:class:`JointSimulator` steps the same equations one sample at a time for
+closed loops and the plant node; both give the same trajectory.
+
+``v_k`` is the command in force over the sample interval that ends at ``t_k``:
+the one issued during ``[t_{k-1}, t_k)`` (in a bag, the last command received
+before ``t_k``). A controller that reads ``y_k`` therefore issues ``v_{k+1}``.
+This is the timing of the verified closed loops of docs/methods.md section 4.6 and of the
+ROS nodes, and ``tau = delay / dt`` (15 at 0.01 s, 3 at 0.05 s for J2).
+
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+import math
+
+from hydro_sdp.core.arrays import FloatArray
+from hydro_sdp.core.errors import DataError
+from hydro_sdp.core.model.bounded_sum import bounded_cumsum
+from hydro_sdp.core.model.effects import (
+    AngleDependentVelocity, Backlash, DirectionDependentDelay, FlowSharing, LoadDependence,
+    StrokeGeometry, ValveLag)
+from hydro_sdp.core.model.exogenous_signals import Exogenous, exogenous_factor
+from hydro_sdp.core.model.joint_model import JointModel
+from hydro_sdp.core.model.static_maps import StaticMap
+from hydro_sdp.core.model.timing import check_sample_period, delay_samples, delayed, DelayLine
+import numpy as np
+
+
+def _rate_of_levels(model: JointModel, v: FloatArray) -> FloatArray:
+    """Evaluate the static map once per held level rather than once per sample."""
+    starts = np.flatnonzero(np.diff(v)) + 1
+    if 2 * (starts.size + 1) > v.size:
+        return model.rate(v)
+    starts = np.r_[0, starts]
+    return np.repeat(model.rate(v[starts]), np.diff(np.r_[starts, v.size]))
+
+
+def _limits(model: JointModel) -> tuple[float, float]:
+    if model.angle_limits is None:
+        return -math.inf, math.inf
+    return model.angle_limits
+
+
+def _check_commands(v: FloatArray) -> FloatArray:
+    v = np.asarray(v, dtype=np.float64)
+    if v.ndim != 1:
+        raise DataError(f'commands must be a 1-D sequence, got shape {v.shape}')
+    bad = np.flatnonzero(~np.isfinite(v))
+    if bad.size:
+        raise DataError(f'{bad.size} commands are not finite (first at sample {bad[0]})')
+    return v
+
+
+def simulate(model: JointModel, v: FloatArray, dt: float, y0: float,
+             *, v_before: float = 0.0, start: int = 0,
+             backlash_offset: float = 0.0, exogenous: Exogenous | None = None) -> FloatArray:
+    """
+    Simulate the joint's angle for a command sequence.
+
+    Parameters
+    ----------
+    model : JointModel
+        The joint.
+    v : FloatArray
+        Command at each sample (held over the sample period), input units.
+    dt : float
+        Sample period, s.
+    y0 : float
+        Angle at sample ``start``, degrees (clamped into the end stops).
+    v_before : float
+        Command assumed before the first sample (fills the delay line).
+    start : int
+        Sample the simulation starts from; the commands before it are history
+        (a measured record is best simulated from ``start`` = its delay, where
+        the delayed commands are all known).
+    backlash_offset : float
+        Sensor angle minus actuator angle at the start, within +-play/2 (with backlash).
+    exogenous : Exogenous or None
+        The record's load and other joints' speeds (``load_dependence``, ``flow_sharing``).
+
+    Returns
+    -------
+    FloatArray
+        Angle at each sample, degrees; ``y[start]`` is ``y0`` and the samples
+        before ``start`` repeat it.
+
+    """
+    dt = check_sample_period(dt)
+    v = _check_commands(v)
+    if v.size == 0:
+        return np.empty(0)
+    speed = speed_profile(model, v, dt, v_before=v_before, exogenous=exogenous)
+    if not 0 <= start < v.size:
+        raise DataError(f'start must be a sample index below {v.size}, got {start}')
+    low, high = _limits(model)
+    gravity, geometry = _angle_effects(model)
+    if gravity is not None or geometry is not None:
+        y = _integrate_angle_dependent(speed[start:], dt, y0, low, high, gravity, geometry)
+    else:
+        y = bounded_cumsum(y0, dt * speed[start + 1:], low, high)
+    play = model.effect(Backlash.name)
+    if isinstance(play, Backlash) and play.play > 0.0:
+        half = 0.5 * play.play
+        # The sensor lags the actuator by e in [-b, b]: e_k = clamp(e_{k-1} - dy_k).
+        initial = min(max(backlash_offset, -half), half)
+        offset = bounded_cumsum(initial, -np.diff(y), -half, half)
+        y = np.clip(y - initial + offset, low, high)
+    return np.r_[np.full(start, y[0]), y] if start else y
+
+
+def speed_profile(model: JointModel, v: FloatArray, dt: float, *,
+                  v_before: float = 0.0, exogenous: Exogenous | None = None) -> FloatArray:
+    """
+    Speed ``w_k`` (deg/s) that moves the joint from ``y_{k-1}`` to ``y_k``, before end stops.
+
+    The static map of the delayed command, with separate delays per direction and
+    the valve lag applied, scaled by flow sharing and load; angle-dependent speed
+    and backlash act on top of it.
+
+    Parameters
+    ----------
+    model : JointModel
+        The joint.
+    v : FloatArray
+        Commands.
+    dt : float
+        Sample period, s.
+    v_before : float
+        Command assumed before the first sample.
+    exogenous : Exogenous or None
+        The record's load and other joints' speeds.
+
+    Returns
+    -------
+    FloatArray
+        One speed per sample (``w_0`` belongs to no interval).
+
+    """
+    dt = check_sample_period(dt)
+    v = _check_commands(v)
+    rates = _rate_of_levels(model, v)
+    rate_before = float(model.rate(np.array([v_before]))[0])
+    split = model.effect(DirectionDependentDelay.name)
+    speed: FloatArray
+    if isinstance(split, DirectionDependentDelay):
+        speed = (delayed(np.maximum(rates, 0.0), delay_samples(split.positive, dt),
+                         max(rate_before, 0.0))
+                 + delayed(np.minimum(rates, 0.0), delay_samples(split.negative, dt),
+                           min(rate_before, 0.0)))
+    else:
+        speed = delayed(rates, model.delay_samples(dt), rate_before)
+    lag = model.effect(ValveLag.name)
+    if isinstance(lag, ValveLag):
+        from scipy.signal import lfilter   # here: importing scipy.signal takes seconds
+        p = math.exp(-dt / lag.time_constant)
+        speed, _ = lfilter([1.0 - p], [1.0, -p], speed, zi=[p * rate_before])
+    factor = exogenous_factor(model, speed, exogenous)
+    return speed if factor is None else speed * factor
+
+
+def one_step_increments(model: JointModel, v: FloatArray, y: FloatArray, dt: float, *,
+                        start: int = 0, v_before: float = 0.0,
+                        exogenous: Exogenous | None = None) -> FloatArray:
+    """
+    Return the increments ``y^_k - y_{k-1}`` the model predicts from each measured angle.
+
+    Unlike a simulation these do not drift: angle-dependent speed and end stops
+    use the measured ``y_{k-1}``, so a discrepancy shows where it happens
+    (docs/methods.md section 8.1, the velocity residual). Backlash follows the model's own
+    play state.
+
+    Parameters
+    ----------
+    model, v, dt, v_before, exogenous
+        As in :func:`speed_profile`.
+    y : FloatArray
+        Measured angles, degrees.
+    start : int
+        First sample whose delayed commands are known.
+
+    Returns
+    -------
+    FloatArray
+        Predicted increments for samples ``start + 1 ..``.
+
+    """
+    speed = speed_profile(model, v, dt, v_before=v_before, exogenous=exogenous)[start + 1:]
+    previous = np.asarray(y, dtype=np.float64)[start:-1]
+    gravity, geometry = _angle_effects(model)
+    if geometry is not None:
+        speed = speed * geometry.factor(previous, speed)
+    increment = dt * speed
+    if gravity is not None:
+        increment = increment + dt * gravity.amplitude * np.abs(speed) * np.cos(
+            np.radians(previous + gravity.phase))
+    play = model.effect(Backlash.name)
+    if isinstance(play, Backlash) and play.play > 0.0:
+        half = 0.5 * play.play
+        offset = bounded_cumsum(0.0, -increment, -half, half)
+        increment = increment + np.diff(offset)
+    low, high = _limits(model)
+    return np.clip(previous + increment, low, high) - previous
+
+
+AngleEffects = tuple[AngleDependentVelocity | None, StrokeGeometry | None]
+
+
+def _angle_effects(model: JointModel) -> AngleEffects:
+    gravity = model.effect(AngleDependentVelocity.name)
+    geometry = model.effect(StrokeGeometry.name)
+    return (gravity if isinstance(gravity, AngleDependentVelocity) else None,
+            geometry if isinstance(geometry, StrokeGeometry) else None)
+
+
+def _integrate_angle_dependent(speed: FloatArray, dt: float, y0: float, low: float,
+                               high: float, gravity: AngleDependentVelocity | None,
+                               geometry: StrokeGeometry | None) -> FloatArray:
+    # The speed depends on the angle just reached, so this recursion is inherently serial;
+    # JointSimulator.step does the same arithmetic in the same order.
+    y = np.empty(speed.size)
+    current = min(max(float(y0), low), high)
+    y[0] = current
+    amplitude = gravity.amplitude if gravity is not None else 0.0
+    phase = math.radians(gravity.phase) if gravity is not None else 0.0
+    for k, w in enumerate(speed[1:].tolist(), start=1):
+        if geometry is not None:
+            w *= geometry.factor_at(current, w)
+        if gravity is not None:
+            w += amplitude * abs(w) * math.cos(math.radians(current) + phase)
+        current = min(max(current + dt * w, low), high)
+        y[k] = current
+    return y
+
+
+class JointSimulator:
+    """
+    Step a joint model one sample at a time: issue a command, get the next angle.
+
+    The command given to :meth:`step` is the one in force over the next sample
+    (``v_{k+1}``), so ``[y0] + [sim.step(v) for v in commands[1:]]`` equals
+    ``simulate(model, commands, dt, y0, v_before=commands[0])``. Closed loops and
+    the plant node use it: the command computed from ``y_k`` is ``v_{k+1}``.
+
+    Parameters
+    ----------
+    model : JointModel
+        The joint.
+    dt : float
+        Sample period, s.
+    y0 : float
+        Angle at the first sample, degrees.
+    v_before : float
+        Command in force up to and including the first sample.
+
+    """
+
+    def __init__(self, model: JointModel, dt: float, y0: float, *,
+                 v_before: float = 0.0) -> None:
+        self.model = model
+        self.dt = check_sample_period(dt)
+        self._low, self._high = _limits(model)
+        split = model.effect(DirectionDependentDelay.name)
+        if isinstance(split, DirectionDependentDelay):
+            self._tau_pos = delay_samples(split.positive, self.dt)
+            self._tau_neg = delay_samples(split.negative, self.dt)
+        else:
+            self._tau_pos = self._tau_neg = model.delay_samples(self.dt)
+        rate_before = float(model.rate(np.array([v_before]))[0])
+        # Speeds of v_{k+1}, v_k, ...: delayed(tau) is rate(v_{k+1-tau}).
+        self._rates = DelayLine(max(self._tau_pos, self._tau_neg), rate_before)
+        lag = model.effect(ValveLag.name)
+        self._lag_p = math.exp(-self.dt / lag.time_constant) if isinstance(lag, ValveLag) else None
+        self._lag_state = rate_before
+        self._gravity, self._geometry = _angle_effects(model)
+        self._exogenous = any(model.effect(name) is not None
+                              for name in (FlowSharing.name, LoadDependence.name))
+        play = model.effect(Backlash.name)
+        self._half_play = 0.5 * play.play if isinstance(play, Backlash) else 0.0
+        self._actuator = min(max(float(y0), self._low), self._high)
+        self._offset = 0.0
+        self.samples = 0
+
+    def set_static_map(self, static_map: StaticMap) -> None:
+        """
+        Swap the command-to-speed map from now on (valve wear or replacement).
+
+        Commands already in the delay line keep the speeds they were given.
+
+        Parameters
+        ----------
+        static_map : StaticMap
+            The new map.
+
+        """
+        self.model = replace(self.model, static_map=static_map)
+
+    @property
+    def angle(self) -> float:
+        """Return the angle the sensor reads now, degrees."""
+        return min(max(self._actuator + self._offset, self._low), self._high)
+
+    def step(self, v: float) -> float:
+        """
+        Issue command ``v`` now and advance one sample.
+
+        Parameters
+        ----------
+        v : float
+            Command in force over the next sample, input units (must be finite).
+
+        Returns
+        -------
+        float
+            Angle at the next sample, degrees.
+
+        """
+        if not math.isfinite(v):
+            raise DataError(f'command must be finite, got {v}')
+        self._rates.push(float(self.model.rate(np.array([v]))[0]))
+        if self._tau_pos == self._tau_neg:
+            speed = self._rates.delayed(self._tau_pos)
+        else:
+            speed = (max(self._rates.delayed(self._tau_pos), 0.0)
+                     + min(self._rates.delayed(self._tau_neg), 0.0))
+        if self._lag_p is not None:
+            # Same arithmetic as lfilter's transposed direct form, so results agree exactly.
+            self._lag_state = (1.0 - self._lag_p) * speed + self._lag_p * self._lag_state
+            speed = self._lag_state
+        if self._exogenous:
+            # No signals here: no load factor, the other joints still.
+            factor = exogenous_factor(self.model, np.array([speed]))
+            speed *= 1.0 if factor is None else float(factor[0])
+        previous = self._actuator
+        if self._geometry is not None:
+            speed *= self._geometry.factor_at(previous, speed)
+        if self._gravity is not None:
+            phase = math.radians(self._gravity.phase)
+            speed += self._gravity.amplitude * abs(speed) * math.cos(
+                math.radians(previous) + phase)
+        self._actuator = min(max(previous + self.dt * speed, self._low), self._high)
+        if self._half_play > 0.0:
+            moved = self._actuator - previous
+            self._offset = min(max(self._offset - moved, -self._half_play), self._half_play)
+        self.samples += 1
+        return self.angle

@@ -1,0 +1,102 @@
+"""
+What every static map is: the :class:`StaticMap` protocol and the kind names.
+
+A map family is one frozen dataclass that satisfies :class:`StaticMap`, named by
+one of :data:`MapKind` and registered in
+:data:`~hydro_sdp.core.model.static_maps.registry.MAP_KINDS`.
+
+"""
+
+from __future__ import annotations
+
+from typing import Any, ClassVar, Literal, Mapping, Protocol, runtime_checkable
+
+from hydro_sdp.core.arrays import FloatArray
+from hydro_sdp.core.errors import ModelFileError
+
+#: The model file's ``kind``: one static-map family each.
+MapKind = Literal['sdp', 'sdp_dz', 'linear', 'pwl', 'poly', 'power_sat']
+
+
+class StaticMap(Protocol):
+    """
+    A static map from the delayed valve command to the joint's angular velocity.
+
+    Class attributes ``kind`` (the model file's ``kind``) and ``keys`` (the
+    model-file keys of its parameters) name the family; parameters are in rate
+    units (deg/s), so one map serves every sample period.
+
+    """
+
+    kind: ClassVar[MapKind]
+    keys: ClassVar[tuple[str, ...]]
+
+    @property
+    def dead_zone(self) -> tuple[float, float] | None:
+        """Edges ``(low, high)`` of the zero-speed band, input units, or None."""
+
+    def rate(self, v: FloatArray) -> FloatArray:
+        """
+        Angular velocity (deg/s) for steady commands ``v``.
+
+        Parameters
+        ----------
+        v : FloatArray
+            Commands in input units.
+
+        Returns
+        -------
+        FloatArray
+            Velocities, same shape as ``v``.
+
+        """
+
+    def to_mapping(self) -> dict[str, Any]:
+        """Return the model-file keys of this map."""
+
+    @classmethod
+    def from_mapping(cls, data: Mapping[str, Any]) -> StaticMap:
+        """Build the map from model-file keys (already checked for presence)."""
+
+
+@runtime_checkable
+class ShiftableMap(Protocol):
+    """A map whose dead-zone edges can be moved (wear, new parts)."""
+
+    def shifted(self, shift: tuple[float, float]) -> StaticMap:
+        """Return the map with ``shift`` added to its lower and upper edge, input units."""
+
+
+def check_dead_zone(dead_zone: tuple[float, float]) -> None:
+    """
+    Refuse dead-zone edges in the wrong order.
+
+    Parameters
+    ----------
+    dead_zone : tuple[float, float]
+        ``(low, high)``, input units.
+
+    Raises
+    ------
+    ModelFileError
+        If ``low > high``.
+
+    """
+    if dead_zone[0] > dead_zone[1]:
+        raise ModelFileError(
+            f"key 'dead_zone': lower edge {dead_zone[0]} is above upper edge {dead_zone[1]}")
+
+
+def check_saturation_velocity(saturation_velocity: tuple[float, float]) -> None:
+    """Refuse saturation speeds that are not ``[negative, positive]`` deg/s (ModelFileError)."""
+    negative, positive = saturation_velocity
+    if not negative < 0.0 < positive:
+        raise ModelFileError(
+            "key 'saturation_velocity': expected [negative, positive] deg/s, "
+            f'got [{negative}, {positive}]')
+
+
+def check_positive_pair(key: str, pair: tuple[float, float]) -> None:
+    """Refuse the pair of file key ``key`` unless both values are > 0 (ModelFileError)."""
+    if min(pair) <= 0.0:
+        raise ModelFileError(f'key {key!r}: both values must be > 0, got {list(pair)}')

@@ -1,0 +1,156 @@
+"""
+Quasi-static hydraulics of one valve-and-cylinder: speed, pump flow, pressures.
+
+Chamber pressures are taken as settled at every sample (quasi-static): oil
+compressibility is left out because the pressure transients it causes (tens of
+milliseconds) are shorter than the spool lag and the sample periods used. The
+speed follows from the orifice equation ``Q = Cd A sqrt(2 dp / rho)`` at both
+metering edges together with the force balance on the piston:
+
+* a load-sensing pump holds ``margin`` across the meter-in orifice, so
+  ``v = Cd A_in sqrt(2 margin / rho) / A_inlet_chamber``, unless
+* the pump would have to exceed its relief pressure: then supply is at relief
+  and ``relief A_in - p_tank A_out - F = rho/2 v^2 (A_in^3/(Cd A_i)^2 +
+  A_out^3/(Cd A_o)^2)`` gives a lower speed (stall when the left side is <= 0);
+* an overrunning load that would pull the inlet chamber below 0 bar runs at
+  the speed the meter-out orifice allows with the inlet at 0 bar (cavitation).
+
+In the last part of the stroke the cushion throttles the outflow in series with
+the meter-out edge, which lowers the relief-limited speed. The head-end cushion
+is ``(piston / annulus)^2`` times the rod-end one, which brakes both ends to the
+same cylinder speed at relief.
+
+"""
+
+from __future__ import annotations
+
+import math
+
+from hydro_sdp.core.synthetic.physics.linkage import Geometry
+from hydro_sdp.core.synthetic.physics.parameters import Pump
+from hydro_sdp.core.synthetic.physics.plant import Joint
+
+BAR = 1e5
+# mm to m, mm^2 to m^2.
+_MM = 1e-3
+_MM2 = 1e-6
+
+
+class Actuator:
+    """
+    One joint's valve metering edges, cylinder and load, in SI units.
+
+    Parameters
+    ----------
+    joint : Joint
+        The joint.
+    pump : Pump
+        The machine's pump.
+
+    """
+
+    def __init__(self, joint: Joint, pump: Pump) -> None:
+        cylinder = joint.cylinder
+        self.geometry = Geometry(joint)
+        self.piston = math.pi / 4.0 * (cylinder.bore * _MM) ** 2
+        self.annulus = self.piston - math.pi / 4.0 * (cylinder.rod * _MM) ** 2
+        self.stroke = cylinder.stroke * _MM
+        self.cushion_length = cylinder.cushion_length * _MM
+        cd = joint.valve.discharge_coefficient
+        self.cushion_area = cd * cylinder.cushion_area * _MM2
+        self.cushion_entry_area = cd * cylinder.cushion_entry_area * _MM2
+        self.head_scale = (self.piston / self.annulus) ** 2
+        self.friction = cylinder.friction
+        self.outlet_ratio = joint.valve.outlet_ratio
+        self.half_rho = 0.5 * pump.oil_density
+        self.margin_speed = math.sqrt(2.0 * pump.margin * BAR / pump.oil_density)
+        self.relief = pump.relief_pressure * BAR
+        self.tank = pump.tank_pressure * BAR
+
+    def _sides(self, area: float, extension: float) -> tuple[float, float, float, float, float]:
+        """Inlet and outlet chamber areas, resisting force, meter-in and meter-out areas."""
+        area_sign = area
+        if area > 0.0:
+            inlet, outlet, to_end = self.piston, self.annulus, self.stroke - extension
+            force = self.geometry.load_force(extension)
+        else:
+            inlet, outlet, to_end = self.annulus, self.piston, extension
+            force = -self.geometry.load_force(extension)
+            area = -area
+        out_area = area * self.outlet_ratio
+        if to_end < self.cushion_length:
+            # Head-end cushions are scaled so both ends brake to the same speed at relief.
+            scale = 1.0 if area_sign > 0.0 else self.head_scale
+            cushion = scale * (self.cushion_area + (self.cushion_entry_area - self.cushion_area)
+                               * max(to_end, 0.0) / self.cushion_length)
+            # Two orifices in series: 1/A^2 adds.
+            out_area = out_area * cushion / math.sqrt(out_area * out_area + cushion * cushion)
+        return inlet, outlet, force + self.friction, area, out_area
+
+    def demand(self, area: float, extension: float) -> tuple[float, float]:
+        """
+        Cylinder speed and pump flow before flow sharing.
+
+        Parameters
+        ----------
+        area : float
+            Signed effective meter-in area ``Cd A``, m^2 (positive extends).
+        extension : float
+            Cylinder extension, m.
+
+        Returns
+        -------
+        tuple[float, float]
+            Speed, m/s (signed), and the flow drawn from the pump, m^3/s.
+
+        """
+        if area == 0.0 or (area > 0.0 and extension >= self.stroke) or (
+                area < 0.0 and extension <= 0.0):
+            return 0.0, 0.0
+        inlet, outlet, force, a_in, a_out = self._sides(area, extension)
+        speed = a_in * self.margin_speed / inlet
+        pumped = speed * inlet
+        k_out = self.half_rho * outlet ** 3 / (a_out * a_out)
+        drive = self.relief * inlet - self.tank * outlet - force
+        if drive <= 0.0:
+            return 0.0, 0.0
+        at_relief = math.sqrt(drive / (self.half_rho * inlet ** 3 / (a_in * a_in) + k_out))
+        if at_relief < speed:
+            speed = at_relief
+            pumped = speed * inlet
+        elif force + self.tank * outlet + k_out * speed * speed < 0.0:
+            speed = math.sqrt(-(force + self.tank * outlet) / k_out)
+        return (speed if area > 0.0 else -speed), pumped
+
+    def pressures(self, area: float, extension: float, speed: float) -> tuple[float, float]:
+        """
+        Piston-side and rod-side pressures, bar.
+
+        Parameters
+        ----------
+        area : float
+            Signed effective meter-in area, m^2.
+        extension : float
+            Cylinder extension, m.
+        speed : float
+            Cylinder speed, m/s (after flow sharing).
+
+        Returns
+        -------
+        tuple[float, float]
+            ``(p_piston, p_rod)``, bar.
+
+        """
+        if area == 0.0:
+            # Closed spool: the trapped oil holds the load on one side.
+            force = self.geometry.load_force(extension)
+            if force > 0.0:
+                return (force + self.tank * self.annulus) / self.piston / BAR, self.tank / BAR
+            return self.tank / BAR, (self.tank * self.piston - force) / self.annulus / BAR
+        inlet, outlet, force, _, a_out = self._sides(area, extension)
+        if speed == 0.0:
+            p_in, p_out = self.relief, self.tank
+        else:
+            p_out = min(self.tank + self.half_rho * (outlet * speed / a_out) ** 2, self.relief)
+            p_in = min(max((force + outlet * p_out) / inlet, 0.0), self.relief)
+        return (p_in / BAR, p_out / BAR) if area > 0.0 else (p_out / BAR, p_in / BAR)

@@ -1,0 +1,292 @@
+"""
+The physics plant: joints sharing one pump, simulated over a command array.
+
+Each sample: the spools (dead time and lag, :mod:`.valve`) set the metering
+areas; each actuator asks for a speed and a pump flow (:mod:`.hydraulics`);
+when the flows add up to more than the pump delivers, every speed is scaled by
+the same factor (flow sharing); the cylinders move and stop at their stroke
+ends. The link rides on a compliance (a second-order mode of ``stop``
+frequency and damping) over the angle the cylinder sets, so it overshoots and
+rings when the cylinder meets an end; the sensor adds white noise.
+
+``commands[k]`` is the command in force over the interval that ends at sample
+``k`` (the timing rule of :mod:`hydro_sdp.core.model.timing`): :class:`PlantSimulator`
+``.step(commands[k + 1])`` returns the angles at sample ``k + 1``, and both
+paths give the same trajectory.
+
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+import math
+from typing import Sequence
+
+from hydro_sdp.core.arrays import FloatArray
+from hydro_sdp.core.errors import DataError
+from hydro_sdp.core.model.timing import check_sample_period
+from hydro_sdp.core.synthetic.physics.hydraulics import Actuator
+from hydro_sdp.core.synthetic.physics.plant import Machine
+from hydro_sdp.core.synthetic.physics.valve import metering_area, Spool, spool_travel
+import numpy as np
+from scipy.signal import bilinear, lfilter, lfilter_zi
+
+# l/min to m^3/s.
+_LPM = 1e-3 / 60.0
+
+
+@dataclass(frozen=True, eq=False)
+class PlantRun:
+    """
+    What a simulation of the plant gives, one row per sample.
+
+    Parameters
+    ----------
+    names : tuple[str, ...]
+        Joint names, one per column.
+    angles : FloatArray
+        Measured joint angles, degrees, shape (n, joints).
+    speeds : FloatArray
+        Joint speed the cylinders set over the interval ending at each sample,
+        deg/s (before the link's compliance and the noise).
+    extensions : FloatArray
+        Cylinder extensions from fully retracted, mm.
+    pressures : FloatArray or None
+        Piston-side and rod-side pressures, bar, shape (n, joints, 2), when asked for.
+
+    """
+
+    names: tuple[str, ...]
+    angles: FloatArray
+    speeds: FloatArray
+    extensions: FloatArray
+    pressures: FloatArray | None = None
+
+
+def _stop_filter(frequency: float, damping: float, dt: float) -> tuple[FloatArray, FloatArray]:
+    """Discrete ``w^2 / (s^2 + 2 d w s + w^2)`` (bilinear, prewarped at ``w``)."""
+    w = 2.0 * math.pi * frequency
+    fs = w / (2.0 * math.tan(w * dt / 2.0))
+    b, a = bilinear([w * w], [1.0, 2.0 * damping * w, w * w], fs)
+    return np.asarray(b, dtype=np.float64), np.asarray(a, dtype=np.float64)
+
+
+def _check(machine: Machine, commands: FloatArray) -> FloatArray:
+    v = np.asarray(commands, dtype=np.float64)
+    if v.ndim == 1 and len(machine.joints) == 1:
+        v = v[:, None]
+    if v.ndim != 2 or v.shape[1] != len(machine.joints):
+        raise DataError(f'commands must have shape (samples, {len(machine.joints)}), '
+                        f'got {v.shape}')
+    bad = np.argwhere(~np.isfinite(v))
+    if bad.size:
+        raise DataError(f'{len(bad)} commands are not finite (first at sample {bad[0][0]})')
+    return v
+
+
+def _initial(machine: Machine, actuators: Sequence[Actuator],
+             angles0: Sequence[float] | None, before: Sequence[float] | None
+             ) -> tuple[list[float], list[float]]:
+    count = len(actuators)
+    if angles0 is not None and len(angles0) != count:
+        raise DataError(f'angles0 needs {count} values, got {len(angles0)}')
+    if before is not None and len(before) != count:
+        raise DataError(f'command_before needs {count} values, got {len(before)}')
+    extensions = [act.stroke / 2.0 if angles0 is None else act.geometry.extension(angles0[i])
+                  for i, act in enumerate(actuators)]
+    commands = [joint.valve.neutral if before is None else float(before[i])
+                for i, joint in enumerate(machine.joints)]
+    return extensions, commands
+
+
+def _advance(actuators: Sequence[Actuator], pump_flow: float, areas: Sequence[float],
+             extensions: list[float], dt: float) -> list[float]:
+    """Move every cylinder over one sample; return the speeds after flow sharing (m/s)."""
+    demands = [act.demand(area, s) for act, area, s in zip(actuators, areas, extensions)]
+    total = sum(flow for _, flow in demands)
+    share = pump_flow / total if total > pump_flow else 1.0
+    speeds = []
+    for i, (act, (speed, _)) in enumerate(zip(actuators, demands)):
+        speed *= share
+        extensions[i] = min(max(extensions[i] + dt * speed, 0.0), act.stroke)
+        speeds.append(speed)
+    return speeds
+
+
+def simulate_plant(machine: Machine, commands: FloatArray, dt: float, *,
+                   angles0: Sequence[float] | None = None,
+                   command_before: Sequence[float] | None = None,
+                   seed: int | None = 0, noise: bool = True,
+                   pressures: bool = False) -> PlantRun:
+    """
+    Simulate the machine for a command array.
+
+    Parameters
+    ----------
+    machine : Machine
+        The plant.
+    commands : FloatArray
+        Commands, shape (samples, joints), each joint's valve units; a 1-D
+        array for a one-joint machine.
+    dt : float
+        Sample period, s.
+    angles0 : sequence of float or None
+        Angles at sample 0, degrees (default: mid-stroke); clamped to the stops.
+    command_before : sequence of float or None
+        Command in force before sample 0, per joint (default: each valve's neutral).
+    seed : int or None
+        Seed of the sensor noise.
+    noise : bool
+        Whether to add the sensor noise.
+    pressures : bool
+        Whether to return the chamber pressures (slower).
+
+    Returns
+    -------
+    PlantRun
+        Angles, speeds, extensions and, if asked, pressures.
+
+    """
+    dt = check_sample_period(dt)
+    v = _check(machine, commands)
+    n, count = v.shape
+    actuators = [Actuator(joint, machine.pump) for joint in machine.joints]
+    extensions, before = _initial(machine, actuators, angles0, command_before)
+    areas = np.column_stack([
+        metering_area(joint.valve, spool_travel(joint.valve, v[:, i], dt,
+                                                command_before=before[i]))
+        for i, joint in enumerate(machine.joints)])
+    path = np.full((n, count), np.nan)
+    speed = np.zeros((n, count))
+    if n:
+        path[0] = extensions
+    # Samples with every spool inside its overlap move nothing: skip them.
+    busy = np.flatnonzero(np.any(areas[1:] != 0.0, axis=1)) + 1
+    pump_flow = machine.pump.flow * _LPM
+    table = areas.tolist()
+    for k in busy.tolist():
+        speed[k] = _advance(actuators, pump_flow, table[k], extensions, dt)
+        path[k] = extensions
+    # Between busy samples the cylinders stay where they were: carry the last value.
+    index = np.where(np.isnan(path[:, 0]), 0, np.arange(n))
+    path = path[np.maximum.accumulate(index)]
+    kinematic = np.column_stack([act.geometry.angles(path[:, i])
+                                 for i, act in enumerate(actuators)])
+    joint_speed = np.zeros((n, count))
+    if n > 1:
+        joint_speed[1:] = np.diff(kinematic, axis=0) / dt
+    angles = np.empty((n, count))
+    for i, joint in enumerate(machine.joints):
+        b, a = _stop_filter(joint.stop_frequency, joint.stop_damping, dt)
+        angles[:, i], _ = lfilter(b, a, kinematic[:, i], zi=lfilter_zi(b, a) * kinematic[0, i])
+    if noise:
+        rng = np.random.default_rng(seed)
+        angles += rng.standard_normal((n, count)) * np.array(
+            [joint.noise for joint in machine.joints])
+    chambers = None
+    if pressures:
+        chambers = np.array([[act.pressures(table[k][i], path[k - 1 if k else 0, i],
+                                            speed[k, i]) for i, act in enumerate(actuators)]
+                             for k in range(n)]).reshape(n, count, 2)
+    return PlantRun(machine.names, angles, joint_speed, path * 1e3, chambers)
+
+
+class PlantSimulator:
+    """
+    Step the plant one sample at a time: issue commands, get the next angles.
+
+    ``[sim.angles] + [sim.step(v) for v in commands[1:]]`` equals
+    ``simulate_plant(machine, commands, dt, command_before=commands[0]).angles``
+    for the same seed.
+
+    Parameters
+    ----------
+    machine : Machine
+        The plant.
+    dt : float
+        Sample period, s.
+    angles0 : sequence of float or None
+        Angles at the first sample, degrees (default: mid-stroke).
+    command_before : sequence of float or None
+        Commands in force up to and including the first sample.
+    seed : int or None
+        Seed of the sensor noise.
+    noise : bool
+        Whether to add the sensor noise.
+
+    """
+
+    def __init__(self, machine: Machine, dt: float, *,
+                 angles0: Sequence[float] | None = None,
+                 command_before: Sequence[float] | None = None,
+                 seed: int | None = 0, noise: bool = True) -> None:
+        self.machine = machine
+        self.dt = check_sample_period(dt)
+        self._actuators = [Actuator(joint, machine.pump) for joint in machine.joints]
+        self.extensions, before = _initial(machine, self._actuators, angles0, command_before)
+        self._spools = [Spool(joint.valve, self.dt, before[i])
+                        for i, joint in enumerate(machine.joints)]
+        self._pump_flow = machine.pump.flow * _LPM
+        self._filters = [_stop_filter(joint.stop_frequency, joint.stop_damping, self.dt)
+                         for joint in machine.joints]
+        self._sigma = [joint.noise if noise else 0.0 for joint in machine.joints]
+        self._rng = np.random.default_rng(seed) if noise else None
+        kinematic = [act.geometry.angle(s) for act, s in zip(self._actuators, self.extensions)]
+        self._state = [list(lfilter_zi(b, a) * x) for (b, a), x in zip(self._filters, kinematic)]
+        self._angles = self._measure(kinematic)
+        self.speeds = [0.0] * len(self._actuators)
+        self.samples = 0
+
+    def _measure(self, kinematic: Sequence[float]) -> list[float]:
+        out = []
+        for (b, a), z, x in zip(self._filters, self._state, kinematic):
+            # lfilter's transposed direct form II, so both paths agree.
+            y = b[0] * x + z[0]
+            z[0] = b[1] * x - a[1] * y + z[1]
+            z[1] = b[2] * x - a[2] * y
+            out.append(float(y))
+        if self._rng is not None:
+            draws = self._rng.standard_normal(len(out))
+            out = [y + float(d) * s for y, d, s in zip(out, draws, self._sigma)]
+        return out
+
+    @property
+    def angles(self) -> list[float]:
+        """Angles the sensors read now, degrees."""
+        return list(self._angles)
+
+    @property
+    def angle_limits(self) -> list[tuple[float, float]]:
+        """Joint angles at the stroke ends, degrees, per joint."""
+        return [act.geometry.angle_limits for act in self._actuators]
+
+    def step(self, commands: Sequence[float]) -> list[float]:
+        """
+        Issue one command per joint for the next sample and advance.
+
+        Parameters
+        ----------
+        commands : sequence of float
+            Command in force over the next sample, per joint, valve units.
+
+        Returns
+        -------
+        list[float]
+            Angles at the next sample, degrees.
+
+        """
+        if len(commands) != len(self._actuators):
+            raise DataError(f'step needs {len(self._actuators)} commands, got {len(commands)}')
+        if not all(math.isfinite(c) for c in commands):
+            raise DataError(f'commands must be finite, got {list(commands)}')
+        travel = [spool.step(c) for spool, c in zip(self._spools, commands)]
+        areas = [float(metering_area(spool.valve, np.array([x]))[0])
+                 for spool, x in zip(self._spools, travel)]
+        previous = [act.geometry.angle(s) for act, s in zip(self._actuators, self.extensions)]
+        if any(area != 0.0 for area in areas):
+            _advance(self._actuators, self._pump_flow, areas, self.extensions, self.dt)
+        kinematic = [act.geometry.angle(s) for act, s in zip(self._actuators, self.extensions)]
+        self.speeds = [(x - p) / self.dt for x, p in zip(kinematic, previous)]
+        self._angles = self._measure(kinematic)
+        self.samples += 1
+        return self.angles

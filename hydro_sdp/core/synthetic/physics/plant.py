@@ -1,0 +1,171 @@
+"""
+A physics plant file (format ``hydro_sdp/physics/v1``): one pump and its joints.
+
+A machine is one pump shared by one or more joints; each joint is a spool
+valve, a double-acting cylinder, a two-pivot linkage, a gravity load and a
+compliant end stop (:mod:`hydro_sdp.core.synthetic.physics.parameters` holds the
+sections). An invalid file is refused with an error naming the key.
+
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+import math
+from typing import Any
+
+from hydro_sdp.core.errors import ModelFileError
+from hydro_sdp.core.synthetic.physics.parameters import (
+    Cylinder, Linkage, Load, number, Pump, section, Valve)
+from hydro_sdp.core.validation import read_document, require_mapping
+
+PHYSICS_FORMAT = 'hydro_sdp/physics/v1'
+
+
+@dataclass(frozen=True)
+class Joint:
+    """
+    One joint: valve, cylinder, linkage, load, end-stop compliance and sensor.
+
+    Parameters
+    ----------
+    name : str
+        Joint name as in ``JointState.name``.
+    valve, cylinder, linkage, load : Valve, Cylinder, Linkage, Load
+        The sections of the same names.
+    stop_frequency : float
+        Natural frequency of the link on its compliance, Hz (key
+        ``stop.frequency``): the link overshoots and rings when the cylinder
+        meets its stroke end.
+    stop_damping : float
+        Damping ratio of that mode (key ``stop.damping``), 0 < d < 1.
+    noise : float
+        Standard deviation of the angle sensor noise, degrees.
+
+    """
+
+    name: str
+    valve: Valve
+    cylinder: Cylinder
+    linkage: Linkage
+    load: Load
+    stop_frequency: float
+    stop_damping: float
+    noise: float = 0.0
+
+    keys = ('name', 'valve', 'cylinder', 'linkage', 'load', 'stop', 'noise')
+
+    @classmethod
+    def from_mapping(cls, data: Any, where: str) -> Joint:
+        """Build from one entry of the ``joints`` list."""
+        data = require_mapping(data, where, cls.keys)
+        name = data.get('name')
+        if not isinstance(name, str) or not name.strip():
+            raise ModelFileError(f'key {where + ".name"!r}: expected a non-empty name, '
+                                 f'got {name!r}')
+        stop = section(data, 'stop', where, ('frequency', 'damping'))
+        joint = cls(
+            name=name,
+            valve=Valve.from_mapping(section(data, 'valve', where, Valve.keys), where + '.valve'),
+            cylinder=Cylinder.from_mapping(section(data, 'cylinder', where, Cylinder.keys),
+                                           where + '.cylinder'),
+            linkage=Linkage.from_mapping(section(data, 'linkage', where, Linkage.keys),
+                                         where + '.linkage'),
+            load=Load.from_mapping(section(data, 'load', where, Load.keys), where + '.load'),
+            stop_frequency=number(stop, 'frequency', where + '.stop', low=0.0, strict_low=True),
+            stop_damping=number(stop, 'damping', where + '.stop', low=0.0, strict_low=True,
+                                high=0.99),
+            noise=number(data, 'noise', where, low=0.0, default=0.0))
+        link = joint.linkage
+        longest = link.base_distance + link.rod_distance
+        shortest = abs(link.base_distance - link.rod_distance)
+        cyl = joint.cylinder
+        if cyl.min_length <= shortest or cyl.min_length + cyl.stroke >= longest:
+            raise ModelFileError(
+                f'key {where + ".cylinder.stroke"!r}: cylinder lengths {cyl.min_length}..'
+                f'{cyl.min_length + cyl.stroke} mm must lie strictly between {shortest} and '
+                f'{longest} mm, which the linkage can reach')
+        return joint
+
+
+@dataclass(frozen=True)
+class Machine:
+    """
+    A physics plant: one pump and its joints.
+
+    Parameters
+    ----------
+    pump : Pump
+        The shared pump.
+    joints : tuple[Joint, ...]
+        The joints, in the order of the command columns.
+
+    """
+
+    pump: Pump
+    joints: tuple[Joint, ...]
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """Joint names in column order."""
+        return tuple(joint.name for joint in self.joints)
+
+    @classmethod
+    def from_mapping(cls, data: Any) -> Machine:
+        """
+        Validate a parsed physics file and build the machine.
+
+        Parameters
+        ----------
+        data : Any
+            The parsed YAML document.
+
+        Returns
+        -------
+        Machine
+            The validated machine.
+
+        Raises
+        ------
+        ModelFileError
+            Naming the key when anything is missing, unknown or invalid.
+
+        """
+        data = read_document(data, 'a physics file', PHYSICS_FORMAT,
+                             known=('format', 'pump', 'joints'))
+        pump = Pump.from_mapping(section(data, 'pump', '', Pump.keys))
+        joints = data.get('joints')
+        if not isinstance(joints, list) or not joints:
+            raise ModelFileError("key 'joints': expected a non-empty list of joints")
+        built = tuple(Joint.from_mapping(entry, f'joints[{i}]') for i, entry in enumerate(joints))
+        names = [joint.name for joint in built]
+        if len(set(names)) != len(names):
+            raise ModelFileError(f"key 'joints': joint names repeat in {names}")
+        return cls(pump, built)
+
+
+def with_payload(machine: Machine, payload: float, joint: int = 0) -> Machine:
+    """
+    Return a copy of the machine with another payload on one joint.
+
+    Parameters
+    ----------
+    machine : Machine
+        The plant.
+    payload : float
+        New payload, kg (>= 0).
+    joint : int
+        Index of the joint whose load changes.
+
+    Returns
+    -------
+    Machine
+        The changed copy.
+
+    """
+    if not (math.isfinite(payload) and payload >= 0.0):
+        raise ModelFileError(f"key 'joints[{joint}].load.payload': must be >= 0, got {payload}")
+    joints = list(machine.joints)
+    changed = joints[joint]
+    joints[joint] = replace(changed, load=replace(changed.load, payload=float(payload)))
+    return replace(machine, joints=tuple(joints))

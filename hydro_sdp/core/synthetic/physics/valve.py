@@ -1,0 +1,147 @@
+"""
+Spool valve: command to spool travel, spool dynamics and metering area.
+
+The command is mapped linearly onto spool travel in [-1, 1] (neutral at 0,
+the command limits at the ends, positive extends the cylinder). The spool
+follows the command after a pure dead time (electronics and pilot stage) and a
+first-order lag. No orifice opens while the travel is within the overlap;
+beyond it the metering notch opens the area of the valve's ``opening`` table.
+
+"""
+
+from __future__ import annotations
+
+import math
+
+from hydro_sdp.core.arrays import FloatArray
+from hydro_sdp.core.model.timing import check_sample_period, delay_samples, delayed, DelayLine
+from hydro_sdp.core.synthetic.physics.parameters import Valve
+import numpy as np
+from scipy.signal import lfilter
+
+# mm^2 to m^2.
+_MM2 = 1e-6
+
+
+def spool_command(valve: Valve, commands: FloatArray) -> FloatArray:
+    """
+    Map commands (valve units) to the spool travel they ask for.
+
+    Parameters
+    ----------
+    valve : Valve
+        The valve.
+    commands : FloatArray
+        Commands in the valve's own units (percent duty, volts...).
+
+    Returns
+    -------
+    FloatArray
+        Spool travel, fraction of full travel, in [-1, 1].
+
+    """
+    v = np.asarray(commands, dtype=np.float64)
+    low, high = valve.limits
+    above = (v - valve.neutral) / (high - valve.neutral)
+    below = (v - valve.neutral) / (valve.neutral - low)
+    return np.clip(np.where(v >= valve.neutral, above, below), -1.0, 1.0)
+
+
+def lag_pole(valve: Valve, dt: float) -> float:
+    """Pole of the spool's first-order lag at sample period ``dt`` (0 without lag)."""
+    dt = check_sample_period(dt)
+    return math.exp(-dt / valve.time_constant) if valve.time_constant > 0.0 else 0.0
+
+
+def spool_travel(valve: Valve, commands: FloatArray, dt: float, *,
+                 command_before: float) -> FloatArray:
+    """
+    Spool travel over each sample interval for a command sequence.
+
+    ``x_k = p x_{k-1} + (1 - p) u_{k-tau}``: the command in force over the
+    interval ending at ``t_k`` reaches the spool ``tau`` samples (the dead
+    time) later, through the lag.
+
+    Parameters
+    ----------
+    valve : Valve
+        The valve.
+    commands : FloatArray
+        Commands, one per sample, valve units.
+    dt : float
+        Sample period, s.
+    command_before : float
+        Command in force before the first sample (the spool starts settled on it).
+
+    Returns
+    -------
+    FloatArray
+        Spool travel, fraction of full travel.
+
+    """
+    tau = delay_samples(valve.dead_time, dt) if valve.dead_time > 0.0 else 0
+    before = float(spool_command(valve, np.array([command_before]))[0])
+    u = delayed(spool_command(valve, commands), tau, before)
+    p = lag_pole(valve, dt)
+    if p == 0.0:
+        return u
+    x, _ = lfilter([1.0 - p], [1.0, -p], u, zi=[p * before])
+    return np.asarray(x, dtype=np.float64)
+
+
+class Spool:
+    """
+    The spool of :func:`spool_travel`, one sample at a time.
+
+    Parameters
+    ----------
+    valve : Valve
+        The valve.
+    dt : float
+        Sample period, s.
+    command_before : float
+        Command in force before the first step.
+
+    """
+
+    def __init__(self, valve: Valve, dt: float, command_before: float) -> None:
+        self.valve = valve
+        self._tau = delay_samples(valve.dead_time, dt) if valve.dead_time > 0.0 else 0
+        self.travel = float(spool_command(valve, np.array([command_before]))[0])
+        self._line = DelayLine(self._tau, self.travel)
+        self._p = lag_pole(valve, dt)
+
+    def step(self, command: float) -> float:
+        """Take the command in force over the next interval; return the spool travel there."""
+        self._line.push(float(spool_command(self.valve, np.array([command]))[0]))
+        u = self._line.delayed(self._tau)
+        # Same arithmetic as lfilter's transposed direct form, so both paths agree.
+        self.travel = u if self._p == 0.0 else (1.0 - self._p) * u + self._p * self.travel
+        return self.travel
+
+
+def metering_area(valve: Valve, travel: FloatArray) -> FloatArray:
+    """
+    Effective meter-in area ``Cd * A(|x|)`` with the sign of the travel.
+
+    The retracting side's notches are ``retract_ratio`` times the opening table.
+
+    Parameters
+    ----------
+    valve : Valve
+        The valve.
+    travel : FloatArray
+        Spool travel, fraction of full travel.
+
+    Returns
+    -------
+    FloatArray
+        Signed effective area, m^2 (0 inside the overlap).
+
+    """
+    x = np.asarray(travel, dtype=np.float64)
+    travels = np.array([valve.overlap] + [row[0] for row in valve.opening])
+    areas = np.array([0.0] + [row[1] for row in valve.opening]) * _MM2
+    magnitude = np.interp(np.abs(x), travels, areas, left=0.0)
+    side = np.where(x < 0.0, -valve.retract_ratio, 1.0)
+    return np.where(x == 0.0, 0.0, side) * valve.discharge_coefficient * magnitude

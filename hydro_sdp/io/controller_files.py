@@ -1,0 +1,68 @@
+"""The controller file (YAML, ``hydro_sdp/controller/v1``, docs/interfaces.md section 6)."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+from hydro_sdp.core.control.controller_spec import ControllerSpec, design_from_model
+from hydro_sdp.core.control.safety import check_controller_fits
+from hydro_sdp.core.model.joint_model import JointModel
+from hydro_sdp.io.atomic import atomic_write_text
+from hydro_sdp.io.documents import load_document, yaml_text
+
+
+def load_controller(path: str | os.PathLike[str]) -> ControllerSpec:
+    """
+    Load and validate a controller file written by ``hydro-sdp design``.
+
+    Parameters
+    ----------
+    path : str or PathLike
+        Controller file.
+
+    Returns
+    -------
+    ControllerSpec
+        The controller; its closed loop is checked to be stable.
+
+    """
+    return load_document(path, ControllerSpec.from_mapping)
+
+
+def controller_for(model: JointModel, path: str | os.PathLike[str] | None,
+                   control_period: float) -> ControllerSpec:
+    """
+    Return the controller of ``path`` checked against ``model``, or one designed from it.
+
+    Parameters
+    ----------
+    model : JointModel
+        The joint's model.
+    path : str, PathLike or None
+        Controller file (checked to be for this joint and valve range), or None to
+        design the PIP-IDZ controller from the model.
+    control_period : float
+        Control period of a designed controller, s.
+
+    Returns
+    -------
+    ControllerSpec
+        The controller.
+
+    """
+    if path:
+        spec = load_controller(path)
+        check_controller_fits(spec, model)
+        return spec
+    return design_from_model(model, control_period=control_period)
+
+
+def save_controller(spec: ControllerSpec, path: str | os.PathLike[str]) -> Path:
+    """
+    Write the controller ``spec`` to a file whole or not at all.
+
+    ``path`` and the returned target path as in :func:`save_model`.
+
+    """
+    return atomic_write_text(path, yaml_text(spec.to_mapping()))

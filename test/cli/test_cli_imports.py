@@ -1,0 +1,125 @@
+"""The command line loads what a command needs: no matplotlib without plots, a light --help."""
+
+import json
+import os
+import subprocess
+import sys
+
+from conftest import REPO
+from hydro_sdp.bags import write_bag
+from hydro_sdp.cli.main import build_parser, COMMANDS, main
+from hydro_sdp.core.synthetic.joint_experiments import experiment_record
+import pytest
+
+# Runs one command in a fresh interpreter and prints the top-level packages it loaded.
+PROBE = """
+import json, sys
+from hydro_sdp.cli.main import main
+try:
+    code = main(sys.argv[1:])
+except SystemExit as stop:      # --help
+    code = stop.code
+print(json.dumps({'code': code, 'loaded': sorted({name.split('.')[0] for name in sys.modules})}))
+"""
+HEAVY = ('matplotlib', 'scipy', 'rosbags', 'rclpy')
+
+
+def _loaded(*argv, cwd):
+    done = subprocess.run([sys.executable, '-c', PROBE, *argv], capture_output=True, text=True,
+                          cwd=cwd, env=dict(os.environ, PYTHONPATH=str(REPO), MPLBACKEND='Agg'),
+                          check=True, timeout=300)
+    result = json.loads(done.stdout.strip().splitlines()[-1])
+    return result['code'], set(result['loaded'])
+
+
+@pytest.fixture(scope='module')
+def steps_bag(tmp_path_factory, j2):
+    folder = tmp_path_factory.mktemp('imports')
+    record = experiment_record(j2, 'steps', seed=1, duration=60.0)
+    return write_bag(folder / 'steps', [record])
+
+
+def test_identify_without_plots_does_not_load_matplotlib(steps_bag, tmp_path):
+    code, loaded = _loaded('identify', str(steps_bag), '--json', cwd=tmp_path)
+    assert code == 0
+    assert 'matplotlib' not in loaded
+    assert 'scipy' in loaded        # the probe sees what identify does load
+    assert 'rosbags' not in loaded  # a plain sqlite3 bag folder is read without it
+
+
+def test_identify_with_plots_loads_matplotlib_and_draws(steps_bag, tmp_path):
+    code, loaded = _loaded('identify', str(steps_bag), '--json', '--plot-dir',
+                           str(tmp_path / 'figures'), cwd=tmp_path)
+    assert code == 0
+    assert 'matplotlib' in loaded
+    assert sorted(p.name for p in (tmp_path / 'figures').iterdir()) == [
+        'gains.png', 'step_responses.png', 'velocity_map.png']
+
+
+@pytest.mark.parametrize('argv', [['--help'], ['--version'], ['demo', '--help'],
+                                  ['calibrate', '--help'], ['evaluate', '--help']])
+def test_help_loads_no_scipy_matplotlib_or_rosbags(argv, tmp_path):
+    code, loaded = _loaded(*argv, cwd=tmp_path)
+    assert code == 0
+    assert not loaded & set(HEAVY), sorted(loaded & set(HEAVY))
+
+
+def test_the_light_parser_lists_every_command_as_the_full_one():
+    assert build_parser('').format_help() == build_parser().format_help()
+    full = build_parser()
+    for command in COMMANDS:
+        light = build_parser(command)
+        # The command asked for gets the same options and description as in the full parser.
+        assert _subparser(light, command).format_help() == \
+            _subparser(full, command).format_help()
+
+
+def _subparser(parser, command):
+    action = next(a for a in parser._actions if a.dest == 'command')
+    return action.choices[command]
+
+
+@pytest.mark.parametrize(('given', 'expected'), [(None, '1'), ('2', '2')])
+def test_blas_runs_one_thread_unless_told(given, expected, tmp_path):
+    environment = dict(os.environ, PYTHONPATH=str(REPO))
+    environment.pop('OPENBLAS_NUM_THREADS', None)
+    if given is not None:
+        environment['OPENBLAS_NUM_THREADS'] = given
+    probe = ('import os, sys\nfrom hydro_sdp.cli.main import main\n'
+             'try:\n    main(["--version"])\nexcept SystemExit:\n    pass\n'
+             'print(os.environ["OPENBLAS_NUM_THREADS"], file=sys.stderr)')
+    done = subprocess.run([sys.executable, '-c', probe], capture_output=True, text=True,
+                          cwd=tmp_path, env=environment, timeout=120)
+    assert done.stdout.startswith('hydro-sdp ')
+    assert done.stderr.strip().splitlines()[-1] == expected
+
+
+def test_a_command_loads_no_other_command_module(steps_bag, tmp_path):
+    probe = ('import sys\nfrom hydro_sdp.cli.main import main\n'
+             f'main(["identify", {str(steps_bag)!r}, "--json"])\n'
+             'print(sorted(m for m in sys.modules if m.startswith("hydro_sdp.cli.")), '
+             'file=sys.stderr)')
+    done = subprocess.run([sys.executable, '-c', probe], capture_output=True, text=True,
+                          cwd=tmp_path, env=dict(os.environ, PYTHONPATH=str(REPO)),
+                          check=True, timeout=300)
+    loaded = done.stderr.strip().splitlines()[-1]
+    assert json.loads(done.stdout)['kind'] == 'sdp'
+    assert loaded == str(['hydro_sdp.cli.common', 'hydro_sdp.cli.identify',
+                          'hydro_sdp.cli.main', 'hydro_sdp.cli.progress'])
+
+
+@pytest.mark.parametrize('argv', [['--help', 'identify'], ['--help']])
+def test_the_command_list_keeps_its_help_when_help_comes_first(argv, capsys):
+    with pytest.raises(SystemExit):
+        main(argv)
+    listing = capsys.readouterr().out
+    assert listing == build_parser().format_help()
+    assert 'identify a joint model from step or random-level bags' in listing
+
+
+def test_blas_threads_are_left_alone_once_numpy_is_loaded(monkeypatch, capsys):
+    monkeypatch.delenv('OPENBLAS_NUM_THREADS', raising=False)
+    with pytest.raises(SystemExit):
+        main(['--version'])
+    assert 'OPENBLAS_NUM_THREADS' not in os.environ   # too late to matter: not set
+    assert capsys.readouterr().out.startswith('hydro-sdp ')
