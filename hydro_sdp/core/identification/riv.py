@@ -21,7 +21,7 @@ from typing import Sequence
 import warnings
 
 from hydro_sdp.core.arrays import FloatArray
-from hydro_sdp.core.errors import DataError, HydroSdpError
+from hydro_sdp.core.errors import DataError
 import numpy as np
 from scipy.signal import lfilter
 
@@ -141,6 +141,172 @@ def _as_experiments(y: FloatArray | Sequence[FloatArray],
     return pairs
 
 
+@dataclass(frozen=True, eq=False)
+class _IvProblem:
+    """The pooled experiments of one estimation and the structure estimated."""
+
+    experiments: list[tuple[FloatArray, FloatArray]]
+    n: int
+    m: int
+    delay: int
+    warm_up: int
+
+    @property
+    def parameters(self) -> int:
+        return self.n + self.m + 1
+
+    def model(self, rho: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Return the auxiliary model ``B/A`` of ``rho``: numerator (delayed), denominator."""
+        return np.r_[np.zeros(self.delay), rho[self.n:]], np.r_[1.0, rho[:self.n]]
+
+
+@dataclass(frozen=True, eq=False)
+class _NormalEquations:
+    """The IV cross-products summed over the experiments, and the auxiliary model's output."""
+
+    cross: FloatArray
+    rhs: FloatArray
+    instrument_product: FloatArray
+    simulated: list[FloatArray]
+
+
+def _normal_equations(problem: _IvProblem, prefilter: tuple[FloatArray, FloatArray] | None,
+                      rho: FloatArray | None) -> _NormalEquations:
+    """
+    Sum the IV cross-products over the experiments, each filtered on its own.
+
+    Without ``rho`` the instruments are the regressors themselves (least squares);
+    with it, the auxiliary model ``B/A`` of ``rho`` makes them, and every signal is
+    prefiltered by ``C/A`` (``prefilter``: numerator ``C``, denominator ``A``).
+
+    """
+    n, m, delay, k0 = problem.n, problem.m, problem.delay, problem.warm_up
+    size = problem.parameters
+    cross = np.zeros((size, size))
+    rhs = np.zeros(size)
+    instrument_product = np.zeros((size, size))
+    simulated = []
+    for output, data in problem.experiments:
+        if rho is None or prefilter is None:
+            x = output
+            phi = _regressors(output, data, n, m, delay)[k0:]
+            instruments, target = phi, output[k0:]
+        else:
+            numerator, denominator = problem.model(rho)
+            x = lfilter(numerator, denominator, data)
+            c_filter, a_filter = prefilter
+            y_f = lfilter(c_filter, a_filter, output)
+            u_f = lfilter(c_filter, a_filter, data)
+            x_f = lfilter(c_filter, a_filter, x)
+            phi = _regressors(y_f, u_f, n, m, delay)[k0:]
+            instruments = _regressors(x_f, u_f, n, m, delay)[k0:]
+            target = y_f[k0:]
+        simulated.append(x)
+        cross += instruments.T @ phi
+        rhs += instruments.T @ target
+        instrument_product += instruments.T @ instruments
+    return _NormalEquations(cross, rhs, instrument_product, simulated)
+
+
+def _problem(y: FloatArray | Sequence[FloatArray], u: FloatArray | Sequence[FloatArray], n: int,
+             m: int, delay: int, factor: FloatArray, warm_up: int | None) -> _IvProblem:
+    """Check the structure and the data; filter the inputs by the known factor's inverse."""
+    if n < 0 or m < 0 or delay < 0:
+        raise DataError(f'orders and delay must be >= 0, got n={n}, m={m}, delay={delay}')
+    experiments = _as_experiments(y, u)
+    if factor.size == 0 or factor[0] != 1.0:
+        raise DataError('the known factor of A must start with 1')
+    # y = B / (A' K) u = B / A' (u / K): filter the input by the known factor's inverse.
+    experiments = [(output, lfilter([1.0], factor, data)) for output, data in experiments]
+    k0 = max(n, delay + m) if warm_up is None else warm_up
+    problem = _IvProblem(experiments, n, m, delay, k0)
+    used = sum(max(0, output.size - k0) for output, _ in experiments)
+    if used <= problem.parameters + 1:
+        raise DataError(f'too few samples ({used}) for {problem.parameters} parameters')
+    return problem
+
+
+def _least_squares_start(problem: _IvProblem) -> FloatArray:
+    """Return the least-squares estimate the IV iterations start from."""
+    equations = _normal_equations(problem, None, None)
+    try:
+        start: FloatArray = np.linalg.lstsq(equations.cross, equations.rhs, rcond=None)[0]
+    except np.linalg.LinAlgError as error:
+        raise DataError(f'the least-squares start failed: {error}') from None
+    return start
+
+
+def _iterate(problem: _IvProblem, rho: FloatArray, noise_order: int, tol: float,
+             max_iterations: int) -> tuple[FloatArray, FloatArray, int, bool]:
+    """
+    Refine ``rho`` by IV iterations until it stops changing (relative change below ``tol``).
+
+    Returns the parameters, the AR noise polynomial, the iterations done and whether
+    they converged.
+
+    """
+    n = problem.n
+    noise: FloatArray = np.ones(1)
+    iterations = 0
+    for iterations in range(1, max_iterations + 1):
+        a_hat = _stabilise(np.r_[1.0, rho[:n]])
+        rho_stable = np.r_[a_hat[1:], rho[n:]]
+        if noise_order > 0:
+            simulated = _normal_equations(problem, (noise, a_hat), rho_stable).simulated
+            residual = np.concatenate([output - x for (output, _), x in
+                                       zip(problem.experiments, simulated)])
+            noise = _ar_fit(residual, noise_order)
+        equations = _normal_equations(problem, (noise, a_hat), rho_stable)
+        new = np.linalg.lstsq(equations.cross, equations.rhs, rcond=None)[0]
+        change = float(np.linalg.norm(new - rho)) / max(float(np.linalg.norm(rho)), 1e-12)
+        rho = new
+        if change < tol:
+            return rho, noise, iterations, True
+    return rho, noise, iterations, False
+
+
+def _estimate(problem: _IvProblem, rho: FloatArray, noise: FloatArray, factor: FloatArray,
+              iterations: int, converged: bool, notes: list[str]) -> TfEstimate:
+    """Return the estimate with its covariance and R_T^2, YIC and Fit (methods 1.8)."""
+    n, k0, parameters = problem.n, problem.warm_up, problem.parameters
+    a_hat = np.r_[1.0, rho[:n]]
+    if n and np.any(np.abs(np.roots(a_hat)) >= 1.0):
+        notes.append('the estimated denominator is not stable')
+    a_stable = _stabilise(a_hat)
+    with np.errstate(over='ignore', invalid='ignore'):
+        equations = _normal_equations(problem, (noise, a_stable), np.r_[a_stable[1:], rho[n:]])
+    simulated = equations.simulated
+    errors = [output[k0:] - x[k0:] for (output, _), x in zip(problem.experiments, simulated)]
+    misfit = np.concatenate(errors)
+    outputs = np.concatenate([output[k0:] for output, _ in problem.experiments])
+    sigma2 = float(np.sum(misfit ** 2) / max(misfit.size - parameters, 1))
+    innovation_variance = sigma2
+    if noise.size > 1:
+        innovations = np.concatenate([lfilter(noise, [1.0], e) for e in errors])
+        innovation_variance = float(np.var(innovations))
+    try:
+        covariance: FloatArray = innovation_variance * np.linalg.inv(equations.instrument_product)
+    except np.linalg.LinAlgError:
+        covariance = np.full((parameters, parameters), np.inf)
+        notes.append('the instrument product matrix is singular')
+    variance_y = float(np.var(outputs))
+    rt2 = 1.0 - float(np.var(misfit)) / variance_y if variance_y > 0 else float('nan')
+    diff_error = np.concatenate([np.diff(e) for e in errors])
+    diff_y = np.concatenate([np.diff(output[k0:]) for output, _ in problem.experiments])
+    rt2_diff = 1.0 - float(np.var(diff_error)) / float(np.var(diff_y)) \
+        if np.var(diff_y) > 0 else float('nan')
+    with np.errstate(divide='ignore', invalid='ignore'):
+        nevn = float(np.mean(np.diag(covariance) / rho ** 2))
+        yic = float(np.log(np.var(misfit) / variance_y) + np.log(nevn))
+    norm = np.linalg.norm(outputs - outputs.mean())
+    fit = 100.0 * (1.0 - float(np.linalg.norm(misfit)) / float(norm)) if norm > 0 else float('nan')
+    return TfEstimate(
+        a=np.convolve(a_hat, factor), b=rho[n:].copy(), delay=problem.delay, parameters=rho,
+        covariance=covariance, sigma2=sigma2, rt2=rt2, rt2_diff=rt2_diff, yic=yic, fit=fit,
+        iterations=iterations, converged=converged, warnings=tuple(notes),
+        simulated=tuple(simulated), noise_ar=noise)
+
+
 def sriv(y: FloatArray | Sequence[FloatArray], u: FloatArray | Sequence[FloatArray], n: int,
          m: int, delay: int, *, known_factor: Sequence[float] = (1.0,), noise_order: int = 0,
          tol: float = 1e-4, max_iterations: int = 20, warm_up: int | None = None) -> TfEstimate:
@@ -175,112 +341,16 @@ def sriv(y: FloatArray | Sequence[FloatArray], u: FloatArray | Sequence[FloatArr
         The estimate and its diagnostics.
 
     """
-    if n < 0 or m < 0 or delay < 0:
-        raise DataError(f'orders and delay must be >= 0, got n={n}, m={m}, delay={delay}')
-    experiments = _as_experiments(y, u)
     factor = np.asarray(known_factor, dtype=np.float64)
-    if factor.size == 0 or factor[0] != 1.0:
-        raise DataError('the known factor of A must start with 1')
-    # y = B / (A' K) u = B / A' (u / K): filter the input by the known factor's inverse.
-    experiments = [(output, lfilter([1.0], factor, data)) for output, data in experiments]
-    k0 = max(n, delay + m) if warm_up is None else warm_up
-    parameters = n + m + 1
-    used = sum(max(0, output.size - k0) for output, _ in experiments)
-    if used <= parameters + 1:
-        raise DataError(f'too few samples ({used}) for {parameters} parameters')
-
-    def pooled(a_filter: FloatArray, c_filter: FloatArray, rho: FloatArray | None
-               ) -> tuple[FloatArray, FloatArray, FloatArray, list[FloatArray]]:
-        """Sum the IV cross-products over experiments with per-experiment filtering."""
-        instrument_product = np.zeros((parameters, parameters))
-        cross = np.zeros((parameters, parameters))
-        rhs = np.zeros(parameters)
-        simulated = []
-        for output, data in experiments:
-            if rho is None:
-                x = output
-                phi = _regressors(output, data, n, m, delay)[k0:]
-                instruments, target = phi, output[k0:]
-            else:
-                a_model = np.r_[1.0, rho[:n]]
-                x = lfilter(np.r_[np.zeros(delay), rho[n:]], a_model, data)
-                prefilter_den = np.convolve(a_filter, [1.0])
-                y_f = lfilter(c_filter, prefilter_den, output)
-                u_f = lfilter(c_filter, prefilter_den, data)
-                x_f = lfilter(c_filter, prefilter_den, x)
-                phi = _regressors(y_f, u_f, n, m, delay)[k0:]
-                instruments = _regressors(x_f, u_f, n, m, delay)[k0:]
-                target = y_f[k0:]
-            simulated.append(x)
-            cross += instruments.T @ phi
-            rhs += instruments.T @ target
-            instrument_product += instruments.T @ instruments
-        return cross, rhs, instrument_product, simulated
-
-    cross, rhs, _, _ = pooled(np.ones(1), np.ones(1), None)
-    try:
-        rho: FloatArray = np.linalg.lstsq(cross, rhs, rcond=None)[0]
-    except np.linalg.LinAlgError as error:
-        raise DataError(f'the least-squares start failed: {error}') from None
-    noise: FloatArray = np.ones(1)
+    problem = _problem(y, u, n, m, delay, factor, warm_up)
+    rho, noise, iterations, converged = _iterate(
+        problem, _least_squares_start(problem), noise_order, tol, max_iterations)
     notes: list[str] = []
-    converged = False
-    iterations = 0
-    for iterations in range(1, max_iterations + 1):
-        a_hat = _stabilise(np.r_[1.0, rho[:n]])
-        rho_stable = np.r_[a_hat[1:], rho[n:]]
-        if noise_order > 0:
-            _, _, _, simulated = pooled(a_hat, noise, rho_stable)
-            residual = np.concatenate([output - x for (output, _), x in
-                                       zip(experiments, simulated)])
-            noise = _ar_fit(residual, noise_order)
-        cross, rhs, _, _ = pooled(a_hat, noise, rho_stable)
-        new = np.linalg.lstsq(cross, rhs, rcond=None)[0]
-        change = float(np.linalg.norm(new - rho)) / max(float(np.linalg.norm(rho)), 1e-12)
-        rho = new
-        if change < tol:
-            converged = True
-            break
     if not converged:
         notes.append(f'not converged after {max_iterations} iterations')
         warnings.warn(f'SRIV did not converge in {max_iterations} iterations',
                       NotConvergedWarning, stacklevel=2)
-    a_hat = np.r_[1.0, rho[:n]]
-    if n and np.any(np.abs(np.roots(a_hat)) >= 1.0):
-        notes.append('the estimated denominator is not stable')
-    a_stable = _stabilise(a_hat)
-    with np.errstate(over='ignore', invalid='ignore'):
-        _, _, instrument_product, simulated = pooled(a_stable, noise,
-                                                     np.r_[a_stable[1:], rho[n:]])
-    errors = [output[k0:] - x[k0:] for (output, _), x in zip(experiments, simulated)]
-    misfit = np.concatenate(errors)
-    outputs = np.concatenate([output[k0:] for output, _ in experiments])
-    sigma2 = float(np.sum(misfit ** 2) / max(misfit.size - parameters, 1))
-    innovation_variance = sigma2
-    if noise_order > 0:
-        innovations = np.concatenate([lfilter(noise, [1.0], e) for e in errors])
-        innovation_variance = float(np.var(innovations))
-    try:
-        covariance: FloatArray = innovation_variance * np.linalg.inv(instrument_product)
-    except np.linalg.LinAlgError:
-        covariance = np.full((parameters, parameters), np.inf)
-        notes.append('the instrument product matrix is singular')
-    variance_y = float(np.var(outputs))
-    rt2 = 1.0 - float(np.var(misfit)) / variance_y if variance_y > 0 else float('nan')
-    diff_error = np.concatenate([np.diff(e) for e in errors])
-    diff_y = np.concatenate([np.diff(output[k0:]) for output, _ in experiments])
-    rt2_diff = 1.0 - float(np.var(diff_error)) / float(np.var(diff_y)) \
-        if np.var(diff_y) > 0 else float('nan')
-    with np.errstate(divide='ignore', invalid='ignore'):
-        nevn = float(np.mean(np.diag(covariance) / rho ** 2))
-        yic = float(np.log(np.var(misfit) / variance_y) + np.log(nevn))
-    norm = np.linalg.norm(outputs - outputs.mean())
-    fit = 100.0 * (1.0 - float(np.linalg.norm(misfit)) / float(norm)) if norm > 0 else float('nan')
-    return TfEstimate(
-        a=np.convolve(a_hat, factor), b=rho[n:].copy(), delay=delay, parameters=rho,
-        covariance=covariance, sigma2=sigma2, rt2=rt2, rt2_diff=rt2_diff, yic=yic, fit=fit,
-        iterations=iterations, converged=converged, warnings=tuple(notes),
-        simulated=tuple(simulated), noise_ar=noise)
+    return _estimate(problem, rho, noise, factor, iterations, converged, notes)
 
 
 def _ar_fit(residual: FloatArray, order: int) -> FloatArray:
@@ -288,97 +358,3 @@ def _ar_fit(residual: FloatArray, order: int) -> FloatArray:
     rows = np.column_stack([-np.r_[np.zeros(i), residual[:-i]] for i in range(1, order + 1)])
     coefficients = np.linalg.lstsq(rows[order:], residual[order:], rcond=None)[0]
     return np.r_[1.0, coefficients]
-
-
-@dataclass(frozen=True)
-class StructureRow:
-    """
-    One candidate structure of a search.
-
-    Parameters
-    ----------
-    n : int
-        Denominator order (known factor excluded).
-    m : int
-        Numerator order.
-    delay : int
-        Delay, samples.
-    rt2 : float
-        ``R_T^2``.
-    rt2_diff : float
-        ``R_T^2`` of the differenced output.
-    yic : float
-        Young information criterion.
-    converged : bool
-        Whether SRIV converged.
-    stable : bool
-        Whether the estimated denominator is stable.
-
-    """
-
-    n: int
-    m: int
-    delay: int
-    rt2: float
-    rt2_diff: float
-    yic: float
-    converged: bool
-    stable: bool
-
-
-def structure_search(y: FloatArray | Sequence[FloatArray], u: FloatArray | Sequence[FloatArray],
-                     n_range: Sequence[int], m_range: Sequence[int],
-                     delay_range: Sequence[int], *, known_factor: Sequence[float] = (1.0,),
-                     criterion: str = 'yic', min_rt2: float | None = None) -> list[StructureRow]:
-    """
-    Estimate every structure in a range and rank them (CAPTAIN ``rivid``, docs/methods.md 1.9).
-
-    Parameters
-    ----------
-    y, u : array or sequence of arrays
-        Data as for :func:`sriv`.
-    n_range, m_range, delay_range : sequence of int
-        Candidate orders and delays.
-    known_factor : sequence of float
-        Known factor of ``A``.
-    criterion : str
-        ``yic`` (most negative first, among models with ``R_T^2 >= min_rt2``),
-        ``rt2`` or ``rt2_diff`` (largest first).
-    min_rt2 : float or None
-        Models below this ``R_T^2`` are ranked after all others for ``yic``;
-        default: 0.001 below the best ``R_T^2`` (YIC chooses among the models that
-        explain the data about as well as the best, as in Young's practice).
-
-    Returns
-    -------
-    list of StructureRow
-        Sorted best first; structures that failed to estimate are left out.
-
-    """
-    if criterion not in ('yic', 'rt2', 'rt2_diff'):
-        raise DataError(f'criterion must be yic, rt2 or rt2_diff, got {criterion!r}')
-    rows = []
-    for n in n_range:
-        for m in m_range:
-            for delay in delay_range:
-                with warnings.catch_warnings(), np.errstate(all='ignore'):
-                    warnings.simplefilter('ignore', NotConvergedWarning)
-                    try:
-                        estimate = sriv(y, u, n, m, delay, known_factor=known_factor)
-                    except (HydroSdpError, np.linalg.LinAlgError):
-                        continue
-                stable = not any('not stable' in note for note in estimate.warnings)
-                rows.append(StructureRow(n, m, delay, estimate.rt2, estimate.rt2_diff,
-                                         estimate.yic, estimate.converged, stable))
-    if min_rt2 is None:
-        min_rt2 = max((row.rt2 for row in rows if row.stable and np.isfinite(row.rt2)),
-                      default=0.0) - 1e-3
-    if criterion == 'yic':
-        def key(row: StructureRow) -> tuple[bool, float]:
-            ok = row.rt2 >= min_rt2 and row.stable and np.isfinite(row.yic)
-            return (not ok, row.yic if np.isfinite(row.yic) else np.inf)
-    else:
-        def key(row: StructureRow) -> tuple[bool, float]:
-            value = getattr(row, criterion)
-            return (not row.stable, -value if np.isfinite(value) else np.inf)
-    return sorted(rows, key=key)

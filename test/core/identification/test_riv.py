@@ -3,7 +3,8 @@
 import warnings
 
 from hydro_sdp.core.errors import DataError
-from hydro_sdp.core.identification.riv import NotConvergedWarning, sriv, structure_search
+from hydro_sdp.core.identification.riv import NotConvergedWarning, sriv
+from hydro_sdp.core.identification.structure_search import structure_search
 import numpy as np
 import pytest
 from scipy.signal import lfilter
