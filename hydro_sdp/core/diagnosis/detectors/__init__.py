@@ -9,20 +9,25 @@ is a :class:`Detector` subclass in a module of this package, registered here.
 
 from __future__ import annotations
 
-from hydro_sdp.core.diagnosis.detectors.angle import AngleDependentVelocity, AngleLimits
+from hydro_sdp.core.diagnosis.detectors.angle import (
+    AngleDependentVelocityDetector, AngleLimitsDetector)
 from hydro_sdp.core.diagnosis.detectors.base import Detector, feature_signature
-from hydro_sdp.core.diagnosis.detectors.delays import DirectionDependentDelay, TimeDelay
-from hydro_sdp.core.diagnosis.detectors.dynamics import Backlash, ValveLag
-from hydro_sdp.core.diagnosis.detectors.map_shape import Asymmetry, DeadZone, VelocitySaturation
-from hydro_sdp.core.diagnosis.detectors.pump_and_load import FlowSharing, LoadDependence
-from hydro_sdp.core.diagnosis.detectors.stroke_shape import StrokeGeometry
+from hydro_sdp.core.diagnosis.detectors.delays import (
+    DirectionDependentDelayDetector, TimeDelayDetector)
+from hydro_sdp.core.diagnosis.detectors.dynamics import BacklashDetector, ValveLagDetector
+from hydro_sdp.core.diagnosis.detectors.map_shape import (
+    AsymmetryDetector, DeadZoneDetector, VelocitySaturationDetector)
+from hydro_sdp.core.diagnosis.detectors.pump_and_load import (
+    FlowSharingDetector, LoadDependenceDetector)
+from hydro_sdp.core.diagnosis.detectors.stroke_shape import StrokeGeometryDetector
 from hydro_sdp.core.errors import ConfigurationError
 
 #: Every detector, in the order the search tries them (ties in gain go to the first).
 DETECTORS: tuple[Detector, ...] = (
-    DeadZone(), VelocitySaturation(), Asymmetry(), TimeDelay(), DirectionDependentDelay(),
-    AngleLimits(), ValveLag(), Backlash(), AngleDependentVelocity(), StrokeGeometry(),
-    FlowSharing(), LoadDependence(),
+    DeadZoneDetector(), VelocitySaturationDetector(), AsymmetryDetector(), TimeDelayDetector(),
+    DirectionDependentDelayDetector(), AngleLimitsDetector(), ValveLagDetector(),
+    BacklashDetector(), AngleDependentVelocityDetector(), StrokeGeometryDetector(),
+    FlowSharingDetector(), LoadDependenceDetector(),
 )
 
 #: The vocabulary: every word the workflow can name (besides ``none``).

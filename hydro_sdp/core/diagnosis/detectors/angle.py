@@ -10,7 +10,7 @@ from hydro_sdp.core.diagnosis.context import Context
 from hydro_sdp.core.diagnosis.detectors.base import Detector, EffectDetector, feature_signature
 from hydro_sdp.core.diagnosis.residuals import Run, velocity_residuals
 from hydro_sdp.core.diagnosis.results import Candidate, Signature, Trial
-from hydro_sdp.core.model.effects import AngleDependentVelocity as AngleSpeed
+from hydro_sdp.core.model.effects import AngleDependentVelocity
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.simulation import speed_profile
 import numpy as np
@@ -110,7 +110,7 @@ def directional_signature(word: str, model: JointModel, augmented: JointModel,
     return replace(signature, signs=np.sign(speed[run.start + 1:]))
 
 
-class AngleLimits(Detector):
+class AngleLimitsDetector(Detector):
     """The joint stops at end stops the model lacks: take the stops seen in the data."""
 
     word = 'angle_limits'
@@ -147,7 +147,7 @@ class AngleLimits(Detector):
         return directional_signature(self.word, model, augmented, run)
 
 
-class AngleDependentVelocity(EffectDetector):
+class AngleDependentVelocityDetector(EffectDetector):
     """The speed depends on the angle (geometry, gravity): regress the residual on it."""
 
     word = 'angle_dependent_velocity'
@@ -171,9 +171,9 @@ class AngleDependentVelocity(EffectDetector):
             targets.append(residual)
         a, b = np.linalg.lstsq(np.concatenate(rows), np.concatenate(targets), rcond=None)[0]
 
-        def effect_of(p: FloatArray) -> AngleSpeed:
-            return AngleSpeed(min(math.hypot(p[0], p[1]), 0.95),
-                              math.degrees(math.atan2(-p[1], p[0])) % 360.0)
+        def effect_of(p: FloatArray) -> AngleDependentVelocity:
+            return AngleDependentVelocity(min(math.hypot(p[0], p[1]), 0.95),
+                                          math.degrees(math.atan2(-p[1], p[0])) % 360.0)
 
         def residuals(p: FloatArray) -> FloatArray:
             return np.concatenate(velocity_residuals(context.model.with_effect(effect_of(p)),

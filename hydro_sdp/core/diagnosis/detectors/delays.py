@@ -10,10 +10,10 @@ from hydro_sdp.core.diagnosis.residuals import block_sums
 from hydro_sdp.core.diagnosis.results import Candidate, Trial
 from hydro_sdp.core.identification.delay import estimate_delay
 from hydro_sdp.core.identification.segmentation import thin
-from hydro_sdp.core.model.effects import DirectionDependentDelay as Split
+from hydro_sdp.core.model.effects import DirectionDependentDelay
 
 
-class TimeDelay(Detector):
+class TimeDelayDetector(Detector):
     """The delay is wrong: re-estimate it by cross-correlation and by search on the records."""
 
     word = 'time_delay'
@@ -52,7 +52,7 @@ class TimeDelay(Detector):
                              f'not {current} ({how})')
 
 
-class DirectionDependentDelay(Detector):
+class DirectionDependentDelayDetector(Detector):
     """The two directions start after different delays: search each over the whole range."""
 
     word = 'direction_dependent_delay'
@@ -67,7 +67,7 @@ class DirectionDependentDelay(Detector):
 
         def cost(positive: int, negative: int) -> float:
             return context.squared_residual(context.model.with_effect(
-                Split(positive * context.dt, negative * context.dt)))
+                DirectionDependentDelay(positive * context.dt, negative * context.dt)))
         # Each direction's delay alone, from the model's; the one that helps more is kept
         # and the other searched again with it (the two interact where motion reverses).
         positive = min(span, key=lambda d: cost(d, current))
@@ -80,7 +80,8 @@ class DirectionDependentDelay(Detector):
         if positive == negative or cost(positive, negative) >= base:
             return Candidate(self.word, True, evidence='both directions start after the same '
                              'delay'), None
-        effect = Split(round(positive * context.dt, 9), round(negative * context.dt, 9))
+        effect = DirectionDependentDelay(round(positive * context.dt, 9),
+                                         round(negative * context.dt, 9))
         return context.score(self.word, context.model.with_effect(effect),
                              {'positive': effect.positive, 'negative': effect.negative},
                              f'motion in the positive direction starts {positive} samples '

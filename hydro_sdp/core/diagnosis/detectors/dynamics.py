@@ -5,10 +5,10 @@ from __future__ import annotations
 from hydro_sdp.core.diagnosis.context import Context
 from hydro_sdp.core.diagnosis.detectors.base import EffectDetector
 from hydro_sdp.core.diagnosis.results import Trial
-from hydro_sdp.core.model.effects import Backlash as Play, ValveLag as Lag
+from hydro_sdp.core.model.effects import Backlash, ValveLag
 
 
-class ValveLag(EffectDetector):
+class ValveLagDetector(EffectDetector):
     """
     The speed approaches each new level with a first-order lag: fit its time constant.
 
@@ -27,13 +27,13 @@ class ValveLag(EffectDetector):
         """Fit the time constant between a fifth of a sample and 2 s, and score it."""
         finding = 'after each command change the speed settles with a time constant of {} s'
         present = context.model.effect(self.word)
-        if isinstance(present, Lag):
+        if isinstance(present, ValveLag):
             finding += f', not {present.time_constant:.3g} s'
-        return self.fit_one_parameter(context, Lag, 'time_constant', (0.2 * context.dt, 2.0),
+        return self.fit_one_parameter(context, ValveLag, 'time_constant', (0.2 * context.dt, 2.0),
                                       finding, log=True)
 
 
-class Backlash(EffectDetector):
+class BacklashDetector(EffectDetector):
     """After a reversal the joint loses motion: fit the play."""
 
     word = 'backlash'
@@ -44,5 +44,5 @@ class Backlash(EffectDetector):
     def fit_effect(self, context: Context) -> Trial:
         """Fit the play between 0 and 10 degrees, and score it."""
         return self.fit_one_parameter(
-            context, Play, 'play', (0.0, 10.0),
+            context, Backlash, 'play', (0.0, 10.0),
             'after each reversal the angle stands still while {} deg of play are taken up')

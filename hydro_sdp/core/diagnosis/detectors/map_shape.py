@@ -42,7 +42,7 @@ class MapShapeDetector(Detector):
         """Return what the refitted model ``candidate`` shows of the data, the evidence."""
 
 
-class DeadZone(MapShapeDetector):
+class DeadZoneDetector(MapShapeDetector):
     """The joint stays still for small commands: refit the map with a dead-zone."""
 
     word = 'dead_zone'
@@ -57,7 +57,7 @@ class DeadZone(MapShapeDetector):
                 'where the model moves it')
 
 
-class VelocitySaturation(MapShapeDetector):
+class VelocitySaturationDetector(MapShapeDetector):
     """The speed levels off: refit the map as an SDP map."""
 
     word = 'velocity_saturation'
@@ -74,7 +74,7 @@ class VelocitySaturation(MapShapeDetector):
                 'deg/s while the model keeps growing with the command')
 
 
-class Asymmetry(MapShapeDetector):
+class AsymmetryDetector(MapShapeDetector):
     """The two directions differ: refit the map with a side each."""
 
     word = 'asymmetry'

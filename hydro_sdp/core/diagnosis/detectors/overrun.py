@@ -15,7 +15,7 @@ from __future__ import annotations
 
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.diagnosis.context import Context
-from hydro_sdp.core.model.effects import LoadDependence as Load
+from hydro_sdp.core.model.effects import LoadDependence
 from hydro_sdp.core.model.simulation import one_step_increments
 import numpy as np
 from scipy.optimize import least_squares
@@ -39,7 +39,7 @@ def one_step_samples(context: Context,
     a model holding the effect is fitted afresh; samples without a load signal
     are left out.
     """
-    base = context.model.without_effect(Load.name)
+    base = context.model.without_effect(LoadDependence.name)
     low, high = inner_range(context, end_share)
     out = []
     for run in context.runs:

@@ -31,7 +31,7 @@ from hydro_sdp.core.diagnosis.detectors.overrun import (
     fit_overrun, inner_range, one_step_samples)
 from hydro_sdp.core.diagnosis.residuals import mae, Run
 from hydro_sdp.core.diagnosis.results import Candidate, Trial
-from hydro_sdp.core.model.effects import FlowSharing as Sharing, LoadDependence as Load
+from hydro_sdp.core.model.effects import FlowSharing, LoadDependence
 from hydro_sdp.core.model.exogenous_signals import record_key, summed_other_speeds
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.simulation import one_step_increments
@@ -61,7 +61,7 @@ def _predicted(context: Context) -> list[FloatArray]:
             for run in context.runs]
 
 
-class FlowSharing(EffectDetector):
+class FlowSharingDetector(EffectDetector):
     """The joint slows while other joints move: fit a shared pump-flow limit."""
 
     word = 'flow_sharing'
@@ -90,7 +90,7 @@ class FlowSharing(EffectDetector):
 
         def model_with(p: FloatArray) -> JointModel:
             limit, up, down = np.exp(np.clip(p, -6.0, 6.0)).tolist()
-            return context.model.with_effect(Sharing(limit, *full, top * up, top * down))
+            return context.model.with_effect(FlowSharing(limit, *full, top * up, top * down))
 
         def simulation_error(p: FloatArray) -> float:
             return mae(model_with(p), context.runs)
@@ -109,7 +109,7 @@ class FlowSharing(EffectDetector):
         best = np.clip(best, -6.0, 6.0)
         augmented = model_with(best)
         effect = augmented.effect(self.word)
-        assert isinstance(effect, Sharing)
+        assert isinstance(effect, FlowSharing)
         both = effect.limit / (1.0 + top / max(effect.other_positive, effect.other_negative))
         return context.score(
             self.word, augmented, {'limit': effect.limit, 'full_positive': effect.full_positive,
@@ -163,8 +163,8 @@ def _polish(context: Context, run: Run, key: str, up: float,
         def error(x: float) -> float:
             trial = list(factors)
             trial[side] = x
-            effect = Load(records=(key,), record_positive=(trial[0],),
-                          record_negative=(trial[1],))
+            effect = LoadDependence(records=(key,), record_positive=(trial[0],),
+                                    record_negative=(trial[1],))
             return mae(context.model.with_effect(effect), [run])
         factors[side] = float(minimize_scalar(error, bounds=(0.5 * scale, 1.5 * scale),
                                               method='bounded', options={'xatol': 1e-3}).x)
@@ -277,7 +277,7 @@ def _first_significant(context: Context, word: str, models: list[JointModel],
     return trial
 
 
-class LoadDependence(EffectDetector):
+class LoadDependenceDetector(EffectDetector):
     """The speed changes with the load: per load unit, or per record when none is measured."""
 
     word = 'load_dependence'
@@ -317,8 +317,8 @@ class LoadDependence(EffectDetector):
         (up, up_onset), (down, down_onset) = factors
         trials = []
         if up or down:
-            effect = Load(overrun_positive=up, overrun_negative=down, onset_positive=up_onset,
-                          onset_negative=down_onset)
+            effect = LoadDependence(overrun_positive=up, overrun_negative=down,
+                                    onset_positive=up_onset, onset_negative=down_onset)
             trials.append(context.score(
                 self.word, context.model.with_effect(effect),
                 {'overrun_positive': up, 'overrun_negative': down,
@@ -362,8 +362,8 @@ class LoadDependence(EffectDetector):
             # The reference stays within the loads seen (beyond, 1 + k (L - ref) degenerates
             # into a constant factor).
             reference = min(max(float(q[2] * spread), lowest), lowest + spread)
-            return context.model.with_effect(Load(float(q[0] / spread), float(q[1] / spread),
-                                                  reference))
+            return context.model.with_effect(
+                LoadDependence(float(q[0] / spread), float(q[1] / spread), reference))
 
         polished = minimize(lambda q: mae(model_with(q), context.runs), k, method='Nelder-Mead',
                             options={'xatol': 1e-4, 'fatol': 1e-6, 'maxfev': 120}).x
@@ -372,7 +372,7 @@ class LoadDependence(EffectDetector):
         parameters = []
         for model in models:
             effect = model.effect(self.word)
-            assert isinstance(effect, Load)
+            assert isinstance(effect, LoadDependence)
             parameters.append({'positive': effect.positive, 'negative': effect.negative,
                                'reference': effect.reference, **found.evidence()})
         return _first_significant(
@@ -396,7 +396,7 @@ class LoadDependence(EffectDetector):
             up = tuple(f[0] for f in factors)
             down = tuple(f[1] for f in factors)
             models.append(context.model.with_effect(
-                Load(records=keys, record_positive=up, record_negative=down)))
+                LoadDependence(records=keys, record_positive=up, record_negative=down)))
             parameters.append({'records': list(keys), 'record_positive': list(up),
                                'record_negative': list(down),
                                **found.evidence()})

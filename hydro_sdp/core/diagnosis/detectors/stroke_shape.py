@@ -250,7 +250,7 @@ def fit_shape(samples: Samples, knots: FloatArray) -> tuple[FloatArray, FloatArr
     return solution[:knots.size], solution[knots.size:]
 
 
-class StrokeGeometry(EffectDetector):
+class StrokeGeometryDetector(EffectDetector):
     """The speed changes along the stroke alike for both directions: fit the angle factor."""
 
     word = 'stroke_geometry'
