@@ -8,11 +8,12 @@ import sys
 import time
 
 from conftest import REPO
-from hydro_sdp.bags import write_bag
+from hydro_sdp.bags import read_bag, write_bag
 from hydro_sdp.core.model.records import Record
 from hydro_sdp.io.atomic import atomic_directory, atomic_write_bytes, interrupts_deferred
 import numpy as np
 import pytest
+import yaml
 
 # The console script's code, run with this interpreter (installed or not).
 COMMAND = [sys.executable, '-c', 'from hydro_sdp.cli.main import entry_point; entry_point()']
@@ -92,7 +93,14 @@ def test_sigint_during_simulate(tmp_path, delay):
     bag = tmp_path / 'out' / 'bag'
     # The bag is there whole, or not at all; an interrupt that lands after the bag was
     # renamed into place still ends the run with 130, and the bag stays whole.
-    assert (bag / 'metadata.yaml').is_file() if code == 0 or bag.exists() else True
+    if code == 0 or bag.exists():
+        # Whole: the storage holds every sample its metadata counts.
+        info = yaml.safe_load((bag / 'metadata.yaml').read_text())['rosbag2_bagfile_information']
+        counted = next(topic['message_count'] for topic in info['topics_with_message_count']
+                       if topic['topic_metadata']['name'] == '/joint_states')
+        assert read_bag(bag).record().t.size == counted > 0
+    else:
+        assert not bag.exists()
 
 
 @pytest.mark.slow

@@ -108,7 +108,12 @@ def _assert_settled(angles, commands, baseline, overshoot=1.0):
 
 def test_fault_free_baseline_settles(baseline):
     angles, commands = baseline
-    _assert_settled(angles, commands, baseline)
+    limits = load_model(default_model_path()).input_limits
+    assert np.all((commands >= limits[0]) & (commands <= limits[1]))
+    assert np.max(np.abs(angles[-200:] - STEP)) < 0.5
+    # The closed-loop check's specification (docs/methods.md section 10): at most 10 %
+    # overshoot; the scenarios below are then held against this baseline.
+    assert np.max(angles) <= STEP * 1.10
 
 
 def test_ten_percent_of_samples_dropped(ros, baseline):

@@ -327,8 +327,9 @@ def test_diagnose_command_reads_the_other_joints_and_the_load_topic(
     load = next(c for c in result['candidates'] if c['effect'] == 'load_dependence')
     assert load['applicable'] and 'does not change' in load['evidence']
     sharing = result['model']['effects']['flow_sharing']
-    # Only limit x full speed and limit x other speed matter: 20 deg/s each, as hidden.
-    assert sharing['full_positive'] == pytest.approx(15.0)
+    # The joint's own full demand is the model's top speed at the commands recorded; only
+    # limit x full speed and limit x other speed matter: 20 deg/s each, as hidden.
+    assert sharing['full_positive'] == pytest.approx(linear_model().rate(np.array([2.0]))[0])
     for key in ('full_positive', 'full_negative', 'other_positive', 'other_negative'):
         assert sharing['limit'] * sharing[key] == pytest.approx(20.0, rel=0.1)
     with pytest.raises(SystemExit):
