@@ -21,7 +21,7 @@ from typing import Any
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import ConfigurationError
 from hydro_sdp.core.model.joint_model import JointModel
-from hydro_sdp.core.model.static_maps import sdp_rate, SdpMap
+from hydro_sdp.core.model.static_maps import SdpMap
 from hydro_sdp.core.model.timing import check_sample_period, DelayLine
 from hydro_sdp.core.validation import require_positive_fields
 import numpy as np
@@ -222,7 +222,7 @@ class OnlineSdpIdentifier:
         self.nis = 1.0
         # Two-sided CUSUM of the normalised innovations, for commands below and above the
         # middle of the dead-zone: a moved edge or a changed speed biases one side.
-        self._cusum = np.zeros(4)
+        self._cusum = [0.0, 0.0, 0.0, 0.0]
         self.resets = 0
         self._since_reset = 0
         self._ratios = np.array(NOISE_VARIANCE_RATIOS) * np.array(
@@ -263,14 +263,18 @@ class OnlineSdpIdentifier:
         dt = self.dt
         return SdpEstimate(a3, a6, a1 / dt, a4 / dt, a2, a5, s3, s6, s1 / dt, s4 / dt, s2, s5)
 
-    def _q(self, u: float) -> float:
-        # theta is eq. (5) in per-sample form: (a1, a2, a3) below, (a4, a5, a6) above.
-        a1, a2, a3, a4, a5, a6 = self.theta
-        return float(sdp_rate(u, a1, a2, a3, a4, a5, a6))
+    def _map_and_gradient(self, u: float) -> tuple[float, FloatArray]:
+        """
+        Return eq. (5) at ``u`` and the gradient of its soft-edged form.
 
-    def _gradient(self, u: float) -> FloatArray:
-        """Gradient of the soft-edged map: smooth min/max replace the kinks at the edges."""
-        a1, a2, a3, a4, a5, a6 = self.theta
+        Scalar arithmetic in Python floats: per sample, a handful of numpy calls on
+        six numbers would cost more than the arithmetic (docs/methods.md section 7.2).
+
+        """
+        # theta is eq. (5) in per-sample form: (a1, a2, a3) below, (a4, a5, a6) above.
+        a1, a2, a3, a4, a5, a6 = self.theta.tolist()
+        q = a1 * -math.expm1(a2 * min(u - a3, 0.0)) + a4 * -math.expm1(-a5 * max(u - a6, 0.0))
+        # Smooth min/max replace the kinks at the edges in the gradient.
         kappa = self.settings.kappa
         below = -_softplus(-(u - a3), kappa)            # smooth min(u - a3, 0)
         above = _softplus(u - a6, kappa)                # smooth max(u - a6, 0)
@@ -278,7 +282,7 @@ class OnlineSdpIdentifier:
         g = math.exp(-a5 * above)
         sigma_below = 1.0 / (1.0 + math.exp(min((u - a3) / kappa, 700.0)))
         sigma_above = 1.0 / (1.0 + math.exp(min(-(u - a6) / kappa, 700.0)))
-        return np.array([
+        return q, np.array([
             1.0 - e, -a1 * below * e, a1 * a2 * e * sigma_below,
             1.0 - g, a4 * above * g, -a4 * a5 * g * sigma_above])
 
@@ -319,9 +323,11 @@ class OnlineSdpIdentifier:
         if limits is not None and (min(y, previous) < limits[0] + self.settings.margin or
                                    max(y, previous) > limits[1] - self.settings.margin):
             return False
-        P = self.P + np.diag(self._ratios * self.r)
-        psi = self._gradient(u)
-        innovation = (y - previous) - self._q(u)
+        # Time update of the random walk, in place: its diagonal grows.
+        P = self.P
+        P.flat[::7] += self._ratios * self.r
+        q, psi = self._map_and_gradient(u)
+        innovation = (y - previous) - q
         Ppsi = P @ psi
         spread = float(psi @ Ppsi)
         S = self.r + spread
@@ -331,14 +337,15 @@ class OnlineSdpIdentifier:
         z = innovation / math.sqrt(S)
         normalised = min(z * z, 100.0)
         self.nis += (normalised - self.nis) / self.settings.change_memory
-        side = 0 if u < 0.5 * (self.theta[2] + self.theta[5]) else 2
+        cusum = self._cusum
+        side = 0 if u < 0.5 * float(self.theta[2] + self.theta[5]) else 2
         drift = self.settings.cusum_drift
         z = min(max(z, -10.0), 10.0)
-        self._cusum[side] = max(0.0, self._cusum[side] + z - drift)
-        self._cusum[side + 1] = max(0.0, self._cusum[side + 1] - z - drift)
+        cusum[side] = max(0.0, cusum[side] + z - drift)
+        cusum[side + 1] = max(0.0, cusum[side + 1] - z - drift)
         self._since_reset += 1
-        lower = float(self._cusum[:2].max()) > self.settings.cusum_limit
-        upper = float(self._cusum[2:].max()) > self.settings.cusum_limit
+        lower = max(cusum[0], cusum[1]) > self.settings.cusum_limit
+        upper = max(cusum[2], cusum[3]) > self.settings.cusum_limit
         if self.nis > self.settings.change_level:
             lower = upper = True
         if (lower or upper) and self._since_reset > 5 * self.settings.change_memory:
@@ -352,15 +359,17 @@ class OnlineSdpIdentifier:
             spread = float(psi @ Ppsi)
             S = self.r + spread
             self.nis = 1.0
-            self._cusum[:] = 0.0
+            cusum[:] = [0.0, 0.0, 0.0, 0.0]
             self._since_reset = 0
             self.resets += 1
         elif self.updates > 100 and innovation * innovation > self.settings.outlier ** 2 * S:
             self.P = P
             return False
         gain = Ppsi / S
-        self.theta = np.clip(self.theta + gain * innovation, self._lower, self._upper)
-        self.P = P - np.outer(gain, Ppsi)
+        theta = self.theta + gain * innovation
+        self.theta = np.minimum(np.maximum(theta, self._lower, out=theta), self._upper, out=theta)
+        P -= gain[:, None] * Ppsi
+        self.P = P
         # Track the noise level slowly, never below a quarter of the start value.
         self.r = max(self._r_min, 0.999 * self.r + 0.001 * (innovation * innovation - spread))
         self.updates += 1
