@@ -7,17 +7,25 @@ console script exactly once, executable (ros2pkg ``get_executable_paths``).
 
 """
 
+import ast
 import configparser
 import os
 from pathlib import Path
 import shutil
 import subprocess
 import sys
+import xml.etree.ElementTree as ElementTree
 
 from conftest import REPO
 import pytest
 
 PACKAGE = 'hydro_sdp'
+# rosdep keys of the Python libraries the package imports (ROS packages go by their name).
+ROSDEP_KEYS = {'numpy': 'python3-numpy', 'scipy': 'python3-scipy',
+               'matplotlib': 'python3-matplotlib', 'yaml': 'python3-yaml',
+               'rosbags': 'python3-rosbags-pip'}
+# Imported through rclpy.lifecycle, whose services carry its messages.
+USED_THROUGH_RCLPY = {'lifecycle_msgs'}
 
 
 def _colcon():
@@ -103,3 +111,25 @@ def test_setup_cfg_uses_underscore_keys():
     assert 'install_scripts=$base/lib/hydro_sdp' in text
     assert 'script_dir=$base/lib/hydro_sdp' in text
     assert '-scripts' not in text and 'script-dir' not in text
+
+
+def _imported_packages():
+    """Return the top-level names the package imports, beyond itself and the standard library."""
+    names = set()
+    for path in (REPO / PACKAGE).rglob('*.py'):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.Import):
+                names.update(alias.name.split('.')[0] for alias in node.names)
+            elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+                names.add(node.module.split('.')[0])
+    return names - set(sys.stdlib_module_names) - {PACKAGE}
+
+
+def test_package_xml_declares_every_package_imported():
+    root = ElementTree.parse(REPO / 'package.xml').getroot()
+    declared = {element.text for element in root
+                if element.tag in ('depend', 'exec_depend', 'build_export_depend')}
+    needed = {ROSDEP_KEYS.get(name, name) for name in _imported_packages() | USED_THROUGH_RCLPY}
+    assert needed <= declared, f'package.xml does not declare {sorted(needed - declared)}'
+    unused = declared - needed
+    assert not unused, f'package.xml declares {sorted(unused)}, which nothing imports'
