@@ -13,11 +13,11 @@ error, and repeats until nothing significant is left (:mod:`.search`).
 
 from hydro_sdp.core.diagnosis.detectors import Detector, detector, DETECTORS, VOCABULARY
 from hydro_sdp.core.diagnosis.residuals import (
-    compare, mae, Run, runs_of, simulate_record, velocity_residuals)
+    compare, mae, Run, runs_of, velocity_residuals)
 from hydro_sdp.core.diagnosis.results import (
     Candidate, Diagnosis, Feature, Gap, LedgerStep, Signature)
 from hydro_sdp.core.diagnosis.search import diagnose
 
 __all__ = ['Candidate', 'compare', 'DETECTORS', 'Detector', 'detector', 'diagnose',
            'Diagnosis', 'Feature', 'Gap', 'LedgerStep', 'mae', 'Run', 'runs_of',
-           'Signature', 'simulate_record', 'velocity_residuals', 'VOCABULARY']
+           'Signature', 'velocity_residuals', 'VOCABULARY']

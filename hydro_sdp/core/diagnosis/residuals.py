@@ -6,7 +6,7 @@ one-step increments, docs/methods.md section 8.1) localises a discrepancy in tim
 without the drift of the simulation error. Two models are compared on it block by
 block: a sign test over one-second blocks, robust to the residuals' autocorrelation
 and not swayed by a few blocks of end-stop impacts (section 8.3). The validation
-error is the per-record mean of :func:`hydro_sdp.core.identification.evaluation.evaluate`.
+error is the per-record mean of :func:`hydro_sdp.core.identification.evaluation.record_mae`.
 
 """
 
@@ -18,14 +18,13 @@ import math
 from typing import Sequence
 
 from hydro_sdp.core.arrays import FloatArray
-from hydro_sdp.core.identification.evaluation import simulated_angles
+from hydro_sdp.core.identification.evaluation import record_mae
 from hydro_sdp.core.identification.segmentation import check_record
 from hydro_sdp.core.model.effects import AngleDependentVelocity, Backlash
 from hydro_sdp.core.model.exogenous_signals import Exogenous, exogenous_of
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.records import Record
-from hydro_sdp.core.model.simulation import (
-    bounded_cumsum, one_step_increments, simulate, speed_profile)
+from hydro_sdp.core.model.simulation import bounded_cumsum, one_step_increments, speed_profile
 import numpy as np
 
 #: A candidate is significant when its block sign-test statistic exceeds this...
@@ -103,56 +102,12 @@ def runs_of(records: Sequence[Record], max_delay: float) -> list[Run]:
     return runs
 
 
-def simulate_record(model: JointModel, run: Run, backlash_offset: float = 0.0) -> FloatArray:
-    """
-    Simulate a record from the first sample at which the joint's state is settled.
-
-    Parameters
-    ----------
-    model : JointModel
-        The model.
-    run : Run
-        The record and its start.
-    backlash_offset : float
-        Initial offset of the play, degrees.
-
-    Returns
-    -------
-    FloatArray
-        Simulated angles, degrees (the measured ones before ``run.start``).
-
-    """
-    record = run.record
-    return simulate(model, record.v, run.dt, float(record.y[run.start]),
-                    v_before=float(record.v[run.start]), start=run.start,
-                    backlash_offset=backlash_offset, exogenous=run.exogenous)
-
-
-def _record_mae(model: JointModel, run: Run) -> float:
-    record = run.record
-    play = model.effect(Backlash.name)
-    half = 0.5 * play.play if isinstance(play, Backlash) else 0.0
-    if record.v[0] == model.rest_command and half == 0.0:
-        # A record that starts at rest: as evaluate does, from the first sample whose
-        # delayed command is known.
-        start = min(model.delay_samples(run.dt), len(record) - 2)
-        return float(np.mean(np.abs(record.y - simulated_angles(model, record))[start:]))
-    # The command before the record is not known (or, with backlash, the side the play
-    # was taken up on): from the settled start, with the best of the three play states.
-    offsets = (0.0, -half, half) if half > 0.0 else (0.0,)
-    measured = record.y[run.start:]
-    return min(float(np.mean(np.abs(measured - simulate_record(model, run, o)[run.start:])))
-               for o in offsets)
-
-
 def mae(model: JointModel, runs: Sequence[Run]) -> float:
     """
-    Return the mean absolute simulation error, averaged per record as `evaluate` does, deg.
+    Return the mean absolute simulation error, averaged per record, degrees.
 
-    A record that starts at the model's rest command is simulated as
-    :func:`~hydro_sdp.core.identification.evaluation.evaluate` does, so the two
-    agree; one that starts in motion (the command before it unknown), or a model
-    with backlash, from the record's settled start.
+    Each record's error is :func:`~hydro_sdp.core.identification.evaluation.record_mae`,
+    the figure ``evaluate`` reports: the two agree by construction.
 
     Parameters
     ----------
@@ -167,7 +122,7 @@ def mae(model: JointModel, runs: Sequence[Run]) -> float:
         Mean over records of each record's MAE, degrees.
 
     """
-    return float(np.mean([_record_mae(model, run) for run in runs]))
+    return float(np.mean([record_mae(model, run.record, run.dt, run.exogenous) for run in runs]))
 
 
 def velocity_residuals(model: JointModel, runs: Sequence[Run]) -> list[FloatArray]:

@@ -16,10 +16,11 @@ from typing import Callable, Sequence
 
 from hydro_sdp.core.diagnosis.context import Context
 from hydro_sdp.core.diagnosis.detectors import detector, DETECTORS
-from hydro_sdp.core.diagnosis.residuals import mae, Run, runs_of, simulate_record
+from hydro_sdp.core.diagnosis.residuals import mae, Run, runs_of
 from hydro_sdp.core.diagnosis.results import (
     Candidate, Diagnosis, Gap, LedgerStep, Signature, Trial)
 from hydro_sdp.core.errors import DataError, HydroSdpError
+from hydro_sdp.core.identification.evaluation import simulated_record
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.records import Record
 import numpy as np
@@ -68,9 +69,11 @@ def _round(context: Context, progress: Callable[[str], None] | None) -> list[Tri
 
 
 def _gap(model: JointModel, augmented: JointModel, run: Run) -> Gap:
-    record, start = run.record, run.start
-    return Gap(record.t[start:], record.y[start:], simulate_record(model, run)[start:],
-               simulate_record(augmented, run)[start:])
+    record = run.record
+    start, before = simulated_record(model, record, run.dt, run.exogenous)
+    later, after = simulated_record(augmented, record, run.dt, run.exogenous)
+    start = max(start, later)
+    return Gap(record.t[start:], record.y[start:], before[start:], after[start:])
 
 
 def diagnose(records: Sequence[Record], model: JointModel, *,

@@ -22,7 +22,8 @@ from typing import Sequence
 
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.identification.segmentation import check_record
-from hydro_sdp.core.model.exogenous_signals import exogenous_of
+from hydro_sdp.core.model.effects import Backlash, ValveLag
+from hydro_sdp.core.model.exogenous_signals import Exogenous, exogenous_of
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.records import Record
 from hydro_sdp.core.model.simulation import simulate
@@ -102,14 +103,103 @@ def sdp_dz_benchmark(model: JointModel) -> JointModel | None:
     return replace(model, static_map=chord, effects=())
 
 
-def _start(model: JointModel, dt: float, samples: int) -> int:
-    return min(model.delay_samples(dt), samples - 2)
+#: A valve lag's unknown state at a record's start is forgotten after this many of its
+#: time constants (e^-5: under 1 %).
+LAG_MEMORY = 5.0
+
+
+def _start(model: JointModel, dt: float, record: Record) -> int:
+    """
+    Return the first sample compared: where the model's state no longer depends on the past.
+
+    That is the first sample whose delayed commands are all known (Table 2 of [W18]);
+    with a valve lag, once the lag's state at the record's start, which depends on
+    commands before it, has decayed (docs/methods.md section 3.8).
+
+    """
+    known = model.longest_delay_samples(dt)
+    lag = model.effect(ValveLag.name)
+    if isinstance(lag, ValveLag):
+        known += int(math.ceil(LAG_MEMORY * lag.time_constant / dt))
+    return min(known, len(record) - 2)
+
+
+def _simulated(model: JointModel, record: Record, dt: float, start: int,
+               exogenous: Exogenous | None = None, backlash_offset: float = 0.0) -> FloatArray:
+    return simulate(model, record.v, dt, float(record.y[start]), v_before=float(record.v[0]),
+                    start=start, backlash_offset=backlash_offset,
+                    exogenous=exogenous if exogenous is not None else exogenous_of(record, dt))
 
 
 def _mae(model: JointModel, record: Record, dt: float, start: int) -> float:
-    simulated = simulate(model, record.v, dt, float(record.y[start]),
-                         v_before=float(record.v[0]), start=start,
-                         exogenous=exogenous_of(record, dt))
+    simulated = _simulated(model, record, dt, start)
+    return float(np.mean(np.abs(record.y[start:] - simulated[start:])))
+
+
+def simulated_record(model: JointModel, record: Record, dt: float | None = None,
+                     exogenous: Exogenous | None = None) -> tuple[int, FloatArray]:
+    """
+    Simulate a model over a record as every figure of its error does.
+
+    The record is simulated from its first sample whose delayed command is known,
+    with the command before the record taken as its first (docs/methods.md section
+    3.8); with backlash, from the best of the three states of the play (the side it
+    was taken up on is not known).
+
+    Parameters
+    ----------
+    model : JointModel
+        The model.
+    record : Record
+        The measured record.
+    dt : float or None
+        Its sample period, s (default: checked from the record).
+    exogenous : Exogenous or None
+        Its load and other joints' speeds, if already built.
+
+    Returns
+    -------
+    tuple[int, FloatArray]
+        The first sample compared, and the simulated angles (degrees; before that
+        sample they repeat it).
+
+    """
+    dt = check_record(record, min_samples=2) if dt is None else dt
+    start = _start(model, dt, record)
+    play = model.effect(Backlash.name)
+    half = 0.5 * play.play if isinstance(play, Backlash) else 0.0
+    offsets = (0.0, -half, half) if half > 0.0 else (0.0,)
+    simulations = [_simulated(model, record, dt, start, exogenous, offset) for offset in offsets]
+    errors = [float(np.mean(np.abs(record.y[start:] - s[start:]))) for s in simulations]
+    return start, simulations[int(np.argmin(errors))]
+
+
+def record_mae(model: JointModel, record: Record, dt: float | None = None,
+               exogenous: Exogenous | None = None) -> float:
+    """
+    Return the model's mean absolute simulation error over one record, degrees.
+
+    The one figure ``evaluate``, ``diagnose`` and ``calibrate`` report, over the
+    simulation of :func:`simulated_record`.
+
+    Parameters
+    ----------
+    model : JointModel
+        The model.
+    record : Record
+        The measured record.
+    dt : float or None
+        Its sample period, s (default: checked from the record).
+    exogenous : Exogenous or None
+        Its load and other joints' speeds, if already built.
+
+    Returns
+    -------
+    float
+        The MAE, degrees.
+
+    """
+    start, simulated = simulated_record(model, record, dt, exogenous)
     return float(np.mean(np.abs(record.y[start:] - simulated[start:])))
 
 
@@ -134,7 +224,7 @@ def best_linear_gain(record: Record, model: JointModel, dt: float) -> tuple[floa
     """
     linear = JointModel(model.joint, LinearMap(1.0), model.delay)
     tau = model.delay_samples(dt)
-    start = _start(model, dt, len(record))
+    start = _start(model, dt, record)
     delayed = np.r_[np.full(tau, record.v[0]), record.v[:-tau]][start:]
     integrated = dt * np.cumsum(np.r_[0.0, delayed[1:]])
     rise = record.y[start:] - record.y[start]
@@ -172,22 +262,19 @@ def evaluate(records: Sequence[Record], model: JointModel) -> list[RecordScore]:
     scores = []
     for record in records:
         dt = check_record(record, min_samples=2)
-        start = _start(model, dt, len(record))
+        start = _start(model, dt, record)
         gain, linear = best_linear_gain(record, model, dt)
         scores.append(RecordScore(
             source=record.source, samples=len(record) - start,
-            model=_mae(model, record, dt, start),
-            sdp_dz=_mae(benchmark, record, dt, start) if benchmark is not None else math.nan,
+            model=record_mae(model, record, dt),
+            sdp_dz=record_mae(benchmark, record, dt) if benchmark is not None else math.nan,
             linear=linear, linear_gain=gain))
     return scores
 
 
 def simulated_angles(model: JointModel, record: Record) -> FloatArray:
     """Simulate ``model`` over a record as :func:`evaluate` does (for plots)."""
-    dt = check_record(record, min_samples=2)
-    start = _start(model, dt, len(record))
-    return simulate(model, record.v, dt, float(record.y[start]), v_before=float(record.v[0]),
-                    start=start, exogenous=exogenous_of(record, dt))
+    return simulated_record(model, record)[1]
 
 
 #: The two ways :func:`mean_errors` averages, by name.

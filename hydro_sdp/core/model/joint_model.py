@@ -17,7 +17,7 @@ from typing import Any, Mapping
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import ConfigurationError, ModelFileError
 from hydro_sdp.core.model.effects import (
-    Effect, effect_from_mapping, effect_to_mapping, EFFECT_TYPES)
+    DirectionDependentDelay, Effect, effect_from_mapping, effect_to_mapping, EFFECT_TYPES)
 from hydro_sdp.core.model.static_maps import MAP_KINDS, MapKind, SdpMap, StaticMap
 from hydro_sdp.core.model.timing import check_sample_period, delay_samples
 from hydro_sdp.core.validation import read_document, require_float, require_ordered_pair
@@ -140,6 +140,14 @@ class JointModel:
     def delay_samples(self, dt: float) -> int:
         """Pure delay in whole samples at sample period ``dt``."""
         return delay_samples(self.delay, dt)
+
+    def longest_delay_samples(self, dt: float) -> int:
+        """Longest pure delay of either direction in whole samples (effects included)."""
+        split = self.effect(DirectionDependentDelay.name)
+        if not isinstance(split, DirectionDependentDelay):
+            return self.delay_samples(dt)
+        return max(self.delay_samples(dt), delay_samples(split.positive, dt),
+                   delay_samples(split.negative, dt))
 
     def effect(self, name: str) -> Effect | None:
         """Return the effect called ``name``, or ``None`` if the model has none."""

@@ -4,10 +4,11 @@ from dataclasses import replace
 
 from conftest import REPO
 from hydro_sdp.core.diagnosis import (
-    detector, DETECTORS, diagnose, runs_of, simulate_record, velocity_residuals, VOCABULARY)
+    detector, DETECTORS, diagnose, runs_of, velocity_residuals, VOCABULARY)
 from hydro_sdp.core.diagnosis.detectors import vocabulary_table
 from hydro_sdp.core.diagnosis.detectors.base import FEATURE_LABELS, feature_signature
 from hydro_sdp.core.errors import ConfigurationError
+from hydro_sdp.core.identification.evaluation import evaluate, mean_errors, simulated_angles
 from hydro_sdp.core.model.effects import Backlash, ValveLag
 from hydro_sdp.core.model.records import Record
 from hydro_sdp.core.model.simulation import simulate
@@ -105,21 +106,28 @@ def test_the_diagnosis_carries_its_evidence(j2):
     truth = j2.with_effect(ValveLag(0.15))
     records = [experiment_record(truth, 'random', seed=seed, duration=40.0) for seed in (3, 4)]
     untouched = diagnose(records[:1], j2, validation=records[1:], max_iterations=0)
-    check, = runs_of(records[1:], 0.5)
     gap = untouched.gap
     assert untouched.effect == 'none' and untouched.signature is None
-    assert np.array_equal(gap.t, records[1].t[check.start:])
-    assert np.array_equal(gap.measured, records[1].y[check.start:])
-    assert np.array_equal(gap.before, simulate_record(j2, check)[check.start:])
+    # The gap drawn is the simulation whose error every command reports (evaluate's).
+    start = j2.delay_samples(0.01)
+    assert np.array_equal(gap.t, records[1].t[start:])
+    assert np.array_equal(gap.measured, records[1].y[start:])
+    assert np.array_equal(gap.before, simulated_angles(j2, records[1])[start:])
     assert np.array_equal(gap.after, gap.before)
     assert untouched.mae_before == pytest.approx(np.mean(np.abs(gap.measured - gap.before)))
+    assert untouched.mae_before == pytest.approx(
+        mean_errors(evaluate(records[1:], j2))['per_record']['model'], abs=1e-12)
     result = diagnose(records[:1], j2, validation=records[1:], max_iterations=1)
     assert result.effect == 'valve_lag'
     signature = result.signature
     assert signature is not None and signature.feature == 'events'
     estimation, = runs_of(records[:1], 0.5)
     assert np.array_equal(signature.after, velocity_residuals(result.model, [estimation])[0])
-    assert np.array_equal(result.gap.after, simulate_record(result.model, check)[check.start:])
+    # Compared from where both models' states are known: the lag's, 5 time constants later.
+    lag = result.model.effect('valve_lag').time_constant
+    later = start + int(np.ceil(5.0 * lag / 0.01))
+    assert np.array_equal(result.gap.t, records[1].t[later:])
+    assert np.array_equal(result.gap.after, simulated_angles(result.model, records[1])[later:])
     assert np.mean(np.abs(result.gap.measured - result.gap.after)) < \
         0.5 * np.mean(np.abs(result.gap.measured - result.gap.before))
 
