@@ -8,9 +8,9 @@ import math
 from pathlib import Path
 from typing import Any, TYPE_CHECKING
 
-from hydro_sdp.bags import read_bag, STORAGE_SUFFIXES
+from hydro_sdp.bags import STORAGE_SUFFIXES
 from hydro_sdp.cli.common import (
-    add_bag_options, finite_float, json_number, Outcome, positive_float, table)
+    add_bag_options, finite_float, json_number, Outcome, positive_float, read_bag_records, table)
 from hydro_sdp.cli.design import complex_pole
 from hydro_sdp.cli.progress import ProgressBar
 from hydro_sdp.core.errors import ConfigurationError
@@ -84,6 +84,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         help='held-out recordings for the MAE (default: whole input '
                              'recordings held out)')
     add_bag_options(parser)
+    parser.add_argument('--load-topic', metavar='TOPIC',
+                        help='Float64 topic of a measured load (a cylinder pressure) in the bags, '
+                             'for load_dependence; remembered in model.yaml')
     parser.add_argument('--rest', type=finite_float, metavar='V',
                         help='command that holds the joint still (default: found by identify)')
     parser.add_argument('--input-limits', nargs=2, type=finite_float, metavar=('LOW', 'HIGH'),
@@ -159,15 +162,13 @@ def read_inputs(paths: list[str], args: argparse.Namespace, label: str,
                     command=args.command, command_negative=args.command_negative,
                     angle_unit=args.angle_unit, delimiter=args.delimiter).record)
             else:
-                data = read_bag(path)
-                joint = data.choose_joint(args.joint)
-                asked = args.command_topic
-                if asked is None and preferred_topic in data.floats:
-                    asked = preferred_topic
-                topic = data.command_topic(joint, asked)
+                # The reader of identify, evaluate and diagnose: cut at gaps, with the load
+                # and the other joints (so the diagnosis can name flow_sharing).
+                pieces, topic = read_bag_records(
+                    path, args.joint, args.command_topic, preferred_topic=preferred_topic,
+                    load_topic=args.load_topic, others=True)
+                records.extend(pieces)
                 topics.add(topic)
-                # With the other joints, so the diagnosis can name flow_sharing.
-                records.append(data.record(joint, topic, others=True))
             bar.update(done)
     return records, (topics.pop() if len(topics) == 1 else None)
 
@@ -297,7 +298,9 @@ def run(args: argparse.Namespace) -> Outcome:
     unit = command_unit_of(result.model, args.command_unit)
     with atomic_directory(out) as building:
         building.mkdir()
-        save_model(replace(result.model, command_topic=topic), building / 'model.yaml')
+        loaded = args.load_topic if result.model.effect('load_dependence') is not None else None
+        save_model(replace(result.model, command_topic=topic, load_topic=loaded),
+                   building / 'model.yaml')
         save_controller(result.spec, building / 'controller.yaml')
         atomic_write_text(building / 'params.yaml', yaml.safe_dump(
             ros_parameters(result, out), sort_keys=False, default_flow_style=False))

@@ -29,6 +29,7 @@ from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import DataError
 from hydro_sdp.core.identification.change_windows import fit_delay_and_lag, lag_pole
 from hydro_sdp.core.identification.segmentation import Experiment
+from hydro_sdp.core.model.sample_period import whole_samples_seconds
 from hydro_sdp.core.model.timing import delayed_at
 import numpy as np
 from scipy.signal import lfilter
@@ -156,7 +157,7 @@ def estimate_delay(experiments: Sequence[Experiment], dt: float, *, max_delay: i
     if not experiments:
         raise DataError('no experiments to estimate the delay from')
     best, lag, explained = fit_delay_and_lag(experiments, dt, max_delay)
-    return DelayEstimate(samples=best, seconds=best * dt, fit=best,
+    return DelayEstimate(samples=best, seconds=whole_samples_seconds(best, dt), fit=best,
                          onset=_onset(experiments, noise, max_delay, lag_pole(lag, dt)),
                          xcorr=_xcorr(experiments, max_delay, lag_pole(lag, dt)),
                          explained=explained, lag=lag)

@@ -37,6 +37,7 @@ from hydro_sdp.core.identification.stroke_fit import fit_stroke_geometry, speed_
 from hydro_sdp.core.model.effects import Effect, StrokeGeometry, ValveLag
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.records import Record
+from hydro_sdp.core.model.sample_period import nominal_period, whole_samples_seconds
 from hydro_sdp.core.model.simulation import simulate
 from hydro_sdp.core.model.static_maps import SdpMap, StaticMap
 import numpy as np
@@ -291,12 +292,19 @@ def thin_evenly(experiments: Sequence[Experiment], max_samples: int,
     return out
 
 
-def _records_dt(records: Sequence[Record]) -> float:
+def records_period(records: Sequence[Record]) -> float:
+    """
+    Return the nominal sample period shared by records, s.
+
+    Each record's nominal period must lie within 1 % of the others'; the result is
+    the nominal period of all their spacings together, so records of one timer
+    give one period whatever their length.
+    """
     periods = [check_record(record) for record in records]
     if max(periods) > 1.01 * min(periods):
-        raise DataError(f'records have different sample periods ({min(periods):.4f} s to '
-                        f'{max(periods):.4f} s); resample them first')
-    return float(np.median(periods))
+        raise DataError(f'records have different sample periods ({min(periods):.4g} s to '
+                        f'{max(periods):.4g} s); resample them first')
+    return nominal_period(np.concatenate([np.diff(record.t) for record in records]))
 
 
 def identify(records: Sequence[Record], *, method: FitMethod = 'rr', kind: KindChoice = 'auto',
@@ -344,7 +352,7 @@ def identify(records: Sequence[Record], *, method: FitMethod = 'rr', kind: KindC
     if len(joints) > 1:
         raise DataError(f"records of several joints ({', '.join(sorted(joints))}); "
                         'identify one joint at a time')
-    dt = _records_dt(records)
+    dt = records_period(records)
     step = (lambda name: progress(name)) if progress is not None else (lambda name: None)
     step('segmenting')
     max_delay_samples = max(2, int(round(max_delay / dt)))
@@ -387,9 +395,8 @@ def identify(records: Sequence[Record], *, method: FitMethod = 'rr', kind: KindC
     if limits is None and low_stop is not None and high_stop is not None:
         limits = (low_stop, high_stop)
     effects: tuple[Effect, ...] = (ValveLag(delay.lag),) if delay.lag > 0.0 else ()
-    # Stamps are integer nanoseconds: round the delay there, not at float noise.
     model = JointModel(joint=next(iter(joints)) or 'joint', static_map=fit.static_map,
-                       delay=round(delay.samples * dt, 9), angle_limits=limits,
+                       delay=whole_samples_seconds(delay.samples, dt), angle_limits=limits,
                        input_limits=input_limits, effects=effects)
     mae = data.simulation_mae(fit.static_map.rate)
     geometry = fit_stroke_geometry(sample, fit.static_map.rate, delay.samples, dt, delay.lag,

@@ -150,7 +150,7 @@ def check_record(record: Record, *, min_samples: int = 50, max_gap: float = 3.0)
     Returns
     -------
     float
-        Median sample period, s.
+        Nominal sample period, s (:func:`hydro_sdp.core.model.sample_period.nominal_period`).
 
     Raises
     ------
@@ -164,7 +164,7 @@ def check_record(record: Record, *, min_samples: int = 50, max_gap: float = 3.0)
     if len(record) < min_samples:
         raise DataError(f'{label}: too few samples ({len(record)}; need at least {min_samples})')
     steps = np.diff(record.t)
-    period = float(np.median(steps))
+    period = record.sample_period
     gaps = np.flatnonzero(steps > max_gap * period)
     if gaps.size:
         k = int(gaps[0])
