@@ -116,7 +116,8 @@ def write_bag(path: str | os.PathLike[str], records: Sequence[Record], *,
               storage: str = 'sqlite3',
               setpoints: Mapping[str, FloatArray] | None = None,
               command_topics: Mapping[str, str] | None = None,
-              signals: Mapping[str, FloatArray] | None = None, start: int = 0) -> Path:
+              signals: Mapping[str, FloatArray] | None = None, start: int = 0,
+              without_command: Sequence[str] = ()) -> Path:
     """
     Write records as a rosbag2 bag, whole or not at all.
 
@@ -148,6 +149,8 @@ def write_bag(path: str | os.PathLike[str], records: Sequence[Record], *,
     start : int
         Nanoseconds added to every stamp (``1_760_000_000 * 10**9`` stamps the bag
         in 2025, as a recorder on a wall clock does).
+    without_command : sequence of str
+        Joints whose command topic is not written (measured, not commanded).
 
     Returns
     -------
@@ -179,7 +182,7 @@ def write_bag(path: str | os.PathLike[str], records: Sequence[Record], *,
             raise DataError(f'command topic given for {joint!r}, which has no record')
         topics[joint] = topic
     floats = {topics[record.joint]: Stamped(command_stamps + start, record.v)
-              for record in records}
+              for record in records if record.joint not in without_command}
     for joint, values in (setpoints or {}).items():
         values = np.asarray(values, dtype=np.float64)
         if values.shape != t.shape:

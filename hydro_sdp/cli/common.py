@@ -64,6 +64,13 @@ def non_negative_float(text: str) -> float:
     return value
 
 
+def row_number(text: str) -> int:
+    """Argparse type: a row number from 1, as a spreadsheet numbers rows."""
+    if not text.isdigit() or int(text) < 1:
+        raise argparse.ArgumentTypeError(f'must be a row number from 1, got {text!r}')
+    return int(text)
+
+
 def finite_float(text: str) -> float:
     """Argparse type: any finite number."""
     value = _parse_number(text)
