@@ -150,6 +150,7 @@ class CsvTable:
         if not rows:
             raise DataError(f'{source}: file is empty')
         header, self.data = split_header(rows, header_row, source)
+        self.first_line = rows[0][0]
         self.header = None if header is None else header[1]
         self.header_line = rows[0][0] if header is None else header[0]
         if len(self.data) < 2:
@@ -185,8 +186,11 @@ class CsvTable:
         if header is None:
             raise DataError(f'{source}: no column {spec!r} ({option}): the file has no header '
                             'row, choose columns by 0-based index')
+        hint = '' if self.header_line == self.first_line else \
+            ' (the header is taken from the row above the numbers; name another with ' \
+            '--header-row N)'
         raise DataError(f'{source}: row {self.header_line}: no column {spec!r} ({option}); '
-                        f"columns: {', '.join(header)}")
+                        f"columns: {', '.join(header)}{hint}")
 
     def _values(self, column: _Column) -> FloatArray:
         """Return the numbers of one column, naming the row and column of a bad cell."""

@@ -110,8 +110,9 @@ def check_channel(source: str, channel: Channel) -> Channel:
     if wrong.size:
         k = int(wrong[0])
         kind = 'repeats' if steps[k] == 0.0 else 'goes backwards from'
-        raise DataError(f'{source}: {channel.label}: time {channel.t[k + 1]:.9g} s at sample '
-                        f'{k + 1} {kind} {channel.t[k]:.9g} s ({wrong.size} times in all)')
+        more = f' ({wrong.size} times in all)' if wrong.size > 1 else ''
+        raise DataError(f'{source}: {channel.label}: time {channel.t[k + 1]:.12g} s at sample '
+                        f'{k + 1} {kind} {channel.t[k]:.12g} s{more}')
     return channel
 
 
