@@ -15,7 +15,7 @@ Every joint needs its ``angle``; ``command`` (and ``command_negative``,
 subtracted from it) give ``/<joint>/valve_command``; a joint may set its own
 ``angle_unit``. Each signal becomes the Float64 topic ``/<topic>``. Unknown
 keys are refused, so a misspelt key never silently drops a channel
-(docs/interfaces.md section 2.3).
+(docs/interfaces.md section 2.1).
 
 """
 
