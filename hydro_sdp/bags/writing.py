@@ -83,7 +83,7 @@ def write_topics(path: str | os.PathLike[str], stamps: IntArray, names: Sequence
     stamps = np.asarray(stamps, dtype=np.int64)
     every = [stamps] + [np.asarray(series.stamps, dtype=np.int64) for series in floats.values()]
     if any(np.any(times < 0) for times in every):
-        raise DataError('bag stamps must not be negative (ns since the clock\'s zero)')
+        raise DataError("bag stamps must not be negative (ns since the clock's zero)")
     typestore = get_typestore(Stores.ROS2_JAZZY)
     template = _joint_state_template(typestore, names)
     messages = [('/joint_states', JOINT_STATE, stamps,

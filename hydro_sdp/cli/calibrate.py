@@ -110,7 +110,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         help='replace DIR if it exists and is not empty')
     logs = parser.add_argument_group("loggers' files (CSV, MDF4, MATLAB)")
     logs.add_argument('--time', metavar='COL',
-                      help='time column or variable, s (MDF4: default the channels\' own)')
+                      help="time column or variable, s (MDF4: default the channels' own)")
     logs.add_argument('--angle', metavar='COL', help='angle column, channel or variable')
     logs.add_argument('--angle-unit', choices=ANGLE_UNITS, default='deg',
                       help='unit of the angle (default: deg)')
@@ -163,7 +163,7 @@ def read_inputs(paths: list[str], args: argparse.Namespace, label: str,
                     ('joint', 'time', 'angle', 'command')
                 missing = [f'--{name}' for name in needed if not getattr(args, name)]
                 if missing:
-                    raise ConfigurationError(f'{path} is read as a logger\'s file and needs '
+                    raise ConfigurationError(f"{path} is read as a logger's file and needs "
                                              f'{", ".join(missing)}')
                 spec = single_joint_spec(args.joint, args.angle, args.command, time=args.time,
                                          command_negative=args.command_negative,

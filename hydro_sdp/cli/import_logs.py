@@ -1,4 +1,4 @@
-"""``hydro-sdp import``: loggers' files (CSV, MDF4, MATLAB) written as bags the other commands read."""
+"""``hydro-sdp import``: loggers' files (CSV, MDF4, MATLAB) as bags the other commands read."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ from hydro_sdp.core.errors import ConfigurationError
 from hydro_sdp.io.logs import (
     ANGLE_UNITS, load_signals, MachineLog, MachineSpec, read_machine_log, single_joint_spec)
 
-HELP = 'convert loggers\' files (CSV, MDF4, MATLAB) into bags for identify'
+HELP = "convert loggers' files (CSV, MDF4, MATLAB) into bags for identify"
 DESCRIPTION = """\
 Convert loggers' files into rosbag2 bags, one per file, named after it
 (DIR/run1 for run1.mf4), with /joint_states (radians) and /<joint>/valve_command:
@@ -72,17 +72,17 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser('import', help=HELP, description=DESCRIPTION,
                                    formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument('files', nargs='+', metavar='FILE',
-                        help='loggers\' files, one run each: .csv (or any text), .mf4, .mat')
+                        help="loggers' files, one run each: .csv (or any text), .mf4, .mat")
     parser.add_argument('--out', required=True, metavar='DIR',
                         help='folder for the bags, one per file named after it '
                              '(a bag already there is replaced)')
     parser.add_argument('--signals', metavar='YAML',
-                        help='the machine\'s joints and signals (instead of --joint, --angle, '
+                        help="the machine's joints and signals (instead of --joint, --angle, "
                              '--command)')
     parser.add_argument('--joint', help='joint name written to JointState')
     parser.add_argument('--time', metavar='COL',
-                        help='time column or variable, s (MDF4: default each channel\'s own '
-                             'time base; with --signals it replaces the file\'s time)')
+                        help="time column or variable, s (MDF4: default each channel's own "
+                             "time base; with --signals it replaces the file's time)")
     parser.add_argument('--angle', metavar='COL', help='angle column, channel or variable')
     parser.add_argument('--angle-unit', choices=ANGLE_UNITS, default='deg',
                         help='unit of the angle (default: deg)')
@@ -103,9 +103,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 def machine_spec(args: argparse.Namespace) -> MachineSpec:
     """Return the joints and signals the command line names (``--signals`` or one joint)."""
-    single = [f'--{name.replace("_", "-")}' for name in ('joint', 'angle', 'command',
-                                                          'command_negative')
-              if getattr(args, name)]
+    names = ('joint', 'angle', 'command', 'command_negative')
+    single = [f'--{name.replace("_", "-")}' for name in names if getattr(args, name)]
     if args.signals:
         if single:
             raise ConfigurationError(f"{', '.join(single)}: the signals file {args.signals} "

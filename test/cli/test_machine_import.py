@@ -1,7 +1,9 @@
 """
-A whole machine in one bag: the physics plant's arm and boom on one pump, logged as a
-data logger logs them (MDF4, one channel group per rate) and imported with --signals;
-diagnose names flow_sharing on the imported bags as on bags written directly.
+A whole machine in one bag: the physics plant's arm and boom on one pump, from MDF4.
+
+They are logged as a data logger logs them (MDF4, one channel group per rate) and
+imported with --signals; diagnose names flow_sharing on the imported bags as on bags
+written directly.
 """
 
 from contextlib import redirect_stdout
@@ -92,7 +94,8 @@ def machine_runs(tmp_path_factory):
     alone = []
     for seed in (1, 2, 3):
         c, a = levels(excavator, 30.0, [0], seed)
-        alone.append(Record(DT * np.arange(1, len(c) + 1), c[:, 0], a[:, 0], 'arm', f'alone {seed}'))
+        alone.append(Record(DT * np.arange(1, len(c) + 1), c[:, 0], a[:, 0], 'arm',
+                            f'alone {seed}'))
     model = identify(alone).model
     save_model(model, folder / 'arm.yaml')
     direct, logged = [], []

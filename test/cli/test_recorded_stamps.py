@@ -41,13 +41,14 @@ def run_json(*argv):
 
 def runs(j2):
     """Step and random programs of J2, per sample."""
-    return {'steps': step_program(j2, DT, steps=16), 'random_1': random_program(j2, DT, 25.0, seed=3),
+    return {'steps': step_program(j2, DT, steps=16),
+            'random_1': random_program(j2, DT, 25.0, seed=3),
             'random_2': random_program(j2, DT, 25.0, seed=4)}
 
 
 @pytest.fixture(scope='module')
 def bags(j2, tmp_path_factory):
-    """The runs written clean and as a machine's recorder writes them."""
+    """Write the runs clean and as a machine's recorder writes them."""
     folder = tmp_path_factory.mktemp('stamps')
     written = {'clean': [], 'machine': []}
     for seed, (name, program) in enumerate(runs(j2).items()):
@@ -92,9 +93,10 @@ def test_identify_is_unchanged(identified):
 
 def test_evaluate_and_diagnose_are_unchanged(bags, identified):
     model = identified['clean'].model
-    scores = {kind: np.mean([s.model for s in evaluate(read_records(paths[1:], None, None),
-                                                        model)])
-              for kind, paths in bags.items()}
+    scores = {}
+    for kind, paths in bags.items():
+        records = read_records(paths[1:], None, None)
+        scores[kind] = np.mean([s.model for s in evaluate(records, model)])
     assert scores['machine'] == pytest.approx(scores['clean'], rel=0.1, abs=0.005)
     found = {kind: diagnose(read_records(paths, None, None), model, max_iterations=1).effect
              for kind, paths in bags.items()}

@@ -1,6 +1,8 @@
 """
-Loggers' files: MDF4 written by asammdf, MATLAB v5 by scipy and v7.3 (HDF5) by h5py,
-CSV with the logger's lines above the header; identify on an import equals identify on a bag.
+Loggers' files: MDF4, MATLAB v5 and v7.3, CSV with the logger's lines above the header.
+
+MDF4 files are written by asammdf, MATLAB v5 by scipy and v7.3 (HDF5) by h5py; identify
+on an import equals identify on the same data written as a bag.
 """
 
 from contextlib import redirect_stdout
@@ -94,7 +96,8 @@ def test_identify_on_an_import_equals_identify_on_the_bag(steps, direct, tmp_pat
         # a pressure at 1 kHz in a third: each channel on its own time base.
         source = write_mdf(tmp_path / 'run.mf4', [
             (t, {'J2_ang': steps.y}), (t, {'J2_cmd': logged(steps)}),
-            (np.arange(t[0], t[-1], 0.001), {'J2_P': np.zeros(int(round((t[-1] - t[0]) / 0.001)))})])
+            (np.arange(t[0], t[-1], 0.001),
+             {'J2_P': np.zeros(int(round((t[-1] - t[0]) / 0.001)))})])
         options = []
     elif kind == 'mat5':
         source = tmp_path / 'run.mat'
@@ -207,7 +210,7 @@ def test_a_whole_machine_in_one_bag(tmp_path):
 
 @pytest.mark.parametrize(('yaml_text', 'table_change', 'message'), [
     pytest.param(MACHINE.replace('Arm_ang', 'Arm_angle'), {}, "run.mat: variable 'Arm_angle' "
-                 "(joints.arm.angle): no such variable", id='missing_variable'),
+                 '(joints.arm.angle): no such variable', id='missing_variable'),
     pytest.param(MACHINE, {'t': 'backwards'}, "run.mat: variable 'Boom_ang': time "
                  '1760000000.49 s at sample 51 goes backwards from 1760000000.5 s',
                  id='time_backwards'),
@@ -255,7 +258,7 @@ def test_bad_mdf_and_mat_inputs(tmp_path, capsys):
         ('backwards.mf4', [], "channel 'A': time 0.49 s at sample 50 repeats 0.49 s"),
         ('fake.mf4', [], 'fake.mf4: not an MDF file'),
         ('matrix.mat', ['--time', 't'], "variable 'A' (--angle): a 100x2 matrix, not a vector"),
-        ('matrix.mat', [], "a MATLAB file needs its time variable (--time)"),
+        ('matrix.mat', [], 'a MATLAB file needs its time variable (--time)'),
     ]
     for name, options, message in cases:
         code = main(['import', str(tmp_path / name), '--out', str(tmp_path / 'bags'), '--joint',

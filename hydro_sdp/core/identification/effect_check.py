@@ -158,7 +158,7 @@ def held_out(effect: str, parts: Sequence[tuple[list[Experiment], list[Experimen
 def at_stop(previous: FloatArray, speed: FloatArray,
             stops: tuple[float | None, float | None], reach: float) -> np.ndarray:
     """
-    Samples where the joint sits at an end stop while the command drives it into it.
+    Mark the samples where the joint sits at an end stop while the command drives it into it.
 
     Parameters
     ----------

@@ -20,7 +20,7 @@ geometry found.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 import math
 from typing import Callable, get_args, Literal, Sequence
 
@@ -33,12 +33,12 @@ from hydro_sdp.core.identification.family_choice import folds
 from hydro_sdp.core.identification.map_fit import (
     FIT_METHODS, fit_poly, fit_pwl, fit_sdp, FitData, FitMethod, MapFit)
 from hydro_sdp.core.identification.map_fit.power_sat import fit_power_sat
-from hydro_sdp.core.identification.segmentation import (
-    check_record, Experiment, segment_records, Segmentation, split_long, thin)
 from hydro_sdp.core.identification.own_effects import (
     check_geometry, check_lag, shape_with_geometry)
+from hydro_sdp.core.identification.segmentation import (
+    check_record, Experiment, segment_records, Segmentation, split_long, thin)
 from hydro_sdp.core.identification.stroke_fit import fit_stroke_geometry
-from hydro_sdp.core.model.effects import Effect, StrokeGeometry, ValveLag
+from hydro_sdp.core.model.effects import Effect, ValveLag
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.records import Record
 from hydro_sdp.core.model.sample_period import nominal_period, whole_samples_seconds

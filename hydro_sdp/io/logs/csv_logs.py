@@ -43,6 +43,7 @@ from hydro_sdp.io.logs.machine_log import machine_log
 from hydro_sdp.io.logs.signals_file import single_joint_spec
 import numpy as np
 
+
 @dataclass(frozen=True, eq=False)
 class CsvLog:
     """

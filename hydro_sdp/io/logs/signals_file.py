@@ -95,7 +95,7 @@ def _name(value: Any, where: str) -> str:
 
 def _unit(value: Any, where: str) -> str:
     if value not in ANGLE_UNITS:
-        raise ConfigurationError(f"{where}: angle unit must be deg or rad, got {value!r}")
+        raise ConfigurationError(f'{where}: angle unit must be deg or rad, got {value!r}')
     return str(value)
 
 
@@ -104,7 +104,7 @@ def _mapping(value: Any, where: str, keys: tuple[str, ...]) -> Mapping[str, Any]
         raise ConfigurationError(f'{where}: expected a mapping, got {type(value).__name__}')
     unknown = [str(key) for key in value if key not in keys]
     if unknown:
-        raise ConfigurationError(f"{where}: unknown key {unknown[0]!r} (keys: "
+        raise ConfigurationError(f'{where}: unknown key {unknown[0]!r} (keys: '
                                  f"{', '.join(keys)})")
     return value
 
@@ -188,7 +188,7 @@ def single_joint_spec(joint: str, angle: str, command: str, *, time: str | None 
                       command_negative: str | None = None,
                       angle_unit: str = 'deg') -> MachineSpec:
     """
-    The spec the single-joint options give (``--joint --time --angle --command``...).
+    Return the spec the single-joint options give (``--joint --time --angle --command``...).
 
     Returns
     -------

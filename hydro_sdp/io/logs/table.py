@@ -117,13 +117,13 @@ def check_channel(source: str, channel: Channel) -> Channel:
 
 
 def nanoseconds(t: FloatArray, origin: float) -> IntArray:
-    """Times in integer nanoseconds from ``origin`` (s), differenced before scaling."""
+    """Return times in integer nanoseconds from ``origin`` (s), differenced before scaling."""
     return np.round((np.asarray(t, dtype=np.float64) - origin) * 1e9).astype(np.int64)
 
 
 def held_at(samples: IntArray, channel: Channel, origin: float, *, command: bool) -> FloatArray:
     """
-    The value of a channel in force at each sample, holding its last value.
+    Return the value of a channel in force at each sample, holding its last value.
 
     Parameters
     ----------
