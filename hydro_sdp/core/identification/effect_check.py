@@ -12,7 +12,8 @@ never ask the fit to extrapolate), the model with the effect, fitted on the
 training part, must lower the pooled error of the test parts by a margin
 (:data:`HELD_OUT_GAIN` of the simulation error for the stroke factor,
 :data:`INCREMENT_GAIN` of the error of the increments around command changes
-for the lag) and be no worse on any fold.
+for the lag) and lower it on more than half of the folds (one level left out
+may still be predicted worse: full-stroke runs hold each duty once).
 
 Neither is fitted on samples where the joint sits at an end stop (:func:`at_stop`):
 there the command drives the joint and the joint cannot move, which says
@@ -39,8 +40,6 @@ HELD_OUT_GAIN = 0.1
 #: the sensor noise's variance is in every increment and no timing removes it, so a lag
 #: that halves the rest shows as a few percent.
 INCREMENT_GAIN = 0.05
-#: Largest share a fold's held-out error may grow with the effect.
-FOLD_TOLERANCE = 0.02
 
 #: Fits a model to the training experiments of a fold (None: the effect cannot be fitted).
 Fitter = Callable[[Sequence[Experiment]], JointModel | None]
@@ -77,9 +76,9 @@ class HeldOut:
 
     @property
     def kept(self) -> bool:
-        """Whether the effect lowers the error by :attr:`margin`, on no fold worse."""
-        return (self.gain >= self.margin and all(
-            after <= (1.0 + FOLD_TOLERANCE) * before for before, after in self.folds))
+        """Whether the effect lowers the pooled error by :attr:`margin`, and on most folds."""
+        better = sum(after < before for before, after in self.folds)
+        return self.gain >= self.margin and 2 * better > len(self.folds)
 
     def describe(self) -> str:
         """One line for reports."""
