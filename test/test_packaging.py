@@ -23,7 +23,8 @@ PACKAGE = 'hydro_sdp'
 # rosdep keys of the Python libraries the package imports (ROS packages go by their name).
 ROSDEP_KEYS = {'numpy': 'python3-numpy', 'scipy': 'python3-scipy',
                'matplotlib': 'python3-matplotlib', 'yaml': 'python3-yaml',
-               'rosbags': 'python3-rosbags-pip'}
+               'rosbags': 'python3-rosbags-pip', 'h5py': 'python3-h5py',
+               'asammdf': 'python3-asammdf-pip'}
 # Imported through rclpy.lifecycle, whose services carry its messages.
 USED_THROUGH_RCLPY = {'lifecycle_msgs'}
 

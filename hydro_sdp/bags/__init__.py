@@ -12,10 +12,10 @@ from hydro_sdp.bags.reading import BagData, read_bag, read_record, Series
 from hydro_sdp.bags.storage import (
     BagInfo, EmptyBagError, FLOAT64, inspect_bag, JOINT_STATE, Progress, raw_messages,
     STORAGE_SUFFIXES, STORAGES, TopicInfo)
-from hydro_sdp.bags.writing import write_bag
+from hydro_sdp.bags.writing import Stamped, write_bag, write_topics
 
 __all__ = [
     'BagData', 'BagInfo', 'EmptyBagError', 'FLOAT64', 'inspect_bag', 'JOINT_STATE', 'Progress',
-    'raw_messages', 'read_bag', 'read_record', 'Series', 'STORAGE_SUFFIXES', 'STORAGES',
-    'TopicInfo', 'write_bag',
+    'raw_messages', 'read_bag', 'read_record', 'Series', 'Stamped', 'STORAGE_SUFFIXES', 'STORAGES',
+    'TopicInfo', 'write_bag', 'write_topics',
 ]

@@ -39,15 +39,19 @@ class Series:
     topic : str
         Topic name.
     t : FloatArray
-        Receive times, s.
+        Receive times, s from the bag's :attr:`BagData.start`.
     data : FloatArray
         Values.
+    stamps : IntArray
+        The same receive times in integer nanoseconds from the bag's start: what
+        commands are paired with samples on.
 
     """
 
     topic: str
     t: FloatArray
     data: FloatArray
+    stamps: IntArray
 
 
 @dataclass(frozen=True, eq=False)
@@ -62,8 +66,8 @@ class BagData:
     state_topic : str
         The JointState topic read.
     t : FloatArray
-        Time of each JointState message, s (``header.stamp``, or the receive
-        time where the publisher left the stamps at zero).
+        Time of each JointState message, s from :attr:`start` (``header.stamp``,
+        or the receive time where the publisher left the stamps at zero).
     names : tuple[str, ...]
         Joint names.
     positions : FloatArray
@@ -74,6 +78,13 @@ class BagData:
         Every Float64 topic.
     info : BagInfo
         The bag's topics.
+    stamps : IntArray
+        The times of ``t`` in integer nanoseconds from :attr:`start`.
+    start : int
+        Origin of the bag's times, ns since 1970 (or since the clock's zero): the
+        whole second at or before its first message. Stamps stay integers and are
+        made relative to it before any arithmetic, so a stamp of 1.76e9 s keeps
+        its nanoseconds and the sub-second digits stay as stamped.
 
     """
 
@@ -85,6 +96,8 @@ class BagData:
     present: np.ndarray
     floats: Mapping[str, Series]
     info: BagInfo
+    stamps: IntArray
+    start: int = 0
 
     def angles(self, joint: str) -> tuple[FloatArray, FloatArray]:
         """
@@ -192,12 +205,13 @@ class BagData:
         joint = self.choose_joint(joint)
         topic = self.command_topic(joint, command_topic)
         t, y = self.angles(joint)
-        command, index = self._held(topic, t, 'command')
+        stamps = self.stamps[self.present[:, self.names.index(joint)]]
+        command, index = self._held(topic, stamps, 'command')
         keep = index >= 0
         if not keep.any():
             raise DataError(f'{self.path}: no {topic} message arrives before the last '
                             f'{self.state_topic} sample')
-        load, held = self._load(load_topic, t)
+        load, held = self._load(load_topic, stamps)
         if load is not None:
             keep &= held >= 0
             if not keep.any():
@@ -210,22 +224,23 @@ class BagData:
                       others=None if angles is None else angles[keep], other_joints=names)
 
     def _load(self, topic: str | None,
-              t: FloatArray) -> tuple[FloatArray | None, IntArray]:
+              stamps: IntArray) -> tuple[FloatArray | None, IntArray]:
         """Values of the load topic and, per angle sample, the index of the one in force."""
         if topic is None:
             return None, np.zeros(0, dtype=np.int64)
         if topic not in self.floats:
             raise TopicNotFoundError(f'{self.path}: no {FLOAT64} load topic {topic} '
                                      f'(topics: {self.info.describe()})')
-        return self._held(topic, t, 'load')
+        return self._held(topic, stamps, 'load')
 
-    def _held(self, topic: str, t: FloatArray, what: str) -> tuple[FloatArray, IntArray]:
-        """Values of a Float64 topic in time order, and the index of the one in force at ``t``."""
+    def _held(self, topic: str, stamps: IntArray,
+              what: str) -> tuple[FloatArray, IntArray]:
+        """Values of a Float64 topic in time order, and the one in force at each stamp (ns)."""
         series = self.floats[topic]
-        if series.t.size == 0:
+        if series.stamps.size == 0:
             raise DataError(f'{self.path}: {what} topic {topic} has no messages')
-        order = np.argsort(series.t, kind='stable')
-        return series.data[order], command_in_force(t, series.t[order])
+        order = np.argsort(series.stamps, kind='stable')
+        return series.data[order], command_in_force(stamps, series.stamps[order])
 
     def _others(self, joint: str) -> tuple[tuple[str, ...], FloatArray | None]:
         """Names and angles (degrees) of the other joints measured wherever ``joint`` is."""
@@ -290,25 +305,50 @@ def read_bag(path: str | os.PathLike[str], *, state_topic: str | None = None,
     try:
         decoded = decode_joint_states(raws)
         receive = np.asarray(collected.stamps[state_topic], dtype=np.int64)
-        floats = {}
-        for name, (msgtype, _) in collected.topics.items():
-            if msgtype == FLOAT64:
-                floats[name] = Series(name, _seconds(collected.stamps.get(name, [])),
-                                      decode_float64(collected.raws.get(name, [])))
+        series = {name: (np.asarray(collected.stamps.get(name, []), dtype=np.int64),
+                         decode_float64(collected.raws.get(name, [])))
+                  for name, (msgtype, _) in collected.topics.items() if msgtype == FLOAT64}
     except (TypeError, ValueError, OverflowError) as error:
         if isinstance(error, BagFormatError):
             raise
         # A damaged storage file can hand back NULL or mistyped time stamps and payloads.
         raise BagFormatError(f'{bag}: malformed messages or time stamps ({error})') from None
     # A publisher that never fills header.stamp leaves it at zero; use receive times then.
-    stamps = receive if not decoded.stamps.any() else decoded.stamps
-    return BagData(bag, state_topic, _seconds(stamps), decoded.names, decoded.positions,
-                   decoded.present, floats, info)
+    stamps = receive if not decoded.stamps.any() else np.asarray(decoded.stamps, dtype=np.int64)
+    start = recording_start([stamps] + [times for times, _ in series.values()])
+    floats = {name: Series(name, seconds_since(times, start), values, times - start)
+              for name, (times, values) in series.items()}
+    return BagData(bag, state_topic, seconds_since(stamps, start), decoded.names,
+                   decoded.positions, decoded.present, floats, info, stamps - start, start)
 
 
-def _seconds(stamps: Sequence[int] | IntArray) -> FloatArray:
-    """Integer nanosecond stamps in seconds."""
-    return np.asarray(np.asarray(stamps, dtype=np.int64) * 1e-9, dtype=np.float64)
+#: Nanoseconds in a second.
+NANOSECONDS = 1_000_000_000
+
+
+def recording_start(stamps: Sequence[IntArray]) -> int:
+    """
+    Return the whole second (ns) at or before the earliest of integer nanosecond stamps.
+
+    Parameters
+    ----------
+    stamps : sequence of IntArray
+        Stamps of every topic read, ns.
+
+    Returns
+    -------
+    int
+        The origin the bag's times count from, ns.
+
+    """
+    firsts = [int(np.min(times)) for times in stamps if np.asarray(times).size]
+    return (min(firsts) // NANOSECONDS) * NANOSECONDS if firsts else 0
+
+
+def seconds_since(stamps: IntArray, start: int) -> FloatArray:
+    """Integer nanosecond stamps as seconds from ``start`` (ns), subtracted as integers."""
+    return np.asarray((np.asarray(stamps, dtype=np.int64) - np.int64(start)) * 1e-9,
+                      dtype=np.float64)
 
 
 def read_record(path: str | os.PathLike[str], joint: str | None = None,

@@ -1,20 +1,24 @@
 """
 Writing records as a rosbag2 bag (sqlite3 or mcap), whole or not at all.
 
-Commands are stamped by :func:`hydro_sdp.core.model.timing.command_stamps_for`, so
-that the bag reader pairs each one with the sample it belongs to again.
+:func:`write_bag` writes records: commands are stamped by
+:func:`hydro_sdp.core.model.timing.command_stamps_for`, so that the bag reader
+pairs each one with the sample it belongs to again. :func:`write_topics` writes
+samples and Float64 topics each at its own stamps, as a recorder leaves them
+(epoch stamps, commands at their own rate).
 
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 import os
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
 from hydro_sdp.bags.cdr import encode_float64, encode_joint_states
 from hydro_sdp.bags.storage import FLOAT64, JOINT_STATE, STORAGES
-from hydro_sdp.core.arrays import FloatArray
+from hydro_sdp.core.arrays import FloatArray, IntArray
 from hydro_sdp.core.errors import DataError
 from hydro_sdp.core.model.records import Record
 from hydro_sdp.core.model.timing import command_stamps_for
@@ -22,10 +26,98 @@ from hydro_sdp.io.atomic import atomic_directory
 import numpy as np
 
 
+@dataclass(frozen=True, eq=False)
+class Stamped:
+    """
+    Values of one ``std_msgs/msg/Float64`` topic with their own stamps.
+
+    Parameters
+    ----------
+    stamps : IntArray
+        Receive time of each message, integer nanoseconds (any origin, 1970 included).
+    values : FloatArray
+        The ``data`` fields.
+
+    """
+
+    stamps: IntArray
+    values: FloatArray
+
+
+def write_topics(path: str | os.PathLike[str], stamps: IntArray, names: Sequence[str],
+                 positions: FloatArray, floats: Mapping[str, Stamped], *,
+                 storage: str = 'sqlite3') -> Path:
+    """
+    Write ``/joint_states`` and Float64 topics, each at its own stamps, whole or not at all.
+
+    This is what ``ros2 bag record`` leaves: samples stamped by the publisher's
+    clock (``header.stamp`` and receive time alike), commands and other signals
+    at their own rate, in time order.
+
+    Parameters
+    ----------
+    path : str or PathLike
+        Bag folder to create (replaced if it exists).
+    stamps : IntArray
+        Stamp of each JointState message, integer nanoseconds (> 0).
+    names : sequence of str
+        Joint names.
+    positions : FloatArray
+        ``(messages, joints)`` positions, radians.
+    floats : mapping of str to Stamped
+        Float64 topics (``/a/b``) and their messages.
+    storage : str
+        ``sqlite3`` or ``mcap``.
+
+    Returns
+    -------
+    Path
+        The bag folder.
+
+    """
+    from rosbags.rosbag2 import StoragePlugin, Writer
+    from rosbags.typesys import get_typestore, Stores
+
+    if storage not in STORAGES:
+        raise ValueError(f"storage must be one of {', '.join(STORAGES)}, got {storage!r}")
+    stamps = np.asarray(stamps, dtype=np.int64)
+    every = [stamps] + [np.asarray(series.stamps, dtype=np.int64) for series in floats.values()]
+    if any(np.any(times < 0) for times in every):
+        raise DataError("bag stamps must not be negative (ns since the clock's zero)")
+    typestore = get_typestore(Stores.ROS2_JAZZY)
+    template = _joint_state_template(typestore, names)
+    messages = [('/joint_states', JOINT_STATE, stamps,
+                 encode_joint_states(template, stamps, np.asarray(positions)))]
+    for topic, series in floats.items():
+        values = np.asarray(series.values, dtype=np.float64)
+        if values.shape != np.shape(series.stamps):
+            raise DataError(f'{topic}: {values.size} values for {np.size(series.stamps)} stamps')
+        messages.append((topic, FLOAT64, np.asarray(series.stamps, dtype=np.int64),
+                         encode_float64(values)))
+    # Every message in time order, as a recorder receives them (stable: topics in the
+    # order given at equal stamps).
+    topic_of = np.concatenate([np.full(times.size, i) for i, (_, _, times, _) in
+                               enumerate(messages)])
+    index_of = np.concatenate([np.arange(times.size) for _, _, times, _ in messages])
+    order = np.argsort(np.concatenate([times for _, _, times, _ in messages]), kind='stable')
+    plugin = StoragePlugin.MCAP if storage == 'mcap' else StoragePlugin.SQLITE3
+    with atomic_directory(path) as building:
+        # Metadata version 8 is what rosbag2 on Jazzy writes and reads.
+        with Writer(building, version=8, storage_plugin=plugin) as writer:
+            connections = [writer.add_connection(topic, msgtype, typestore=typestore)
+                           for topic, msgtype, _, _ in messages]
+            for which, k in zip(topic_of[order].tolist(), index_of[order].tolist()):
+                _, _, times, raws = messages[which]
+                writer.write(connections[which], int(times[k]), raws[k])
+    return Path(path)
+
+
 def write_bag(path: str | os.PathLike[str], records: Sequence[Record], *,
               storage: str = 'sqlite3',
               setpoints: Mapping[str, FloatArray] | None = None,
-              command_topics: Mapping[str, str] | None = None) -> Path:
+              command_topics: Mapping[str, str] | None = None,
+              signals: Mapping[str, FloatArray] | None = None, start: int = 0,
+              without_command: Sequence[str] = ()) -> Path:
     """
     Write records as a rosbag2 bag, whole or not at all.
 
@@ -46,10 +138,19 @@ def write_bag(path: str | os.PathLike[str], records: Sequence[Record], *,
         ``sqlite3`` or ``mcap``.
     setpoints : mapping of str to FloatArray, optional
         Desired angle (degrees) per joint and sample, written as
-        ``/<joint>/setpoint`` in radians.
+        ``/<joint>/setpoint`` in radians at the sample stamps.
     command_topics : mapping of str to str, optional
         Command topic per joint, e.g. ``{'arm': '/arm/pwm'}``; default
         ``/<joint>/valve_command``.
+    signals : mapping of str to FloatArray, optional
+        More Float64 topics (``/arm/head_pressure``), one value per sample, stamped
+        as the commands are, so that the value in force at ``t_k`` (a load read
+        with ``load_topic``) reads back at sample ``k``.
+    start : int
+        Nanoseconds added to every stamp (``1_760_000_000 * 10**9`` stamps the bag
+        in 2025, as a recorder on a wall clock does).
+    without_command : sequence of str
+        Joints whose command topic is not written (measured, not commanded).
 
     Returns
     -------
@@ -57,9 +158,6 @@ def write_bag(path: str | os.PathLike[str], records: Sequence[Record], *,
         The bag folder.
 
     """
-    from rosbags.rosbag2 import StoragePlugin, Writer
-    from rosbags.typesys import get_typestore, Stores
-
     if storage not in STORAGES:
         raise ValueError(f"storage must be one of {', '.join(STORAGES)}, got {storage!r}")
     if not records:
@@ -71,7 +169,6 @@ def write_bag(path: str | os.PathLike[str], records: Sequence[Record], *,
     names = [record.joint for record in records]
     if len(set(names)) != len(names) or not all(names):
         raise DataError(f'records need distinct, non-empty joint names, got {names}')
-    typestore = get_typestore(Stores.ROS2_JAZZY)
     stamps = np.round(t * 1e9).astype(np.int64)
     if stamps.size < 2:
         raise DataError('a bag needs at least two samples')
@@ -79,34 +176,27 @@ def write_bag(path: str | os.PathLike[str], records: Sequence[Record], *,
     if command_stamps[0] < 0:
         raise DataError(f'records must start at least one sample period after t = 0 '
                         f'(first sample at {t[0]} s)')
-    template = _joint_state_template(typestore, names)
-    positions = np.radians(np.column_stack([record.y for record in records]))
-    messages = [('/joint_states', JOINT_STATE, encode_joint_states(template, stamps, positions))]
     topics = {record.joint: f'/{record.joint}/valve_command' for record in records}
     for joint, topic in (command_topics or {}).items():
         if joint not in topics:
             raise DataError(f'command topic given for {joint!r}, which has no record')
         topics[joint] = topic
-    for record in records:
-        messages.append((topics[record.joint], FLOAT64, encode_float64(record.v)))
+    floats = {topics[record.joint]: Stamped(command_stamps + start, record.v)
+              for record in records if record.joint not in without_command}
     for joint, values in (setpoints or {}).items():
         values = np.asarray(values, dtype=np.float64)
         if values.shape != t.shape:
             raise DataError(f'setpoints of {joint} do not match the time stamps')
-        messages.append((f'/{joint}/setpoint', FLOAT64, encode_float64(np.radians(values))))
-    commands = set(topics.values())
-    plugin = StoragePlugin.MCAP if storage == 'mcap' else StoragePlugin.SQLITE3
-    with atomic_directory(path) as building:
-        # Metadata version 8 is what rosbag2 on Jazzy writes and reads.
-        with Writer(building, version=8, storage_plugin=plugin) as writer:
-            connections = [
-                (writer.add_connection(topic, msgtype, typestore=typestore), raws,
-                 command_stamps.tolist() if topic in commands else stamps.tolist())
-                for topic, msgtype, raws in messages]
-            for k in range(stamps.size):
-                for connection, raws, times in connections:
-                    writer.write(connection, times[k], raws[k])
-    return Path(path)
+        floats[f'/{joint}/setpoint'] = Stamped(stamps + start, np.radians(values))
+    for topic, values in (signals or {}).items():
+        values = np.asarray(values, dtype=np.float64)
+        if values.shape != t.shape:
+            raise DataError(f'signal {topic} does not match the time stamps')
+        if topic in floats:
+            raise DataError(f'signal {topic} is also a command or set-point topic')
+        floats[topic] = Stamped(command_stamps + start, values)
+    positions = np.radians(np.column_stack([record.y for record in records]))
+    return write_topics(path, stamps + start, names, positions, floats, storage=storage)
 
 
 def _joint_state_template(typestore: Any, names: Sequence[str]) -> bytes:

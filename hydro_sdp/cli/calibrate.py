@@ -8,16 +8,17 @@ import math
 from pathlib import Path
 from typing import Any, TYPE_CHECKING
 
-from hydro_sdp.bags import read_bag, STORAGE_SUFFIXES
+from hydro_sdp.bags import STORAGE_SUFFIXES
 from hydro_sdp.cli.common import (
-    add_bag_options, finite_float, json_number, Outcome, positive_float, table)
+    add_bag_options, finite_float, json_number, Outcome, positive_float, read_bag_records,
+    row_number, table)
 from hydro_sdp.cli.design import complex_pole
 from hydro_sdp.cli.progress import ProgressBar
 from hydro_sdp.core.errors import ConfigurationError
 from hydro_sdp.core.model.records import Record
 from hydro_sdp.io.atomic import atomic_directory, atomic_write_text
 from hydro_sdp.io.controller_files import save_controller
-from hydro_sdp.io.csv_logs import ANGLE_UNITS, read_csv_log
+from hydro_sdp.io.logs import ANGLE_UNITS, log_kind, read_machine_log, single_joint_spec
 from hydro_sdp.io.model_files import save_model
 import yaml
 
@@ -55,10 +56,12 @@ paths; only values that differ from the nodes' defaults) and report/
 (summary.md, velocity map with the level speeds, evaluation, closed-loop
 check, and diagnosis/ with the residual signature and the gap).
 
-Inputs are bags or CSV logs: a plain file that is not a .db3 or .mcap storage
-file is read as a CSV log (one row per sample; the command on a row acts until
+Inputs are bags or loggers' files: a plain file that is not a .db3 or .mcap
+storage file is read as a logger's file, CSV, MDF4 (.mf4) or MATLAB (.mat), as
+`hydro-sdp import` reads it (one row per sample; the command on a row acts until
 the next row; see `hydro-sdp import --help`), and needs --joint, --time,
---angle and --command (column names or 0-based indices).
+--angle and --command (column names or 0-based indices; --time is optional
+for MDF4, whose channels carry their own time).
 
 model.yaml remembers the command topic of the bags (key command_topic), so
 evaluate and diagnose read the same topic without --command-topic.
@@ -84,6 +87,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         help='held-out recordings for the MAE (default: whole input '
                              'recordings held out)')
     add_bag_options(parser)
+    parser.add_argument('--load-topic', metavar='TOPIC',
+                        help='Float64 topic of a measured load (a cylinder pressure) in the bags, '
+                             'for load_dependence; remembered in model.yaml')
     parser.add_argument('--rest', type=finite_float, metavar='V',
                         help='command that holds the joint still (default: found by identify)')
     parser.add_argument('--input-limits', nargs=2, type=finite_float, metavar=('LOW', 'HIGH'),
@@ -102,20 +108,24 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument('--out', required=True, metavar='DIR', help='folder to write')
     parser.add_argument('--force', action='store_true',
                         help='replace DIR if it exists and is not empty')
-    csv = parser.add_argument_group('CSV logs')
-    csv.add_argument('--time', metavar='COL', help='time column, s')
-    csv.add_argument('--angle', metavar='COL', help='angle column')
-    csv.add_argument('--angle-unit', choices=ANGLE_UNITS, default='deg',
-                     help='unit of the angle column (default: deg)')
-    csv.add_argument('--command', metavar='COL', help='command column')
-    csv.add_argument('--command-negative', metavar='COL',
-                     help='column subtracted from --command (one valve per direction)')
-    csv.add_argument('--delimiter', default=',', help="cell delimiter (default: ',')")
+    logs = parser.add_argument_group("loggers' files (CSV, MDF4, MATLAB)")
+    logs.add_argument('--time', metavar='COL',
+                      help="time column or variable, s (MDF4: default the channels' own)")
+    logs.add_argument('--angle', metavar='COL', help='angle column, channel or variable')
+    logs.add_argument('--angle-unit', choices=ANGLE_UNITS, default='deg',
+                      help='unit of the angle (default: deg)')
+    logs.add_argument('--command', metavar='COL', help='command column, channel or variable')
+    logs.add_argument('--command-negative', metavar='COL',
+                      help='subtracted from --command (one valve per direction)')
+    logs.add_argument('--header-row', type=row_number, metavar='N',
+                      help='CSV: the row of the column names (default: the row above the '
+                           'numbers)')
+    logs.add_argument('--delimiter', default=',', help="CSV cell delimiter (default: ',')")
     parser.set_defaults(run=run)
 
 
-def is_csv(path: str) -> bool:
-    """Whether an input is read as a CSV log: a plain file that is no bag storage file."""
+def is_log(path: str) -> bool:
+    """Whether an input is read as a logger's file: a plain file that is no bag storage file."""
     source = Path(path)
     return (source.is_file() and source.suffix not in STORAGE_SUFFIXES
             and source.name != 'metadata.yaml')
@@ -148,26 +158,26 @@ def read_inputs(paths: list[str], args: argparse.Namespace, label: str,
     topics: set[str] = set()
     with ProgressBar(label, len(paths)) as bar:
         for done, path in enumerate(paths, start=1):
-            if is_csv(path):
-                missing = [f'--{name}' for name in ('joint', 'time', 'angle', 'command')
-                           if not getattr(args, name)]
+            if is_log(path):
+                needed = ('joint', 'angle', 'command') if log_kind(path) == 'mdf' else \
+                    ('joint', 'time', 'angle', 'command')
+                missing = [f'--{name}' for name in needed if not getattr(args, name)]
                 if missing:
-                    raise ConfigurationError(f'{path} is read as a CSV log and needs '
+                    raise ConfigurationError(f"{path} is read as a logger's file and needs "
                                              f'{", ".join(missing)}')
-                records.append(read_csv_log(
-                    path, joint=args.joint, time=args.time, angle=args.angle,
-                    command=args.command, command_negative=args.command_negative,
-                    angle_unit=args.angle_unit, delimiter=args.delimiter).record)
+                spec = single_joint_spec(args.joint, args.angle, args.command, time=args.time,
+                                         command_negative=args.command_negative,
+                                         angle_unit=args.angle_unit)
+                records.append(read_machine_log(path, spec, header_row=args.header_row,
+                                                delimiter=args.delimiter).records[0])
             else:
-                data = read_bag(path)
-                joint = data.choose_joint(args.joint)
-                asked = args.command_topic
-                if asked is None and preferred_topic in data.floats:
-                    asked = preferred_topic
-                topic = data.command_topic(joint, asked)
+                # The reader of identify, evaluate and diagnose: cut at gaps, with the load
+                # and the other joints (so the diagnosis can name flow_sharing).
+                pieces, topic = read_bag_records(
+                    path, args.joint, args.command_topic, preferred_topic=preferred_topic,
+                    load_topic=args.load_topic, others=True)
+                records.extend(pieces)
                 topics.add(topic)
-                # With the other joints, so the diagnosis can name flow_sharing.
-                records.append(data.record(joint, topic, others=True))
             bar.update(done)
     return records, (topics.pop() if len(topics) == 1 else None)
 
@@ -297,7 +307,9 @@ def run(args: argparse.Namespace) -> Outcome:
     unit = command_unit_of(result.model, args.command_unit)
     with atomic_directory(out) as building:
         building.mkdir()
-        save_model(replace(result.model, command_topic=topic), building / 'model.yaml')
+        loaded = args.load_topic if result.model.effect('load_dependence') is not None else None
+        save_model(replace(result.model, command_topic=topic, load_topic=loaded),
+                   building / 'model.yaml')
         save_controller(result.spec, building / 'controller.yaml')
         atomic_write_text(building / 'params.yaml', yaml.safe_dump(
             ros_parameters(result, out), sort_keys=False, default_flow_style=False))

@@ -64,6 +64,13 @@ def non_negative_float(text: str) -> float:
     return value
 
 
+def row_number(text: str) -> int:
+    """Argparse type: a row number from 1, as a spreadsheet numbers rows."""
+    if not text.isdigit() or int(text) < 1:
+        raise argparse.ArgumentTypeError(f'must be a row number from 1, got {text!r}')
+    return int(text)
+
+
 def finite_float(text: str) -> float:
     """Argparse type: any finite number."""
     value = _parse_number(text)
@@ -188,25 +195,55 @@ def read_records_and_topic(bags: list[str], joint: str | None, command_topic: st
         the bags used different topics.
 
     """
-    from hydro_sdp.bags import read_bag
     from hydro_sdp.cli.progress import ProgressBar
-    from hydro_sdp.core.model.records import split_at_gaps
 
     records: list = []
     topics: set[str] = set()
     with ProgressBar(label, len(bags)) as bar:
         for done, bag in enumerate(bags, start=1):
-            data = read_bag(bag)
-            name = data.choose_joint(joint)
-            asked = command_topic
-            if asked is None and preferred_topic is not None and preferred_topic in data.floats:
-                asked = preferred_topic
-            topic = data.command_topic(name, asked)
+            pieces, topic = read_bag_records(bag, joint, command_topic,
+                                             preferred_topic=preferred_topic,
+                                             load_topic=load_topic, others=others)
+            records.extend(pieces)
             topics.add(topic)
-            record = data.record(name, topic, load_topic=load_topic, others=others)
-            records.extend(split_at_gaps(record).records)
             bar.update(done)
     return records, (topics.pop() if len(topics) == 1 else None)
+
+
+def read_bag_records(bag: str, joint: str | None, command_topic: str | None, *,
+                     preferred_topic: str | None = None, load_topic: str | None = None,
+                     others: bool = False) -> tuple[list, str]:
+    """
+    Read one joint's record from one bag, cut at gaps in its time stamps.
+
+    The one path every command reads a bag by (``identify``, ``evaluate``,
+    ``diagnose``, ``calibrate``).
+
+    Parameters
+    ----------
+    bag : str
+        Bag path.
+    joint, command_topic, preferred_topic, load_topic, others
+        As :func:`read_records_and_topic`.
+
+    Returns
+    -------
+    tuple
+        ``(pieces, topic)``: the record, or its pieces where a stalled recording
+        left a hole, and the command topic read.
+
+    """
+    from hydro_sdp.bags import read_bag
+    from hydro_sdp.core.model.records import split_at_gaps
+
+    data = read_bag(bag)
+    name = data.choose_joint(joint)
+    asked = command_topic
+    if asked is None and preferred_topic is not None and preferred_topic in data.floats:
+        asked = preferred_topic
+    topic = data.command_topic(name, asked)
+    record = data.record(name, topic, load_topic=load_topic, others=others)
+    return list(split_at_gaps(record).records), topic
 
 
 def add_bag_options(parser: argparse.ArgumentParser) -> None:

@@ -102,6 +102,8 @@ def describe(result: Identification) -> dict:
         'comparison': [{'kind': s.kind, 'mae': json_number(s.mae), 'note': s.note}
                        for s in result.comparison],
         'mae': result.mae,
+        'effect_checks': [{'effect': c.effect, 'without': c.without, 'with': c.with_effect,
+                           'gain': c.gain, 'kept': c.kept} for c in result.effect_checks],
     })
     return payload
 
@@ -168,6 +170,7 @@ def run(args: argparse.Namespace) -> Outcome:
                        ['kind', 'MAE (deg)', 'note'])
     lines.append(f'chosen: {model.kind} ({result.fit.method}, beta {result.fit.beta:.3f}); '
                  f'simulation MAE on the experiments {result.mae:.4f} deg')
+    lines += [f'held-out check of {check.describe()}' for check in result.effect_checks]
     if model.effect('stroke_geometry') is not None:
         lines.append('speed along the stroke: effect stroke_geometry (see the model file)')
     if args.out:

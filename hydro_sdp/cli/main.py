@@ -32,7 +32,7 @@ from hydro_sdp import __version__
 BLAS_THREADS = '1'
 
 #: Commands and their modules in hydro_sdp.cli, in the order of ``--help``.
-COMMANDS = {'simulate': 'simulate', 'import': 'import_csv', 'identify': 'identify',
+COMMANDS = {'simulate': 'simulate', 'import': 'import_logs', 'identify': 'identify',
             'evaluate': 'evaluate', 'diagnose': 'diagnose', 'design': 'design',
             'closed-loop': 'closed_loop', 'calibrate': 'calibrate', 'demo': 'demo.command',
             'reindex': 'reindex'}

@@ -147,7 +147,11 @@ class CalibrationResult:
 
 def split_records(records: Sequence[Record]) -> tuple[list[Record], list[Record], str]:
     """
-    Hold out whole records for validation: every third one, at least one of two.
+    Hold out whole recordings for validation: every third one, at least one of two.
+
+    Pieces of one recording (a bag cut at a hole in its stamps shares its
+    ``source``) stay together, on one side: a held-out piece of a recording the
+    model was fitted on would not be held out.
 
     Parameters
     ----------
@@ -157,19 +161,24 @@ def split_records(records: Sequence[Record]) -> tuple[list[Record], list[Record]
     Returns
     -------
     tuple
-        ``(estimation, validation, note)``; with one record both are that record
-        and the note says the MAE is in-sample.
+        ``(estimation, validation, note)``; with one recording both are all of its
+        records and the note says the MAE is in-sample.
 
     """
-    if len(records) < 2:
+    # A record without a source is a recording of its own.
+    keys = [record.source or f'#{index}' for index, record in enumerate(records)]
+    sources = list(dict.fromkeys(keys))
+    recordings = len(sources)
+    if recordings < 2:
         return list(records), list(records), ('in-sample: one record given, nothing to hold '
                                               'out (give --validation for a held-out MAE)')
-    held = set(range(2, len(records), 3)) or {len(records) - 1}
-    estimation = [r for i, r in enumerate(records) if i not in held]
-    validation = [r for i, r in enumerate(records) if i in held]
+    held = set(range(2, recordings, 3)) or {recordings - 1}
+    kept = {sources[i] for i in held}
+    estimation = [r for r, key in zip(records, keys) if key not in kept]
+    validation = [r for r, key in zip(records, keys) if key in kept]
     names = ', '.join(str(i + 1) for i in sorted(held))
     return estimation, validation, (f'held out: input record{"s" if len(held) > 1 else ""} '
-                                    f'{names} of {len(records)} (whole records)')
+                                    f'{names} of {recordings} (whole records)')
 
 
 def _identify(records: Sequence[Record], settings: CalibrationSettings,
@@ -298,7 +307,7 @@ def calibrate(records: Sequence[Record], validation: Sequence[Record] | None = N
         note = f'given: {len(checks)} validation record{"s" if len(checks) > 1 else ""}'
     else:
         estimation, checks, note = split_records(records)
-        if len(records) < 2:
+        if note.startswith('in-sample'):
             warnings.append('one record: the validation MAE is in-sample')
     stages = ['segmenting', 'estimating the delay', 'fitting the static map',
               'comparing map families on held-out experiments']

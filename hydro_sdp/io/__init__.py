@@ -4,6 +4,6 @@ Files: written whole or not at all (:mod:`.atomic`), read with one-line errors (
 
 The model (:mod:`.model_files`), controller (:mod:`.controller_files`), physics
 plant (:mod:`.plant_files`) and trajectory and kinematics files
-(:mod:`.trajectory_files`), and machines' logs (:mod:`.csv_logs`).
+(:mod:`.trajectory_files`), and machines' logs: CSV, MDF4 and MATLAB files (:mod:`.logs`).
 
 """

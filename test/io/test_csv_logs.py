@@ -7,7 +7,7 @@ from hydro_sdp.bags.cdr import decode_float64
 from hydro_sdp.cli.main import main
 from hydro_sdp.core.errors import DataError
 from hydro_sdp.core.synthetic.joint_experiments import experiment_record
-from hydro_sdp.io.csv_logs import parse_csv_log, record_from_log
+from hydro_sdp.io.logs import parse_csv_log, record_from_log
 import numpy as np
 import pytest
 
@@ -170,7 +170,8 @@ def test_json_keys_and_human_output(tmp_path, capsys):
                          '--out', tmp_path / 'bags', *COLUMNS, '--storage', 'mcap', '--json')
     assert code == 0, err
     payload = json.loads(out)
-    assert set(payload) == {'bags', 'samples', 'sources', 'joint', 'time_shift'}
+    assert set(payload) == {'bags', 'samples', 'sources', 'joint', 'joints', 'signals',
+                            'time_shift'}
     assert payload['bags'] == [str(tmp_path / 'bags' / 'first'), str(tmp_path / 'bags' / 'second')]
     assert payload['samples'] == [5, 5]
     assert payload['sources'] == [str(tmp_path / 'first.csv'), str(tmp_path / 'second.csv')]
@@ -287,7 +288,8 @@ def test_help_teaches_the_timing_with_an_example(capsys):
     assert exit_info.value.code == 0
     out = capsys.readouterr().out
     assert 'examples:\n  hydro-sdp import run1.csv run2.csv --out bags --joint arm' in out
-    assert 'the angle of\n  the next row is the first that can show it' in out
-    assert 'shifted so the first row lands one sample period after t = 0' in out
+    assert 'the angle of the next row is\n  the first that can show it' in out
+    assert 'the first sample lands one sample period after\n  t = 0' in out
+    assert 'hydro-sdp import day1/*.mf4 --out bags --signals machine.yaml' in out
     for option in ('--angle-unit {deg,rad}', '--command-negative COL', '--delimiter D'):
         assert option in out

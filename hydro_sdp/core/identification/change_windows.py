@@ -243,6 +243,17 @@ def fit_delay_and_lag(experiments: Sequence[Experiment], dt: float, max_delay: i
     """
     Dead time and lag time constant that explain the increments best.
 
+    As :func:`fit_delay_lag_and_pure`, without the best pure delay.
+    """
+    delay, lag, explained, _ = fit_delay_lag_and_pure(experiments, dt, max_delay)
+    return delay, lag, explained
+
+
+def fit_delay_lag_and_pure(experiments: Sequence[Experiment], dt: float, max_delay: int
+                           ) -> tuple[int, float, FloatArray, int]:
+    """
+    Dead time and lag time constant that explain the increments best, and the best pure delay.
+
     Parameters
     ----------
     experiments : sequence of Experiment
@@ -255,9 +266,11 @@ def fit_delay_and_lag(experiments: Sequence[Experiment], dt: float, max_delay: i
     Returns
     -------
     tuple
-        ``(delay, time_constant, explained)``: dead time (samples), lag time
-        constant (s, 0 for none) and, per candidate delay 1..max_delay, the share
-        of the windows' squared increments explained with the best lag tried there.
+        ``(delay, time_constant, explained, pure)``: dead time (samples), lag time
+        constant (s, 0 for none), per candidate delay 1..max_delay the share of the
+        windows' squared increments explained with the best lag tried there, and the
+        dead time that explains them best without a lag (what stands when the lag
+        does not earn its place on held-out experiments).
 
     Raises
     ------
@@ -296,5 +309,5 @@ def fit_delay_and_lag(experiments: Sequence[Experiment], dt: float, max_delay: i
     energy = windows.energy if windows.energy > 0.0 else 1.0
     explained = np.array([1.0 - best[d][0] / energy for d in sorted(best)])
     if lag > 0.0 and score < (1.0 - LAG_GAIN) * pure_score:
-        return delay, lag, explained
-    return pure, 0.0, explained
+        return delay, lag, explained, pure
+    return pure, 0.0, explained, pure

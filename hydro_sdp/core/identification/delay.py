@@ -21,14 +21,15 @@ and looks like extra delay; the estimators here avoid that:
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 import math
 from typing import Sequence
 
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import DataError
-from hydro_sdp.core.identification.change_windows import fit_delay_and_lag, lag_pole
+from hydro_sdp.core.identification.change_windows import fit_delay_lag_and_pure, lag_pole
 from hydro_sdp.core.identification.segmentation import Experiment
+from hydro_sdp.core.model.sample_period import whole_samples_seconds
 from hydro_sdp.core.model.timing import delayed_at
 import numpy as np
 from scipy.signal import lfilter
@@ -56,6 +57,8 @@ class DelayEstimate:
         each candidate delay 1..max_delay, with the best lag tried there.
     lag : float
         First-order valve lag time constant found with the delay, s (0: none).
+    pure : int or None
+        Dead time that explains the increments best without a lag (None: ``fit``).
 
     """
 
@@ -66,6 +69,13 @@ class DelayEstimate:
     xcorr: int | None
     explained: FloatArray
     lag: float = 0.0
+    pure: int | None = None
+
+    def without_lag(self, dt: float) -> DelayEstimate:
+        """Return the estimate with the best pure delay and no lag."""
+        pure = self.fit if self.pure is None else self.pure
+        return replace(self, samples=pure, seconds=whole_samples_seconds(pure, dt), fit=pure,
+                       lag=0.0)
 
     @property
     def agree(self) -> bool:
@@ -155,11 +165,11 @@ def estimate_delay(experiments: Sequence[Experiment], dt: float, *, max_delay: i
     """
     if not experiments:
         raise DataError('no experiments to estimate the delay from')
-    best, lag, explained = fit_delay_and_lag(experiments, dt, max_delay)
-    return DelayEstimate(samples=best, seconds=best * dt, fit=best,
+    best, lag, explained, pure = fit_delay_lag_and_pure(experiments, dt, max_delay)
+    return DelayEstimate(samples=best, seconds=whole_samples_seconds(best, dt), fit=best,
                          onset=_onset(experiments, noise, max_delay, lag_pole(lag, dt)),
                          xcorr=_xcorr(experiments, max_delay, lag_pole(lag, dt)),
-                         explained=explained, lag=lag)
+                         explained=explained, lag=lag, pure=pure)
 
 
 @dataclass(frozen=True)

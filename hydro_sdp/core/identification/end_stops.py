@@ -23,6 +23,8 @@ HELD_FRACTION = 0.1
 MOVING_FRACTION = 0.3
 #: Share of the windows after the stop that must stay held (bounces are tolerated).
 STAYS = 0.8
+#: Nearest a joint counts as sitting at a stop, degrees (at least; or six noise levels).
+STOP_REACH = 0.25
 
 
 def stop_window(dt: float) -> int:
@@ -175,3 +177,49 @@ def stop_tolerance(stops: tuple[float | None, float | None]) -> float:
     low, high = stops
     travel = high - low if low is not None and high is not None else 0.0
     return max(0.02 * travel, 1.0)
+
+
+def stop_reach(noise: float) -> float:
+    """Return how near a stop a joint counts as sitting at it: :data:`STOP_REACH`, or 6 noise."""
+    return max(STOP_REACH, 6.0 * noise)
+
+
+def arrival_at_stop(y: FloatArray, level: float, rest: float,
+                    stops: tuple[float | None, float | None], reach: float) -> int | None:
+    """
+    First sample at which a step reaches the stop its command drives it into, if it does.
+
+    A joint that arrives at a stop and sits there while its command still drives it
+    shows a speed of zero that says nothing about the valve; the samples from the
+    arrival on are left out of every fit. A stop too short-lived for
+    :func:`clamp_start` (under half a window at the stop) is caught here once the
+    stop is known, from this record or another.
+
+    Parameters
+    ----------
+    y : FloatArray
+        Angles of the step from its initial state on, degrees.
+    level : float
+        The held command.
+    rest : float
+        Rest command: above it the joint is driven up, below it down.
+    stops : tuple[float | None, float | None]
+        Lower and upper end stop, degrees; None where unknown.
+    reach : float
+        How near the stop counts as at it, degrees (:func:`stop_reach`).
+
+    Returns
+    -------
+    int or None
+        Index into ``y`` of the first sample at the stop (after the first), or None.
+
+    """
+    if y.size < 2 or not level != rest:
+        return None
+    side = int(level > rest)
+    stop = stops[side]
+    if stop is None:
+        return None
+    direction = 1.0 if side else -1.0
+    at = np.flatnonzero(direction * (np.asarray(y[1:]) - stop) >= -reach)
+    return int(at[0]) + 1 if at.size else None

@@ -20,24 +20,28 @@ geometry found.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 import math
 from typing import Callable, get_args, Literal, Sequence
 
 from hydro_sdp.core.errors import DataError, HydroSdpError
 from hydro_sdp.core.identification.delay import (
     DelayEstimate, estimate_delay, level_speeds, LevelSpeed)
+from hydro_sdp.core.identification.effect_check import HeldOut, simulation_errors
+from hydro_sdp.core.identification.end_stops import stop_reach
 from hydro_sdp.core.identification.family_choice import folds
 from hydro_sdp.core.identification.map_fit import (
     FIT_METHODS, fit_poly, fit_pwl, fit_sdp, FitData, FitMethod, MapFit)
 from hydro_sdp.core.identification.map_fit.power_sat import fit_power_sat
+from hydro_sdp.core.identification.own_effects import (
+    check_geometry, check_lag, shape_with_geometry)
 from hydro_sdp.core.identification.segmentation import (
     check_record, Experiment, segment_records, Segmentation, split_long, thin)
-from hydro_sdp.core.identification.stroke_fit import fit_stroke_geometry, speed_gains
-from hydro_sdp.core.model.effects import Effect, StrokeGeometry, ValveLag
+from hydro_sdp.core.identification.stroke_fit import fit_stroke_geometry
+from hydro_sdp.core.model.effects import Effect, ValveLag
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.records import Record
-from hydro_sdp.core.model.simulation import simulate
+from hydro_sdp.core.model.sample_period import nominal_period, whole_samples_seconds
 from hydro_sdp.core.model.static_maps import SdpMap, StaticMap
 import numpy as np
 
@@ -61,10 +65,6 @@ PARSIMONY = 1.05
 #: Families of a physical shape, and the factor a free-form family must beat them by.
 SMOOTH_KINDS = ('sdp', 'power_sat')
 FREE_FORM_MARGIN = 1.5
-#: The stroke factor is kept when it lowers the simulation error by this share at least.
-GEOMETRY_GAIN = 0.05
-#: Alternations of map and stroke factor.
-GEOMETRY_ROUNDS = 3
 
 
 @dataclass(frozen=True)
@@ -112,6 +112,9 @@ class Identification:
         Held-out errors of the map families tried.
     mae : float
         Mean absolute simulation error of the model on all experiments, degrees.
+    effect_checks : tuple[HeldOut, ...]
+        Held-out errors without and with each effect identify proposed by itself
+        (``valve_lag``, ``stroke_geometry``), and whether it was kept.
 
     """
 
@@ -123,6 +126,7 @@ class Identification:
     fit: MapFit[StaticMap]
     comparison: tuple[KindScore, ...]
     mae: float
+    effect_checks: tuple[HeldOut, ...] = ()
 
     @property
     def alpha(self) -> tuple[float, ...] | None:
@@ -243,13 +247,7 @@ def experiments_mae(model: JointModel, experiments: Sequence[Experiment], dt: fl
     Each experiment is simulated from its measured angle at its start, with its
     command history before; the lag starts in steady state at the first command.
     """
-    total, count = 0.0, 0
-    for experiment in experiments:
-        simulated = simulate(model, experiment.v, dt, float(experiment.y[experiment.start]),
-                             v_before=float(experiment.v[0]), start=experiment.start)
-        residual = experiment.y[experiment.start + 1:] - simulated[experiment.start + 1:]
-        total += float(np.sum(np.abs(residual)))
-        count += residual.size
+    total, count = simulation_errors(model, experiments, dt)
     return total / max(count, 1)
 
 
@@ -291,12 +289,19 @@ def thin_evenly(experiments: Sequence[Experiment], max_samples: int,
     return out
 
 
-def _records_dt(records: Sequence[Record]) -> float:
+def records_period(records: Sequence[Record]) -> float:
+    """
+    Return the nominal sample period shared by records, s.
+
+    Each record's nominal period must lie within 1 % of the others'; the result is
+    the nominal period of all their spacings together, so records of one timer
+    give one period whatever their length.
+    """
     periods = [check_record(record) for record in records]
     if max(periods) > 1.01 * min(periods):
-        raise DataError(f'records have different sample periods ({min(periods):.4f} s to '
-                        f'{max(periods):.4f} s); resample them first')
-    return float(np.median(periods))
+        raise DataError(f'records have different sample periods ({min(periods):.4g} s to '
+                        f'{max(periods):.4g} s); resample them first')
+    return nominal_period(np.concatenate([np.diff(record.t) for record in records]))
 
 
 def identify(records: Sequence[Record], *, method: FitMethod = 'rr', kind: KindChoice = 'auto',
@@ -344,7 +349,7 @@ def identify(records: Sequence[Record], *, method: FitMethod = 'rr', kind: KindC
     if len(joints) > 1:
         raise DataError(f"records of several joints ({', '.join(sorted(joints))}); "
                         'identify one joint at a time')
-    dt = _records_dt(records)
+    dt = records_period(records)
     step = (lambda name: progress(name)) if progress is not None else (lambda name: None)
     step('segmenting')
     max_delay_samples = max(2, int(round(max_delay / dt)))
@@ -359,9 +364,20 @@ def identify(records: Sequence[Record], *, method: FitMethod = 'rr', kind: KindC
     pieces = split_long(segmentation.experiments, PIECE_SAMPLES, max_delay_samples)
     delay = estimate_delay(thin(pieces, DELAY_SAMPLES), dt, max_delay=max_delay_samples,
                            rest=rest_command, noise=segmentation.noise_std)
+    sample = thin(pieces, SEARCH_SAMPLES)
+    trial = thin_evenly(sample, COMPARE_SAMPLES, rest_command)
+    limits = angle_limits
+    low_stop, high_stop = segmentation.end_stops
+    if limits is None and low_stop is not None and high_stop is not None:
+        limits = (low_stop, high_stop)
+    checks: list[HeldOut] = []
+    if delay.lag > 0.0:
+        lag_check = check_lag(trial, delay, dt, rest_command, max_delay_samples)
+        checks.append(lag_check)
+        if not lag_check.kept:
+            delay = delay.without_lag(dt)
     points = tuple(level_speeds(pieces, delay.samples, dt, rest=rest_command))
     data = FitData(pieces, delay.samples, dt, delay.lag)
-    sample = thin(pieces, SEARCH_SAMPLES)
     search = data if len(sample) == len(pieces) else FitData(sample, delay.samples, dt,
                                                              delay.lag)
     step('fitting the static map')
@@ -371,7 +387,6 @@ def identify(records: Sequence[Record], *, method: FitMethod = 'rr', kind: KindC
     chosen: FittedKind = 'sdp' if kind == 'auto' else kind
     if kind == 'auto':
         step('comparing map families on held-out experiments')
-        trial = thin_evenly(sample, COMPARE_SAMPLES, rest_command)
         comparison = tuple(compare_kinds(trial, delay.samples, dt, rest_command, method,
                                          FIRST_KINDS, lag=delay.lag))
         chosen = choose_kind(comparison)
@@ -382,40 +397,24 @@ def identify(records: Sequence[Record], *, method: FitMethod = 'rr', kind: KindC
             chosen = choose_kind(comparison)
     fit: MapFit[StaticMap] = sdp_fit if chosen == 'sdp' else _fit_kind(
         chosen, data, points, rest_command, method, sdp_fit.static_map)
-    limits = angle_limits
-    low_stop, high_stop = segmentation.end_stops
-    if limits is None and low_stop is not None and high_stop is not None:
-        limits = (low_stop, high_stop)
     effects: tuple[Effect, ...] = (ValveLag(delay.lag),) if delay.lag > 0.0 else ()
-    # Stamps are integer nanoseconds: round the delay there, not at float noise.
     model = JointModel(joint=next(iter(joints)) or 'joint', static_map=fit.static_map,
-                       delay=round(delay.samples * dt, 9), angle_limits=limits,
+                       delay=whole_samples_seconds(delay.samples, dt), angle_limits=limits,
                        input_limits=input_limits, effects=effects)
     mae = data.simulation_mae(fit.static_map.rate)
+    stops = limits if limits is not None else (low_stop, high_stop)
+    reach = stop_reach(segmentation.noise_std)
     geometry = fit_stroke_geometry(sample, fit.static_map.rate, delay.samples, dt, delay.lag,
-                                   (low_stop, high_stop))
-    refit = fit
-    if geometry is not None and experiments_mae(
-            replace(model, effects=effects + (geometry,)), sample, dt) >= \
-            (1.0 - GEOMETRY_GAIN) * experiments_mae(model, sample, dt):
-        geometry = None         # no gain even before the map is refitted under it
-    for _ in range(GEOMETRY_ROUNDS):
-        if geometry is None:
-            break
-        # Refit the map under the factor (taken at the measured angles), then the factor
-        # under the new map: the two share the speed's scale, so they alternate.
-        shaped_data = FitData(pieces, delay.samples, dt, delay.lag, speed_gains(
-            pieces, refit.static_map.rate, delay.samples, dt, delay.lag, geometry))
-        refit = _fit_kind(chosen, shaped_data, points, rest_command, method, sdp_fit.static_map)
-        geometry = fit_stroke_geometry(sample, refit.static_map.rate, delay.samples, dt,
-                                       delay.lag, (low_stop, high_stop))
+                                   stops, reach)
     if geometry is not None:
-        shaped = replace(model, static_map=refit.static_map, effects=effects + (geometry,))
-        before, after = experiments_mae(model, sample, dt), experiments_mae(shaped, sample, dt)
-        if after < (1.0 - GEOMETRY_GAIN) * before:
-            model, fit, mae = shaped, refit, experiments_mae(shaped, pieces, dt)
-    return Identification(model, dt, delay, segmentation, points, fit, comparison, mae)
-
-
-__all__ = ['Identification', 'KINDS', 'KindScore', 'StrokeGeometry', 'choose_kind',
-           'compare_kinds', 'experiments_mae', 'identify', 'thin_evenly']
+        geometry_check = check_geometry(trial, model, delay, dt, stops, reach)
+        checks.append(geometry_check)
+        if geometry_check.kept:
+            shaped, refit = shape_with_geometry(
+                model, geometry, lambda gained: _fit_kind(chosen, gained, points, rest_command,
+                                                          method, sdp_fit.static_map),
+                fit, pieces, sample, delay, dt, stops, reach)
+            if shaped is not None:
+                model, fit, mae = shaped, refit, experiments_mae(shaped, pieces, dt)
+    return Identification(model, dt, delay, segmentation, points, fit, comparison, mae,
+                          tuple(checks))

@@ -15,11 +15,12 @@ from typing import Sequence
 
 from hydro_sdp.core.identification.change_windows import lagged_residual
 from hydro_sdp.core.identification.delay import level_speeds
-from hydro_sdp.core.identification.identify import _records_dt, PIECE_SAMPLES
+from hydro_sdp.core.identification.identify import PIECE_SAMPLES, records_period
 from hydro_sdp.core.identification.map_fit import fit_sdp, FitData
 from hydro_sdp.core.identification.segmentation import segment_records, split_long
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.records import Record
+from hydro_sdp.core.model.sample_period import whole_samples_seconds
 
 
 def paper_model(records: Sequence[Record], *, max_delay: float = 0.5,
@@ -42,7 +43,7 @@ def paper_model(records: Sequence[Record], *, max_delay: float = 0.5,
         An ``sdp`` model with the end stops seen in the data and no effects.
 
     """
-    dt = _records_dt(records)
+    dt = records_period(records)
     most = max(2, int(round(max_delay / dt)))
     segmentation = segment_records(records, max_delay=most, rest=rest)
     pieces = split_long(segmentation.experiments, PIECE_SAMPLES, most)
@@ -51,5 +52,5 @@ def paper_model(records: Sequence[Record], *, max_delay: float = 0.5,
     fit = fit_sdp(FitData(pieces, delay, dt), points, segmentation.rest, method='oe', starts=2)
     low, high = segmentation.end_stops
     limits = (low, high) if low is not None and high is not None else None
-    return JointModel(records[0].joint or 'joint', fit.static_map, round(delay * dt, 9),
-                      angle_limits=limits)
+    return JointModel(records[0].joint or 'joint', fit.static_map,
+                      whole_samples_seconds(delay, dt), angle_limits=limits)

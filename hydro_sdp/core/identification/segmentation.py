@@ -22,7 +22,8 @@ from typing import Sequence
 
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import DataError
-from hydro_sdp.core.identification.end_stops import clamp_start, pushes_into_stop, stop_window
+from hydro_sdp.core.identification.end_stops import (
+    arrival_at_stop, clamp_start, pushes_into_stop, stop_reach, stop_window)
 from hydro_sdp.core.identification.rest import estimate_rest_command
 from hydro_sdp.core.model.records import Record
 import numpy as np
@@ -150,7 +151,7 @@ def check_record(record: Record, *, min_samples: int = 50, max_gap: float = 3.0)
     Returns
     -------
     float
-        Median sample period, s.
+        Nominal sample period, s (:func:`hydro_sdp.core.model.sample_period.nominal_period`).
 
     Raises
     ------
@@ -164,7 +165,7 @@ def check_record(record: Record, *, min_samples: int = 50, max_gap: float = 3.0)
     if len(record) < min_samples:
         raise DataError(f'{label}: too few samples ({len(record)}; need at least {min_samples})')
     steps = np.diff(record.t)
-    period = float(np.median(steps))
+    period = record.sample_period
     gaps = np.flatnonzero(steps > max_gap * period)
     if gaps.size:
         k = int(gaps[0])
@@ -285,20 +286,46 @@ def segment_record(record: Record, *, max_delay: int, rest: float | None = None,
                  float(np.max(stops[1])) if stops[1] else None)
     if angle_limits is not None:
         end_stops = angle_limits
-    kept, at_stop = _drop_held(experiments, end_stops, rest, record)
+    kept, at_stop = _drop_held(experiments, end_stops, rest, record, noise)
     return Segmentation(kept, tuple(dropped) + at_stop, rest, noise, end_stops)
 
 
 def _drop_held(experiments: Sequence[Experiment], stops: tuple[float | None, float | None],
-               rest: float, record: Record) -> tuple[tuple[Experiment, ...],
-                                                     tuple[Dropped, ...]]:
+               rest: float, record: Record, noise: float) -> tuple[tuple[Experiment, ...],
+                                                                   tuple[Dropped, ...]]:
     # Steps that start at a stop and push into it: zero speed there is true but
     # says nothing about the valve.
     held = [e for e in experiments if e.kind == 'step'
             and pushes_into_stop(e.y[e.start:], e.level, rest, stops)]
-    return (tuple(e for e in experiments if e not in held),
-            tuple(Dropped(e.t0, 'held against an end stop', record.source,
-                          record.since_start(e.t0)) for e in held))
+    kept, dropped = [], []
+    for e in experiments:
+        if e in held:
+            dropped.append(Dropped(e.t0, 'held against an end stop', record.source,
+                                   record.since_start(e.t0)))
+            continue
+        trimmed = _trim_at_stop(e, stops, rest, stop_reach(noise))
+        if trimmed is None:
+            dropped.append(Dropped(e.t0, 'clamped by an end stop', record.source,
+                                   record.since_start(e.t0)))
+        else:
+            kept.append(trimmed)
+    return tuple(kept), tuple(dropped)
+
+
+def _trim_at_stop(experiment: Experiment, stops: tuple[float | None, float | None],
+                  rest: float, reach: float) -> Experiment | None:
+    """Cut a step where it arrives at the stop its command drives into (None: too short)."""
+    if experiment.kind != 'step':
+        return experiment
+    arrival = arrival_at_stop(experiment.y[experiment.start:], experiment.level, rest, stops,
+                              reach)
+    if arrival is None:
+        return experiment
+    if arrival < MIN_SAMPLES:
+        return None
+    stop = experiment.start + arrival + 1
+    return Experiment(experiment.v[:stop], experiment.y[:stop], experiment.start,
+                      experiment.kind, experiment.level, experiment.t0, experiment.source)
 
 
 def split_long(experiments: Sequence[Experiment], max_samples: int,
@@ -407,7 +434,8 @@ def segment_records(records: Sequence[Record], *, max_delay: int,
     highs = [p.end_stops[1] for p in parts if p.end_stops[1] is not None]
     stops = (min(lows) if lows else None, max(highs) if highs else None)
     # A stop seen in one record holds in the others.
-    held = [_drop_held(p.experiments, stops, rest, r) for p, r in zip(parts, ordered)]
+    held = [_drop_held(p.experiments, stops, rest, r, p.noise_std)
+            for p, r in zip(parts, ordered)]
     return Segmentation(
         tuple(e for kept, _ in held for e in kept),
         tuple(d for p, (_, more) in zip(parts, held) for d in p.dropped + more), rest,

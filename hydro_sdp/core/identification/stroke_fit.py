@@ -8,8 +8,9 @@ shared factors and the per-direction parts are one (slightly smoothed) least
 squares problem. Knots are spread evenly over the angles the joint moved
 through, with two more near each end where the cushions act. The factor is
 identified only when the data span the stroke (the joint moved through most
-of the range between its stops, in both directions) and kept only when it
-lowers the simulation error of the experiments.
+of the range between its stops, in both directions), never from samples where
+the joint sits at a stop, and kept only when it lowers the simulation error of
+held-out experiments (:mod:`.effect_check`).
 
 """
 
@@ -18,6 +19,8 @@ from __future__ import annotations
 from typing import Literal, Sequence
 
 from hydro_sdp.core.arrays import FloatArray
+from hydro_sdp.core.identification.effect_check import at_stop
+from hydro_sdp.core.identification.end_stops import STOP_REACH
 from hydro_sdp.core.identification.segmentation import Experiment
 from hydro_sdp.core.model.effects import StrokeGeometry
 from hydro_sdp.core.model.timing import delayed_at
@@ -251,8 +254,8 @@ def geometry_of(knots: FloatArray, shared: FloatArray,
 
 def fit_stroke_geometry(experiments: Sequence[Experiment], rate_of: object, delay: int,
                         dt: float, lag: float,
-                        stops: tuple[float | None, float | None] = (None, None)
-                        ) -> StrokeGeometry | None:
+                        stops: tuple[float | None, float | None] = (None, None),
+                        reach: float = STOP_REACH) -> StrokeGeometry | None:
     """
     Fit a shared angle factor with a per-direction part, if the data span the stroke.
 
@@ -270,6 +273,9 @@ def fit_stroke_geometry(experiments: Sequence[Experiment], rate_of: object, dela
         Valve lag time constant, s.
     stops : tuple
         End stops seen, degrees (None where none was seen).
+    reach : float
+        How near a stop the joint counts as sitting at it, degrees: samples there
+        that drive it into the stop are left out (:func:`.effect_check.at_stop`).
 
     Returns
     -------
@@ -279,7 +285,7 @@ def fit_stroke_geometry(experiments: Sequence[Experiment], rate_of: object, dela
     """
     w, dy, previous = model_speeds(experiments, rate_of, delay, dt, lag)
     peak = float(np.max(np.abs(w))) if w.size else 0.0
-    moving = np.abs(w) > 0.1 * peak
+    moving = (np.abs(w) > 0.1 * peak) & ~at_stop(previous, w, stops, reach)
     if peak <= 0.0 or np.sum(moving) < 50 * KNOTS:
         return None
     low, high = float(np.min(previous)), float(np.max(previous))

@@ -29,6 +29,7 @@ from typing import Sequence
 
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import DataError
+from hydro_sdp.core.model.sample_period import period_of_stamps
 import numpy as np
 
 #: Fewest samples a piece cut at a gap must have to be kept (what identification needs).
@@ -163,10 +164,10 @@ class Record:
 
     @property
     def sample_period(self) -> float:
-        """Median spacing of the time stamps, s."""
+        """Nominal spacing of the time stamps, s (:func:`.sample_period.period_of_stamps`)."""
         if self.t.size < 2:
             raise DataError(f'{self._label()}: needs at least two samples for a sample period')
-        return float(np.median(np.diff(self.t)))
+        return period_of_stamps(self.t)
 
     @property
     def duration(self) -> float:

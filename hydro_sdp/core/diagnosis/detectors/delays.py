@@ -11,6 +11,7 @@ from hydro_sdp.core.diagnosis.results import Candidate, Trial
 from hydro_sdp.core.identification.delay import estimate_delay
 from hydro_sdp.core.identification.segmentation import thin
 from hydro_sdp.core.model.effects import DirectionDependentDelay
+from hydro_sdp.core.model.sample_period import whole_samples_seconds
 
 
 class TimeDelayDetector(Detector):
@@ -45,7 +46,7 @@ class TimeDelayDetector(Detector):
         if best == current:
             return Candidate(self.word, True, evidence=f'the data agree with the delay of '
                              f'{current} samples'), None
-        delay = round(best * context.dt, 9)
+        delay = whole_samples_seconds(best, context.dt)
         candidate = replace(context.model, delay=delay)
         return context.score(self.word, candidate, {'delay': delay},
                              f'speed changes follow command changes after {best} samples, '
@@ -80,8 +81,8 @@ class DirectionDependentDelayDetector(Detector):
         if positive == negative or cost(positive, negative) >= base:
             return Candidate(self.word, True, evidence='both directions start after the same '
                              'delay'), None
-        effect = DirectionDependentDelay(round(positive * context.dt, 9),
-                                         round(negative * context.dt, 9))
+        effect = DirectionDependentDelay(whole_samples_seconds(positive, context.dt),
+                                         whole_samples_seconds(negative, context.dt))
         return context.score(self.word, context.model.with_effect(effect),
                              {'positive': effect.positive, 'negative': effect.negative},
                              f'motion in the positive direction starts {positive} samples '

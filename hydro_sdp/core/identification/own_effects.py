@@ -1,0 +1,190 @@
+"""
+The effects ``identify`` proposes by itself: checked on held-out experiments, then fitted.
+
+A ``valve_lag`` comes with the dead time (:mod:`.change_windows`), a
+``stroke_geometry`` factor when the runs span the stroke (:mod:`.stroke_fit`).
+:func:`check_lag` and :func:`check_geometry` say whether each lowers the error
+of experiments it was not fitted on by a clear margin (:mod:`.effect_check`);
+:func:`shape_with_geometry` then refits the map under the factor.
+
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+import math
+from typing import Callable, Sequence
+
+from hydro_sdp.core.errors import HydroSdpError
+from hydro_sdp.core.identification.change_windows import (
+    ChangeWindows, fit_delay_lag_and_pure, lag_pole)
+from hydro_sdp.core.identification.delay import DelayEstimate
+from hydro_sdp.core.identification.effect_check import (
+    held_out, HeldOut, INCREMENT_GAIN, simulation_errors)
+from hydro_sdp.core.identification.family_choice import folds
+from hydro_sdp.core.identification.map_fit import FitData, MapFit
+from hydro_sdp.core.identification.segmentation import Experiment
+from hydro_sdp.core.identification.stroke_fit import fit_stroke_geometry, speed_gains
+from hydro_sdp.core.model.effects import StrokeGeometry
+from hydro_sdp.core.model.joint_model import JointModel
+from hydro_sdp.core.model.static_maps import StaticMap
+import numpy as np
+
+#: The stroke factor refitted with the map is kept when it lowers the simulation error of
+#: the experiments by this share at least (after its held-out check).
+GEOMETRY_GAIN = 0.05
+#: Alternations of map and stroke factor.
+GEOMETRY_ROUNDS = 3
+
+#: Refits the chosen map family to data whose speeds carry known gains.
+MapRefit = Callable[[FitData], MapFit[StaticMap]]
+
+
+def check_lag(experiments: Sequence[Experiment], delay: DelayEstimate, dt: float, rest: float,
+              max_delay: int) -> HeldOut:
+    """
+    Held-out error of the increments around command changes, with and without a lag.
+
+    On each fold the dead time and lag are fitted on the training part
+    (:func:`~.change_windows.fit_delay_lag_and_pure`), and the test part's
+    increments around its command changes are explained with them and with the
+    training part's best pure delay; the errors are the root mean square of what is
+    left, degrees per sample. Like the fit itself this is free of any map shape,
+    so a map family that fits the joint poorly cannot hide the lag or invent it.
+
+    Parameters
+    ----------
+    experiments : sequence of Experiment
+        Experiments to deal into folds (:func:`~.family_choice.folds`).
+    delay : DelayEstimate
+        The delay and lag fitted on all experiments (its lag is what is checked).
+    dt : float
+        Sample period, s.
+    rest : float
+        Rest command.
+    max_delay : int
+        Largest dead time, samples.
+
+    Returns
+    -------
+    HeldOut
+        The comparison (:mod:`.effect_check`).
+
+    """
+    pooled = np.zeros(2)
+    count = 0.0
+    per_fold = []
+    for train, test in folds(experiments, rest):
+        windows = ChangeWindows(test, max_delay)
+        if windows.windows == 0:
+            continue
+        try:
+            dead, lag, _, pure = fit_delay_lag_and_pure(train, dt, max_delay)
+        except HydroSdpError:
+            continue
+        before = windows.residual(pure, 0.0)
+        after = windows.residual(dead, lag_pole(lag, dt)) if lag > 0.0 else before
+        samples = float(np.sum(windows.length))
+        pooled += (before, after)
+        count += samples
+        per_fold.append((math.sqrt(before / samples), math.sqrt(after / samples)))
+    if count == 0.0 or delay.lag <= 0.0:
+        return HeldOut('valve_lag', 0.0, 0.0, tuple(per_fold), INCREMENT_GAIN)
+    return HeldOut('valve_lag', math.sqrt(pooled[0] / count), math.sqrt(pooled[1] / count),
+                   tuple(per_fold), INCREMENT_GAIN)
+
+
+def check_geometry(experiments: Sequence[Experiment], model: JointModel, delay: DelayEstimate,
+                   dt: float, stops: tuple[float | None, float | None],
+                   reach: float) -> HeldOut:
+    """
+    Held-out errors of the model without and with a stroke factor fitted on each training part.
+
+    Parameters
+    ----------
+    experiments : sequence of Experiment
+        Experiments to deal into folds (:func:`~.family_choice.folds`).
+    model : JointModel
+        The model without the factor (its map fitted on all experiments).
+    delay : DelayEstimate
+        Delay and lag.
+    dt : float
+        Sample period, s.
+    stops : tuple
+        End stops seen, degrees.
+    reach : float
+        How near a stop counts as at it, degrees.
+
+    Returns
+    -------
+    HeldOut
+        The comparison (:mod:`.effect_check`).
+
+    """
+    def shaped(train: Sequence[Experiment]) -> JointModel | None:
+        geometry = fit_stroke_geometry(train, model.static_map.rate, delay.samples, dt,
+                                       delay.lag, stops, reach)
+        return None if geometry is None else replace(model, effects=model.effects + (geometry,))
+    return held_out('stroke_geometry', folds(experiments, model.rest_command),
+                    lambda train: model, shaped, dt)
+
+
+def _mae(model: JointModel, experiments: Sequence[Experiment], dt: float) -> float:
+    total, count = simulation_errors(model, experiments, dt)
+    return total / max(count, 1)
+
+
+def shape_with_geometry(model: JointModel, geometry: StrokeGeometry | None, refit_map: MapRefit,
+                        first: MapFit[StaticMap], pieces: Sequence[Experiment],
+                        sample: Sequence[Experiment], delay: DelayEstimate, dt: float,
+                        stops: tuple[float | None, float | None], reach: float
+                        ) -> tuple[JointModel | None, MapFit[StaticMap]]:
+    """
+    Refit the map under the stroke factor, then the factor under the new map, in turn.
+
+    The two share the speed's scale, so they alternate (:data:`GEOMETRY_ROUNDS`);
+    the result stands when it lowers the error of the experiments by
+    :data:`GEOMETRY_GAIN`.
+
+    Parameters
+    ----------
+    model : JointModel
+        The model without the factor.
+    geometry : StrokeGeometry or None
+        The factor fitted under the model's map.
+    refit_map : callable
+        Refits the chosen map family to data with known gains on the speed.
+    first : MapFit
+        The fit of the chosen map family without the factor.
+    pieces, sample : sequence of Experiment
+        All experiments, and the (thinned) ones the factor is fitted on.
+    delay : DelayEstimate
+        Delay and lag.
+    dt : float
+        Sample period, s.
+    stops : tuple
+        End stops seen, degrees.
+    reach : float
+        How near a stop counts as at it, degrees.
+
+    Returns
+    -------
+    tuple
+        ``(model, fit)``: the shaped model (None when it gains too little) and the
+        map fit under the factor.
+
+    """
+    refit = first
+    for _ in range(GEOMETRY_ROUNDS):
+        if geometry is None:
+            break
+        # The factor is taken at the measured angles: known gains on the speed.
+        refit = refit_map(FitData(pieces, delay.samples, dt, delay.lag, speed_gains(
+            pieces, refit.static_map.rate, delay.samples, dt, delay.lag, geometry)))
+        geometry = fit_stroke_geometry(sample, refit.static_map.rate, delay.samples, dt,
+                                       delay.lag, stops, reach)
+    if geometry is None:
+        return None, refit
+    shaped = replace(model, static_map=refit.static_map, effects=model.effects + (geometry,))
+    before, after = _mae(model, sample, dt), _mae(shaped, sample, dt)
+    return (shaped if after < (1.0 - GEOMETRY_GAIN) * before else None), refit

@@ -1,0 +1,166 @@
+"""
+CSV logs of one joint, read as records ready to be written as bags.
+
+A logger writes one row per sample: the time (s), the measured angle and the
+command it applied at that time. Columns are chosen by header name or by
+0-based index; the header is the row above the first row of numbers when none
+of its cells is a number (lines of the logger's own above it are skipped;
+:mod:`.csv_table`). Row numbers in messages are those a spreadsheet shows: the
+file's line.
+
+Timing (docs/methods.md section 3.4). A record's ``v_k`` is the command in
+force over the interval ``(t_{k-1}, t_k]`` that ends at sample ``t_k``. The
+command on row ``k`` is the one the logger applied at ``t_k``, so it is in
+force over the interval *after* the row: ``v_{k+1}`` = command of row ``k``,
+and the angle of row ``k + 1`` is the first that can show it. Before the first
+row the command is taken to be the first row's (rule 3: ``timing.delayed`` by
+one sample); the last row's command acts after the last angle and is unused.
+Written with :func:`hydro_sdp.bags.write_bag`, the command of row ``k`` is
+stamped at ``t_k`` itself, which is what the logger did, and reads back as the
+same record.
+
+Time. Only differences of the time column matter: it may start at any value
+(logger clock, Unix time, negative). It is shifted so the first row lands one
+period ``t_1 - t_0`` after ``t = 0``, where a bag must start (its first
+command is stamped one period before the first sample). Irregular steps are
+kept as they are; steps that repeat or go backwards are refused.
+
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+import os
+from pathlib import Path
+
+from hydro_sdp.core.arrays import FloatArray
+from hydro_sdp.core.errors import DataError
+from hydro_sdp.core.model.records import Record
+from hydro_sdp.core.model.timing import delayed
+from hydro_sdp.io.documents import read_text
+from hydro_sdp.io.logs.csv_table import CsvTable
+from hydro_sdp.io.logs.machine_log import machine_log
+from hydro_sdp.io.logs.signals_file import single_joint_spec
+import numpy as np
+
+
+@dataclass(frozen=True, eq=False)
+class CsvLog:
+    """
+    One CSV log as a record.
+
+    Parameters
+    ----------
+    record : Record
+        ``t`` (s, shifted), ``v`` (input units, the command in force over the
+        interval ending at each row), ``y`` (degrees).
+    time_shift : float
+        Seconds added to the time column.
+
+    """
+
+    record: Record
+    time_shift: float
+
+
+def record_from_log(t: FloatArray, y: FloatArray, command: FloatArray, *, joint: str,
+                    source: str = '') -> CsvLog:
+    """
+    Turn logged rows into a record by the timing rule of the module docstring.
+
+    Parameters
+    ----------
+    t : FloatArray
+        Time of each row, s, strictly increasing (any start).
+    y : FloatArray
+        Angle of each row, degrees.
+    command : FloatArray
+        Command the logger applied at each row's time, input units.
+    joint : str
+        Joint name.
+    source : str
+        Where the rows came from, for messages.
+
+    Returns
+    -------
+    CsvLog
+        The record (``v_k`` = command of row ``k - 1``; ``v_0`` = command of row 0)
+        and the time shift.
+
+    """
+    t = np.asarray(t, dtype=np.float64)
+    if t.size < 2:
+        raise DataError(f'{source or "log"}: {t.size} rows; a log needs at least 2')
+    period = t[1] - t[0]
+    # (t - t_0) is exact for nearby values, so large clock values lose nothing more.
+    shifted = t if t[0] == period else (t - t[0]) + period
+    record = Record(shifted, delayed(np.asarray(command, dtype=np.float64), 1), y,
+                    joint=joint, source=source)
+    return CsvLog(record, float(shifted[0] - t[0]))
+
+
+def parse_csv_log(text: str, *, joint: str, time: str, angle: str, command: str,
+                  command_negative: str | None = None, angle_unit: str = 'deg',
+                  delimiter: str = ',', source: str = 'csv',
+                  header_row: int | None = None) -> CsvLog:
+    """
+    Parse the text of one CSV log.
+
+    Parameters
+    ----------
+    text : str
+        The file's content.
+    joint : str
+        Joint name for the record.
+    time, angle, command : str
+        Columns (header name or 0-based index) of the time (s), the angle and
+        the command.
+    command_negative : str or None
+        Column subtracted from ``command`` (one-sided duty of the other
+        direction's valve).
+    angle_unit : str
+        ``deg`` or ``rad``.
+    delimiter : str
+        Cell delimiter, one character (see :func:`.csv_table.delimiter_character`).
+    source : str
+        Name of the file, for messages.
+    header_row : int or None
+        Spreadsheet number of the header row (default: found).
+
+    Returns
+    -------
+    CsvLog
+        The record and the time shift.
+
+    """
+    spec = single_joint_spec(joint, angle, command, time=time,
+                             command_negative=command_negative, angle_unit=angle_unit)
+    table = CsvTable(text, time, delimiter=delimiter, source=source, header_row=header_row)
+    log = machine_log(table, spec)
+    return CsvLog(log.records[0], log.time_shift)
+
+
+def read_csv_log(path: str | os.PathLike[str], *, joint: str, time: str, angle: str,
+                 command: str, command_negative: str | None = None, angle_unit: str = 'deg',
+                 delimiter: str = ',', header_row: int | None = None) -> CsvLog:
+    """
+    Read one CSV log file (UTF-8, with or without a byte-order mark).
+
+    Parameters
+    ----------
+    path : str or PathLike
+        The file.
+    joint, time, angle, command, command_negative, angle_unit, delimiter, header_row
+        As for :func:`parse_csv_log`.
+
+    Returns
+    -------
+    CsvLog
+        The record and the time shift.
+
+    """
+    source = Path(path)
+    text = read_text(source, DataError, kind='a CSV file', byte_order_mark=True)
+    return parse_csv_log(text, joint=joint, time=time, angle=angle, command=command,
+                         command_negative=command_negative, angle_unit=angle_unit,
+                         delimiter=delimiter, source=str(source), header_row=header_row)

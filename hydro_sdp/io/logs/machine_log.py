@@ -1,0 +1,202 @@
+"""
+A logger's file as a machine's records: every joint, its command, and more signals.
+
+The first joint's angle samples are the time base; every other channel (the
+other joints' angles, the commands, the pressures) is put on it by holding its
+last value (:func:`~hydro_sdp.io.logs.table.held_at`). The records share their
+time stamps, shifted so the first sample lands one sample period after
+``t = 0`` (where a bag must start: its first command is stamped a period
+before the first sample); only differences of time matter.
+
+"""
+
+from __future__ import annotations
+
+from contextlib import contextmanager
+from dataclasses import dataclass
+import os
+from pathlib import Path
+from typing import Iterator, Mapping
+
+from hydro_sdp.core.arrays import FloatArray
+from hydro_sdp.core.errors import DataError
+from hydro_sdp.core.model.records import Record
+from hydro_sdp.io.documents import read_text
+from hydro_sdp.io.logs.csv_table import CsvTable
+from hydro_sdp.io.logs.mat_table import MAT_SUFFIXES, MatTable
+from hydro_sdp.io.logs.mdf_table import MDF_SUFFIXES, MdfTable
+from hydro_sdp.io.logs.signals_file import MachineSpec
+from hydro_sdp.io.logs.table import check_channel, held_at, LogTable, nanoseconds
+import numpy as np
+
+
+@dataclass(frozen=True, eq=False)
+class MachineLog:
+    """
+    One logger's file read as records.
+
+    Parameters
+    ----------
+    records : tuple[Record, ...]
+        One per joint, in the signals file's order, sharing their time stamps:
+        ``t`` (s, shifted), ``v`` (the command in force over the interval ending
+        at each sample; zero for a joint without a command), ``y`` (degrees).
+    commanded : tuple[str, ...]
+        Joints that have a command channel.
+    signals : Mapping[str, FloatArray]
+        Each signal's value at each sample, by topic.
+    time_shift : float
+        Seconds added to the file's time.
+
+    """
+
+    records: tuple[Record, ...]
+    commanded: tuple[str, ...]
+    signals: Mapping[str, FloatArray]
+    time_shift: float
+
+    @property
+    def samples(self) -> int:
+        """Return the number of samples."""
+        return len(self.records[0])
+
+
+def log_kind(path: str | os.PathLike[str]) -> str:
+    """Return ``mdf``, ``mat`` or ``csv``: how a logger's file is read, by its name."""
+    suffix = Path(path).suffix.lower()
+    if suffix in MDF_SUFFIXES:
+        return 'mdf'
+    if suffix in MAT_SUFFIXES:
+        return 'mat'
+    return 'csv'
+
+
+@contextmanager
+def open_table(path: str | os.PathLike[str], time: str | None, *, time_role: str = '--time',
+               header_row: int | None = None, delimiter: str = ',') -> Iterator[LogTable]:
+    """
+    Open a logger's file by its kind (:func:`log_kind`); closed on leaving.
+
+    Parameters
+    ----------
+    path : str or PathLike
+        The file.
+    time : str or None
+        Time column or variable (optional for MDF4).
+    time_role : str
+        How messages name the time option.
+    header_row : int or None
+        CSV header row (spreadsheet number).
+    delimiter : str
+        CSV cell delimiter.
+
+    Yields
+    ------
+    LogTable
+        The file's channels.
+
+    """
+    kind = log_kind(path)
+    if kind == 'mdf':
+        mdf = MdfTable(path, time, time_role=time_role)
+        try:
+            yield mdf
+        finally:
+            mdf.close()
+    elif kind == 'mat':
+        mat = MatTable(path, time, time_role=time_role)
+        try:
+            yield mat
+        finally:
+            mat.close()
+    else:
+        text = read_text(path, DataError, kind='a CSV file', byte_order_mark=True)
+        yield CsvTable(text, time, delimiter=delimiter, source=str(path), header_row=header_row,
+                       time_role=time_role)
+
+
+def _role(spec: MachineSpec, joint: str, key: str) -> str:
+    if spec.source == 'command line':
+        return '--' + key.replace('_', '-')
+    return f'joints.{joint}.{key}'
+
+
+def machine_log(table: LogTable, spec: MachineSpec) -> MachineLog:
+    """
+    Read a machine's joints and signals from an open logger's file.
+
+    Parameters
+    ----------
+    table : LogTable
+        The file (:func:`open_table`).
+    spec : MachineSpec
+        Which channels are which (the signals file, or the single-joint options).
+
+    Returns
+    -------
+    MachineLog
+        The records and signals on the first joint's angle samples.
+
+    """
+    source = table.source
+    names = list(spec.joints)
+    first = spec.joints[names[0]]
+    base = check_channel(source, table.channel(first.angle, _role(spec, names[0], 'angle')))
+    if base.t.size < 2:
+        raise DataError(f'{source}: {base.label}: {base.t.size} sample; a log needs at least 2')
+    origin = float(base.t[0])
+    samples = nanoseconds(base.t, origin)
+    records = []
+    for name in names:
+        channels = spec.joints[name]
+        angle = base if name == names[0] else check_channel(
+            source, table.channel(channels.angle, _role(spec, name, 'angle')))
+        y = held_at(samples, angle, origin, command=False)
+        if channels.angle_unit == 'rad':
+            y = np.degrees(y)
+        v = np.zeros(samples.size)
+        for key, sign in (('command', 1.0), ('command_negative', -1.0)):
+            column = getattr(channels, key)
+            if column is not None:
+                command = check_channel(source, table.channel(column, _role(spec, name, key)))
+                v = v + sign * held_at(samples, command, origin, command=True)
+        records.append((name, v, y))
+    signals = {}
+    for topic, column in spec.signals.items():
+        role = '--load' if spec.source == 'command line' else f'signals.{topic.lstrip("/")}'
+        signal = check_channel(source, table.channel(column, role))
+        signals[topic] = held_at(samples, signal, origin, command=False)
+    period = float(samples[1] - samples[0]) * 1e-9
+    t = samples * 1e-9 + period
+    return MachineLog(tuple(Record(t, v, y, joint=name, source=source)
+                            for name, v, y in records),
+                      tuple(name for name in names if spec.joints[name].command is not None),
+                      signals, float(t[0] - origin))
+
+
+def read_machine_log(path: str | os.PathLike[str], spec: MachineSpec, *,
+                     header_row: int | None = None, delimiter: str = ',') -> MachineLog:
+    """
+    Read a logger's file (CSV, MDF4 or MATLAB) as a machine's records.
+
+    Parameters
+    ----------
+    path : str or PathLike
+        The file.
+    spec : MachineSpec
+        Which channels are which.
+    header_row : int or None
+        CSV header row (spreadsheet number; default: found).
+    delimiter : str
+        CSV cell delimiter.
+
+    Returns
+    -------
+    MachineLog
+        The records and signals.
+
+    """
+    role = '--time' if spec.source == 'command line' else 'time'
+    with open_table(path, spec.time, time_role=role, header_row=header_row,
+                    delimiter=delimiter) as table:
+        return machine_log(table, spec)

@@ -1,0 +1,203 @@
+"""
+The signals file: which channels of a logger's file are a machine's joints and signals.
+
+.. code-block:: yaml
+
+    time: t                    # column or variable (MDF4: the channels' own time base)
+    angle_unit: deg            # or rad
+    joints:
+      boom: {angle: Boom_ang, command: Boom_up_duty, command_negative: Boom_dn_duty}
+      arm:  {angle: Arm_ang,  command: Arm_out_duty}
+    signals:                   # more std_msgs/Float64 topics, e.g. for --load-topic
+      boom/head_pressure: Boom_head_P
+
+Every joint needs its ``angle``; ``command`` (and ``command_negative``,
+subtracted from it) give ``/<joint>/valve_command``; a joint may set its own
+``angle_unit``. Each signal becomes the Float64 topic ``/<topic>``. Unknown
+keys are refused, so a misspelt key never silently drops a channel
+(docs/interfaces.md section 2.1).
+
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+import os
+import re
+from typing import Any, Mapping
+
+from hydro_sdp.core.errors import ConfigurationError
+from hydro_sdp.io.documents import load_yaml
+
+#: Units of an angle channel.
+ANGLE_UNITS = ('deg', 'rad')
+#: Keys of the file, of a joint, in order.
+FILE_KEYS = ('time', 'angle_unit', 'joints', 'signals')
+JOINT_KEYS = ('angle', 'command', 'command_negative', 'angle_unit')
+#: A joint name (a JointState name and the first part of its topics) and a topic name.
+JOINT_NAME = re.compile(r'[A-Za-z][A-Za-z0-9_]*\Z')
+TOPIC_NAME = re.compile(r'/?[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*\Z')
+
+
+@dataclass(frozen=True)
+class JointChannels:
+    """
+    The channels of one joint.
+
+    Parameters
+    ----------
+    angle : str
+        Angle channel.
+    command : str or None
+        Command channel (None: the joint is only measured).
+    command_negative : str or None
+        Channel subtracted from ``command`` (one valve coil per direction).
+    angle_unit : str
+        ``deg`` or ``rad``.
+
+    """
+
+    angle: str
+    command: str | None = None
+    command_negative: str | None = None
+    angle_unit: str = 'deg'
+
+
+@dataclass(frozen=True)
+class MachineSpec:
+    """
+    A machine's joints and signals in a logger's files.
+
+    Parameters
+    ----------
+    joints : Mapping[str, JointChannels]
+        Joints in order: the first joint's angle samples are the bag's time base.
+    signals : Mapping[str, str]
+        Float64 topic (with its leading slash) per channel.
+    time : str or None
+        Time column or variable, s (None: each channel's own time base, MDF4 only).
+    source : str
+        Where the description came from, for messages.
+
+    """
+
+    joints: Mapping[str, JointChannels]
+    signals: Mapping[str, str] = field(default_factory=dict)
+    time: str | None = None
+    source: str = 'command line'
+
+
+def _name(value: Any, where: str) -> str:
+    if isinstance(value, bool) or not isinstance(value, (str, int)) or str(value).strip() == '':
+        raise ConfigurationError(f'{where}: expected a channel name, got {value!r}')
+    return str(value)
+
+
+def _unit(value: Any, where: str) -> str:
+    if value not in ANGLE_UNITS:
+        raise ConfigurationError(f'{where}: angle unit must be deg or rad, got {value!r}')
+    return str(value)
+
+
+def _mapping(value: Any, where: str, keys: tuple[str, ...]) -> Mapping[str, Any]:
+    if not isinstance(value, Mapping):
+        raise ConfigurationError(f'{where}: expected a mapping, got {type(value).__name__}')
+    unknown = [str(key) for key in value if key not in keys]
+    if unknown:
+        raise ConfigurationError(f'{where}: unknown key {unknown[0]!r} (keys: '
+                                 f"{', '.join(keys)})")
+    return value
+
+
+def spec_from_mapping(data: Any, source: str) -> MachineSpec:
+    """
+    Build a :class:`MachineSpec` from a parsed signals file.
+
+    Parameters
+    ----------
+    data : Any
+        The parsed YAML document.
+    source : str
+        The file, for messages.
+
+    Returns
+    -------
+    MachineSpec
+        The joints and signals.
+
+    """
+    top = _mapping(data, source, FILE_KEYS)
+    unit = _unit(top.get('angle_unit', 'deg'), f'{source}: angle_unit')
+    joints_data = top.get('joints')
+    if not joints_data:
+        raise ConfigurationError(f'{source}: joints: at least one joint is needed')
+    joints = {}
+    for name, entry in _mapping(joints_data, f'{source}: joints',
+                                tuple(str(k) for k in joints_data)).items():
+        where = f'{source}: joints.{name}'
+        if not JOINT_NAME.match(str(name)):
+            raise ConfigurationError(f'{where}: a joint name is a letter, then letters, digits '
+                                     'or _')
+        if not isinstance(entry, Mapping) or 'angle' not in entry:
+            raise ConfigurationError(f'{where}: no angle (every joint needs its angle channel)')
+        entry = _mapping(entry, where, JOINT_KEYS)
+        command = entry.get('command')
+        negative = entry.get('command_negative')
+        if negative is not None and command is None:
+            raise ConfigurationError(f'{where}: command_negative without command')
+        joints[str(name)] = JointChannels(
+            _name(entry['angle'], f'{where}.angle'),
+            None if command is None else _name(command, f'{where}.command'),
+            None if negative is None else _name(negative, f'{where}.command_negative'),
+            _unit(entry.get('angle_unit', unit), f'{where}.angle_unit'))
+    signals = {}
+    for topic, channel in _mapping(top.get('signals') or {}, f'{source}: signals',
+                                   tuple(str(k) for k in (top.get('signals') or {}))).items():
+        where = f'{source}: signals.{topic}'
+        if not TOPIC_NAME.match(str(topic)):
+            raise ConfigurationError(f'{where}: not a topic name (letters, digits, _ and /)')
+        signals['/' + str(topic).lstrip('/')] = _name(channel, where)
+    commands = {f'/{joint}/valve_command' for joint, c in joints.items() if c.command}
+    clash = sorted(commands & set(signals))
+    if clash:
+        raise ConfigurationError(f'{source}: signals.{clash[0].lstrip("/")}: is a command topic')
+    time = top.get('time')
+    return MachineSpec(joints, signals, None if time is None else _name(time, f'{source}: time'),
+                       source)
+
+
+def load_signals(path: str | os.PathLike[str]) -> MachineSpec:
+    """
+    Read a signals file.
+
+    Parameters
+    ----------
+    path : str or PathLike
+        The YAML file.
+
+    Returns
+    -------
+    MachineSpec
+        The joints and signals.
+
+    """
+    return spec_from_mapping(load_yaml(path), str(path))
+
+
+def single_joint_spec(joint: str, angle: str, command: str, *, time: str | None = None,
+                      command_negative: str | None = None,
+                      angle_unit: str = 'deg') -> MachineSpec:
+    """
+    Return the spec the single-joint options give (``--joint --time --angle --command``...).
+
+    Returns
+    -------
+    MachineSpec
+        One joint, no signals.
+
+    """
+    if not joint:
+        raise ConfigurationError('joint name must not be empty')
+    _unit(angle_unit, '--angle-unit')
+    return MachineSpec({joint: JointChannels(angle, command, command_negative, angle_unit)},
+                       {}, time)

@@ -1,0 +1,147 @@
+"""
+A logger's file as channels, each with its own time base, and the rule that aligns them.
+
+CSV and MAT files hold one time column or variable for every channel; an MDF4
+file gives each channel group its own time base (a dSPACE or CANape log samples
+the angles at 100 Hz, the pressures at 1 kHz, the duties at 50 Hz). Every reader
+hands back :class:`Channel` objects; :func:`held_at` puts a channel on the
+angle's samples by holding its last value, as the bag readers do
+(docs/methods.md section 3.4):
+
+* a command is in force from the instant it was logged on, over the interval
+  after it: a sample at ``t_k`` sees the last command logged strictly before
+  ``t_k`` (a command logged on the same row as an angle acts after that angle);
+* a measured signal (another joint's angle, a pressure) at ``t_k`` is the last
+  value logged at or before ``t_k``;
+* before a channel's first value, that value is held.
+
+Times are compared as integer nanoseconds from the first angle sample, so a
+50 Hz and a 100 Hz clock that meet at an instant meet exactly.
+
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Protocol
+
+from hydro_sdp.core.arrays import FloatArray, IntArray
+from hydro_sdp.core.errors import DataError
+import numpy as np
+
+
+@dataclass(frozen=True, eq=False)
+class Channel:
+    """
+    One logged signal.
+
+    Parameters
+    ----------
+    name : str
+        Its name in the file.
+    t : FloatArray
+        Time of each value, s (any origin: the logger's clock, time since 1970).
+    values : FloatArray
+        The values, finite.
+    label : str
+        How messages name it (``channel 'Boom_ang'``, ``column 'angle'``...).
+
+    """
+
+    name: str
+    t: FloatArray
+    values: FloatArray
+    label: str
+
+
+class LogTable(Protocol):
+    """A logger's file: channels found by name (or column index), each with its time."""
+
+    source: str
+
+    def channel(self, name: str, role: str) -> Channel:
+        """
+        Return the channel ``name``, or raise a one-line :class:`DataError`.
+
+        Parameters
+        ----------
+        name : str
+            Channel, column or variable name (a 0-based index for a CSV column).
+        role : str
+            What it is for, for messages (``--angle``, ``joints.boom.angle``).
+
+        Returns
+        -------
+        Channel
+            Its values and their times.
+
+        """
+
+
+def check_channel(source: str, channel: Channel) -> Channel:
+    """
+    Refuse a channel whose values are not finite or whose time does not increase.
+
+    Parameters
+    ----------
+    source : str
+        The file, for messages.
+    channel : Channel
+        The channel.
+
+    Returns
+    -------
+    Channel
+        The same channel.
+
+    """
+    if channel.values.size == 0:
+        raise DataError(f'{source}: {channel.label}: no values')
+    if channel.t.shape != channel.values.shape:
+        raise DataError(f'{source}: {channel.label}: {channel.values.size} values for '
+                        f'{channel.t.size} times')
+    for what, values in (('value', channel.values), ('time', channel.t)):
+        bad = np.flatnonzero(~np.isfinite(values))
+        if bad.size:
+            raise DataError(f'{source}: {channel.label}: {bad.size} {what}s are NaN or infinite '
+                            f'(first at sample {bad[0]})')
+    steps = np.diff(channel.t)
+    wrong = np.flatnonzero(steps <= 0.0)
+    if wrong.size:
+        k = int(wrong[0])
+        kind = 'repeats' if steps[k] == 0.0 else 'goes backwards from'
+        more = f' ({wrong.size} times in all)' if wrong.size > 1 else ''
+        raise DataError(f'{source}: {channel.label}: time {channel.t[k + 1]:.12g} s at sample '
+                        f'{k + 1} {kind} {channel.t[k]:.12g} s{more}')
+    return channel
+
+
+def nanoseconds(t: FloatArray, origin: float) -> IntArray:
+    """Return times in integer nanoseconds from ``origin`` (s), differenced before scaling."""
+    return np.round((np.asarray(t, dtype=np.float64) - origin) * 1e9).astype(np.int64)
+
+
+def held_at(samples: IntArray, channel: Channel, origin: float, *, command: bool) -> FloatArray:
+    """
+    Return the value of a channel in force at each sample, holding its last value.
+
+    Parameters
+    ----------
+    samples : IntArray
+        Sample instants, ns from ``origin``.
+    channel : Channel
+        The channel.
+    origin : float
+        Time the nanoseconds count from, s (in the channel's clock).
+    command : bool
+        A command counts strictly before the sample; a measurement at or before it.
+
+    Returns
+    -------
+    FloatArray
+        One value per sample.
+
+    """
+    stamps = nanoseconds(channel.t, origin)
+    index = np.searchsorted(stamps, samples, side='left' if command else 'right') - 1
+    return channel.values[np.maximum(index, 0)]

@@ -1,0 +1,64 @@
+"""
+``calibrate`` on a bag that ``bag_recorder`` recorded over DDS, as the user guide records one.
+
+``plant_node`` (J2, 100 Hz, on the wall clock) and ``bag_recorder`` run as two processes
+in a fresh ROS domain; an outside client steps the valve open loop on its own 50 Hz
+timer, not in step with the plant. The bag is stamped since 1970 with the timers'
+jitter; calibrate must read the plant's period as 0.01 s, the delay as 15 samples
+(written 0.15), add no effect the plant does not have, and pass its closed-loop check.
+"""
+
+from contextlib import redirect_stdout
+import io
+import json
+import time
+
+from hydro_sdp.bags import read_bag
+from hydro_sdp.cli.main import main
+from hydro_sdp.io.model_files import load_model
+from outside import Processes
+import pytest
+from std_msgs.msg import Float64
+
+pytestmark = [pytest.mark.ros, pytest.mark.slow]
+
+#: Steps from rest, volts, each held HOLD s and followed by REST s at rest.
+LEVELS = (2.0, -2.0, 3.0, -3.0, 1.6, -1.6, 5.0, -5.0, 2.5, -2.5, 1.8, -1.8)
+HOLD, REST = 1.0, 0.8
+COMMAND_PERIOD = 0.02
+
+
+def test_calibrate_reads_a_bag_recorded_over_dds(monkeypatch, tmp_path):
+    bag = tmp_path / 'rec'
+    nodes = Processes(monkeypatch, ('plant_node', ['-p', 'noise_std:=0.02']),
+                      ('bag_recorder', ['-p', f'output:={bag}', '-p', "joint_names:=['j2']"]))
+    try:
+        valve = nodes.node.create_publisher(Float64, 'j2/valve_command', 10)
+        # Both the plant and the recorder listen, and the recorder has had time to find
+        # joint_states (it looks for topics every discovery_period).
+        assert nodes.spin_until(lambda: valve.get_subscription_count() >= 2, 60.0), \
+            nodes.died()
+        nodes.spin_for(3.0)
+        program = [step for level in LEVELS for step in ((level, HOLD), (0.0, REST))]
+        for level, hold in program:
+            end = time.monotonic() + hold
+            while time.monotonic() < end:
+                valve.publish(Float64(data=level))
+                nodes.spin_for(COMMAND_PERIOD)
+        nodes.stop('bag_recorder')
+    finally:
+        nodes.close()
+    data = read_bag(bag)
+    assert data.start > 1.7e18             # stamped with the wall clock
+    out = tmp_path / 'cal'
+    stdout = io.StringIO()
+    with redirect_stdout(stdout):
+        code = main(['calibrate', str(bag), '--out', str(out), '--json'])
+    assert code == 0
+    result = json.loads(stdout.getvalue())
+    model = load_model(result['model'])
+    assert model.delay == 0.15
+    assert result['effects'] == []
+    assert result['closed_loop']['passed']
+    params = (out / 'params.yaml').read_text()
+    assert 'sample_period' not in params      # the nodes' default 0.01 s: nothing to say
