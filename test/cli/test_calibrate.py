@@ -10,8 +10,9 @@ from hydro_sdp.bags import write_bag
 from hydro_sdp.cli.calibrate import read_inputs
 from hydro_sdp.cli.main import build_parser, main
 from hydro_sdp.core import calibration as core_calibration
-from hydro_sdp.core.calibration import calibrate, CalibrationSettings, chord_map, split_records
+from hydro_sdp.core.calibration import calibrate, CalibrationSettings, split_records
 from hydro_sdp.core.control.controller_spec import design_from_model
+from hydro_sdp.core.control.idz_design import chord_map
 from hydro_sdp.core.control.loop_check import check_loop, slower_poles, stroke_levels
 from hydro_sdp.core.control.loop_simulation import (
     LoopJoint, run_closed_loop, step_metrics, step_setpoints)
