@@ -6,40 +6,23 @@ from hydro_sdp.core.control.controller_spec import ControllerSpec, design_from_m
 from hydro_sdp.core.control.idz import InverseDeadZone
 from hydro_sdp.core.control.idz_design import chord_idz, default_form, idz_for_model
 from hydro_sdp.core.control.idz_table import chord_as_table, TableInverseDeadZone
+from hydro_sdp.core.control.idz_recalibration import recalibrated_idz
 from hydro_sdp.core.control.idz_table_design import command_span, table_idz
+from hydro_sdp.core.control.loop_simulation import (
+    LoopJoint, run_closed_loop, step_setpoints, valve_reversals)
 from hydro_sdp.core.control.pip_controller import ControllerSettings, PipIdzController
 from hydro_sdp.core.control.pip_design import PipGains
 from hydro_sdp.core.errors import ConfigurationError, DataError, ModelFileError
 from hydro_sdp.core.model.effects import ValveLag
 from hydro_sdp.core.model.joint_model import JointModel
-from hydro_sdp.core.model.static_maps import (
-    LinearMap, PolyMap, PowerSatMap, PwlMap, SdpDzMap, SdpMap)
+from hydro_sdp.core.model.static_maps import PwlMap, shifted_map
 from hypothesis import given, settings, strategies as st
 import numpy as np
 import pytest
+from support.map_families import MODELS
 
 PERIOD = 0.05
 PAPER = PipGains((0.1261,), (0.12, 0.1261), 0.0061)
-#: Maps of every family identify writes, in the units they come in: J2 in volts, a
-#: convex valve in signed percent (power_sat and pwl, as identified from an arm's logs),
-#: a polynomial, a piecewise-linear dead-zone and a linear map in percent resting at 50.
-MODELS = {
-    'sdp': JointModel('j2', SdpMap((-1.3298, 1.3124), (-29.51, 38.87), (1.356, 1.771)), 0.15,
-                      input_limits=(-10.0, 10.0)),
-    'power_sat': JointModel('arm', PowerSatMap((-31.52, 16.03), (-47.4, 32.32),
-                                               (0.02058, 0.01952), (2.198, 4.529)), 0.39,
-                            input_limits=(-100.0, 100.0)),
-    'pwl': JointModel('arm', PwlMap((-100.0, -80.0, -60.0, -40.0, -38.57, 38.67, 40.0, 60.0,
-                                     80.0, 100.0),
-                                    (-27.8, -25.8, -10.4, -0.9, 0.0, 0.0, 1.0, 12.5, 28.7,
-                                     31.3)), 0.38, input_limits=(-100.0, 100.0)),
-    'poly': JointModel('boom', PolyMap((0.2, 0.004), (0.25, 0.006), (-10.0, 10.0)), 0.1),
-    'sdp_dz': JointModel('pwm', SdpDzMap((32.0, 66.0), (0.9, 1.1)), 0.2,
-                         input_limits=(0.0, 100.0)),
-    'linear': JointModel('pwm', LinearMap(0.5), 0.1, input_limits=(-40.0, 40.0)),
-}
-
-
 @pytest.mark.parametrize('kind', sorted(MODELS))
 def test_the_table_inverts_the_map(kind):
     model = MODELS[kind]
@@ -237,3 +220,26 @@ def test_table_commands_are_finite_and_inside_the_valve(inputs, mode, beta):
         u, v = controller.step(setpoint, angle)
         assert np.isfinite(u) and -100.0 <= v <= 100.0
         assert table.u_range[0] <= u <= table.u_range[1]
+
+
+def test_a_recalibrated_table_stops_the_hunting_of_a_worn_valve(j2):
+    # The J2 valve's dead-zone narrows by 0.3 V on each side (wear): its table now
+    # over-compensates and the loop hunts; the edges the online identifier reports
+    # (here the true ones, with the chord slopes it sends) shift the table back.
+    worn = replace(j2, static_map=shifted_map(j2.static_map, (0.3, -0.3)))
+    spec = design_from_model(j2, form='table', noise_std=0.01)
+    recalibrated = recalibrated_idz(worn, worn.dead_zone, PERIOD)
+    table = spec.idz.with_slopes(recalibrated.slopes).with_edges(recalibrated.dead_zone)
+    assert table.dead_zone == pytest.approx(worn.dead_zone)
+    levels = [20.0, 35.0, 15.0, 30.0]
+    setpoint = step_setpoints(levels * 2, 4.0, 0.01)
+    ends = []
+    for idz in (spec.idz, table):
+        controller = replace(spec, idz=idz).controller()
+        trace = run_closed_loop([LoopJoint(worn, controller, setpoint, 20.0)], dt=0.01,
+                                control_period=PERIOD, noise_std=0.01, seed=4)[0]
+        tail = np.abs(trace.y - trace.setpoint).reshape(8, 400)[-4:, -50:]
+        ends.append((float(tail.max()), valve_reversals(trace.v[-1600:], idz.rest)))
+    (worst_before, reversals_before), (worst_after, reversals_after) = ends
+    assert worst_before > 0.5 or reversals_before > 20
+    assert worst_after < 0.5 and reversals_after < reversals_before
