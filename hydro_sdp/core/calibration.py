@@ -4,11 +4,15 @@ From a machine's recordings to a checked controller (the ``calibrate`` command).
 :func:`calibrate` chains what the other commands do one at a time: identify the
 joint (held-out choice of the map family), evaluate the model on validation
 records, diagnose what it misses and add the named effects, design the PIP-IDZ
-controller from the final model, and check it in closed loop on that final
-model with its effects (:mod:`.loop_check`); when the check fails the dominant
-poles move toward 1 and the controller is designed again, and the result says
-so. Without validation records, whole records are held out (never a piece of a
-record), and the result says which.
+controller from the final model (on its delay and valve lag; the chord IDZ for
+an ``sdp`` map, the map's own table for the others), and check it in closed
+loop on that final model with its effects and the records' noise
+(:mod:`.loop_check`). When chords fail the check the table takes their place;
+when the check still fails the dominant poles move toward 1 and the controller
+is designed again, and the result says so; if no design passes, the check is
+run again with each element idealised to say what stands in the way
+(:mod:`.loop_obstacles`). Without validation records, whole records are held
+out (never a piece of a record), and the result says which.
 
 """
 

@@ -14,7 +14,8 @@ from hydro_sdp.core.calibration import calibrate, CalibrationSettings, split_rec
 from hydro_sdp.core.control.controller_spec import design_from_model
 from hydro_sdp.core.control.design_plant import completed_poles
 from hydro_sdp.core.control.idz_design import chord_map
-from hydro_sdp.core.control.loop_check import check_loop, CheckSettings, slower_poles, stroke_levels
+from hydro_sdp.core.control.loop_check import (
+    check_loop, CheckSettings, slower_poles, stroke_levels)
 from hydro_sdp.core.control.loop_simulation import (
     LoopJoint, run_closed_loop, step_metrics, step_setpoints)
 from hydro_sdp.core.diagnosis.results import Signature

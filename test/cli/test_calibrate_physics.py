@@ -98,8 +98,8 @@ def test_a_pwm_arm_logged_stroke_by_stroke_is_calibrated_and_settles(tmp_path):
     machine = load_machine(shipped_config('physics_arm_pwm.yaml'))
 
     def runs(duties):
-        return [run for duty in duties for run in full_stroke_runs(machine, DT, (duty,),
-                                                                     seed=duty)]
+        return [run for duty in duties
+                for run in full_stroke_runs(machine, DT, (duty,), seed=duty)]
     result = calibrate(runs(ESTIMATION), runs(VALIDATION),
                        CalibrationSettings(input_limits=(0.0, 100.0)))
     assert result.check.passed, result.warnings

@@ -21,7 +21,7 @@ from hydro_sdp.io.controller_files import load_controller, save_controller
 from hydro_sdp.io.csv_logs import read_csv_log
 from hydro_sdp.io.documents import load_yaml
 import pytest
-from support.real_valve_joints import cases, cycles, settles, SETTLE, truth_loop
+from support.real_valve_joints import cases, cycles, SETTLE, settles, truth_loop
 
 
 def read_logs(paths, options):

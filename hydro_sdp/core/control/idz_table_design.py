@@ -155,7 +155,7 @@ def _branch(model: JointModel, rest: float, end: float,
     u_table, v_table = u[chosen], v[chosen]
     u_table[0] = 0.0
     keep = np.r_[True, np.diff(u_table) > 0.0]
-    return (sign * u_table[keep]).tolist(), v_table[keep].tolist()
+    return (sign * u_table[keep] + 0.0).tolist(), v_table[keep].tolist()   # no -0.0
 
 
 def table_idz(model: JointModel, control_period: float, *, beta: float,

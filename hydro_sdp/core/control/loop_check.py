@@ -5,7 +5,8 @@ The closed-loop check of a designed controller on a joint model, and slower re-d
 an angle factor...) over set-point steps across the stroke, up and down, and a
 ramp, and judges it: every step settles into the band within a bound, overshoots
 by at most 10 %, and no hold ends in a limit cycle (the valve hunting across
-rest, or the angle wandering more than the band). :func:`slower_poles` moves a
+rest, or the angle wandering more than the band), with the angle read through
+the noise the settings give. :func:`slower_poles` moves a
 design's dominant poles toward 1, for the re-design when the check fails.
 
 """

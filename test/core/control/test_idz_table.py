@@ -5,8 +5,8 @@ from dataclasses import replace
 from hydro_sdp.core.control.controller_spec import ControllerSpec, design_from_model
 from hydro_sdp.core.control.idz import InverseDeadZone
 from hydro_sdp.core.control.idz_design import chord_idz, default_form, idz_for_model
-from hydro_sdp.core.control.idz_table import chord_as_table, TableInverseDeadZone
 from hydro_sdp.core.control.idz_recalibration import recalibrated_idz
+from hydro_sdp.core.control.idz_table import chord_as_table, TableInverseDeadZone
 from hydro_sdp.core.control.idz_table_design import command_span, table_idz
 from hydro_sdp.core.control.loop_simulation import (
     LoopJoint, run_closed_loop, step_setpoints, valve_reversals)
@@ -23,6 +23,8 @@ from support.map_families import MODELS
 
 PERIOD = 0.05
 PAPER = PipGains((0.1261,), (0.12, 0.1261), 0.0061)
+
+
 @pytest.mark.parametrize('kind', sorted(MODELS))
 def test_the_table_inverts_the_map(kind):
     model = MODELS[kind]
