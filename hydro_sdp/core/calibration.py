@@ -33,7 +33,6 @@ from hydro_sdp.core.identification.evaluation import evaluate, RecordScore
 from hydro_sdp.core.identification.identify import Identification, identify
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.records import Record
-from hydro_sdp.core.model.static_maps import LinearMap, SdpDzMap, SdpMap
 import numpy as np
 
 #: The stages, in order, as :func:`calibrate` reports them.
@@ -199,24 +198,12 @@ def _identify(records: Sequence[Record], settings: CalibrationSettings,
     return identify(records, rest=settings.rest, **options)
 
 
-def _span(model: JointModel, identified: Identification) -> tuple[float, float] | None:
-    """Commands the chords of a non-``sdp`` map refer to: the measured levels, in the limits."""
-    if isinstance(model.static_map, (SdpMap, SdpDzMap, LinearMap)):
-        return None
-    levels = [p.level for p in identified.points]
-    span = (min(levels), max(levels))
-    if model.input_limits is not None:
-        span = (max(span[0], model.input_limits[0]), min(span[1], model.input_limits[1]))
-    return span
-
-
 class _Designer:
     """Designs the controller of the final model in one IDZ form, as calibrate asks."""
 
     def __init__(self, model: JointModel, settings: CalibrationSettings,
-                 span: tuple[float, float] | None, noise_std: float) -> None:
-        self.model, self.settings, self.span = model, settings, span
-        self.noise_std = noise_std
+                 noise_std: float) -> None:
+        self.model, self.settings, self.noise_std = model, settings, noise_std
         self.form: IdzForm = 'chord'
 
     def design(self, poles: Sequence[complex] | None = None,
@@ -224,8 +211,7 @@ class _Designer:
         """Design in the current form (LQ without ``poles``), for ``model`` or the final one."""
         return design_from_model(model if model is not None else self.model,
                                  control_period=self.settings.control_period, poles=poles,
-                                 form=self.form, noise_std=self.noise_std,
-                                 v_range=self.span if self.form == 'chord' else None)
+                                 form=self.form, noise_std=self.noise_std)
 
     def first(self, form: IdzForm) -> ControllerSpec:
         """Return the first design in ``form``: LQ, or the poles asked for, completed."""
@@ -316,7 +302,7 @@ def calibrate(records: Sequence[Record], validation: Sequence[Record] | None = N
     noise = noise if math.isfinite(noise) and noise > 0.0 else 0.0
     check_settings = settings.check if settings.check is not None else CheckSettings(
         dt=identified.sample_period, noise_std=noise)
-    designer = _Designer(final, settings, _span(final, identified), noise)
+    designer = _Designer(final, settings, noise)
     spec = designer.first(default_form(final))
     designs: list[tuple[str, ...]] = []
     forms: list[str] = []
@@ -350,11 +336,6 @@ def calibrate(records: Sequence[Record], validation: Sequence[Record] | None = N
                         f'again with slower poles {listed}')
         spec = slower
     assert check is not None  # the loop runs at least once
-    if designer.form == 'chord' and designer.span is not None and spec.idz is not None:
-        warnings.insert(0, f'the IDZ inverts chords of the {final.kind} map: dead-zone '
-                           f'[{spec.idz.dead_zone[0]:.4g}, {spec.idz.dead_zone[1]:.4g}], slopes '
-                           f'{spec.idz.slopes[0] / spec.control_period:.4g}, '
-                           f'{spec.idz.slopes[1] / spec.control_period:.4g} deg/s per unit')
     found: tuple[Obstacle, ...] = ()
     if not check.passed:
         warnings.append('the controller still fails the closed-loop check: '
