@@ -3,6 +3,7 @@
 from hydro_sdp.core.control.controller_spec import ControllerSpec, design_from_model
 from hydro_sdp.core.control.design_plant import (
     completed_poles, lagged_integrator, plant_for_model)
+from hydro_sdp.core.control.loop_noise import noise_gain
 from hydro_sdp.core.control.pip_design import (
     closed_loop_poles, DiscretePlant, lq_design, LqWeights, nmss, pole_assignment)
 from hydro_sdp.core.errors import ConfigurationError, ModelFileError
@@ -121,3 +122,31 @@ def test_refusals():
     with pytest.raises(ConfigurationError, match='at least one sample'):
         lagged_integrator(0, 0.1, 0.05)
     assert lagged_integrator(3, None, 0.05) == DiscretePlant.integrator(3)
+
+
+def _noise_to_u(plant, gains, samples=3000):
+    """Return u after a unit impulse on the measured angle, by the loop's own equations."""
+    a, b = np.r_[1.0, plant.a], np.r_[0.0, plant.b]
+    y, u = np.zeros(samples), np.zeros(samples)
+
+    def measured(k):
+        return 0.0 if k < 0 else y[k] + (1.0 if k == 0 else 0.0)
+    for k in range(samples):
+        y[k] = sum(-a[i] * y[k - i] for i in range(1, a.size) if k - i >= 0) \
+            + sum(b[j] * u[k - j] for j in range(1, b.size) if k - j >= 0)
+        past = [u[k - j] if k - j >= 0 else 0.0 for j in range(1, plant.m + 1)]
+        u[k] = past[0] - gains.k_i * measured(k) \
+            - sum(f * (measured(k - i) - measured(k - i - 1)) for i, f in enumerate(gains.f)) \
+            - sum(g * (past[j] - past[j + 1]) for j, g in enumerate(gains.g))
+    return u
+
+
+@pytest.mark.parametrize('lag', [None, 0.12])
+def test_the_noise_gain_is_the_loops_own(j2, lag):
+    model = j2 if lag is None else j2.with_effect(ValveLag(lag))
+    spec = design_from_model(model, poles=None)
+    expected = float(np.sqrt(np.sum(_noise_to_u(spec.plant, spec.gains) ** 2)))
+    assert noise_gain(spec.plant, spec.gains) == pytest.approx(expected, rel=1e-9)
+    # The values docs/methods.md section 5.5 quotes: [W18]'s J2 design, and the lagged
+    # design, which reacts more to the angle's changes.
+    assert expected == pytest.approx(0.1355 if lag is None else 0.4870, abs=5e-4)
