@@ -35,18 +35,20 @@ From a machine's recordings to a working controller, in one command:
      recording the error is in-sample, and a warning says so;
   3. diagnose what the model misses and add the named effects (valve lag, angle
      factor...);
-  4. design the PIP-IDZ controller from that final model;
-  5. check it in closed loop on the final model, effects included: steps from
-     20 % of the stroke to 50 %, 80 %, 50 %, 20 % and a ramp. Every step must
-     settle into +-0.5 deg within 6 s plus its travel at a quarter of full speed,
-     overshoot at most 10 %, and no hold may end in a limit cycle; otherwise the
-     dominant poles move toward 1 and the controller is designed again (up to 4
-     times), and the warnings say so. If no design passes, the last one is
-     written, the check reads FAILED and the warnings give every failure.
-
-A pwl or poly map has no dead-zone of its own: the IDZ then inverts chords of
-the map (edges where the speed leaves zero, chords to two thirds of the speed
-at the largest command measured), and a warning gives them.
+  4. design the PIP-IDZ controller from that final model, on the integrator
+     with its delay and valve lag; the IDZ inverts chords of an sdp map (the
+     paper's IDZ) and the map itself, as a table, for pwl, poly and power_sat;
+  5. check it in closed loop on the final model, effects included, reading the
+     angle with the noise found in the records: steps from 20 % of the stroke
+     to 50 %, 80 %, 50 %, 20 % and a ramp. Every step must settle into +-0.5
+     deg within 6 s plus its travel at a quarter of full speed, overshoot at
+     most 10 %, and no hold may end in a limit cycle. If the chords fail, the
+     table takes their place; if the check still fails, the dominant poles
+     move toward 1 and the controller is designed again (up to 4 times), and
+     the warnings say so. If no design passes, the last one is written, the
+     check reads FAILED, the warnings give every failure and what stands in
+     the way: the check is run again with the map, the delay, the valve lag,
+     the noise and the other effects each idealised in turn.
 
 Written to --out DIR, all at once (built beside it and renamed when complete;
 an existing non-empty DIR is refused unless --force, and replaced only at the
@@ -100,7 +102,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         help='control period, s (default: 0.05)')
     parser.add_argument('--poles', nargs='+', type=complex_pole, metavar='P',
                         help='closed-loop poles to start from, the dominant ones first; '
-                             'the rest of the 1 + delay poles are 0 (default: LQ design)')
+                             'a valve lag keeps its own pole and the rest are 0 (default: '
+                             'LQ design)')
     parser.add_argument('--iterations', type=int, default=4,
                         help='most effects the diagnosis adds (default: 4)')
     parser.add_argument('--command-unit',
@@ -255,7 +258,11 @@ def describe(result: CalibrationResult, folder: Path) -> dict[str, Any]:
             'ramp_error': check.ramp_error,
             'ramp_settling': json_number(check.ramp_settling),
             'limit_cycles': check.cycles,
-            'designs': [list(poles) for poles in result.designs]},
+            'designs': [list(poles) for poles in result.designs],
+            'idz_forms': list(result.forms),
+            'in_the_way': list(result.in_the_way),
+            'idealised': {o.element: {'passed': o.passed, 'failures': o.failures}
+                          for o in result.obstacles}},
         'warnings': warnings,
     }
 
@@ -324,6 +331,10 @@ def run(args: argparse.Namespace) -> Outcome:
              f'closed-loop check on the final model: '
              f'{"passed" if result.check.passed else "FAILED"}']
     lines += table(rows, ['step (deg)', 'settling (s)', 'overshoot (%)'])
+    lines.append(f'IDZ: {result.forms[-1] if result.forms else "chord"}; design plant: '
+                 f'{result.spec.delay_samples} samples of delay'
+                 + ('' if result.spec.valve_lag is None
+                    else f', valve lag {result.spec.valve_lag:.3g} s'))
     lines += [f'warning: {w}' for w in payload['warnings']]
     lines += [f'wrote {payload[key]}' for key in ('model', 'controller', 'params')]
     lines.append(f'report: {out / "report" / "summary.md"}')

@@ -7,6 +7,9 @@ import argparse
 from hydro_sdp.cli.common import finite_float, non_negative_float, Outcome, positive_float, table
 from hydro_sdp.core.control.controller_spec import ControllerSpec, design_from_model, format_pole
 from hydro_sdp.core.control.idz import IDZ_MODES
+from hydro_sdp.core.control.idz_design import chord_idz, IDZ_FORMS
+from hydro_sdp.core.control.idz_table import TableInverseDeadZone
+from hydro_sdp.core.control.idz_table_design import DEFAULT_NOISE
 from hydro_sdp.core.control.pip_design import LqWeights
 from hydro_sdp.core.errors import ConfigurationError
 from hydro_sdp.io.controller_files import save_controller
@@ -17,17 +20,33 @@ DESCRIPTION = """\
 Design a Proportional-Integral-Plus (PIP) controller with an inverse dead-zone
 (IDZ) for a joint model, as in West et al. (2018) section 5.
 
-The IDZ inverts the chord of the model's velocity map between each dead-zone edge
-and the command where the speed reaches two thirds of saturation (--v-range to
-choose), so the controller sees y_k = y_{k-1} + u_{k-tau} with tau the delay in
-control samples. The gains come from LQ design (default weights: the paper's
-design, dominant poles 0.94 +- 0.05i) or from pole assignment (--poles: n + m
-poles, complex ones in conjugate pairs, zeros allowed and repeated).
+Every map family identify writes is accepted. The IDZ inverts the model's
+velocity map in one of two forms (--idz-form):
+
+  chord  the paper's IDZ: straight lines from each dead-zone edge to where the
+         speed reaches two thirds of saturation (--v-range to choose); the
+         default for sdp, sdp_dz and linear maps.
+  table  the map itself, as a table of points from the PIP's u (deg per control
+         sample) to the valve command over the valve's range (--v-range to
+         choose): for valves whose speed rises convexly from a wide dead-zone
+         and saturates, where a chord promises near the edge several times the
+         speed the valve gives; the default for pwl, poly and power_sat maps.
+         Its chatter band covers --noise-std and keeps the smallest correction
+         small for the model's delay and lag.
+
+The controller then sees the integrator with the model's delay and, when the
+model has a valve_lag, that lag (one more pole): the design plant, recorded in
+the controller file. The gains come from LQ design (default weights: the
+paper's design, dominant poles 0.94 +- 0.05i) or from pole assignment (--poles:
+n + m poles, complex ones in conjugate pairs, zeros allowed and repeated; n + m
+is 1 + the delay in control samples, one more with a valve lag).
 
 examples:
   hydro-sdp design config/brokk_j2.yaml --out j2_controller.yaml
   hydro-sdp design config/brokk_j2.yaml --poles 0.94+0.05j 0.94-0.05j 0 0 \\
       --v-range -2.2 1.75 --u-limits -2.5 2.5 --out j2_paper.yaml
+  hydro-sdp design arm/model.yaml --idz-form table --noise-std 0.01 \\
+      --out arm_controller.yaml --plot arm_idz.png
 """
 
 
@@ -57,13 +76,24 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         help='limits of u, deg per control sample (default: 1.25 x the '
                              'saturation speeds, or the chord at the input limits)')
     parser.add_argument('--v-range', nargs=2, type=finite_float, metavar=('V_MIN', 'V_MAX'),
-                        help='commands where the IDZ chords meet an sdp map')
+                        help='commands where the IDZ chords meet an sdp map; the commands a '
+                             'table covers (default: the input limits)')
     parser.add_argument('--beta', type=non_negative_float,
                         help='IDZ chatter band, deg per control sample (default: 0.05)')
     parser.add_argument('--idz-mode', choices=IDZ_MODES, default='zero',
                         help='IDZ near u = 0: zero band (paper), smooth blend or hysteresis')
+    parser.add_argument('--idz-form', choices=IDZ_FORMS,
+                        help="chord: invert chords of the map (the paper's IDZ); table: invert "
+                             'the map itself (default: chord for sdp, sdp_dz and linear, '
+                             'table for pwl, poly and power_sat)')
+    parser.add_argument('--noise-std', type=non_negative_float, default=DEFAULT_NOISE,
+                        metavar='DEG',
+                        help="angle noise the controller will read, deg: an IDZ table's "
+                             'chatter band covers it (default: 0.03)')
     parser.add_argument('--out', help='controller file to write (YAML)')
-    parser.add_argument('--plot', help="PNG of the IDZ approximation (the paper's Fig. 6)")
+    parser.add_argument('--plot', help="PNG of the IDZ approximation (the paper's Fig. 6; a "
+                                       'table is drawn with the chords and the loop gain of '
+                                       'each)')
     parser.set_defaults(run=run)
 
 
@@ -78,6 +108,10 @@ def describe(spec: ControllerSpec) -> dict:
         'poles': [format_pole(p) for p in spec.poles],
         'control_period': spec.control_period,
         'delay_samples': spec.delay_samples,
+        'plant': {'a': list(spec.plant.a), 'b': list(spec.plant.b),
+                  'valve_lag': spec.valve_lag},
+        'idz_form': None if idz is None else (
+            'table' if isinstance(idz, TableInverseDeadZone) else 'chord'),
         'slopes': None if idz is None else list(idz.slopes),
         'dead_zone': None if idz is None else list(idz.dead_zone),
         'beta': None if idz is None else idz.beta,
@@ -95,25 +129,34 @@ def run(args: argparse.Namespace) -> Outcome:
     spec = design_from_model(
         model, control_period=args.control_period, poles=args.poles, weights=weights,
         u_limits=tuple(args.u_limits) if args.u_limits else None, beta=args.beta,
-        mode=args.idz_mode, v_range=tuple(args.v_range) if args.v_range else None)
+        mode=args.idz_mode, v_range=tuple(args.v_range) if args.v_range else None,
+        form=args.idz_form, noise_std=args.noise_std)
     payload = describe(spec)
     if args.out:
         payload['controller'] = str(save_controller(spec, args.out))
     if args.plot:
         if spec.idz is None:
             raise ConfigurationError('--plot draws the inverse dead-zone, and this model has none')
-        from hydro_sdp.plots import plot_idz, save_figure
+        from hydro_sdp.plots import plot_idz, plot_idz_table, save_figure
 
-        payload['plot'] = str(save_figure(plot_idz(model, spec.idz, spec.control_period,
-                                                   u_limits=spec.u_limits),
-                                          args.plot))
+        if isinstance(spec.idz, TableInverseDeadZone):
+            chord = chord_idz(model, spec.control_period, beta=spec.idz.beta)
+            figure = plot_idz_table(model, spec.idz, chord, spec.control_period)
+        else:
+            figure = plot_idz(model, spec.idz, spec.control_period, u_limits=spec.u_limits)
+        payload['plot'] = str(save_figure(figure, args.plot))
     rows = [['f', ', '.join(f'{x:.4f}' for x in spec.gains.f)],
             ['g', ', '.join(f'{x:.4f}' for x in spec.gains.g) or '-'],
             ['kI', f'{spec.gains.k_i:.4f}'],
             ['poles', ', '.join(payload['poles'])],
-            ['delay', f'{spec.delay_samples} samples of {spec.control_period:g} s']]
+            ['delay', f'{spec.delay_samples} samples of {spec.control_period:g} s'],
+            ['valve lag', '-' if spec.valve_lag is None else f'{spec.valve_lag:.4g} s (pole '
+                          f'{spec.plant.a[-1]:.4f})']]
     if spec.idz is not None:
-        rows += [['IDZ edges', ', '.join(f'{x:.4f}' for x in spec.idz.dead_zone)],
+        rows += [['IDZ form', payload['idz_form'] + (
+                     f' ({len(spec.idz.u)} points)' if isinstance(spec.idz, TableInverseDeadZone)
+                     else '')],
+                 ['IDZ edges', ', '.join(f'{x:.4f}' for x in spec.idz.dead_zone)],
                  ['IDZ slopes', ', '.join(f'{x:.4f}' for x in spec.idz.slopes)
                   + ' deg/sample per unit'],
                  ['chatter band', f'{spec.idz.beta:g} ({spec.idz.mode})']]

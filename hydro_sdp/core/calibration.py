@@ -4,29 +4,35 @@ From a machine's recordings to a checked controller (the ``calibrate`` command).
 :func:`calibrate` chains what the other commands do one at a time: identify the
 joint (held-out choice of the map family), evaluate the model on validation
 records, diagnose what it misses and add the named effects, design the PIP-IDZ
-controller from the final model, and check it in closed loop on that final
-model with its effects (:mod:`.loop_check`); when the check fails the dominant
-poles move toward 1 and the controller is designed again, and the result says
-so. Without validation records, whole records are held out (never a piece of a
-record), and the result says which.
+controller from the final model (on its delay and valve lag; the chord IDZ for
+an ``sdp`` map, the map's own table for the others), and check it in closed
+loop on that final model with its effects and the records' noise
+(:mod:`.loop_check`). When chords fail the check the table takes their place;
+when the check still fails the dominant poles move toward 1 and the controller
+is designed again, and the result says so; if no design passes, the check is
+run again with each element idealised to say what stands in the way
+(:mod:`.loop_obstacles`). Without validation records, whole records are held
+out (never a piece of a record), and the result says which.
 
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 import math
 from typing import Any, Callable, Sequence
 
 from hydro_sdp.core.control.controller_spec import ControllerSpec, design_from_model, format_pole
+from hydro_sdp.core.control.design_plant import completed_poles
+from hydro_sdp.core.control.idz_design import default_form, IdzForm
 from hydro_sdp.core.control.loop_check import check_loop, CheckSettings, LoopCheck, slower_poles
+from hydro_sdp.core.control.loop_obstacles import Obstacle, obstacles, standing_in_the_way
 from hydro_sdp.core.diagnosis import DETECTORS, diagnose, Diagnosis
 from hydro_sdp.core.errors import DataError, HydroSdpError
 from hydro_sdp.core.identification.evaluation import evaluate, RecordScore
 from hydro_sdp.core.identification.identify import Identification, identify
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.records import Record
-from hydro_sdp.core.model.static_maps import CHORD_SPEED_FRACTION, LinearMap, SdpDzMap, SdpMap
 import numpy as np
 
 #: The stages, in order, as :func:`calibrate` reports them.
@@ -101,6 +107,10 @@ class CalibrationResult:
         Angle range the check stepped across, degrees.
     warnings : tuple[str, ...]
         What the user should know, one line each.
+    forms : tuple[str, ...]
+        IDZ form of every design tried (``chord`` or ``table``), first to last.
+    obstacles : tuple[Obstacle, ...]
+        When the check failed: the check with each element idealised.
 
     """
 
@@ -116,6 +126,15 @@ class CalibrationResult:
     designs: tuple[tuple[str, ...], ...]
     stroke: tuple[float, float]
     warnings: tuple[str, ...] = field(default=())
+    forms: tuple[str, ...] = field(default=())
+    obstacles: tuple[Obstacle, ...] = field(default=())
+
+    @property
+    def in_the_way(self) -> tuple[str, ...]:
+        """Elements that stand in the way of a failed check (empty when it passed)."""
+        if self.check.passed:
+            return ()
+        return standing_in_the_way(self.obstacles, len(self.check.failures))
 
     @property
     def model(self) -> JointModel:
@@ -188,73 +207,30 @@ def _identify(records: Sequence[Record], settings: CalibrationSettings,
     return identify(records, rest=settings.rest, **options)
 
 
-#: Speed, as a fraction of the speed at the end of the span, that the chord of a
-#: convex map passes through on its way to the two-thirds point.
-CREEP_SPEED_FRACTION = 0.02
+class _Designer:
+    """Designs the controller of the final model in one IDZ form, as calibrate asks."""
 
+    def __init__(self, model: JointModel, settings: CalibrationSettings,
+                 noise_std: float) -> None:
+        self.model, self.settings, self.noise_std = model, settings, noise_std
+        self.form: IdzForm = 'chord'
 
-def chord_map(model: JointModel, span: tuple[float, float]) -> SdpDzMap:
-    """
-    SDP-DZ chords of any monotone map, as the IDZ of an ``sdp`` map (docs/methods.md 3.3).
+    def design(self, poles: Sequence[complex] | None = None,
+               model: JointModel | None = None) -> ControllerSpec:
+        """Design in the current form (LQ without ``poles``), for ``model`` or the final one."""
+        return design_from_model(model if model is not None else self.model,
+                                 control_period=self.settings.control_period, poles=poles,
+                                 form=self.form, noise_std=self.noise_std)
 
-    On each side of rest the chord ends where the speed reaches two thirds of its
-    value at the end of ``span``; its edge is the outer of where the speed first
-    exceeds 0.1 % of that value and where the line through the points at 2 %
-    (:data:`CREEP_SPEED_FRACTION`) and two thirds meets zero speed. For a map that
-    leaves its dead-zone steeply (``sdp``, ``pwl``) that is the dead-zone edge; a
-    convex map (``power_sat``) creeps for a long way past its dead-zone, and an
-    IDZ edge there leaves the integral action to wind through commands that barely
-    move the joint: on the physics plant's arm the edge moves from 28 % to 37 %
-    duty, and the limit cycles of the held set-points go.
-
-    Parameters
-    ----------
-    model : JointModel
-        The joint (any map family).
-    span : tuple[float, float]
-        Commands the map is trusted over (the measured levels), input units.
-
-    Returns
-    -------
-    SdpDzMap
-        Dead-zone edges and chord slopes.
-
-    """
-    rest = model.rest_command
-    edges, slopes = [], []
-    for end, sign in ((span[0], -1.0), (span[1], 1.0)):
-        v = np.linspace(rest, end, 2001)
-        speed = sign * model.rate(v)
-        top = float(speed[-1])
-        if not (sign * (end - rest) > 0.0 and top > 0.0):
-            raise DataError(f'the {model.kind} map does not move the joint '
-                            f'{"down" if sign < 0 else "up"} within the commands measured')
-        leaves = float(v[max(int(np.argmax(speed > 1e-3 * top)) - 1, 0)])
-        creep = float(v[int(np.argmax(speed >= CREEP_SPEED_FRACTION * top))])
-        reach = float(v[int(np.argmax(speed >= CHORD_SPEED_FRACTION * top))])
-        secant = (CHORD_SPEED_FRACTION - CREEP_SPEED_FRACTION) * top / max(
-            abs(reach - creep), 1e-12)
-        meets = creep - sign * CREEP_SPEED_FRACTION * top / secant
-        edge = leaves if sign * (leaves - meets) >= 0.0 else meets
-        edges.append(edge)
-        slopes.append(CHORD_SPEED_FRACTION * top / max(abs(reach - edge), 1e-12))
-    return SdpDzMap(dead_zone=(edges[0], edges[1]), slope=(slopes[0], slopes[1]))
-
-
-def _design_model(model: JointModel, identified: Identification,
-                  warnings: list[str]) -> JointModel:
-    """Return the model the IDZ is designed from: the model, or its SDP-DZ chords."""
-    if isinstance(model.static_map, (SdpMap, SdpDzMap, LinearMap)):
-        return model
-    levels = [p.level for p in identified.points]
-    span = (min(levels), max(levels))
-    if model.input_limits is not None:
-        span = (max(span[0], model.input_limits[0]), min(span[1], model.input_limits[1]))
-    chord = chord_map(model, span)
-    warnings.append(f'the IDZ inverts chords of the {model.kind} map: dead-zone '
-                    f'[{chord.dead_zone[0]:.4g}, {chord.dead_zone[1]:.4g}], slopes '
-                    f'{chord.slope[0]:.4g}, {chord.slope[1]:.4g} deg/s per unit')
-    return replace(model, static_map=chord)
+    def first(self, form: IdzForm) -> ControllerSpec:
+        """Return the first design in ``form``: LQ, or the poles asked for, completed."""
+        self.form = form
+        spec = self.design()
+        if self.settings.poles is not None:
+            # The number of poles depends on the delay found: the valve lag keeps its own,
+            # the rest are deadbeat (at 0).
+            spec = self.design(completed_poles(spec.plant, self.settings.poles))
+        return spec
 
 
 def _clean(poles: Sequence[complex]) -> list[complex]:
@@ -330,27 +306,37 @@ def calibrate(records: Sequence[Record], validation: Sequence[Record] | None = N
     final = diagnosis.model
     final_scores = tuple(evaluate(checks, final))
     report('design', 0, 1)
-    design_model = _design_model(final, identified, warnings)
-    spec = design_from_model(design_model, control_period=settings.control_period)
-    if settings.poles is not None:
-        # The number of poles depends on the delay found: the rest are deadbeat (at 0).
-        poles = list(settings.poles) + [0j] * max(0, len(spec.poles) - len(settings.poles))
-        spec = design_from_model(design_model, control_period=settings.control_period,
-                                 poles=poles)
     stroke = _stroke(final, list(records) + list(checks))
+    noise = identified.segmentation.noise_std
+    noise = noise if math.isfinite(noise) and noise > 0.0 else 0.0
     check_settings = settings.check if settings.check is not None else CheckSettings(
-        dt=identified.sample_period)
+        dt=identified.sample_period, noise_std=noise)
+    designer = _Designer(final, settings, noise)
+    spec = designer.first(default_form(final))
     designs: list[tuple[str, ...]] = []
+    forms: list[str] = []
     check: LoopCheck | None = None
-    for attempt in range(REDESIGNS + 1):
+    total = REDESIGNS + 2           # the chord, the table, then slower poles
+    for attempt in range(total):
         designs.append(tuple(format_pole(p) for p in spec.poles))
-        report('closed-loop check', attempt, REDESIGNS + 1)
+        forms.append(designer.form)
+        report('closed-loop check', attempt, total)
         check = check_loop(final, spec, stroke, settings=check_settings)
-        if check.passed or attempt == REDESIGNS:
+        if check.passed or attempt == total - 1:
             break
+        if designer.form == 'chord':
+            try:
+                table = designer.first('table')
+            except HydroSdpError as error:
+                warnings.append(f'no IDZ table could be made: {error}')
+            else:
+                warnings.append(f'the chord IDZ fails the closed-loop check '
+                                f'({"; ".join(check.failures)}); the IDZ inverts the '
+                                f'{final.kind} map itself (a table) instead')
+                spec = table
+                continue
         try:
-            slower = design_from_model(design_model, control_period=settings.control_period,
-                                       poles=slower_poles(_clean(list(spec.poles))))
+            slower = designer.design(slower_poles(_clean(list(spec.poles))))
         except HydroSdpError as error:
             warnings.append(f'no slower design could be made: {error}')
             break
@@ -359,11 +345,20 @@ def calibrate(records: Sequence[Record], validation: Sequence[Record] | None = N
                         f'again with slower poles {listed}')
         spec = slower
     assert check is not None  # the loop runs at least once
+    found: tuple[Obstacle, ...] = ()
     if not check.passed:
         warnings.append('the controller still fails the closed-loop check: '
                         + '; '.join(check.failures))
+        report('closed-loop check', total, total + 1)
+        found = obstacles(final, spec, stroke, check_settings,
+                          lambda ideal, poles: designer.design(poles, ideal))
+        named = standing_in_the_way(found, len(check.failures))
+        tried = ', '.join(f'{o.element} ({"passes" if o.passed else f"{o.failures} failures"})'
+                          for o in found)
+        warnings.append(f'in the way: {" and ".join(named) if named else "no element alone"} '
+                        f'(the check with each idealised: {tried})')
     if not all(math.isfinite(s.model) for s in final_scores):
         warnings.append('the final model diverges on a validation record')
     return CalibrationResult(identified, note, tuple(estimation), tuple(checks), scores,
                              final_scores, diagnosis, spec, check, tuple(designs), stroke,
-                             tuple(warnings))
+                             tuple(warnings), tuple(forms), found)

@@ -5,6 +5,7 @@ from __future__ import annotations
 from typing import Sequence
 
 from hydro_sdp.core.control.idz import InverseDeadZone
+from hydro_sdp.core.control.idz_table import TableInverseDeadZone
 from hydro_sdp.core.control.loop_simulation import LoopTrace
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.plots.figures import (
@@ -74,6 +75,63 @@ def plot_idz(model: JointModel, idz: InverseDeadZone, control_period: float, *,
     figure.suptitle(f'IDZ approximation of joint {model.joint} '
                     f'(slopes {idz.slopes[0]:.4g}, {idz.slopes[1]:.4g}; beta {idz.beta:g})',
                     fontsize=11)
+    return figure
+
+
+def plot_idz_table(model: JointModel, table: TableInverseDeadZone, chord: InverseDeadZone,
+                   control_period: float, *, command_unit: str | None = None) -> Figure:
+    """
+    Draw the map's table IDZ next to the paper's chord IDZ, and the loop gain each leaves.
+
+    Top: the model's increment per control sample against the steady command,
+    the table's points (the IDZ inverts the line through them) and the chords.
+    Bottom: the loop gain ``T rate(IDZ(u)) / u`` the controller sees through each
+    inverse: 1 where the inverse is exact.
+
+    Parameters
+    ----------
+    model : JointModel
+        The joint.
+    table : TableInverseDeadZone
+        The table IDZ.
+    chord : InverseDeadZone
+        The chord IDZ of the same model, for comparison.
+    control_period : float
+        Control period, s.
+    command_unit : str or None
+        Unit of the command; default: from the model's input range.
+
+    Returns
+    -------
+    Figure
+        The figure.
+
+    """
+    figure, (ax, gain_ax) = new_figure(2, height=3.4, width=7.5, sharex=False)
+    v = np.linspace(table.v[0], table.v[-1], 1201)
+    ax.plot(v, model.rate(v) * control_period, color=MODEL, linewidth=3.0,
+            label=f'{model.kind} model')
+    ax.plot(table.v, table.u, color=MEASURED, linewidth=1.0, marker='o', markersize=2.5,
+            label=f'table: {len(table.u)} points (the IDZ inverts this)')
+    ax.plot(v, [chord.increment(x) for x in v], color=LIMIT, linestyle='--', linewidth=1.2,
+            label="chords (the paper's IDZ)")
+    mark_dead_zone(ax, table.dead_zone)
+    ax.axhline(0.0, color='black', linewidth=0.6)
+    ax.set_ylim(1.15 * table.u[0], 1.15 * table.u[-1])
+    label_command_axes(ax, model, command_unit,
+                       f'increment q (deg per {control_period:g} s sample)', 'upper left')
+    u = np.linspace(table.u[0], table.u[-1], 1200)
+    u = u[np.abs(u) > max(table.beta, 1e-9)]        # the band sends u to rest
+    for idz, colour, style, name in ((table, MEASURED, '-', 'table'),
+                                     (chord, LIMIT, '--', 'chords')):
+        gain = [control_period * float(model.rate(idz.command(float(x))[0])) / x for x in u]
+        gain_ax.plot(u, gain, color=colour, linestyle=style, linewidth=1.4, label=name)
+    gain_ax.axhline(1.0, color='black', linewidth=0.6)
+    gain_ax.set_xlabel(f'PIP output u (deg per {control_period:g} s sample)')
+    gain_ax.set_ylabel('loop gain q(IDZ(u)) / u')
+    gain_ax.legend(loc='upper right', fontsize=8, frameon=False)
+    figure.suptitle(f"IDZ of joint {model.joint}: the map's own inverse and its chords "
+                    f'(beta {table.beta:.3g})', fontsize=11)
     return figure
 
 

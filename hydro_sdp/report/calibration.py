@@ -62,7 +62,21 @@ def summary_lines(result: CalibrationResult, unit: str, figures: list[str]) -> l
              for m, bound in zip(check.steps, check.bounds)]
     ledger = [f'| {i} | {s.effect} | {s.mae_before:.4g} | {s.mae_after:.4g} |'
               for i, s in enumerate(diagnosis.ledger, start=1)]
-    designs = [f'{i}. {", ".join(poles)}' for i, poles in enumerate(result.designs, start=1)]
+    forms = result.forms or ('chord',) * len(result.designs)
+    designs = [f'{i}. {form} IDZ; poles {", ".join(poles)}'
+               for i, (poles, form) in enumerate(zip(result.designs, forms), start=1)]
+    plant = (f'the integrator with {spec.delay_samples} samples of delay'
+             + ('' if spec.valve_lag is None else f' and a valve lag of {spec.valve_lag:.3g} s'))
+    obstacles = [f'| {o.element} | {o.idealised} | '
+                 f'{"passes" if o.passed else f"{o.failures} failures"} |'
+                 for o in result.obstacles]
+    in_the_way = ([] if check.passed or not obstacles else [
+        'What stands in the way: the check run again with each element idealised (the map '
+        'made the one the IDZ inverts, the delay one control sample, no valve lag, no angle '
+        'noise, no other effects; a new delay or lag is designed for again, with the same '
+        'dominant poles):', '', '| element | idealised | check |', '|---|---|---|',
+        *obstacles, '',
+        f'In the way: **{" and ".join(result.in_the_way) or "no element alone"}**.', ''])
     return [
         f'# Calibration of joint `{model.joint}`', '',
         f'Model `{model.kind}` with delay {model.delay:g} s'
@@ -90,18 +104,21 @@ def summary_lines(result: CalibrationResult, unit: str, figures: list[str]) -> l
         *(ledger or ['| - | none | - | - |']), '',
         'The full discrepancy report is in `diagnosis/summary.md`.', '',
         '## Controller and closed-loop check', '',
-        'Designs tried (closed-loop poles, first to last):', '', *designs, '',
+        f'Designed on {plant} at {spec.control_period:g} s. Designs tried (IDZ form and '
+        'closed-loop poles, first to last):', '', *designs, '',
         f'The controller runs on the final model, with its effects, from 20 % of the stroke '
         f'[{result.stroke[0]:.4g}, {result.stroke[1]:.4g}] deg to 50 %, 80 %, 50 % and 20 %, '
         'then along a ramp from 20 % to 80 % at a quarter of full speed. Settling into '
         f'+-0.5 deg within the bound (6 s plus the travel at a quarter of full speed), '
-        'overshoot at most 10 %, no limit cycle.', '',
+        'overshoot at most 10 %, no limit cycle; the controller reads the angle with the '
+        f'noise found in the records ({segmentation.noise_std:.3g} deg).', '',
         '| step (deg) | settling (s) | bound (s) | overshoot (%) | steady error (deg) |',
         '|---|---|---|---|---|', *steps, '',
         f'Ramp: largest tracking error {check.ramp_error:.3g} deg, settled '
         f'{_seconds(check.ramp_settling)} s after its end; holds ending in a limit cycle: '
         f'{check.cycles}.', '',
         *[f'- {failure}' for failure in check.failures], '',
+        *in_the_way,
         '## Figures', '', *[f'![{Path(f).stem}]({f})' for f in figures], '',
         '## Final model', '', '```yaml', dump_model(model).rstrip(), '```', '']
 

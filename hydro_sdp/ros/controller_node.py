@@ -35,7 +35,10 @@ itself at start.
 
 Every writable parameter applies at run time: ``<joint>.gains.k_i``,
 ``<joint>.idz.dead_zone``... per joint (with one joint also under the plain names
-``gains.k_i``, ``idz.dead_zone``..., kept in step). A change request is checked as
+``gains.k_i``, ``idz.dead_zone``..., kept in step). With a table IDZ (the map's own
+inverse) a new ``idz.dead_zone`` shifts the branch of the edge that moved and a new
+``idz.slopes`` scales a branch's increments (its chord slope to two thirds of its
+largest increment). A change request is checked as
 a whole before anything is applied and applied in the post-set callback.
 
 """

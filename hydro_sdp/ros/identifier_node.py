@@ -35,9 +35,9 @@ import math
 from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticArray
-from hydro_sdp.core.control.controller_spec import idz_for_model
 from hydro_sdp.core.control.health import joint_health
 from hydro_sdp.core.control.idz import InverseDeadZone
+from hydro_sdp.core.control.idz_design import chord_idz
 from hydro_sdp.core.control.idz_recalibration import recalibrated_idz, RecalibrationPolicy
 from hydro_sdp.core.errors import ConfigurationError, DataError, HydroSdpError
 from hydro_sdp.core.identification.online import input_scale, OnlineSdpIdentifier, OnlineSettings
@@ -246,7 +246,7 @@ class IdentifierNode(Node):
         decision = item.recalibration.observe(stamp * 1e-9, estimate)
         item.last_decision = decision
         try:
-            values['slope_negative'], values['slope_positive'] = idz_for_model(
+            values['slope_negative'], values['slope_positive'] = chord_idz(
                 model, self.control_period).slopes
         except HydroSdpError:
             pass

@@ -16,6 +16,7 @@ from typing import Any
 from hydro_sdp.core.control.controller_spec import ControllerSpec
 from hydro_sdp.core.control.health import JointSnapshot
 from hydro_sdp.core.control.idz import idz_mode, IDZ_MODES, InverseDeadZone
+from hydro_sdp.core.control.idz_table import TableInverseDeadZone
 from hydro_sdp.core.control.pip_controller import PipIdzController
 from hydro_sdp.core.control.pip_design import PipGains
 from hydro_sdp.core.control.scheduling import ControlSchedule, FeedbackGate, seconds_to_ns
@@ -31,8 +32,11 @@ PARAMETERS: dict[str, tuple[str, float | None, float | None]] = {
     'gains.f': ('PIP output feedback gains f0.., (deg per control sample) per deg', None, None),
     'gains.g': ('PIP input feedback gains g1.. (dimensionless)', None, None),
     'gains.k_i': ('PIP integral gain kI, (deg per control sample) per deg of error', 0.0, 10.0),
-    'idz.dead_zone': ('IDZ edges, input units', None, None),
-    'idz.slopes': ('IDZ slopes, deg per control sample per input unit', None, None),
+    'idz.dead_zone': ('IDZ edges, input units (a table: each branch moves with its edge)',
+                      None, None),
+    'idz.slopes': ('IDZ slopes, deg per control sample per input unit (a table: chord slopes '
+                   'to two thirds of its largest increment; a new value scales the branch)',
+                   None, None),
     'idz.beta': ('IDZ chatter band, deg per control sample', 0.0, 100.0),
     'idz.mode': (f"IDZ mode: {', '.join(IDZ_MODES)}", None, None),
 }
@@ -126,12 +130,22 @@ class JointLoop:
             return value_of(parameters, prefix + name, current)
         if names & set(IDZ_PARAMETERS) and spec.idz is not None:
             current = spec.idz
-            idz = InverseDeadZone(
-                dead_zone=pair(new('idz.dead_zone', current.dead_zone), prefix + 'idz.dead_zone'),
-                slopes=pair(new('idz.slopes', current.slopes), prefix + 'idz.slopes'),
-                beta=float(new('idz.beta', current.beta)),
-                mode=idz_mode(new('idz.mode', current.mode)),
-                rest=current.rest)
+            edges = pair(new('idz.dead_zone', current.dead_zone), prefix + 'idz.dead_zone')
+            slopes = pair(new('idz.slopes', current.slopes), prefix + 'idz.slopes')
+            beta = float(new('idz.beta', current.beta))
+            mode = idz_mode(new('idz.mode', current.mode))
+            idz: InverseDeadZone | TableInverseDeadZone
+            if isinstance(current, TableInverseDeadZone):
+                # A table keeps its shape: new slopes scale a branch, new edges shift it.
+                idz = current
+                if slopes != current.slopes:
+                    idz = idz.with_slopes(slopes)
+                if edges != current.dead_zone:
+                    idz = idz.with_edges(edges)
+                idz = replace(idz, beta=beta, mode=mode)
+            else:
+                idz = InverseDeadZone(dead_zone=edges, slopes=slopes, beta=beta, mode=mode,
+                                      rest=current.rest)
             spec = replace(spec, idz=idz)    # checks the IDZ against the valve range
         if names & set(GAIN_PARAMETERS):
             gains = spec.gains

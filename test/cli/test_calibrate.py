@@ -7,12 +7,15 @@ import json
 from pathlib import Path
 
 from hydro_sdp.bags import write_bag
-from hydro_sdp.cli.calibrate import read_inputs
+from hydro_sdp.cli.calibrate import describe, read_inputs
 from hydro_sdp.cli.main import build_parser, main
 from hydro_sdp.core import calibration as core_calibration
-from hydro_sdp.core.calibration import calibrate, CalibrationSettings, chord_map, split_records
+from hydro_sdp.core.calibration import calibrate, CalibrationSettings, split_records
 from hydro_sdp.core.control.controller_spec import design_from_model
-from hydro_sdp.core.control.loop_check import check_loop, slower_poles, stroke_levels
+from hydro_sdp.core.control.design_plant import completed_poles
+from hydro_sdp.core.control.idz_design import chord_map
+from hydro_sdp.core.control.loop_check import (
+    check_loop, CheckSettings, slower_poles, stroke_levels)
 from hydro_sdp.core.control.loop_simulation import (
     LoopJoint, run_closed_loop, step_metrics, step_setpoints)
 from hydro_sdp.core.diagnosis.results import Signature
@@ -168,9 +171,14 @@ def test_a_failed_check_designs_again_with_slower_poles(redesigned):
     assert len(result.designs) >= 2 and result.designs[0][:2] == ('0.75+0.1j', '0.75-0.1j')
     assert result.check.passed
     assert any('designed again with slower poles' in w for w in result.warnings)
-    first = design_from_model(result.model,
-                              poles=list(FAST) + [0.0] * (len(result.spec.poles) - 2))
-    assert not check_loop(result.model, first, result.stroke).passed
+    # The sdp map starts with the paper's chords; when they fail, the table takes over.
+    assert result.forms[0] == 'chord' and set(result.forms[1:]) == {'table'}
+    assert any('the IDZ inverts the sdp map itself (a table) instead' in w
+               for w in result.warnings)
+    first = design_from_model(result.model, form='table', poles=completed_poles(
+        result.spec.plant, FAST), noise_std=result.identification.segmentation.noise_std)
+    assert not check_loop(result.model, first, result.stroke, settings=CheckSettings(
+        noise_std=result.identification.segmentation.noise_std)).passed
     # The dominant poles of the design kept are slower than the ones asked for.
     assert min(abs(p) for p in result.spec.poles if abs(p) > 0.5) > 0.76
 
@@ -203,6 +211,24 @@ def test_a_failure_while_writing_leaves_nothing(redesigned, bags, tmp_path, caps
     assert sorted(p.name for p in tmp_path.iterdir()) == ['out']
     warnings = json.loads(stdout)['warnings']
     assert any('designed again with slower poles' in w for w in warnings)
+
+
+@pytest.mark.slow
+def test_a_check_no_design_passes_says_what_stands_in_the_way(records):
+    # A band no loop holds: every design fails, and so does every idealised check.
+    impossible = CheckSettings(band=0.005)
+    result = calibrate(records[:2], [records[2]],
+                       CalibrationSettings(iterations=0, check=impossible))
+    assert not result.check.passed and len(result.designs) == core_calibration.REDESIGNS + 2
+    elements = [o.element for o in result.obstacles]
+    assert elements[:2] == ['map', 'delay'] and 'noise' not in elements
+    assert result.in_the_way == () and result.warnings[-1].startswith(
+        'in the way: no element alone (the check with each idealised: map (')
+    payload = describe(result, Path('out'))['closed_loop']
+    assert payload['in_the_way'] == [] and set(payload['idealised']) == set(elements)
+    assert payload['idz_forms'][:2] == ['chord', 'table']
+    lines = report_calibration.summary_lines(result, 'V', [])
+    assert 'In the way: **no element alone**.' in lines
 
 
 def test_slower_poles_move_the_dominant_poles_toward_one():

@@ -9,10 +9,13 @@ from dataclasses import replace
 import math
 
 from hydro_sdp.core.control.controller_spec import design_from_model
+from hydro_sdp.core.control.idz_table import TableInverseDeadZone
 from hydro_sdp.core.control.pip_controller import PipIdzController
 from hydro_sdp.core.errors import ConfigurationError
+from hydro_sdp.core.model.joint_model import JointModel
+from hydro_sdp.core.model.static_maps import PowerSatMap
 from hydro_sdp.io.controller_files import save_controller
-from hydro_sdp.io.model_files import default_model_path, load_model
+from hydro_sdp.io.model_files import default_model_path, load_model, save_model
 from hydro_sdp.ros.controller_node import PipControllerNode
 from hydro_sdp.ros.testing import RosHarness
 from outside import node_process_fixture, NodeProcess
@@ -226,3 +229,51 @@ def test_run_time_changes_take_effect_over_the_services(outside):
     assert client.answer() == pytest.approx(_first_command(63.6 - 5.0), abs=1e-12)
     result = client.set_atomically(joint='j3')
     assert not result.successful and 'read-only' in result.reason
+
+
+#: A convex valve in signed percent (a power_sat map as identify fits to an arm's logs).
+ARM = JointModel('arm', PowerSatMap((-31.5, 16.0), (-47.4, 32.3), (0.0206, 0.0195), (2.2, 4.5)),
+                 0.39, angle_limits=(-45.0, 40.0), input_limits=(-100.0, 100.0))
+
+
+def test_idz_parameters_move_and_scale_a_table(ros, tmp_path):
+    # Design writes a table for this map, and the node loads it.
+    model = ARM
+    save_model(model, tmp_path / 'arm.yaml')
+    spec = design_from_model(model)
+    save_controller(spec, tmp_path / 'arm_controller.yaml')
+    controller = ros.add(PipControllerNode, parameters={
+        'model_file': str(tmp_path / 'arm.yaml'),
+        'controller_file': str(tmp_path / 'arm_controller.yaml')})
+    table = controller.controller.settings.idz
+    assert isinstance(table, TableInverseDeadZone) and table == spec.idz
+    assert controller.get_parameter('idz.dead_zone').value == pytest.approx([-31.5, 16.0])
+    # A recalibrated edge shifts that side of the table; the other side stays.
+    result = controller.set_parameters([Parameter('arm.idz.dead_zone', value=[-31.5, 20.0])])
+    assert result[0].successful, result[0].reason
+    moved = controller.controller.settings.idz
+    assert moved.dead_zone == pytest.approx((-31.5, 20.0))
+    assert moved.command(0.5)[0] == pytest.approx(table.command(0.5)[0] + 4.0)
+    assert moved.command(-0.5)[0] == pytest.approx(table.command(-0.5)[0])
+    assert controller.get_parameter('idz.dead_zone').value == pytest.approx([-31.5, 20.0])
+    # New slopes scale a branch's increments; beta and mode apply as they are.
+    slopes = list(moved.slopes)
+    result = controller.set_parameters([
+        Parameter('idz.slopes', value=[slopes[0], 2.0 * slopes[1]]),
+        Parameter('idz.beta', value=0.03), Parameter('idz.mode', value='hysteresis')])
+    assert all(r.successful for r in result)
+    scaled = controller.controller.settings.idz
+    assert scaled.slopes == pytest.approx((slopes[0], 2.0 * slopes[1]))
+    assert scaled.u_range[1] == pytest.approx(2.0 * moved.u_range[1])
+    assert (scaled.beta, scaled.mode) == (0.03, 'hysteresis')
+    result = controller.set_parameters([Parameter('idz.dead_zone', value=[5.0, 20.0])])
+    assert not result[0].successful and 'rest' in result[0].reason
+    result = controller.set_parameters([Parameter('idz.slopes', value=[0.0, 1.0])])
+    assert not result[0].successful and 'slopes' in result[0].reason
+    assert controller.controller.settings.idz == scaled
+
+
+def test_a_power_sat_model_alone_gets_a_table(ros, tmp_path):
+    save_model(ARM, tmp_path / 'arm.yaml')
+    controller = ros.add(PipControllerNode, parameters={'model_file': str(tmp_path / 'arm.yaml')})
+    assert isinstance(controller.controller.settings.idz, TableInverseDeadZone)

@@ -3,7 +3,7 @@
 from dataclasses import replace
 import math
 
-from hydro_sdp.core.control.controller_spec import idz_for_model
+from hydro_sdp.core.control.idz_design import idz_for_model
 from hydro_sdp.core.identification.online import SdpEstimate
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.static_maps import SdpMap

@@ -10,6 +10,7 @@ from hydro_sdp.cli.common import table
 from hydro_sdp.cli.demo.line import bucket_line
 from hydro_sdp.cli.demo.report import Report
 from hydro_sdp.core.control.controller_spec import design_from_model, format_pole
+from hydro_sdp.core.control.idz import InverseDeadZone
 from hydro_sdp.core.control.loop_simulation import (
     LoopJoint, run_closed_loop, step_metrics, step_setpoints)
 from hydro_sdp.core.diagnosis import diagnose
@@ -119,8 +120,8 @@ def _control(report: Report) -> None:
                              v_range=(-2.2, 1.75), u_limits=(-2.5, 2.5))
     save_controller(spec, report.out / 'j2_controller.yaml')
     idz = spec.idz
-    if idz is None:
-        raise DataError('the J2 design has an inverse dead-zone')
+    if not isinstance(idz, InverseDeadZone):
+        raise DataError("the J2 design has the paper's chord inverse dead-zone")
     levels = [20.0, 10.0, 55.0]
     hold = 6.0 if report.short else 10.0
     trace = run_closed_loop([LoopJoint(model, spec.controller(),

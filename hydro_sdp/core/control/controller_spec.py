@@ -2,11 +2,12 @@
 Controller specifications: PIP-IDZ design from a joint model, and the controller file.
 
 :func:`design_from_model` turns a :class:`~hydro_sdp.core.model.joint_model.JointModel`
-into a :class:`ControllerSpec` at a chosen control period: IDZ slopes from the
-chord of the static map (docs/methods.md section 3.3), the delay in control samples, and
-PIP gains for the plant the IDZ leaves behind, ``y_k = y_{k-1} + u_{k-tau}``.
-The spec is what ``hydro-sdp design`` writes (format ``hydro_sdp/controller/v1``)
-and what the controller node loads.
+into a :class:`ControllerSpec` at a chosen control period: the IDZ, as the chord of
+the static map (docs/methods.md section 3.3) or the map's own table (section 5.4),
+and PIP gains for the plant the IDZ leaves behind: the integrator with the model's
+delay and valve lag (:mod:`.design_plant`; ``y_k = y_{k-1} + u_{k-tau}`` without a
+lag). The spec is what ``hydro-sdp design`` writes (format
+``hydro_sdp/controller/v1``) and what the controller node loads.
 
 """
 
@@ -15,21 +16,25 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any, Mapping, Sequence
 
-from hydro_sdp.core.control.idz import IDZ_MODES, IdzMode, InverseDeadZone
+from hydro_sdp.core.control.design_plant import check_plant_lag, model_lag, plant_for_model
+from hydro_sdp.core.control.idz import IdzMode
+from hydro_sdp.core.control.idz_design import default_u_limits, idz_for_model, IdzForm
+from hydro_sdp.core.control.idz_mapping import idz_from_mapping, idz_to_mapping
+from hydro_sdp.core.control.idz_table import Idz
+from hydro_sdp.core.control.idz_table_design import DEFAULT_NOISE
 from hydro_sdp.core.control.pip_controller import ControllerSettings, PipIdzController
 from hydro_sdp.core.control.pip_design import (
     closed_loop_poles, DiscretePlant, lq_design, LqWeights, PipGains, pole_assignment)
 from hydro_sdp.core.errors import ConfigurationError, ModelFileError
 from hydro_sdp.core.model.joint_model import JointModel
-from hydro_sdp.core.model.static_maps import chord_commands, linearise, LinearMap, SdpDzMap, SdpMap
 from hydro_sdp.core.model.timing import check_sample_period
 from hydro_sdp.core.validation import (
-    read_document, require_float, require_float_list, require_ordered_pair, require_pair)
+    read_document, require_float, require_float_list, require_ordered_pair)
 import numpy as np
 
 CONTROLLER_FORMAT = 'hydro_sdp/controller/v1'
-#: Default u limits of an ``sdp`` model, as a multiple of its saturation speed.
-U_LIMIT_MARGIN = 1.25
+#: Keys of the ``plant`` mapping.
+PLANT_KEYS = {'a', 'b', 'valve_lag'}
 
 
 @dataclass(frozen=True)
@@ -47,14 +52,17 @@ class ControllerSpec:
         Design plant at the control period.
     gains : PipGains
         PIP gains.
-    idz : InverseDeadZone or None
-        Inverse dead-zone (``None``: the valve gets ``u`` itself).
+    idz : InverseDeadZone, TableInverseDeadZone or None
+        Inverse dead-zone, chord or table (``None``: the valve gets ``u`` itself).
     u_limits : tuple[float, float] or None
         Limits of ``u``, degrees per control sample.
     v_limits : tuple[float, float] or None
         Valve command range, input units.
     design : Mapping[str, Any]
         How the gains were found (``method``: ``lq`` with ``weights``, or ``poles``).
+    valve_lag : float or None
+        Valve lag the plant was made from, s (:func:`.design_plant.lagged_integrator`);
+        ``None``: the plant is given as it is.
 
     """
 
@@ -62,13 +70,16 @@ class ControllerSpec:
     control_period: float
     plant: DiscretePlant
     gains: PipGains
-    idz: InverseDeadZone | None
+    idz: Idz | None
     u_limits: tuple[float, float] | None
     v_limits: tuple[float, float] | None
     design: Mapping[str, Any] = field(default_factory=dict)
+    valve_lag: float | None = None
 
     def __post_init__(self) -> None:
         check_sample_period(self.control_period)
+        if self.valve_lag is not None:
+            check_plant_lag(self.plant, self.valve_lag, self.control_period)
         if len(self.gains.f) != self.plant.n or len(self.gains.g) != self.plant.m - 1:
             raise ConfigurationError(
                 f'gains ({len(self.gains.f)} f, {len(self.gains.g)} g) do not fit a plant with '
@@ -98,23 +109,21 @@ class ControllerSpec:
 
     def to_mapping(self) -> dict[str, Any]:
         """Return the controller file's content."""
-        idz = None
-        if self.idz is not None:
-            idz = {'mode': self.idz.mode, 'beta': self.idz.beta,
-                   'dead_zone': list(self.idz.dead_zone), 'slopes': list(self.idz.slopes),
-                   'rest': self.idz.rest}
+        plant: dict[str, Any] = {'a': list(self.plant.a), 'b': list(self.plant.b)}
+        if self.valve_lag is not None:
+            plant['valve_lag'] = self.valve_lag
         return {
             'format': CONTROLLER_FORMAT,
             'joint': self.joint,
             'control_period': self.control_period,
             'delay_samples': self.delay_samples,
-            'plant': {'a': list(self.plant.a), 'b': list(self.plant.b)},
+            'plant': plant,
             'f': list(self.gains.f),
             'g': list(self.gains.g),
             'kI': self.gains.k_i,
             'poles': [format_pole(p) for p in self.poles],
             'design': dict(self.design),
-            'idz': idz,
+            'idz': idz_to_mapping(self.idz),
             'u_limits': None if self.u_limits is None else list(self.u_limits),
             'v_limits': None if self.v_limits is None else list(self.v_limits),
         }
@@ -141,8 +150,11 @@ class ControllerSpec:
                              required=('format', 'joint', 'control_period', 'plant', 'f', 'g',
                                        'kI'))
         plant = data['plant']
-        if not isinstance(plant, Mapping) or set(plant) != {'a', 'b'}:
-            raise ModelFileError("key 'plant': expected a mapping with keys 'a' and 'b'")
+        if not isinstance(plant, Mapping) or not {'a', 'b'} <= set(plant) <= PLANT_KEYS:
+            raise ModelFileError("key 'plant': expected a mapping with keys 'a' and 'b' "
+                                 "(and 'valve_lag')")
+        lag = plant.get('valve_lag')
+        idz = idz_from_mapping(data.get('idz'))
         try:
             spec = cls(
                 joint=str(data['joint']),
@@ -152,10 +164,11 @@ class ControllerSpec:
                 gains=PipGains(require_float_list(data['f'], 'f'),
                                require_float_list(data['g'], 'g'),
                                require_float(data['kI'], 'kI')),
-                idz=_idz_from_mapping(data.get('idz')),
+                idz=idz,
                 u_limits=_optional_pair(data.get('u_limits'), 'u_limits'),
                 v_limits=_optional_pair(data.get('v_limits'), 'v_limits'),
                 design=dict(data.get('design') or {}),
+                valve_lag=None if lag is None else require_float(lag, 'plant.valve_lag'),
             )
         except ConfigurationError as error:
             raise ModelFileError(str(error)) from None
@@ -179,116 +192,14 @@ def _optional_pair(value: Any, key: str) -> tuple[float, float] | None:
     return None if value is None else require_ordered_pair(value, key)
 
 
-def _idz_from_mapping(data: Any) -> InverseDeadZone | None:
-    if data is None:
-        return None
-    if not isinstance(data, Mapping):
-        raise ModelFileError("key 'idz': expected a mapping or null")
-    unknown = sorted(set(data) - {'mode', 'beta', 'dead_zone', 'slopes', 'rest'})
-    if unknown:
-        raise ModelFileError(f"key 'idz': unknown key {unknown[0]!r}")
-    for key in ('dead_zone', 'slopes'):
-        if key not in data:
-            raise ModelFileError(f"key 'idz': missing key {key!r}")
-    mode = data.get('mode', 'zero')
-    if mode not in IDZ_MODES:
-        raise ModelFileError(f"key 'idz.mode': expected one of {', '.join(IDZ_MODES)}, "
-                             f'got {mode!r}')
-    return InverseDeadZone(
-        dead_zone=require_ordered_pair(data['dead_zone'], 'idz.dead_zone', strict=False),
-        slopes=require_pair(data['slopes'], 'idz.slopes'),
-        beta=require_float(data.get('beta', 0.05), 'idz.beta'),
-        mode=mode,
-        rest=require_float(data.get('rest', 0.0), 'idz.rest'))
-
-
-def idz_for_model(model: JointModel, control_period: float, *, beta: float | None = None,
-                  mode: IdzMode = 'zero',
-                  v_range: tuple[float, float] | None = None) -> InverseDeadZone:
-    """
-    Inverse dead-zone of a model at the control period (docs/methods.md section 3.3).
-
-    Parameters
-    ----------
-    model : JointModel
-        The joint.
-    control_period : float
-        Control period, s.
-    beta : float or None
-        Chatter band, degrees per control sample; default 0.05 for maps with a
-        dead-zone (the paper's value) and 0 for a linear map.
-    mode : str
-        IDZ mode.
-    v_range : tuple[float, float] or None
-        ``(v_min, v_max)`` where the chords meet an ``sdp`` map; default: where
-        its speed reaches two thirds of saturation (J2 in the paper: -2.2, 1.75).
-
-    Returns
-    -------
-    InverseDeadZone
-        Slopes in degrees per control sample per input unit.
-
-    """
-    period = check_sample_period(control_period)
-    static_map = model.static_map
-    if isinstance(static_map, SdpMap):
-        v_min, v_max = v_range if v_range is not None else chord_commands(static_map)
-        chord = linearise(static_map, v_min, v_max)
-        dead_zone, slopes = chord.dead_zone, chord.slope
-    elif isinstance(static_map, SdpDzMap):
-        dead_zone, slopes = static_map.dead_zone, static_map.slope
-    elif isinstance(static_map, LinearMap):
-        dead_zone, slopes = (0.0, 0.0), (static_map.gain, static_map.gain)
-    else:  # pragma: no cover - every kind is handled above
-        raise ConfigurationError(f'no IDZ for kind {model.kind}')
-    if beta is None:
-        beta = 0.0 if isinstance(static_map, LinearMap) else 0.05
-    return InverseDeadZone(dead_zone=dead_zone,
-                           slopes=(slopes[0] * period, slopes[1] * period),
-                           beta=beta, mode=mode, rest=model.rest_command)
-
-
-def default_u_limits(model: JointModel, idz: InverseDeadZone,
-                     control_period: float) -> tuple[float, float] | None:
-    """
-    Return the default limits of ``u`` for a model.
-
-    For an ``sdp`` map, 1.25 times the saturation speeds (J2 at 0.05 s: about
-    -1.84 and +2.43, near the paper's +-2.5); otherwise the chord increments at
-    the valve's input limits, or no limits when the model has none.
-
-    Parameters
-    ----------
-    model : JointModel
-        The joint.
-    idz : InverseDeadZone
-        Its inverse dead-zone.
-    control_period : float
-        Control period, s.
-
-    Returns
-    -------
-    tuple[float, float] or None
-        ``(u_min, u_max)`` in degrees per control sample.
-
-    """
-    static_map = model.static_map
-    if isinstance(static_map, SdpMap):
-        negative, positive = static_map.saturation_velocity
-        return (U_LIMIT_MARGIN * negative * control_period,
-                U_LIMIT_MARGIN * positive * control_period)
-    if model.input_limits is None:
-        return None
-    low, high = model.input_limits
-    return idz.increment(low), idz.increment(high)
-
-
 def design_from_model(model: JointModel, *, control_period: float = 0.05,
                       poles: Sequence[complex] | None = None,
                       weights: LqWeights | None = None,
                       u_limits: tuple[float, float] | None = None,
                       beta: float | None = None, mode: IdzMode = 'zero',
-                      v_range: tuple[float, float] | None = None) -> ControllerSpec:
+                      v_range: tuple[float, float] | None = None,
+                      form: IdzForm | None = None,
+                      noise_std: float = DEFAULT_NOISE) -> ControllerSpec:
     """
     Design a PIP-IDZ controller for a joint model.
 
@@ -304,18 +215,24 @@ def design_from_model(model: JointModel, *, control_period: float = 0.05,
         LQ weights; default :class:`LqWeights` (the paper's design for J2:
         dominant poles 0.94 +- 0.05i at any delay).
     u_limits : tuple[float, float] or None
-        Limits of ``u``; default :func:`default_u_limits`.
-    beta, mode, v_range
-        IDZ chatter band, mode and chord ends, as in :func:`idz_for_model`.
+        Limits of ``u``; default :func:`.idz_design.default_u_limits`.
+    beta, mode, v_range, form
+        IDZ chatter band, mode, command range and form (``chord`` or ``table``;
+        default: the chord for ``sdp``, ``sdp_dz`` and ``linear`` maps, the table
+        for the others), as in :func:`.idz_design.idz_for_model`.
+    noise_std : float
+        Angle noise the controller will read, degrees: a table's default chatter
+        band covers it (default 0.03, the online identifier's default).
 
     Returns
     -------
     ControllerSpec
-        The controller.
+        The controller, designed on the integrator with the model's delay and valve lag.
 
     """
     period = check_sample_period(control_period)
-    plant = DiscretePlant.integrator(model.delay_samples(period))
+    plant = plant_for_model(model, period)
+    lag = model_lag(model)
     if poles is not None:
         gains = pole_assignment(plant, poles)
         design: dict[str, Any] = {'method': 'poles',
@@ -325,9 +242,10 @@ def design_from_model(model: JointModel, *, control_period: float = 0.05,
         gains = lq_design(plant, weights)
         design = {'method': 'lq', 'weights': {'w_y': weights.w_y, 'w_u': weights.w_u,
                                               'w_e': weights.w_e}}
-    idz = idz_for_model(model, period, beta=beta, mode=mode, v_range=v_range)
+    idz = idz_for_model(model, period, form=form, beta=beta, mode=mode, v_range=v_range,
+                        design=(plant, gains, lag), noise_std=noise_std)
     if u_limits is None:
         u_limits = default_u_limits(model, idz, period)
     return ControllerSpec(joint=model.joint, control_period=period, plant=plant, gains=gains,
                           idz=idz, u_limits=u_limits, v_limits=model.input_limits,
-                          design=design)
+                          design=design, valve_lag=lag)

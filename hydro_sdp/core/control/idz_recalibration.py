@@ -20,8 +20,8 @@ from collections import deque
 from dataclasses import dataclass, replace
 import math
 
-from hydro_sdp.core.control.controller_spec import idz_for_model
 from hydro_sdp.core.control.idz import InverseDeadZone
+from hydro_sdp.core.control.idz_design import chord_idz
 from hydro_sdp.core.errors import ConfigurationError
 from hydro_sdp.core.identification.online import SdpEstimate
 from hydro_sdp.core.model.joint_model import JointModel
@@ -189,4 +189,4 @@ def recalibrated_idz(estimate: JointModel, edges: tuple[float, float],
     if not isinstance(static_map, SdpMap):
         raise ConfigurationError(f'recalibration needs a kind sdp estimate, not {estimate.kind}')
     model = replace(estimate, static_map=replace(static_map, dead_zone=edges))
-    return idz_for_model(model, control_period)
+    return chord_idz(model, control_period)

@@ -5,7 +5,8 @@ The closed-loop check of a designed controller on a joint model, and slower re-d
 an angle factor...) over set-point steps across the stroke, up and down, and a
 ramp, and judges it: every step settles into the band within a bound, overshoots
 by at most 10 %, and no hold ends in a limit cycle (the valve hunting across
-rest, or the angle wandering more than the band). :func:`slower_poles` moves a
+rest, or the angle wandering more than the band), with the angle read through
+the noise the settings give. :func:`slower_poles` moves a
 design's dominant poles toward 1, for the re-design when the check fails.
 
 """
@@ -48,6 +49,11 @@ class CheckSettings:
         Time each set-point is held, s (at least the allowed settling plus ``tail``).
     tail : float
         Last seconds of each hold watched for a limit cycle, s.
+    noise_std : float
+        Angle measurement noise, standard deviation, degrees (``calibrate``: the
+        noise identify found in the records).
+    seed : int
+        Seed of the noise.
 
     """
 
@@ -56,6 +62,8 @@ class CheckSettings:
     band: float = 0.5
     hold: float = 10.0
     tail: float = 2.0
+    noise_std: float = 0.0
+    seed: int = 0
 
 
 @dataclass(frozen=True, eq=False)
@@ -151,7 +159,8 @@ def check_loop(model: JointModel, spec: ControllerSpec, stroke: tuple[float, flo
 
     The steps start at 20 % of the stroke and go to 50 %, 80 %, back to 50 % and
     20 % (two up, two down); the ramp then runs from 20 % to 80 % at a quarter
-    of the joint's full speed and holds there.
+    of the joint's full speed and holds there. The controller reads the angle
+    with the noise of ``settings``.
 
     Parameters
     ----------
@@ -193,9 +202,11 @@ def check_loop(model: JointModel, spec: ControllerSpec, stroke: tuple[float, flo
 
     steps_trace = run_closed_loop([LoopJoint(model, spec.controller(), setpoint, low)],
                                   dt=settings.dt, control_period=spec.control_period,
+                                  noise_std=settings.noise_std, seed=settings.seed,
                                   on_sample=progress(0))[0]
     ramp_trace = run_closed_loop([LoopJoint(model, spec.controller(), ramp, low)],
                                  dt=settings.dt, control_period=spec.control_period,
+                                 noise_std=settings.noise_std, seed=settings.seed + 1,
                                  on_sample=progress(setpoint.size))[0]
     metrics = tuple(step_metrics(steps_trace, band=settings.band, initial=low))
     bounds = tuple(settings.settling + abs(m.size) / (0.25 * speed) for m in metrics)

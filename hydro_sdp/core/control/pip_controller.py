@@ -34,7 +34,7 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 import math
 
-from hydro_sdp.core.control.idz import InverseDeadZone
+from hydro_sdp.core.control.idz_table import Idz, TableInverseDeadZone
 from hydro_sdp.core.control.pip_design import PipGains
 from hydro_sdp.core.errors import ConfigurationError, DataError
 
@@ -58,8 +58,8 @@ class ControllerSettings:
     ----------
     gains : PipGains
         PIP gains.
-    idz : InverseDeadZone or None
-        Inverse dead-zone; ``None`` sends ``u`` to the valve unchanged.
+    idz : InverseDeadZone, TableInverseDeadZone or None
+        Inverse dead-zone, chord or table; ``None`` sends ``u`` to the valve unchanged.
     u_limits : tuple[float, float] or None
         Limits of the linear controller's output (angle per control sample).
     v_limits : tuple[float, float] or None
@@ -68,7 +68,7 @@ class ControllerSettings:
     """
 
     gains: PipGains
-    idz: InverseDeadZone | None = None
+    idz: Idz | None = None
     u_limits: tuple[float, float] | None = None
     v_limits: tuple[float, float] | None = None
 
@@ -217,6 +217,9 @@ class PipIdzController:
         settings = self.settings
         if settings.u_limits is not None:
             u = min(max(u, settings.u_limits[0]), settings.u_limits[1])
+        if isinstance(settings.idz, TableInverseDeadZone):
+            # Beyond its ends the table holds the end commands: keep what the valve gives.
+            u = min(max(u, settings.idz.u_range[0]), settings.idz.u_range[1])
         if settings.idz is not None:
             v, branch = settings.idz.command(u, self._branch)
         else:
@@ -238,17 +241,17 @@ class PipIdzController:
         self.last_u, self.last_v = u, v
         self.steps += 1
 
-    def update_idz(self, idz: InverseDeadZone) -> None:
+    def update_idz(self, idz: Idz) -> None:
         """
         Change the IDZ at run time without a jump in the valve command.
 
-        The stored increments are re-expressed in the new chord model, so that
-        the command the valve receives stays where it was until the control law
-        moves it; inside the chatter band nothing needs to change.
+        The stored increments are re-expressed in the new IDZ (chord or table),
+        so that the command the valve receives stays where it was until the
+        control law moves it; inside the chatter band nothing needs to change.
 
         Parameters
         ----------
-        idz : InverseDeadZone
+        idz : InverseDeadZone or TableInverseDeadZone
             The new inverse dead-zone.
 
         """

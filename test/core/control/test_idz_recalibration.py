@@ -2,7 +2,7 @@
 
 from dataclasses import replace
 
-from hydro_sdp.core.control.controller_spec import idz_for_model
+from hydro_sdp.core.control.idz_design import idz_for_model
 from hydro_sdp.core.control.idz_recalibration import (
     recalibrated_idz, Recalibration, RecalibrationPolicy)
 from hydro_sdp.core.errors import ConfigurationError

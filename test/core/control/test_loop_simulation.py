@@ -2,8 +2,8 @@
 
 from dataclasses import replace
 
-from hydro_sdp.core.control.controller_spec import (
-    ControllerSpec, design_from_model, format_pole, idz_for_model)
+from hydro_sdp.core.control.controller_spec import ControllerSpec, design_from_model, format_pole
+from hydro_sdp.core.control.idz_design import idz_for_model
 from hydro_sdp.core.control.loop_simulation import (
     LoopJoint, run_closed_loop, step_metrics, step_setpoints, valve_reversals)
 from hydro_sdp.core.errors import ConfigurationError, ModelFileError

@@ -1,0 +1,193 @@
+"""
+The map's own inverse as the IDZ of a model: the table, its command range and its band.
+
+:func:`table_idz` samples the static map over :func:`command_span` (the valve's
+range) and keeps up to :data:`TABLE_POINTS` points per branch, evenly spaced
+along the curve (docs/methods.md section 5.4). :func:`table_beta` is the
+default chatter band: wide enough that the sensor noise alone does not reverse
+the valve, and no wider than the delay and lag allow for the smallest
+correction.
+
+"""
+
+from __future__ import annotations
+
+import math
+
+from hydro_sdp.core.control.idz import IdzMode
+from hydro_sdp.core.control.idz_table import TableInverseDeadZone
+from hydro_sdp.core.control.loop_noise import noise_gain
+from hydro_sdp.core.control.pip_design import DiscretePlant, PipGains
+from hydro_sdp.core.errors import ConfigurationError, DataError
+from hydro_sdp.core.model.joint_model import JointModel
+from hydro_sdp.core.model.static_maps import PolyMap, PowerSatMap, PwlMap, SdpMap
+from hydro_sdp.core.model.timing import check_sample_period
+import numpy as np
+
+#: Angle the smallest correction of [W18]'s J2 loop moves: its band 0.05 deg per sample
+#: for its 3 samples of delay; a table's default band keeps it for the model's own dynamics.
+SMALLEST_CORRECTION = 0.15
+#: A table's band is at least this many standard deviations of the noise on ``u``.
+NOISE_MULTIPLE = 3.0
+#: Angle noise a design assumes when none is given, deg (the identifier's default).
+DEFAULT_NOISE = 0.03
+#: Points of each branch of an IDZ table.
+TABLE_POINTS = 40
+#: Fraction of saturation where a table of a saturating map without input limits ends.
+TABLE_SATURATION = 0.99
+
+
+def command_span(model: JointModel,
+                 v_range: tuple[float, float] | None = None) -> tuple[float, float]:
+    """
+    Return the commands an IDZ table (or the chords of ``chord_map``) covers, input units.
+
+    ``v_range`` if given; else the valve's input limits; else the map's own range
+    (``pwl`` knots, ``poly`` command range) or, for a saturating map, where it
+    reaches 99 % of saturation on each side.
+
+    Parameters
+    ----------
+    model : JointModel
+        The joint.
+    v_range : tuple[float, float] or None
+        Commands to cover.
+
+    Returns
+    -------
+    tuple[float, float]
+        ``(low, high)`` with the rest command strictly between.
+
+    """
+    static_map = model.static_map
+    if v_range is not None:
+        span = (float(v_range[0]), float(v_range[1]))
+    elif model.input_limits is not None:
+        span = model.input_limits
+    elif isinstance(static_map, PwlMap):
+        span = (static_map.knots[0], static_map.knots[-1])
+    elif isinstance(static_map, PolyMap):
+        span = static_map.command_range
+    elif isinstance(static_map, (SdpMap, PowerSatMap)):
+        reach = -math.log(1.0 - TABLE_SATURATION)
+        power = static_map.exponent if isinstance(static_map, PowerSatMap) else (1.0, 1.0)
+        low, high = static_map.dead_zone
+        span = (low - reach ** (1.0 / power[0]) / static_map.curvature[0],
+                high + reach ** (1.0 / power[1]) / static_map.curvature[1])
+    else:
+        raise ConfigurationError(f'an IDZ table of a {model.kind} map needs the command range: '
+                                 'give the model input_limits (or --v-range)')
+    rest = model.rest_command
+    if not (math.isfinite(span[0]) and math.isfinite(span[1]) and span[0] < rest < span[1]):
+        raise ConfigurationError(f'the command range {list(span)} must contain the rest '
+                                 f'command {rest} strictly inside')
+    return span
+
+
+def table_beta(dead_zone: tuple[float, float], plant: DiscretePlant, gains: PipGains,
+               lag: float | None, control_period: float, noise_std: float) -> float:
+    """
+    Return the default chatter band of an IDZ table, degrees per control sample.
+
+    When ``u`` leaves the band the joint starts to move only after the delay
+    ``tau`` and the lag ``T_v``, and meanwhile the controller keeps asking: the
+    smallest correction moves about ``beta (tau + T_v / T)`` degrees. The band
+    keeps that at [W18]'s J2 value, :data:`SMALLEST_CORRECTION` (0.05 deg per
+    sample over 3 samples of delay), unless the noise needs more: the band is
+    at least :data:`NOISE_MULTIPLE` standard deviations of the noise on ``u``
+    (:func:`.loop_noise.noise_gain`). A map without a dead-zone needs no band.
+
+    Parameters
+    ----------
+    dead_zone : tuple[float, float]
+        The table's edges, input units.
+    plant : DiscretePlant
+        The design plant (its delay, control samples).
+    gains : PipGains
+        The PIP gains.
+    lag : float or None
+        Valve lag of the model, s.
+    control_period : float
+        Control period, s.
+    noise_std : float
+        Standard deviation of the angle noise the controller reads, degrees.
+
+    Returns
+    -------
+    float
+        The band.
+
+    """
+    if dead_zone[1] <= dead_zone[0]:
+        return 0.0
+    samples = plant.delay + (0.0 if lag is None else lag / check_sample_period(control_period))
+    noise = NOISE_MULTIPLE * noise_std * noise_gain(plant, gains) if noise_std > 0.0 else 0.0
+    return max(SMALLEST_CORRECTION / samples, noise)
+
+
+def _branch(model: JointModel, rest: float, end: float,
+            control_period: float) -> tuple[list[float], list[float]]:
+    """Return one branch of the table, ``(u, v)`` from the edge outward (u from 0)."""
+    sign = 1.0 if end > rest else -1.0
+    dead_zone = model.dead_zone
+    edge = rest
+    if dead_zone is not None:
+        edge = min(max(dead_zone[1] if sign > 0 else dead_zone[0], min(rest, end)),
+                   max(rest, end))
+    v = np.linspace(edge, end, 4001)
+    u = np.clip(sign * control_period * model.rate(v), 0.0, None)
+    u = np.maximum.accumulate(u)            # a monotone envelope (a poly map may dip)
+    moving = np.flatnonzero(u > 0.0)
+    if not moving.size:
+        raise DataError(f'the {model.kind} map does not move the joint '
+                        f'{"down" if sign < 0 else "up"} within the commands '
+                        f'{sorted([rest, end])}')
+    start = max(int(moving[0]) - 1, 0)
+    v, u = v[start:], u[start:]
+    keep = np.r_[True, np.diff(u) > 0.0]     # a flat stretch: its first command
+    v, u = v[keep], u[keep]
+    # Points of the map evenly spaced along the curve drawn on the unit square (steep and
+    # flat parts alike), the first (the edge) and the last (the end) always among them.
+    step = np.hypot(np.diff(u) / u[-1], np.diff(v) / (v[-1] - v[0]))
+    length = np.r_[0.0, np.cumsum(step)]
+    chosen = np.unique(np.r_[0, np.searchsorted(length, np.linspace(
+        0.0, length[-1], TABLE_POINTS)[1:-1]), u.size - 1])
+    u_table, v_table = u[chosen], v[chosen]
+    u_table[0] = 0.0
+    keep = np.r_[True, np.diff(u_table) > 0.0]
+    return (sign * u_table[keep] + 0.0).tolist(), v_table[keep].tolist()   # no -0.0
+
+
+def table_idz(model: JointModel, control_period: float, *, beta: float,
+              mode: IdzMode = 'zero',
+              v_range: tuple[float, float] | None = None) -> TableInverseDeadZone:
+    """
+    Return the map's own inverse as the IDZ table at the control period (methods.md 5.4).
+
+    Parameters
+    ----------
+    model : JointModel
+        The joint (any map family; effects at their nominal values).
+    control_period : float
+        Control period, s.
+    beta : float
+        Chatter band, degrees per control sample (:func:`table_beta` is the default
+        :func:`~hydro_sdp.core.control.controller_spec.design_from_model` gives it).
+    mode : str
+        IDZ mode.
+    v_range : tuple[float, float] or None
+        Commands the table covers (default :func:`command_span`: the input limits).
+
+    Returns
+    -------
+    TableInverseDeadZone
+        Up to :data:`TABLE_POINTS` points per branch.
+
+    """
+    period = check_sample_period(control_period)
+    low, high = command_span(model, v_range)
+    rest = model.rest_command
+    negative_u, negative_v = _branch(model, rest, low, period)
+    positive = _branch(model, rest, high, period)
+    return TableInverseDeadZone.from_branches(
+        (negative_u[::-1], negative_v[::-1]), positive, beta=beta, mode=mode, rest=rest)

@@ -1,0 +1,190 @@
+"""
+A PIP-IDZ loop written from the equations, reading the controller file itself.
+
+It uses none of hydro_sdp's controller classes: the file is read with PyYAML,
+the control law is the incremental PIP of docs/methods.md section 4.2 (for
+``n = 1, m = 3`` eq. (8) of West et al. 2018), ``u`` is clamped to
+``u_limits``, the inverse dead-zone is the chord of section 5.1 or the table
+of section 5.4 (zero band or hysteresis), the command is clamped to
+``v_limits`` and the history keeps the increment the valve really gives. The
+plant is any object with ``angle`` (the reading now) and ``step(command)``,
+stepped at its own period with the command held between control instants.
+
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+import math
+from pathlib import Path
+from typing import Sequence
+
+import numpy as np
+import yaml
+
+
+@dataclass
+class FileController:
+    """The controller of a controller file, stepped once per control period."""
+
+    f: list[float]
+    g: list[float]
+    k_i: float
+    period: float
+    idz: dict
+    u_limits: tuple[float, float] | None
+    v_limits: tuple[float, float] | None
+
+    @classmethod
+    def read(cls, path: str | Path) -> FileController:
+        data = yaml.safe_load(Path(path).read_text())
+        limits = [None if data.get(key) is None else tuple(data[key])
+                  for key in ('u_limits', 'v_limits')]
+        return cls(list(data['f']), list(data['g']), float(data['kI']),
+                   float(data['control_period']), dict(data['idz']), limits[0], limits[1])
+
+    def __post_init__(self) -> None:
+        self.ys: list[float] = []
+        self.us = [0.0] * (len(self.g) + 1)
+        self.branch = 0
+        self.rest = float(self.idz.get('rest', 0.0))
+        self.beta = float(self.idz.get('beta', 0.05))
+        self.mode = self.idz.get('mode', 'zero')
+        if self.mode not in ('zero', 'hysteresis'):
+            raise ValueError(f'mode {self.mode} is not written here')
+        if 'table' in self.idz:
+            u = np.asarray(self.idz['table']['u'], dtype=float)
+            v = np.asarray(self.idz['table']['v'], dtype=float)
+            zeros = np.flatnonzero(u == 0.0)
+            self.negative = (u[:zeros[0] + 1], v[:zeros[0] + 1])
+            self.positive = (u[zeros[-1]:], v[zeros[-1]:])
+            self.table = (u, v)
+            self.edges = (float(v[zeros[0]]), float(v[zeros[-1]]))
+        else:
+            self.table = None
+            self.edges = tuple(self.idz['dead_zone'])
+            self.slopes = tuple(self.idz['slopes'])
+
+    def _branch_command(self, u: float, side: int) -> float:
+        low, high = self.edges
+        if self.table is None:
+            if side > 0:
+                return max(u / self.slopes[1] + high, low)
+            return min(u / self.slopes[0] + low, high)
+        us, vs = self.positive if side > 0 else self.negative
+        if side > 0 and u < 0.0:
+            return max(vs[0] + u * (vs[1] - vs[0]) / (us[1] - us[0]), low)
+        if side < 0 and u > 0.0:
+            return min(vs[-1] + u * (vs[-1] - vs[-2]) / (us[-1] - us[-2]), high)
+        return float(np.interp(u, us, vs))
+
+    def _increment(self, v: float) -> float:
+        if self.table is not None:
+            return float(np.interp(v, *self.table[::-1]))
+        low, high = self.edges
+        if v < low:
+            return self.slopes[0] * (v - low)
+        return self.slopes[1] * (v - high) if v > high else 0.0
+
+    def step(self, setpoint: float, y: float) -> float:
+        """One control sample: the valve command for the angle ``y``."""
+        n = len(self.f)
+        ys = [y] + (self.ys[:n] if self.ys else [y] * n)
+        us = self.us
+        u = us[0] + self.k_i * (setpoint - y)
+        for j, g_j in enumerate(self.g, start=1):
+            u -= g_j * (us[j - 1] - us[j])
+        for i, f_i in enumerate(self.f):
+            u -= f_i * (ys[i] - ys[i + 1])
+        if self.u_limits is not None:
+            u = min(max(u, self.u_limits[0]), self.u_limits[1])
+        if self.table is not None:
+            u = min(max(u, float(self.table[0][0])), float(self.table[0][-1]))
+        if u > self.beta:
+            self.branch = 1
+        elif u < -self.beta:
+            self.branch = -1
+        elif self.mode == 'zero':
+            self.branch = 0
+        v = self.rest if self.branch == 0 else self._branch_command(u, self.branch)
+        if self.v_limits is not None and not self.v_limits[0] <= v <= self.v_limits[1]:
+            v = min(max(v, self.v_limits[0]), self.v_limits[1])
+            u = self._increment(v)
+        self.ys = ys[:n + 1]
+        self.us = [u] + us[:len(self.g)]
+        return v
+
+
+@dataclass
+class LoopRun:
+    """True angles, readings, set-points and commands at every plant sample."""
+
+    t: np.ndarray
+    y: np.ndarray
+    measured: np.ndarray
+    setpoint: np.ndarray
+    v: np.ndarray
+
+
+def run_loop(controller: FileController, plant, dt: float, levels: Sequence[float],
+             hold: float) -> LoopRun:
+    """
+    Hold each set-point ``hold`` s; the controller acts every control period.
+
+    ``plant.angle`` is what the controller reads; ``plant.true_angle`` (when the
+    plant has it) the angle judged, without the sensor noise.
+    """
+    every = int(round(controller.period / dt))
+    setpoint = np.repeat(np.asarray(levels, dtype=float), int(round(hold / dt)))
+    y, measured, v = (np.empty(setpoint.size) for _ in range(3))
+    command = controller.rest
+    for j in range(setpoint.size):
+        measured[j] = plant.angle
+        y[j] = getattr(plant, 'true_angle', measured[j])
+        if j % every == 0:
+            command = controller.step(float(setpoint[j]), measured[j])
+        v[j] = command
+        plant.step(command)
+    return LoopRun(np.arange(setpoint.size) * dt, y, measured, setpoint, v)
+
+
+@dataclass
+class StepResult:
+    """Settling, overshoot and the end of one hold."""
+
+    size: float
+    settling: float
+    overshoot: float
+    reversals: int
+    wander: float
+
+
+def judge(run: LoopRun, *, band: float = 0.5, tail: float = 2.0,
+          rest: float = 0.0) -> list[StepResult]:
+    """
+    Settling into ``band``, overshoot (% of the step) and the last ``tail`` s of each hold.
+
+    ``reversals`` counts sign changes of the command about ``rest`` in the tail
+    (samples at rest ignored), ``wander`` the angle's range there.
+    """
+    dt = float(run.t[1] - run.t[0])
+    y = run.y
+    changes = np.r_[0, np.flatnonzero(np.diff(run.setpoint)) + 1, run.setpoint.size]
+    results = []
+    for start, end in zip(changes[:-1], changes[1:]):
+        if start == 0:
+            continue
+        target, before = run.setpoint[start], run.setpoint[start - 1]
+        error = y[start:end] - target
+        outside = np.flatnonzero(np.abs(error) > band)
+        settling = 0.0 if not outside.size else (
+            math.inf if outside[-1] == error.size - 1 else (outside[-1] + 1) * dt)
+        size = target - before
+        overshoot = max(0.0, 100.0 * float(np.max(np.sign(size) * error)) / abs(size))
+        window = slice(end - int(round(tail / dt)), end)
+        side = np.sign(run.v[window] - rest)
+        side = side[side != 0]
+        reversals = int(np.count_nonzero(np.diff(side)))
+        results.append(StepResult(float(size), settling, overshoot, reversals,
+                                  float(np.ptp(y[window]))))
+    return results
