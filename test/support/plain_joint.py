@@ -101,26 +101,97 @@ class PlainJoint:
 
         """
         v = np.asarray(commands, dtype=float)
-        n = v.size
+        drive = _Drive(self, y0)
+        y = np.array([y0] + [drive.step(v, k, None if load is None else float(load[k - 1]))
+                             for k in range(1, v.size)])
+        return self._record(v, y, load, seed, source)
+
+    def run_levels(self, duration: float, *, magnitude: tuple[float, float] = (1.0, 8.0),
+                   holds: tuple[float, float] = (0.5, 2.5), y0: float = 0.0, margin: float = 10.0,
+                   load: Callable[[float], float] | None = None, seed: int = 0,
+                   source: str = 'random levels') -> Record:
+        """
+        Random levels held for random times, each heading away from the nearer stop.
+
+        A level ends early within ``margin`` of the stop it heads for, as an operator lets go.
+
+        Parameters
+        ----------
+        duration : float
+            Length, s.
+        magnitude : tuple[float, float]
+            Range of the levels' size.
+        holds : tuple[float, float]
+            Range of the hold times, s.
+        y0 : float
+            Starting angle, deg.
+        margin : float
+            Distance from a stop at which a level ends, deg.
+        load : callable or None
+            Measured load as a function of time, s (kept in the record).
+        seed : int
+            Seed of the levels, the noise and the jitter.
+        source : str
+            Name of the record.
+
+        Returns
+        -------
+        Record
+            The run.
+
+        """
+        rng = np.random.default_rng([seed, 7])
+        n = int(round(duration / self.dt))
+        v = np.zeros(n)
+        loads = None if load is None else np.array([load(k * self.dt) for k in range(n)])
+        drive = _Drive(self, y0)
+        y = [y0]
+        k = 1
+        while k < n:
+            low, high = self.stops
+            upward = rng.random() > (y[-1] - low) / (high - low)
+            level = (1.0 if upward else -1.0) * rng.uniform(*magnitude)
+            for _ in range(int(round(rng.uniform(*holds) / self.dt))):
+                if k >= n or (upward and y[-1] > high - margin) or (
+                        not upward and y[-1] < low + margin):
+                    break
+                v[k] = level
+                y.append(drive.step(v, k, None if loads is None else float(loads[k - 1])))
+                k += 1
+        return self._record(v, np.array(y), loads, seed, source)
+
+    def _record(self, v: np.ndarray, y: np.ndarray, load: Sequence[float] | None, seed: int,
+                source: str) -> Record:
         rng = np.random.default_rng(seed)
-        pole = math.exp(-self.dt / self.lag) if self.lag > 0.0 else 0.0
-        y = np.empty(n)
-        y[0] = y0
-        flow = 0.0
-        for k in range(1, n):
-            target = self.speed(float(v[max(k - self.delay, 0)]))
-            flow = pole * flow + (1.0 - pole) * target
-            speed = flow
-            direction = 1.0 if speed > 0.0 else -1.0
-            if self.angle_factor is not None and speed != 0.0:
-                speed *= self.angle_factor(float(y[k - 1]), direction)
-            if self.load_factor is not None and load is not None and speed != 0.0:
-                speed *= self.load_factor(float(load[k - 1]), direction)
-            y[k] = min(max(y[k - 1] + self.dt * speed, self.stops[0]), self.stops[1])
+        n = v.size
         t = EPOCH + self.dt * np.arange(1, n + 1) + rng.uniform(-0.05, 0.05, n) * self.dt
         measured = y + rng.normal(0.0, self.noise, n)
         return Record(t, v, measured, 'plain', source, origin=EPOCH,
                       load=None if load is None else np.asarray(load, dtype=float))
+
+
+class _Drive:
+    """The joint's state while it is driven: the valve's flow and the angle."""
+
+    def __init__(self, joint: PlainJoint, y0: float) -> None:
+        self.joint = joint
+        self.pole = math.exp(-joint.dt / joint.lag) if joint.lag > 0.0 else 0.0
+        self.flow = 0.0
+        self.y = y0
+
+    def step(self, v: np.ndarray, k: int, load: float | None) -> float:
+        """Advance over the interval ending at sample ``k``; return the angle there."""
+        joint = self.joint
+        target = joint.speed(float(v[max(k - joint.delay, 0)]))
+        self.flow = self.pole * self.flow + (1.0 - self.pole) * target
+        speed = self.flow
+        direction = 1.0 if speed > 0.0 else -1.0
+        if joint.angle_factor is not None and speed != 0.0:
+            speed *= joint.angle_factor(self.y, direction)
+        if joint.load_factor is not None and load is not None and speed != 0.0:
+            speed *= joint.load_factor(load, direction)
+        self.y = min(max(self.y + joint.dt * speed, joint.stops[0]), joint.stops[1])
+        return self.y
 
 
 def steps(levels: Sequence[float], *, dt: float = 0.01, hold: float = 1.5,
@@ -131,17 +202,3 @@ def steps(levels: Sequence[float], *, dt: float = 0.01, hold: float = 1.5,
     for level in levels:
         parts += [np.full(n_hold, float(level)), np.zeros(n_rest)]
     return np.concatenate(parts)
-
-
-def random_levels(duration: float, *, dt: float = 0.01, magnitude: tuple[float, float] = (
-        1.0, 4.0), holds: tuple[float, float] = (0.5, 2.5), seed: int = 0) -> np.ndarray:
-    """Random levels of either sign held for random times, with rests between some."""
-    rng = np.random.default_rng(seed)
-    parts = [np.zeros(int(round(0.5 / dt)))]
-    total = int(round(duration / dt))
-    while sum(p.size for p in parts) < total:
-        level = rng.choice([-1.0, 1.0]) * rng.uniform(*magnitude)
-        if rng.random() < 0.2:
-            level = 0.0
-        parts.append(np.full(int(round(rng.uniform(*holds) / dt)), level))
-    return np.concatenate(parts)[:total]

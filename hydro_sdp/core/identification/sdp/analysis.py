@@ -29,7 +29,7 @@ from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import DataError, HydroSdpError
 from hydro_sdp.core.identification.delay import estimate_delay
 from hydro_sdp.core.identification.rest import estimate_rest_command
-from hydro_sdp.core.identification.sdp.backfit import Backfit, backfit, Term
+from hydro_sdp.core.identification.sdp.backfit import Backfit, backfit, base_fit, Term
 from hydro_sdp.core.identification.sdp.ordering import MAX_GROUPS
 from hydro_sdp.core.identification.sdp.random_walk import order_of, TvpKind
 from hydro_sdp.core.identification.sdp.results import (
@@ -106,8 +106,7 @@ def data_delay(records: Sequence[Record], dt: float, max_delay: float,
         X = X[:, np.any(X != 0.0, axis=0)]
         if X.shape[1] == 0:
             raise DataError('the command never leaves rest: nothing drives the joint')
-        dy = rows.increment
-        rss = float(np.sum((dy - X @ np.linalg.lstsq(X, dy, rcond=None)[0]) ** 2)) / dy.size
+        rss = base_fit(rows.increment, X)[2]
         if rss < best_rss:
             best, best_rss = delay, rss
     return best

@@ -24,7 +24,7 @@ from hydro_sdp.core.errors import DataError
 from hydro_sdp.core.identification.sdp.held_out import held_out_reduction
 from hydro_sdp.core.identification.sdp.nvr import NvrEstimate
 from hydro_sdp.core.identification.sdp.ordering import MAX_GROUPS, order_by_state, Ordering
-from hydro_sdp.core.identification.sdp.random_walk import group_stats, order_of, TvpKind
+from hydro_sdp.core.identification.sdp.random_walk import group_stats, inner, order_of, TvpKind
 from hydro_sdp.core.identification.sdp.significance import dependence_test
 from hydro_sdp.core.identification.sdp.smoothing import smooth_parameter, SmoothedParameter
 import numpy as np
@@ -198,6 +198,9 @@ def base_fit(z: FloatArray, regressors: FloatArray) -> tuple[FloatArray, FloatAr
     """
     Least-squares constant parameters of ``z = X p + e``.
 
+    By the normal equations of the columns scaled to unit norm (a handful of columns,
+    no BLAS: see :func:`~hydro_sdp.core.identification.sdp.random_walk.inner`).
+
     Returns
     -------
     tuple
@@ -205,14 +208,19 @@ def base_fit(z: FloatArray, regressors: FloatArray) -> tuple[FloatArray, FloatAr
 
     """
     X = np.asarray(regressors, dtype=np.float64)
-    coefficients, _, rank, _ = np.linalg.lstsq(X, z, rcond=None)
-    if rank < X.shape[1]:
+    norms = np.sqrt(np.einsum('ij,ij->j', X, X))
+    if np.any(norms == 0.0):
+        raise DataError('a regressor is zero at every sample (a term never excited)')
+    scaled = X / norms
+    normal = np.einsum('ij,ik->jk', scaled, scaled)
+    if np.linalg.cond(normal) > 1e12:
         raise DataError('the regressors are linearly dependent (a term never excited?)')
-    residual = z - X @ coefficients
-    rss = float(np.dot(residual, residual))
+    inverse = np.linalg.inv(normal)
+    coefficients = inverse @ np.einsum('ij,i->j', scaled, z) / norms
+    residual = z - np.einsum('ij,j->i', X, coefficients)
+    rss = inner(residual, residual)
     dof = max(z.size - X.shape[1], 1)
-    covariance = np.linalg.inv(X.T @ X) * rss / dof
-    return coefficients, np.sqrt(np.diag(covariance)), rss
+    return coefficients, np.sqrt(np.diag(inverse) * rss / dof) / norms, rss
 
 
 def backfit(z: FloatArray, terms: Sequence[Term], *, max_groups: int | None = MAX_GROUPS,
@@ -261,7 +269,7 @@ def backfit(z: FloatArray, terms: Sequence[Term], *, max_groups: int | None = MA
     parameters = [np.full(z.size, float(value)) for value in start]
     nvrs: list[float | NvrEstimate | None] = [t.nvr for t in terms]
     smoothed: list[SmoothedParameter] = []
-    fitted = regressors @ start
+    fitted = np.einsum('ij,j->i', regressors, start)
     previous = rss_base
     passes, converged = 0, False
     while passes < max_passes and not converged:
@@ -290,7 +298,7 @@ def backfit(z: FloatArray, terms: Sequence[Term], *, max_groups: int | None = MA
     estimates = tuple(_weigh(z, residual, regressors, i, terms[i], orderings[i], smoothed[i],
                              parameters[i], rss_base, replicates, seed + i)
                       for i in range(len(terms)))
-    return Backfit(estimates, fitted, float(np.dot(residual, residual)), rss_base, base,
+    return Backfit(estimates, fitted, inner(residual, residual), rss_base, base,
                    base_se, passes, converged)
 
 
@@ -306,7 +314,7 @@ def _weigh(z: FloatArray, residual: FloatArray, regressors: FloatArray, i: int, 
     held = stats.total - float(np.sum(stats.moment)) ** 2 / total_weight
     observed = max(held - stats.residual_sum(smoothed.estimate), 0.0)
     n = stats.count
-    sigma2 = float(np.dot(residual[ordering.samples], residual[ordering.samples])) / max(
+    sigma2 = inner(residual[ordering.samples], residual[ordering.samples]) / max(
         n - order_of(smoothed.kind), 1)
     constant_se = math.sqrt(sigma2 / total_weight)
     partial = residual + x * parameter

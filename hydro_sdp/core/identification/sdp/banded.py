@@ -241,7 +241,7 @@ def fit_flat(stats: GroupStats, kind: str) -> FlatFit:
     """
     d = order_of(kind)
     basis = null_basis(stats.groups, kind)
-    normal = basis.T @ (stats.weight[:, None] * basis)
+    normal = np.einsum('ij,i,ik->jk', basis, stats.weight, basis)
     try:
         inverse = np.linalg.inv(normal)
         sign, log_det = np.linalg.slogdet(normal)
@@ -249,8 +249,8 @@ def fit_flat(stats: GroupStats, kind: str) -> FlatFit:
         sign = 0.0
     if sign <= 0.0 or stats.count <= d:
         raise DataError('the regressor does not excite the parameter (all zero or one value)')
-    coefficients = inverse @ (basis.T @ stats.moment)
-    estimate = basis @ coefficients
+    coefficients = inverse @ np.einsum('ij,i->j', basis, stats.moment)
+    estimate = np.einsum('ij,j->i', basis, coefficients)
     residual = stats.residual_sum(estimate)
     sigma2 = max(residual, 0.0) / (stats.count - d)
     if sigma2 <= 0.0:

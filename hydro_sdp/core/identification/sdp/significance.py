@@ -30,7 +30,7 @@ from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.identification.sdp.banded import null_basis, penalty_bands
 from hydro_sdp.core.identification.sdp.nvr import nvr_range
 from hydro_sdp.core.identification.sdp.ordering import coarsened, Ordering
-from hydro_sdp.core.identification.sdp.random_walk import GroupStats, order_of
+from hydro_sdp.core.identification.sdp.random_walk import GroupStats, inner, order_of
 import numpy as np
 from scipy import sparse
 from scipy.linalg import cho_solve_banded, cholesky_banded, LinAlgError
@@ -70,7 +70,7 @@ def block_length(series: FloatArray) -> int:
     n = values.size
     longest = max(1, n // MIN_BLOCKS)
     centred = values - np.mean(values) if n else values
-    power = float(np.dot(centred, centred))
+    power = inner(centred, centred)
     if n < 4 or power <= 0.0:
         return min(longest, max(1, int(round(n ** (1.0 / 3.0)))))
     size = 1 << int(math.ceil(math.log2(2 * n)))
@@ -120,7 +120,7 @@ class LikelihoodRatio:
             log_det = 2.0 * float(np.sum(np.log(factor[0])))
             self.factors.append((float(nvr), factor, log_det + (groups - self.d) * math.log(nvr)))
         basis = null_basis(groups, kind)
-        normal = basis.T @ (self.weight[:, None] * basis)
+        normal = np.einsum('ij,i,ik->jk', basis, self.weight, basis)
         self.basis = basis
         self.normal_inverse = np.linalg.inv(normal)
         self.flat_log_det = float(np.linalg.slogdet(normal)[1])
@@ -146,7 +146,7 @@ class LikelihoodRatio:
             ``max(0, -2 log L(flat) - min over the scan of -2 log L(nvr))`` per series.
 
         """
-        projected = self.basis.T @ moment
+        projected = np.einsum('ij,ik->jk', self.basis, moment)
         flat_squares = total - np.sum(projected * (self.normal_inverse @ projected), axis=0)
         flat = self._neg2(flat_squares, self.flat_log_det)
         best = np.full(moment.shape[1], np.inf)
@@ -224,7 +224,7 @@ def dependence_test(z: FloatArray, residual: FloatArray, x: FloatArray, state: F
     ratio = LikelihoodRatio(weight, n, kind)
     observed = np.asarray(z, dtype=np.float64)[samples]
     statistic = float(ratio(np.asarray(operator @ observed)[:, None],
-                            np.array([np.dot(observed, observed)]))[0])
+                            np.array([inner(observed, observed)]))[0])
     e = np.asarray(residual, dtype=np.float64)[samples]
     block = block_length(e)
     if statistic <= 0.0:

@@ -17,7 +17,7 @@ from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.identification.sdp.banded import (
     BandedFit, fit_banded, fit_flat, FlatFit, null_basis)
 from hydro_sdp.core.identification.sdp.nvr import estimate_nvr, NvrEstimate
-from hydro_sdp.core.identification.sdp.random_walk import GroupStats, order_of
+from hydro_sdp.core.identification.sdp.random_walk import GroupStats, inner, order_of
 import numpy as np
 
 
@@ -67,7 +67,7 @@ class SmoothedParameter:
         """Return the smoother's equivalent degrees of freedom, ``trace`` of its hat matrix."""
         if isinstance(self.fit, FlatFit):
             return float(order_of(self.kind))
-        return float(np.dot(self.stats.weight, self.fit.variance()))
+        return inner(self.stats.weight, self.fit.variance())
 
 
 def smooth_parameter(stats: GroupStats, kind: str,
