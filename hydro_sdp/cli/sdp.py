@@ -95,7 +95,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         help='largest delay considered without --model, s (default: 0.5)')
     parser.add_argument('--irw', action='store_true',
                         help='integrated random walks (smoother curves; zero NVR then means '
-                             'a line in the state\'s rank, not a constant)')
+                             "a line in the state's rank, not a constant)")
     parser.add_argument('--replicates', type=_replicates, default=199,
                         help='bootstrap replicates of each test (default: 199)')
     parser.add_argument('--plot-dir', help='folder for the figures')
@@ -181,7 +181,7 @@ def _lines(analysis: SdpAnalysis, skipped: list[tuple[str, str]],
     what = ('SDP-ARX model y_k = -a1 y_{k-1} + b (v_{k-tau} - rest)' if analysis.target == 'arx'
             else 'measured / model increment (ratio) and increment residual')
     lines = [f'{what}: {analysis.samples} samples, delay {analysis.delay} samples '
-             f'({analysis.delay * analysis.sample_period:g} s), rest {analysis.rest:g}']
+             f'({analysis.delay * analysis.sample_period:.3g} s), rest {analysis.rest:g}']
     if analysis.a1 is not None:
         a1 = analysis.a1
         lines.append(f'a1 = {a1.mean:.5f} +- {a1.se:.1e} (NVR along the angle {a1.nvr:.3g}; '

@@ -20,7 +20,7 @@ from matplotlib.figure import Figure
 import numpy as np
 
 #: Colours of the directions of motion.
-DIRECTION_COLOURS = {'positive': '#d95f02', 'negative': '#1b9e77', 'both': MEASURED}
+DIRECTION_COLOURS = {'positive': '#7570b3', 'negative': '#1b9e77', 'both': MEASURED}
 #: Most points drawn per curve (the groups are thinned evenly beyond).
 CURVE_POINTS = 1500
 #: What each parameter is, for the axis labels.
@@ -38,7 +38,8 @@ def _label(state: str, command_unit: str | None) -> str:
     return f'{names[state]} ({unit})'
 
 
-def draw_dependence(ax: Axes, entry: StateDependence, *, label: str | None = None) -> None:
+def draw_dependence(ax: Axes, entry: StateDependence, *, label: str | None = None,
+                    constant: bool = True) -> None:
     """
     Draw one parameter against its state: the estimate, its +-2 SE band, its constant.
 
@@ -50,6 +51,8 @@ def draw_dependence(ax: Axes, entry: StateDependence, *, label: str | None = Non
         The parameter along the state.
     label : str or None
         Legend label; default: its direction, share and significance.
+    constant : bool
+        Also draw the parameter held constant (dashed).
 
     """
     colour = DIRECTION_COLOURS.get(entry.direction, MEASURED)
@@ -68,9 +71,10 @@ def draw_dependence(ax: Axes, entry: StateDependence, *, label: str | None = Non
         ax.fill_between(values, estimate - 2.0 * se, estimate + 2.0 * se, color=colour,
                         alpha=0.2, linewidth=0)
         ax.plot(values, estimate, color=colour, linewidth=1.6, label=text)
-    lo, hi = float(np.min(values)), float(np.max(values))
-    ax.plot([lo, hi], [entry.constant, entry.constant], color=colour, linestyle='--',
-            linewidth=0.9)
+    if constant:
+        lo, hi = float(np.min(values)), float(np.max(values))
+        ax.plot([lo, hi], [entry.constant, entry.constant], color=colour, linestyle='--',
+                linewidth=0.9)
 
 
 def plot_state(analysis: SdpAnalysis, state: str, *, command_unit: str | None = None,

@@ -113,7 +113,7 @@ def data_delay(records: Sequence[Record], dt: float, max_delay: float,
 
 
 def _split(values: FloatArray) -> list[tuple[str, FloatArray]]:
-    """The positive and negative parts of a regressor, those with enough samples."""
+    """Return the positive and negative parts of a regressor that have enough samples."""
     parts = [('+', np.maximum(values, 0.0)), ('-', np.minimum(values, 0.0))]
     return [part for part in parts if np.count_nonzero(part[1]) >= MIN_SAMPLES]
 
@@ -169,7 +169,7 @@ class _Target:
 
 def _entries(fit: Backfit, state: str, parameter: str, names: list[str],
              added: bool) -> list[StateDependence]:
-    """The gains of a back-fit as entries (``added``: the terms along the second state)."""
+    """Describe the gains of a back-fit (``added``: the terms along the second state)."""
     out = []
     for name in names:
         term = fit.term(f'{name} added' if added else name)
@@ -206,8 +206,7 @@ def _two_stages(target: _Target, rows: Rows, names: Sequence[str], parameter: st
         alone[name] = target.alone(rows.state(name), setting, setting.seed, test=False)
     first = max(names, key=lambda name: sum(alone[name].term(g).share for g in gain_names))
     step(first)
-    fits[f'{prefix}{first}'] = target.alone(rows.state(first), setting, setting.seed,
-                                           test=True)
+    fits[f'{prefix}{first}'] = target.alone(rows.state(first), setting, setting.seed, True)
     entries = _entries(fits[f'{prefix}{first}'], first, parameter, gain_names, False)
     for index, name in enumerate(names):
         if name == first:
@@ -222,8 +221,9 @@ def _two_stages(target: _Target, rows: Rows, names: Sequence[str], parameter: st
 
 def analyse(records: Sequence[Record], *, model: JointModel | None = None,
             states: Sequence[str] = STATES, delay: int | None = None, max_delay: float = 0.5,
-            kind: TvpKind = 'rw', replicates: int = 199, max_groups: int | None = MAX_GROUPS,
-            seed: int = 0, progress: Callable[[str], None] | None = None) -> SdpAnalysis:
+            rest: float | None = None, kind: TvpKind = 'rw', replicates: int = 199,
+            max_groups: int | None = MAX_GROUPS, seed: int = 0,
+            progress: Callable[[str], None] | None = None) -> SdpAnalysis:
     """
     Estimate how a joint's parameters depend on each candidate state.
 
@@ -241,6 +241,9 @@ def analyse(records: Sequence[Record], *, model: JointModel | None = None,
         Delay, samples; default: the model's, or estimated from the data.
     max_delay : float
         Largest delay considered when it is estimated, s.
+    rest : float or None
+        The valve's rest command; default: the model's, else 0 when the commands take
+        both signs, else from the data (:func:`rest_of`).
     kind : str
         Walk of every parameter: ``rw`` (default; zero NVR: no dependence) or ``irw``.
     replicates : int
@@ -264,9 +267,9 @@ def analyse(records: Sequence[Record], *, model: JointModel | None = None,
     dt = records_period(records)
     if model is not None:
         tau = delay or model.delay_samples(dt)
-        rest = model.rest_command
+        rest = model.rest_command if rest is None else rest
     else:
-        rest = rest_of(records)
+        rest = rest_of(records) if rest is None else rest
         tau = delay or data_delay(records, dt, max_delay, rest)
     rows = rows_of(records, tau, rest, model, dt)
     usable, skipped = _usable(rows, names)
@@ -315,7 +318,7 @@ def analyse(records: Sequence[Record], *, model: JointModel | None = None,
 
 
 def _usable(rows: Rows, names: Sequence[str]) -> tuple[list[str], list[tuple[str, str]]]:
-    """The states the rows can give and that vary; the others with the reason."""
+    """Return the states the rows give and that vary, and the others with the reason."""
     usable, skipped = [], []
     for name in names:
         try:

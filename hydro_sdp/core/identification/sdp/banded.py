@@ -110,7 +110,7 @@ def penalty_bands(groups: int, kind: str) -> FloatArray:
 
 
 def _prior_bands(groups: int, kind: str, prior: float) -> FloatArray:
-    """The initial state's precision ``1 / prior`` in the parameters' coordinates, banded."""
+    """Return the initial state's precision ``1 / prior`` in the parameters' terms, banded."""
     bands = np.zeros((order_of(kind) + 1, groups))
     bands[0, 0] = 1.0 / prior
     if order_of(kind) == 2:

@@ -158,6 +158,6 @@ def group_stats(z: FloatArray, x: FloatArray, group: IntArray, groups: int) -> G
                         f'({z.size}, {x.size}, {np.size(group)})')
     if not (np.all(np.isfinite(z)) and np.all(np.isfinite(x))):
         raise DataError('observations and regressors must be finite')
-    weight = np.bincount(group, weights=x * x, minlength=groups)
-    moment = np.bincount(group, weights=x * z, minlength=groups)
+    weight = np.bincount(group, weights=x * x, minlength=groups).astype(np.float64)
+    moment = np.bincount(group, weights=x * z, minlength=groups).astype(np.float64)
     return GroupStats(weight, moment, inner(z, z), int(z.size))

@@ -220,7 +220,8 @@ def dependence_test(z: FloatArray, residual: FloatArray, x: FloatArray, state: F
     n = xs.size
     operator = sparse.csr_matrix((xs, (ordering.group, np.arange(n))),
                                  shape=(ordering.groups, n))
-    weight = np.bincount(ordering.group, weights=xs * xs, minlength=ordering.groups)
+    weight = np.bincount(ordering.group, weights=xs * xs,
+                         minlength=ordering.groups).astype(np.float64)
     ratio = LikelihoodRatio(weight, n, kind)
     observed = np.asarray(z, dtype=np.float64)[samples]
     statistic = float(ratio(np.asarray(operator @ observed)[:, None],

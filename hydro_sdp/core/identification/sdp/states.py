@@ -127,8 +127,8 @@ def check_states(names: Sequence[str]) -> tuple[str, ...]:
     """Return the state names, refusing unknown or repeated ones."""
     unknown = [name for name in names if name not in STATES]
     if unknown:
-        raise ConfigurationError(f"unknown state {unknown[0]!r}; choose from "
-                                 f"{', '.join(STATES)}")
+        choices = ', '.join(STATES)
+        raise ConfigurationError(f'unknown state {unknown[0]!r}; choose from {choices}')
     if not names:
         raise ConfigurationError('no states to analyse')
     if len(set(names)) != len(names):

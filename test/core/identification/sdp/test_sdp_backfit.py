@@ -65,7 +65,7 @@ def test_captain_sdpdemo_example():
 
 
 def null_and_effect(seed, amplitude, phi, n=3000):
-    """A gain along a slowly drifting state, with AR(1) noise of unit variance."""
+    """Back-fit a gain along a slowly drifting state, with AR(1) noise of unit variance."""
     rng = np.random.default_rng(seed)
     state = np.cumsum(rng.normal(0.0, 1.0, n))
     state = (state - state.min()) / np.ptp(state)

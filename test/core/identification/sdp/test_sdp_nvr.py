@@ -11,7 +11,7 @@ GROUPS = 1500
 
 
 def walk_data(kind, nvr, seed, sigma=0.5):
-    """A parameter that is a random walk (or an integrated one) of known NVR, observed."""
+    """Observe a parameter that is a random walk (or an integrated one) of known NVR."""
     rng = np.random.default_rng(seed)
     steps = rng.normal(0.0, math.sqrt(nvr) * sigma, GROUPS)
     p = np.cumsum(steps) if kind == 'rw' else np.cumsum(np.cumsum(steps))

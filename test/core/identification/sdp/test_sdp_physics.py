@@ -71,7 +71,7 @@ def test_steps_on_the_physics_plant_show_an_integrator_and_a_command_dependent_g
 
 
 def levels(machine: Machine, duration: float, moving: Sequence[int], seed: int) -> Record:
-    """Random duties held 0.5-3 s on the joints in ``moving``, each turned back before its stops."""
+    """Drive the joints in ``moving`` with random duties held 0.5-3 s, turning before stops."""
     rng = np.random.default_rng(seed)
     neutral = [joint.valve.neutral for joint in machine.joints]
     limits = [Geometry(joint).angle_limits for joint in machine.joints]

@@ -1,6 +1,5 @@
-"""The SDP analysis on a joint simulated independently of the package (test/support/plain_joint)."""
+"""The SDP analysis on a joint simulated apart from the package (test/support/plain_joint)."""
 
-from support.plain_joint import PlainJoint, steps
 from hydro_sdp.core.errors import ConfigurationError, DataError
 from hydro_sdp.core.identification.identify import identify
 from hydro_sdp.core.identification.sdp import analyse, SdpAnalysis
@@ -8,15 +7,16 @@ from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.records import Record
 import numpy as np
 import pytest
+from support.plain_joint import PlainJoint, steps
 
 #: A joint whose map has a dead-zone, a rise and a saturation well inside the command range,
 #: and a valve lag of 50 ms.
-JOINT = dict(lag=0.05, slope=(22.0, 25.0), saturation=(45.0, 50.0), stops=(-90.0, 90.0))
+JOINT = {'lag': 0.05, 'slope': (22.0, 25.0), 'saturation': (45.0, 50.0), 'stops': (-90.0, 90.0)}
 STATES = ['command', 'angle', 'since_change']
 
 
 def step_experiments(joint: PlainJoint, seed: int) -> list[Record]:
-    """Steps of 1-8 units each way from rest, each its own record from its own angle."""
+    """Step 1-8 units each way from rest, each step its own record from its own angle."""
     rng = np.random.default_rng(seed)
     records = []
     for i, size in enumerate(np.linspace(1.0, 8.0, 12)):
@@ -30,7 +30,7 @@ def step_experiments(joint: PlainJoint, seed: int) -> list[Record]:
 
 @pytest.fixture(scope='module')
 def model() -> JointModel:
-    """The joint identified from its steps, without a stroke factor (it has none)."""
+    """Identify the joint from its steps, without a stroke factor (it has none)."""
     found = identify(step_experiments(PlainJoint(**JOINT), 9)).model
     return found.without_effect('stroke_geometry')
 
