@@ -25,7 +25,7 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 from typing import Callable, Sequence
 
-from hydro_sdp.core.arrays import FloatArray
+from hydro_sdp.core.arrays import FloatArray, IntArray
 from hydro_sdp.core.errors import DataError, HydroSdpError
 from hydro_sdp.core.identification.delay import estimate_delay
 from hydro_sdp.core.identification.rest import estimate_rest_command
@@ -118,14 +118,20 @@ def _split(values: FloatArray) -> list[tuple[str, FloatArray]]:
     return [part for part in parts if np.count_nonzero(part[1]) >= MIN_SAMPLES]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class _Setting:
-    """How every back-fit of one analysis is run."""
+    """How every back-fit of one analysis is run, and the record of every row."""
 
     kind: TvpKind
     replicates: int
     max_groups: int | None
     seed: int
+    segment: IntArray
+
+    def backfit(self, z: FloatArray, terms: list[Term], seed: int) -> Backfit:
+        """Back-fit ``terms`` to ``z`` with this setting."""
+        return backfit(z, terms, replicates=self.replicates, max_groups=self.max_groups,
+                       seed=seed, segment=self.segment)
 
 
 class _Target:
@@ -153,8 +159,7 @@ class _Target:
         """Back-fit the gains along one state."""
         terms = self.fixed + [Term(name, x, state, setting.kind, test=test)
                               for name, x in self.gains]
-        return backfit(self.z, terms, replicates=setting.replicates,
-                       max_groups=setting.max_groups, seed=seed)
+        return setting.backfit(self.z, terms, seed)
 
     def given(self, first: FloatArray, state: FloatArray, setting: _Setting,
               seed: int) -> Backfit:
@@ -163,8 +168,7 @@ class _Target:
                               for name, x in self.gains]
         terms += [Term(f'{name} added', x, state, setting.kind, additive=True)
                   for name, x in self.gains]
-        return backfit(self.z, terms, replicates=setting.replicates,
-                       max_groups=setting.max_groups, seed=seed)
+        return setting.backfit(self.z, terms, seed)
 
 
 def _entries(fit: Backfit, state: str, parameter: str, names: list[str],
@@ -264,6 +268,9 @@ def analyse(records: Sequence[Record], *, model: JointModel | None = None,
     """
     names = check_states(list(states))
     order_of(kind)
+    # A canonical order, so that the bags' order on the command line changes nothing.
+    records = sorted(records, key=lambda r: (r.source, float(r.t[0]) if len(r) else 0.0,
+                                             len(r), float(np.sum(r.v)), float(np.sum(r.y))))
     dt = records_period(records)
     if model is not None:
         tau = delay or model.delay_samples(dt)
@@ -273,7 +280,7 @@ def analyse(records: Sequence[Record], *, model: JointModel | None = None,
         tau = delay or data_delay(records, dt, max_delay, rest)
     rows = rows_of(records, tau, rest, model, dt)
     usable, skipped = _usable(rows, names)
-    setting = _Setting(kind, replicates, max_groups, seed)
+    setting = _Setting(kind, replicates, max_groups, seed, rows.record)
     fits: dict[str, Backfit] = {}
     residuals: list[StateDependence] = []
     a1_entries: list[StateDependence] = []
@@ -294,8 +301,7 @@ def analyse(records: Sequence[Record], *, model: JointModel | None = None,
         first = rows.state(entries[0].state)
         terms = [Term('a1', -rows.previous, rows.previous, kind)]
         terms += [Term(name, x, first, kind, test=False) for name, x in gains]
-        fits['a1'] = backfit(rows.y, terms, replicates=replicates, max_groups=max_groups,
-                             seed=seed + 1)
+        fits['a1'] = setting.backfit(rows.y, terms, seed + 1)
         a1_fit = fits['a1'].term('a1')
         a1 = ParameterSummary(a1_fit.constant, a1_fit.constant_se, a1_fit.nvr)
         a1_entries.append(StateDependence.of('angle', 'a1', 'both', a1_fit))

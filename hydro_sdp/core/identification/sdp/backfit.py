@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import math
 from typing import Sequence
 
-from hydro_sdp.core.arrays import FloatArray
+from hydro_sdp.core.arrays import FloatArray, IntArray
 from hydro_sdp.core.errors import DataError
 from hydro_sdp.core.identification.sdp.held_out import held_out_reduction
 from hydro_sdp.core.identification.sdp.nvr import NvrEstimate
@@ -139,8 +139,8 @@ class TermEstimate:
 
     @property
     def significant(self) -> bool:
-        """Whether the dependence is significant at :data:`ALPHA`."""
-        return self.p_value < ALPHA
+        """Whether the dependence is significant: ``p_value <= ALPHA``."""
+        return self.p_value <= ALPHA
 
 
 @dataclass(frozen=True, eq=False)
@@ -224,8 +224,8 @@ def base_fit(z: FloatArray, regressors: FloatArray) -> tuple[FloatArray, FloatAr
 
 
 def backfit(z: FloatArray, terms: Sequence[Term], *, max_groups: int | None = MAX_GROUPS,
-            replicates: int = 199, seed: int = 0, max_passes: int = MAX_PASSES,
-            tolerance: float = TOLERANCE) -> Backfit:
+            replicates: int = 199, seed: int = 0, segment: IntArray | None = None,
+            max_passes: int = MAX_PASSES, tolerance: float = TOLERANCE) -> Backfit:
     """
     Back-fit the terms' state-dependent parameters to ``z``, and weigh each.
 
@@ -241,6 +241,8 @@ def backfit(z: FloatArray, terms: Sequence[Term], *, max_groups: int | None = MA
         Bootstrap replicates of each term's test (0: no test, p-values NaN).
     seed : int
         Seed of the bootstrap.
+    segment : IntArray or None
+        Record of every sample, for the held-out shares (None: one record).
     max_passes : int
         Most back-fitting passes.
     tolerance : float
@@ -295,18 +297,17 @@ def backfit(z: FloatArray, terms: Sequence[Term], *, max_groups: int | None = MA
     parameters = [ordering.at_samples(result.estimate, term.state)
                   for ordering, result, term in zip(orderings, smoothed, terms)]
     residual = z - fitted
-    estimates = tuple(_weigh(z, residual, regressors, i, terms[i], orderings[i], smoothed[i],
-                             parameters[i], rss_base, replicates, seed + i)
+    estimates = tuple(_weigh(residual, regressors[:, i], terms[i], orderings[i], smoothed[i],
+                             parameters[i], rss_base, replicates, seed + i, segment)
                       for i in range(len(terms)))
     return Backfit(estimates, fitted, inner(residual, residual), rss_base, base,
                    base_se, passes, converged)
 
 
-def _weigh(z: FloatArray, residual: FloatArray, regressors: FloatArray, i: int, term: Term,
-           ordering: Ordering, smoothed: SmoothedParameter, parameter: FloatArray,
-           rss_base: float, replicates: int, seed: int) -> TermEstimate:
-    """Share, constant fit and p-value of one converged term."""
-    x = regressors[:, i]
+def _weigh(residual: FloatArray, x: FloatArray, term: Term, ordering: Ordering,
+           smoothed: SmoothedParameter, parameter: FloatArray, rss_base: float, replicates: int,
+           seed: int, segment: IntArray | None) -> TermEstimate:
+    """Return one converged term with its share, its constant and its p-value."""
     stats = smoothed.stats
     total_weight = float(np.sum(stats.weight))
     constant = float(np.sum(stats.moment)) / total_weight
@@ -325,7 +326,8 @@ def _weigh(z: FloatArray, residual: FloatArray, regressors: FloatArray, i: int, 
         test = dependence_test(partial, partial - x * constant, x, term.state, ordering,
                                smoothed.kind, replicates=replicates, seed=seed)
         p_value, block = test.p_value, test.block
-    held_out = held_out_reduction(partial, x, ordering, smoothed.kind, smoothed.nvr.nvr)
+    held_out = held_out_reduction(partial, x, ordering, smoothed.kind, smoothed.nvr.nvr,
+                                  segment)
     scale = rss_base if rss_base > 0.0 else np.inf
     return TermEstimate(term, ordering, smoothed, smoothed.standard_error(), parameter,
                         constant, constant_se, observed, max(held_out, 0.0) / scale,

@@ -21,7 +21,7 @@ EPOCH = 1.76e9
 
 
 def step_experiments(machine: Machine, duties: Sequence[float], *, hold: float = 2.5,
-                     margin: float = 6.0, seed: int = 0) -> list[Record]:
+                     margin: float = 15.0, seed: int = 0) -> list[Record]:
     """
     One record per signed duty: rest, the duty held, rest; as a careful experimenter runs them.
 

@@ -71,7 +71,7 @@ def test_a_joint_with_an_angle_effect_shows_the_angle_first(model):
     first = result.states[0]
     assert first.state == 'angle' and first.significant and first.share > 0.2
     # Both directions follow the same factor of the angle: 1 + 0.25 sin(2.5 a).
-    for entry in result.dependence('angle'):
+    for entry in result.dependence('angle', parameter='ratio'):
         inside = np.abs(entry.values) < 70.0
         factor = 1.0 + 0.25 * np.sin(np.radians(2.5 * entry.values[inside]))
         shape = np.corrcoef(entry.estimate[inside], factor)[0, 1]
