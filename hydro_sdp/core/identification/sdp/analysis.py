@@ -3,20 +3,21 @@ The SDP analysis of a joint: how its parameters depend on the candidate states.
 
 Without a model, the SDP-ARX model of the first paper's step 2,
 
-    y_k = -a1{chi} y_{k-1} + b+{chi} u+_{k-tau} + b-{chi} u-_{k-tau} + e_k,
+    y_k = -a1{angle} y_{k-1} + b+{chi} u+_{k-tau} + b-{chi} u-_{k-tau} + e_k,
 
 with ``u = v - rest`` split by its sign (``u+ = max(u, 0)``, ``u- = min(u, 0)``):
-each gain per direction of motion, the delay ``tau`` from the data
-(:func:`~hydro_sdp.core.identification.delay.estimate_delay`). For each
-candidate state the three parameters are back-fitted along it, and the gains
-are weighed. With a model, what it misses:
+each gain per direction of motion, the delay ``tau`` from the data (the dead
+time of :func:`~hydro_sdp.core.identification.delay.estimate_delay` plus the
+lag's time constant). With a model, what it misses:
 
     dy_k = g+{chi} dy^+_k + g-{chi} dy^-_k + e_k   (``ratio``, where the model moves),
     dy_k - dy^_k = c{chi} + e_k                    (``residual``, every sample),
 
 ``dy^`` the model's one-step increments (docs/methods.md section 8.1): the
 ratio of the measured to the modelled increment per direction, and the
-increment residual, each against each state.
+increment residual. Each target's gains are weighed in two stages: every
+state alone, then every other state by what it adds to the one that explains
+most alone (docs/methods.md section 14.6).
 
 """
 
@@ -263,7 +264,8 @@ def analyse(records: Sequence[Record], *, model: JointModel | None = None,
     Returns
     -------
     SdpAnalysis
-        The parameters against the states, the largest share first.
+        The parameters against the states: the first state's entries, then the others
+        by what they add to it.
 
     """
     names = check_states(list(states))
@@ -317,7 +319,6 @@ def analyse(records: Sequence[Record], *, model: JointModel | None = None,
         offset = _Target(rows.increment - rows.predicted, [], [('c', np.ones(rows.samples))])
         residuals = _two_stages(offset, rows, usable, 'residual', setting, progress, fits,
                                 'residual ')
-        residuals = [replace(entry, direction='both') for entry in residuals]
     return SdpAnalysis('arx' if model is None else 'ratio', rows.samples, tau, dt, rest,
                        ordered(entries), ordered(residuals), a1, tuple(a1_entries), fits,
                        tuple(skipped))
