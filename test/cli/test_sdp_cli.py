@@ -89,6 +89,13 @@ def test_the_text_report_and_the_model_target(bags, capsys, tmp_path, j2):
     assert {e['state'] for e in result['residual']} == {'command', 'since_change'}
 
 
+def test_integrated_random_walks_find_the_same_first_state(bags, capsys):
+    code, out, err = run(capsys, 'sdp', *bags, '--states', 'command,angle', '--irw', '--json')
+    assert code == 0, err
+    first = json.loads(out)['states'][0]
+    assert first['state'] == 'command' and first['significant']
+
+
 @pytest.mark.parametrize(('argv', 'message'), [
     (['--states', 'angle,speed'], "argument --states: unknown state 'speed'"),
     (['--states', 'angle,angle'], 'argument --states: a state is named twice'),

@@ -323,8 +323,9 @@ def _weigh(residual: FloatArray, x: FloatArray, term: Term, ordering: Ordering,
     if replicates <= 0 or not term.test:
         p_value = math.nan
     elif smoothed.nvr.nvr > 0.0 and ordering.groups > order_of(smoothed.kind):
-        test = dependence_test(partial, partial - x * constant, x, term.state, ordering,
-                               smoothed.kind, replicates=replicates, seed=seed)
+        # A random walk whatever draws the curve: its zero NVR is a constant, the null.
+        test = dependence_test(partial, partial - x * constant, x, term.state, ordering, 'rw',
+                               replicates=replicates, seed=seed)
         p_value, block = test.p_value, test.block
     held_out = held_out_reduction(partial, x, ordering, smoothed.kind, smoothed.nvr.nvr,
                                   segment)

@@ -22,7 +22,7 @@ from __future__ import annotations
 import math
 
 from hydro_sdp.core.arrays import FloatArray, IntArray
-from hydro_sdp.core.identification.sdp.banded import fit_banded
+from hydro_sdp.core.identification.sdp.banded import fit_banded, fit_flat
 from hydro_sdp.core.identification.sdp.ordering import Ordering
 from hydro_sdp.core.identification.sdp.random_walk import GroupStats
 import numpy as np
@@ -81,7 +81,7 @@ def held_out_reduction(z: FloatArray, x: FloatArray, ordering: Ordering, kind: s
     kind : str
         ``rw`` or ``irw``.
     nvr : float
-        The walk's NVR (0: the parameter is constant, the reduction 0).
+        The walk's NVR (0: a constant, the reduction 0; for ``irw`` a line in the rank).
     segment : IntArray or None
         Record of every sample (None: one record).
 
@@ -92,7 +92,7 @@ def held_out_reduction(z: FloatArray, x: FloatArray, ordering: Ordering, kind: s
         following the state.
 
     """
-    if nvr <= 0.0:
+    if nvr <= 0.0 and kind == 'rw':
         return 0.0
     samples = ordering.samples
     zs = np.asarray(z, dtype=np.float64)[samples]
@@ -119,7 +119,8 @@ def held_out_reduction(z: FloatArray, x: FloatArray, ordering: Ordering, kind: s
         train_w, train_m = weight - w_out[f], moment - m_out[f]
         train = GroupStats(train_w, train_m, total - float(z_out[f]), n - int(n_out[f]))
         constants[f] = float(np.sum(train_m) / np.sum(train_w))
-        estimates[f] = fit_banded(train, kind, nvr).estimate
+        estimates[f] = (fit_banded(train, kind, nvr) if nvr > 0.0
+                        else fit_flat(train, kind)).estimate
     constant_squares = float(np.sum((zs - xs * constants[fold]) ** 2))
     smoothed_squares = float(np.sum((zs - xs * estimates[fold, ordering.group]) ** 2))
     return constant_squares - smoothed_squares

@@ -121,3 +121,18 @@ def test_bad_input_is_refused_with_a_one_line_error():
         analyse([still], states=['angle'], delay=5)
     with pytest.raises(DataError, match='no records'):
         analyse([])
+
+
+def test_a_percent_duty_valve_resting_at_50_gives_the_same_answer(steps_analysis):
+    # The same steps written as a 0..100 % duty resting at 50 (5 % per unit).
+    duty = [Record(r.t, 50.0 + 5.0 * r.v, r.y, r.joint, r.source, r.origin)
+            for r in step_experiments(PlainJoint(**JOINT), 1)]
+    result = analyse(duty, states=STATES)
+    assert result.rest == 50.0 and result.delay == steps_analysis.delay
+    assert result.a1 is not None and abs(result.a1.mean + 1.0) < 0.01
+    assert result.states[0].state == 'command'
+    for entry in result.dependence('command'):
+        volts = steps_analysis.dependence('command', entry.direction)[0]
+        # The gain per percent is the gain per unit over 5, at the same commands.
+        np.testing.assert_allclose(entry.values, 50.0 + 5.0 * volts.values)
+        np.testing.assert_allclose(entry.estimate, volts.estimate / 5.0, rtol=0.05, atol=1e-4)
