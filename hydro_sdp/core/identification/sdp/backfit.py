@@ -6,9 +6,10 @@ constant-parameter least-squares fit; then, term after term, smooth the
 term's parameter along its own state against the partial residual (``z``
 less the other terms), its NVR re-estimated in the first passes and held
 after; repeat until the squared residual stops changing. Each term is then
-weighed: its share of the base model's squared residual (the reduction from
-holding it constant to letting it follow its state, the others as fitted),
-and the bootstrap p-value of that reduction
+weighed, the others as fitted: its share of the base model's squared residual
+(the reduction from holding it constant to letting it follow its state, on
+held-out data: :mod:`hydro_sdp.core.identification.sdp.held_out`), and the
+bootstrap p-value of its dependence
 (:mod:`hydro_sdp.core.identification.sdp.significance`).
 
 """
@@ -322,7 +323,7 @@ def _weigh(residual: FloatArray, x: FloatArray, term: Term, ordering: Ordering,
     p_value, block = 1.0, 0
     if replicates <= 0 or not term.test:
         p_value = math.nan
-    elif smoothed.nvr.nvr > 0.0 and ordering.groups > order_of(smoothed.kind):
+    elif observed > 0.0 and ordering.groups > 1:
         # A random walk whatever draws the curve: its zero NVR is a constant, the null.
         test = dependence_test(partial, partial - x * constant, x, term.state, ordering, 'rw',
                                replicates=replicates, seed=seed)
