@@ -107,7 +107,8 @@ def _entry(entry: StateDependence) -> dict[str, Any]:
     return {'state': entry.state, 'direction': entry.direction, 'parameter': entry.parameter,
             'share': entry.share, 'nvr': entry.nvr, 'significant': bool(entry.significant),
             'p_value': json_number(entry.p_value), 'grid': grid, 'estimate': estimate,
-            'se': se, 'constant': entry.constant, 'samples': entry.samples}
+            'se': se, 'constant': entry.constant, 'samples': entry.samples,
+            'given': entry.given}
 
 
 def describe(analysis: SdpAnalysis) -> dict[str, Any]:

@@ -20,7 +20,7 @@ from support.plain_joint import PlainJoint, steps
 
 JOINT = {'lag': 0.05, 'slope': (22.0, 25.0), 'saturation': (45.0, 50.0), 'stops': (-90.0, 90.0)}
 KEYS = {'state', 'direction', 'parameter', 'share', 'nvr', 'significant', 'p_value', 'grid',
-        'estimate', 'se', 'constant', 'samples'}
+        'estimate', 'se', 'constant', 'samples', 'given'}
 
 
 def run(capsys, *argv):
@@ -64,6 +64,9 @@ def test_the_arx_analysis_as_json(bags, capsys, tmp_path):
         assert entry['grid'] == sorted(entry['grid'])
     shares = [e['share'] for e in states if e['state'] == 'angle']
     assert shares == sorted(shares, reverse=True)
+    # The first state weighed alone, the angle by what it adds to it.
+    assert {e['given'] for e in states} == {None, 'command'}
+    assert all(e['given'] == 'command' for e in states if e['state'] == 'angle')
     assert result['residual'] == []
     assert {'state': 'since_change', 'reason': 'no --load-topic'} not in result['skipped']
     assert sorted(Path(p).name for p in result['plots']) == [

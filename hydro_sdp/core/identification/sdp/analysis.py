@@ -173,17 +173,17 @@ class _Target:
 
 
 def _entries(fit: Backfit, state: str, parameter: str, names: list[str],
-             added: bool) -> list[StateDependence]:
-    """Describe the gains of a back-fit (``added``: the terms along the second state)."""
+             given: str | None) -> list[StateDependence]:
+    """Describe the gains of a back-fit (``given``: the terms added to that state's)."""
     out = []
     for name in names:
-        term = fit.term(f'{name} added' if added else name)
+        term = fit.term(f'{name} added' if given else name)
         entry = StateDependence.of(state, parameter, _direction(name), term)
-        if added:
+        if given:
             # Partial dependence: the first state's gain averaged out, this state's added.
             level = fit.term(name).constant
             entry = replace(entry, estimate=entry.estimate - term.constant + level,
-                            constant=level)
+                            constant=level, given=given)
         out.append(entry)
     return out
 
@@ -212,7 +212,7 @@ def _two_stages(target: _Target, rows: Rows, names: Sequence[str], parameter: st
     first = max(names, key=lambda name: sum(alone[name].term(g).share for g in gain_names))
     step(first)
     fits[f'{prefix}{first}'] = target.alone(rows.state(first), setting, setting.seed, True)
-    entries = _entries(fits[f'{prefix}{first}'], first, parameter, gain_names, False)
+    entries = _entries(fits[f'{prefix}{first}'], first, parameter, gain_names, None)
     for index, name in enumerate(names):
         if name == first:
             continue
@@ -220,7 +220,7 @@ def _two_stages(target: _Target, rows: Rows, names: Sequence[str], parameter: st
         fit = target.given(rows.state(first), rows.state(name), setting,
                            setting.seed + 10 * (index + 1))
         fits[f'{prefix}{name}'] = fit
-        entries += _entries(fit, name, parameter, gain_names, True)
+        entries += _entries(fit, name, parameter, gain_names, first)
     return entries
 
 

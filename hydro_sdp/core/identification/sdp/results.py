@@ -51,6 +51,9 @@ class StateDependence:
         The parameter held constant.
     samples : int
         Samples that inform it.
+    given : str or None
+        The state this dependence is added to (its share is what it adds); None for
+        the first state, weighed alone.
 
     """
 
@@ -66,6 +69,7 @@ class StateDependence:
     se: FloatArray
     constant: float
     samples: int
+    given: str | None = None
 
     @classmethod
     def of(cls, state: str, parameter: str, direction: str,
