@@ -141,7 +141,8 @@ def run(args: argparse.Namespace) -> Outcome:
                                                 result.sample_period),
                             folder / 'step_responses.png')),
             str(save_figure(plot_gains(result.points, model, result.sample_period,
-                                       rest=segmentation.rest), folder / 'gains.png')),
+                                       rest=segmentation.rest, measured=_measured_gain(
+                                           records, result)), folder / 'gains.png')),
             str(save_figure(plot_velocity_map(
                 model, v_range=_command_range(result),
                 points=(np.array([p.level for p in moving]), np.array([p.speed for p in moving])),
@@ -176,6 +177,22 @@ def run(args: argparse.Namespace) -> Outcome:
     if args.out:
         lines.append(f'wrote {payload["model"]}')
     return Outcome(payload, lines)
+
+
+def _measured_gain(records: list, result: Identification) -> tuple:
+    """Return the gain along the delayed command by the SDP analysis, for the gains figure."""
+    from hydro_sdp.core.errors import HydroSdpError
+    from hydro_sdp.core.identification.sdp import analyse
+
+    dt = result.sample_period
+    try:
+        # Model (2) of the paper has no lag: its delay is the dead time plus the lag.
+        analysis = analyse(records, states=['command'], rest=result.segmentation.rest,
+                           delay=result.delay.samples + int(round(result.delay.lag / dt)),
+                           replicates=0)
+    except HydroSdpError:
+        return ()       # a figure without the curve rather than no figure
+    return tuple(analysis.dependence('command', parameter='b'))
 
 
 def _stops(stops: tuple[float | None, float | None]) -> str:

@@ -33,7 +33,7 @@ BLAS_THREADS = '1'
 
 #: Commands and their modules in hydro_sdp.cli, in the order of ``--help``.
 COMMANDS = {'simulate': 'simulate', 'import': 'import_logs', 'identify': 'identify',
-            'evaluate': 'evaluate', 'diagnose': 'diagnose', 'design': 'design',
+            'evaluate': 'evaluate', 'diagnose': 'diagnose', 'sdp': 'sdp', 'design': 'design',
             'closed-loop': 'closed_loop', 'calibrate': 'calibrate', 'demo': 'demo.command',
             'reindex': 'reindex'}
 

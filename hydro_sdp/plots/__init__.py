@@ -5,7 +5,8 @@ Figures are built on :class:`matplotlib.figure.Figure` directly (no pyplot
 global state), so they can be made from any thread and in tests, and saved
 whole or not at all with :func:`save_figure`. By subject: :mod:`.figures`
 (colours, axes, saving), :mod:`.units` (the command's unit in labels),
-:mod:`.identification`, :mod:`.control` and :mod:`.diagnosis`.
+:mod:`.identification`, :mod:`.sdp` (the SDP analysis), :mod:`.control` and
+:mod:`.diagnosis`.
 
 """
 
@@ -16,9 +17,11 @@ from hydro_sdp.plots.figures import (
     LIMIT, matplotlib_colormap, MEASURED, MODEL, new_figure, save_figure)
 from hydro_sdp.plots.identification import (
     plot_gains, plot_record, plot_step_responses, plot_velocity_map)
+from hydro_sdp.plots.sdp import plot_shares, plot_state
 from hydro_sdp.plots.units import command_unit_of, UNKNOWN_UNIT
 
 __all__ = ['command_unit_of', 'LIMIT', 'matplotlib_colormap', 'MEASURED', 'MODEL', 'new_figure',
            'plot_closed_loop', 'plot_gains', 'plot_gap', 'plot_idz', 'plot_idz_table',
-           'plot_ledger', 'plot_record', 'plot_recalibration', 'plot_signature',
-           'plot_step_responses', 'plot_velocity_map', 'save_figure', 'UNKNOWN_UNIT']
+           'plot_ledger', 'plot_record', 'plot_recalibration', 'plot_shares', 'plot_signature',
+           'plot_state', 'plot_step_responses', 'plot_velocity_map', 'save_figure',
+           'UNKNOWN_UNIT']

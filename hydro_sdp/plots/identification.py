@@ -5,12 +5,14 @@ from __future__ import annotations
 from typing import Sequence
 
 from hydro_sdp.core.identification.delay import LevelSpeed
+from hydro_sdp.core.identification.sdp.results import StateDependence
 from hydro_sdp.core.identification.segmentation import Experiment
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.records import Record
 from hydro_sdp.plots.figures import (
     label_command_axes, LIMIT, mark_dead_zone, mark_limits, matplotlib_colormap, MEASURED, MODEL,
     new_figure)
+from hydro_sdp.plots.sdp import draw_dependence
 from hydro_sdp.plots.units import command_unit_of
 from matplotlib.figure import Figure
 import numpy as np
@@ -154,7 +156,8 @@ def plot_step_responses(experiments: Sequence[Experiment], delay: int, dt: float
 
 
 def plot_gains(points: Sequence[LevelSpeed], model: JointModel, dt: float, *, rest: float = 0.0,
-               command_unit: str | None = None) -> Figure:
+               command_unit: str | None = None,
+               measured: Sequence[StateDependence] = ()) -> Figure:
     """
     State-dependent gain against command, as the paper's Fig. 2.
 
@@ -170,6 +173,9 @@ def plot_gains(points: Sequence[LevelSpeed], model: JointModel, dt: float, *, re
         Rest command.
     command_unit : str or None
         Unit of the command; default: from the model's input range.
+    measured : sequence of StateDependence
+        The gain estimated along the delayed command without a map family (the SDP
+        analysis, one entry per direction), drawn with its +-2 standard-error band.
 
     Returns
     -------
@@ -178,6 +184,9 @@ def plot_gains(points: Sequence[LevelSpeed], model: JointModel, dt: float, *, re
 
     """
     figure, (ax,) = new_figure(1, height=4.0, width=7.0)
+    for entry in measured:
+        draw_dependence(ax, entry, label=f'measured, {entry.direction} (SDP, +-2 SE)',
+                        constant=False)
     levels = np.array([p.level for p in points if p.level != rest])
     gains = np.array([p.gain * 1.0 for p in points if p.level != rest])
     ax.plot(levels, gains, 'o', color=MEASURED, markerfacecolor='none', markersize=5,

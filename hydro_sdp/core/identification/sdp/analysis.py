@@ -1,0 +1,349 @@
+"""
+The SDP analysis of a joint: how its parameters depend on the candidate states.
+
+Without a model, the SDP-ARX model of the first paper's step 2,
+
+    y_k = -a1{angle} y_{k-1} + b+{chi} u+_{k-tau} + b-{chi} u-_{k-tau} + e_k,
+
+with ``u = v - rest`` split by its sign (``u+ = max(u, 0)``, ``u- = min(u, 0)``):
+each gain per direction of motion, the delay ``tau`` from the data (the dead
+time of :func:`~hydro_sdp.core.identification.delay.estimate_delay` plus the
+lag's time constant). With a model, what it misses:
+
+    dy_k = g+{chi} dy^+_k + g-{chi} dy^-_k + e_k   (``ratio``, where the model moves),
+    dy_k - dy^_k = c{chi} + e_k                    (``residual``, every sample),
+
+``dy^`` the model's one-step increments (docs/methods.md section 8.1): the
+ratio of the measured to the modelled increment per direction, and the
+increment residual. Each target's gains are weighed in two stages: every
+state alone, then every other state by what it adds to the one that explains
+most alone (docs/methods.md section 14.6).
+
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from typing import Callable, Sequence
+
+from hydro_sdp.core.arrays import FloatArray, IntArray
+from hydro_sdp.core.errors import DataError, HydroSdpError
+from hydro_sdp.core.identification.delay import estimate_delay
+from hydro_sdp.core.identification.rest import estimate_rest_command
+from hydro_sdp.core.identification.sdp.backfit import Backfit, backfit, base_fit, Term
+from hydro_sdp.core.identification.sdp.ordering import MAX_GROUPS
+from hydro_sdp.core.identification.sdp.random_walk import order_of, TvpKind
+from hydro_sdp.core.identification.sdp.results import (
+    ordered, ParameterSummary, SdpAnalysis, StateDependence)
+from hydro_sdp.core.identification.sdp.states import check_states, Rows, rows_of, STATES
+from hydro_sdp.core.identification.segmentation import (
+    check_record, segment_records, split_long, thin)
+from hydro_sdp.core.model.joint_model import JointModel
+from hydro_sdp.core.model.records import Record
+import numpy as np
+
+#: Fewest samples a direction needs for its gain to be analysed.
+MIN_SAMPLES = 20
+#: Model increments below this share of the largest count as "the model does not move".
+STILL = 1e-9
+
+
+def records_period(records: Sequence[Record]) -> float:
+    """Return the records' common sample period, s, refusing records that differ."""
+    if not records:
+        raise DataError('no records to analyse')
+    joints = {record.joint for record in records}
+    if len(joints) > 1:
+        raise DataError(f"records of several joints ({', '.join(sorted(joints))}); "
+                        'analyse one joint at a time')
+    periods = [check_record(record) for record in records]
+    if max(periods) > 1.01 * min(periods):
+        raise DataError(f'records have different sample periods ({min(periods):.4f} s to '
+                        f'{max(periods):.4f} s); resample them first')
+    return float(np.median(periods))
+
+
+def rest_of(records: Sequence[Record]) -> float:
+    """
+    Return the valve's rest command: 0 when the commands take both signs, else from the data.
+
+    A command's sign is its direction on a valve centred at 0 (the papers' +-10 V), however
+    briefly the records rest there; otherwise the still command held longest
+    (:func:`~hydro_sdp.core.identification.rest.estimate_rest_command`: a 0..100 % duty
+    resting at 50).
+    """
+    low = min(float(np.min(r.v)) for r in records)
+    high = max(float(np.max(r.v)) for r in records)
+    if low < 0.0 < high:
+        return 0.0
+    return estimate_rest_command([(r.v, r.y) for r in records])
+
+
+def data_delay(records: Sequence[Record], dt: float, max_delay: float,
+               rest: float) -> int:
+    """
+    Return the delay of model (2) found in the records, samples.
+
+    The dead time of :func:`~hydro_sdp.core.identification.delay.estimate_delay`
+    on the records' experiments plus the valve lag's time constant (the pure delay
+    that matches a lag's mean); records that never rest (no experiments) get the
+    delay whose split gains explain the increments best.
+    """
+    longest = max(2, int(round(max_delay / dt)))
+    try:
+        segmentation = segment_records(records, max_delay=longest, rest=rest)
+        if segmentation.experiments:
+            pieces = split_long(segmentation.experiments, 3000, longest)
+            found = estimate_delay(thin(pieces, 100_000), dt, max_delay=longest, rest=rest,
+                                   noise=segmentation.noise_std)
+            return found.samples + int(round(found.lag / dt))
+    except HydroSdpError:
+        pass
+    best, best_rss = 1, np.inf
+    for delay in range(1, longest + 1):
+        rows = rows_of(records, delay, rest)
+        drive = rows.drive
+        X = np.column_stack([np.maximum(drive, 0.0), np.minimum(drive, 0.0)])
+        X = X[:, np.any(X != 0.0, axis=0)]
+        if X.shape[1] == 0:
+            raise DataError('the command never leaves rest: nothing drives the joint')
+        rss = base_fit(rows.increment, X)[2]
+        if rss < best_rss:
+            best, best_rss = delay, rss
+    return best
+
+
+def _split(values: FloatArray) -> list[tuple[str, FloatArray]]:
+    """Return the positive and negative parts of a regressor that have enough samples."""
+    parts = [('+', np.maximum(values, 0.0)), ('-', np.minimum(values, 0.0))]
+    return [part for part in parts if np.count_nonzero(part[1]) >= MIN_SAMPLES]
+
+
+@dataclass(frozen=True, eq=False)
+class _Setting:
+    """How every back-fit of one analysis is run, and the record of every row."""
+
+    kind: TvpKind
+    replicates: int
+    max_groups: int | None
+    seed: int
+    segment: IntArray
+
+    def backfit(self, z: FloatArray, terms: list[Term], seed: int) -> Backfit:
+        """Back-fit ``terms`` to ``z`` with this setting."""
+        return backfit(z, terms, replicates=self.replicates, max_groups=self.max_groups,
+                       seed=seed, segment=self.segment)
+
+
+class _Target:
+    """
+    One model of the analysis: its observations, its fixed terms and its gains.
+
+    Parameters
+    ----------
+    z : FloatArray
+        Observations.
+    fixed : list of Term
+        Terms along states of their own (``a1`` along the angle).
+    gains : list of tuple[str, FloatArray]
+        Name and regressor of each gain that follows the candidate states.
+
+    """
+
+    def __init__(self, z: FloatArray, fixed: list[Term],
+                 gains: list[tuple[str, FloatArray]]) -> None:
+        self.z = z
+        self.fixed = fixed
+        self.gains = gains
+
+    def alone(self, state: FloatArray, setting: _Setting, seed: int, test: bool) -> Backfit:
+        """Back-fit the gains along one state."""
+        terms = self.fixed + [Term(name, x, state, setting.kind, test=test)
+                              for name, x in self.gains]
+        return setting.backfit(self.z, terms, seed)
+
+    def given(self, first: FloatArray, state: FloatArray, setting: _Setting,
+              seed: int) -> Backfit:
+        """Back-fit the gains along ``first`` plus what they add along ``state``."""
+        terms = self.fixed + [Term(name, x, first, setting.kind, test=False)
+                              for name, x in self.gains]
+        terms += [Term(f'{name} added', x, state, setting.kind, additive=True)
+                  for name, x in self.gains]
+        return setting.backfit(self.z, terms, seed)
+
+
+def _entries(fit: Backfit, state: str, parameter: str, names: list[str],
+             given: str | None) -> list[StateDependence]:
+    """Describe the gains of a back-fit (``given``: the terms added to that state's)."""
+    out = []
+    for name in names:
+        term = fit.term(f'{name} added' if given else name)
+        entry = StateDependence.of(state, parameter, _direction(name), term)
+        if given:
+            # Partial dependence: the first state's gain averaged out, this state's added.
+            level = fit.term(name).constant
+            entry = replace(entry, estimate=entry.estimate - term.constant + level,
+                            constant=level, given=given)
+        out.append(entry)
+    return out
+
+
+def _two_stages(target: _Target, rows: Rows, names: Sequence[str], parameter: str,
+                setting: _Setting, progress: Callable[[str], None] | None,
+                fits: dict[str, Backfit], prefix: str) -> list[StateDependence]:
+    """
+    Weigh the gains against every state: the best state alone, the others given it.
+
+    Each state is first fitted alone; the one whose gains remove most of the
+    held-out squared residual comes first, with its own share and test; every
+    other state is weighed by what it adds to it (the same gains along both,
+    back-fitted together), so a state merely correlated with the first in the
+    data does not take its place.
+    """
+    gain_names = [name for name, _ in target.gains]
+
+    def step(name: str) -> None:
+        if progress is not None:
+            progress(f'{prefix}{name}')
+    alone: dict[str, Backfit] = {}
+    for name in names:
+        step(name)
+        alone[name] = target.alone(rows.state(name), setting, setting.seed, test=False)
+    first = max(names, key=lambda name: sum(alone[name].term(g).share for g in gain_names))
+    step(first)
+    fits[f'{prefix}{first}'] = target.alone(rows.state(first), setting, setting.seed, True)
+    entries = _entries(fits[f'{prefix}{first}'], first, parameter, gain_names, None)
+    for index, name in enumerate(names):
+        if name == first:
+            continue
+        step(name)
+        fit = target.given(rows.state(first), rows.state(name), setting,
+                           setting.seed + 10 * (index + 1))
+        fits[f'{prefix}{name}'] = fit
+        entries += _entries(fit, name, parameter, gain_names, first)
+    return entries
+
+
+def analyse(records: Sequence[Record], *, model: JointModel | None = None,
+            states: Sequence[str] = STATES, delay: int | None = None, max_delay: float = 0.5,
+            rest: float | None = None, kind: TvpKind = 'rw', replicates: int = 199,
+            max_groups: int | None = MAX_GROUPS, seed: int = 0,
+            progress: Callable[[str], None] | None = None) -> SdpAnalysis:
+    """
+    Estimate how a joint's parameters depend on each candidate state.
+
+    Parameters
+    ----------
+    records : sequence of Record
+        Records of one joint, same sample period.
+    model : JointModel or None
+        None: the SDP-ARX model of the joint (``target = arx``); a model: what it
+        misses (``target = ratio``).
+    states : sequence of str
+        Candidate states (:data:`~hydro_sdp.core.identification.sdp.states.STATES`);
+        those the records cannot give (no other joints, no load) are skipped.
+    delay : int or None
+        Delay, samples; default: the model's, or estimated from the data.
+    max_delay : float
+        Largest delay considered when it is estimated, s.
+    rest : float or None
+        The valve's rest command; default: the model's, else 0 when the commands take
+        both signs, else from the data (:func:`rest_of`).
+    kind : str
+        Walk of every parameter: ``rw`` (default; zero NVR: no dependence) or ``irw``.
+    replicates : int
+        Bootstrap replicates of each dependence test.
+    max_groups : int or None
+        Most groups per state.
+    seed : int
+        Seed of the bootstrap.
+    progress : callable or None
+        Called with the name of each back-fit as it starts (a state, ``residual
+        <state>`` or ``a1``): ``2 n`` of them per target for ``n`` states, and ``a1``.
+
+    Returns
+    -------
+    SdpAnalysis
+        The parameters against the states: the first state's entries, then the others
+        by what they add to it.
+
+    """
+    names = check_states(list(states))
+    order_of(kind)
+    # A canonical order, so that the bags' order on the command line changes nothing.
+    records = sorted(records, key=lambda r: (r.source, float(r.t[0]) if len(r) else 0.0,
+                                             len(r), float(np.sum(r.v)), float(np.sum(r.y))))
+    dt = records_period(records)
+    if model is not None:
+        tau = delay or model.delay_samples(dt)
+        rest = model.rest_command if rest is None else rest
+    else:
+        rest = rest_of(records) if rest is None else rest
+        tau = delay or data_delay(records, dt, max_delay, rest)
+    rows = rows_of(records, tau, rest, model, dt)
+    usable, skipped = _usable(rows, names)
+    setting = _Setting(kind, replicates, max_groups, seed, rows.record)
+    fits: dict[str, Backfit] = {}
+    residuals: list[StateDependence] = []
+    a1_entries: list[StateDependence] = []
+    a1 = None
+    if model is None:
+        gains = [(f'b{suffix}', x) for suffix, x in _split(rows.drive)]
+        if not gains:
+            raise DataError('the command never drives the joint (no samples away from rest)')
+        # a1 is held constant while the gains are weighed, then smoothed along its own
+        # regressor's state, the angle (Young's default), with the gains along the first
+        # state: against the command, a1{v} y_{k-1} would mimic each step's speed over the
+        # few degrees it travels.
+        constant = Term('a1', -rows.previous, rows.previous, kind, nvr=0.0, test=False)
+        entries = _two_stages(_Target(rows.y, [constant], gains), rows, usable, 'b', setting,
+                              progress, fits, '')
+        if progress is not None:
+            progress('a1')
+        first = rows.state(entries[0].state)
+        terms = [Term('a1', -rows.previous, rows.previous, kind)]
+        terms += [Term(name, x, first, kind, test=False) for name, x in gains]
+        fits['a1'] = setting.backfit(rows.y, terms, seed + 1)
+        a1_fit = fits['a1'].term('a1')
+        a1 = ParameterSummary(a1_fit.constant, a1_fit.constant_se, a1_fit.nvr)
+        a1_entries.append(StateDependence.of('angle', 'a1', 'both', a1_fit))
+    else:
+        assert rows.predicted is not None
+        largest = float(np.max(np.abs(rows.predicted)))
+        moving = np.where(np.abs(rows.predicted) > STILL * largest, rows.predicted, 0.0)
+        gains = [(f'g{suffix}', x) for suffix, x in _split(moving)]
+        if not gains:
+            raise DataError('the model never moves the joint on these records')
+        entries = _two_stages(_Target(rows.increment, [], gains), rows, usable, 'ratio',
+                              setting, progress, fits, '')
+        offset = _Target(rows.increment - rows.predicted, [], [('c', np.ones(rows.samples))])
+        residuals = _two_stages(offset, rows, usable, 'residual', setting, progress, fits,
+                                'residual ')
+    return SdpAnalysis('arx' if model is None else 'ratio', rows.samples, tau, dt, rest,
+                       ordered(entries), ordered(residuals), a1, tuple(a1_entries), fits,
+                       tuple(skipped))
+
+
+def _usable(rows: Rows, names: Sequence[str]) -> tuple[list[str], list[tuple[str, str]]]:
+    """Return the states the rows give and that vary, and the others with the reason."""
+    usable, skipped = [], []
+    for name in names:
+        try:
+            state = rows.state(name)
+        except DataError as error:
+            skipped.append((name, str(error).split(': ', 1)[-1]))
+            continue
+        if np.unique(state).size < 2:
+            skipped.append((name, 'takes one value only'))
+            continue
+        usable.append(name)
+    if not usable:
+        reasons = '; '.join(f'{name}: {why}' for name, why in skipped)
+        raise DataError(f'no state could be analysed ({reasons})')
+    return usable, skipped
+
+
+def _direction(name: str) -> str:
+    if name.endswith('+'):
+        return 'positive'
+    return 'negative' if name.endswith('-') else 'both'

@@ -1,0 +1,312 @@
+"""
+The fixed-interval smoother of a random-walk parameter as a banded least-squares problem.
+
+The smoothed estimate of the walk (:mod:`hydro_sdp.core.identification.sdp.random_walk`)
+minimises the quadratic
+
+    S(p) = sum_k (z_k - x_k p_{g(k)})^2 + (1/nvr) |D p|^2 [+ prior terms],
+
+whose normal equations ``A p = X'z`` with ``A = W + D'D / nvr`` (``W`` the
+per-group weights) are banded: bandwidth 1 for ``rw``, 2 for ``irw``. A banded
+Cholesky factor solves them in ``O(M)`` and gives ``log det A`` from its
+diagonal; the smoothed variances ``diag(A^{-1})`` come from the factor by the
+selected-inversion recursion of Takahashi et al. (1973), also ``O(M)``. The
+concentrated likelihood of the walk with its first ``d`` states diffuse is
+
+    -2 log L = (n - d) (log(2 pi sigma^2) + 1) + log det A + (M - d) log nvr,
+    sigma^2 = S(p^) / (n - d),
+
+the prediction-error decomposition of the Kalman filter with a diffuse start
+(Harvey 1989; de Jong 1991) computed without the filter. With a proper initial
+state ``N(0, prior sigma^2 I)`` (``prior`` given), ``A`` and ``S`` carry its
+precision, ``n`` replaces ``n - d`` and ``d log prior`` is added: the filter's
+likelihood exactly (docs/methods.md section 14).
+
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+import math
+
+from hydro_sdp.core.arrays import FloatArray
+from hydro_sdp.core.errors import DataError
+from hydro_sdp.core.identification.sdp.random_walk import (
+    difference, GroupStats, order_of, STENCILS)
+import numpy as np
+from scipy.linalg import cho_solve_banded, cholesky_banded, LinAlgError
+
+
+@dataclass(frozen=True, eq=False)
+class BandedFit:
+    """
+    The smoothed parameter at one NVR.
+
+    Parameters
+    ----------
+    estimate : FloatArray
+        Smoothed parameter per group.
+    sigma2 : float
+        Concentrated noise variance.
+    neg2_log_likelihood : float
+        ``-2 log L`` (diffuse, or with the given prior).
+    factor : FloatArray
+        Lower banded Cholesky factor of ``A`` (for more right-hand sides).
+    residual_sum : float
+        ``sum (z - x p)^2`` at the estimate.
+    nvr : float
+        The NVR.
+
+    """
+
+    estimate: FloatArray
+    sigma2: float
+    neg2_log_likelihood: float
+    factor: FloatArray
+    residual_sum: float
+    nvr: float
+
+    def solve(self, moment: FloatArray) -> FloatArray:
+        """Return ``A^{-1} moment`` (columns: several right-hand sides at once)."""
+        return np.asarray(cho_solve_banded((self.factor, True), moment, check_finite=False))
+
+    def variance(self) -> FloatArray:
+        """Return ``diag(A^{-1})``: the smoothed variances normalised by ``sigma^2``."""
+        return selected_inverse_diagonal(self.factor)
+
+    def standard_error(self) -> FloatArray:
+        """Return the standard error of the smoothed parameter per group."""
+        return np.sqrt(self.variance() * self.sigma2)
+
+
+def penalty_bands(groups: int, kind: str) -> FloatArray:
+    """
+    Return ``D'D`` in lower banded storage: row ``i`` holds the ``i``-th subdiagonal.
+
+    Parameters
+    ----------
+    groups : int
+        Size ``M`` of the matrix.
+    kind : str
+        ``rw`` or ``irw``.
+
+    Returns
+    -------
+    FloatArray
+        Array of shape ``(d + 1, M)``.
+
+    """
+    stencil = STENCILS[kind]
+    d = len(stencil) - 1
+    bands = np.zeros((d + 1, groups))
+    rows = groups - d
+    if rows <= 0:
+        return bands
+    # Each row of D adds c_s c_t at (i + t, i + s), t >= s: subdiagonal t - s, column i + s.
+    for s, cs in enumerate(stencil):
+        for t in range(s, d + 1):
+            bands[t - s, s:s + rows] += cs * stencil[t]
+    return bands
+
+
+def _prior_bands(groups: int, kind: str, prior: float) -> FloatArray:
+    """Return the initial state's precision ``1 / prior`` in the parameters' terms, banded."""
+    bands = np.zeros((order_of(kind) + 1, groups))
+    bands[0, 0] = 1.0 / prior
+    if order_of(kind) == 2:
+        # (p_0, s_0) ~ N(0, prior I) with s_0 = p_1 - p_0: p_0^2 + (p_1 - p_0)^2.
+        bands[0, 0] += 1.0 / prior
+        bands[0, 1] = 1.0 / prior
+        bands[1, 0] = -1.0 / prior
+    return bands
+
+
+def fit_banded(stats: GroupStats, kind: str, nvr: float, *,
+               prior: float | None = None) -> BandedFit:
+    """
+    Smooth the parameter at a given NVR by the banded normal equations.
+
+    Parameters
+    ----------
+    stats : GroupStats
+        Sums of the observations per group.
+    kind : str
+        ``rw`` or ``irw``.
+    nvr : float
+        Noise variance ratio (> 0).
+    prior : float or None
+        Variance of the initial state normalised by ``sigma^2``; None: diffuse.
+
+    Returns
+    -------
+    BandedFit
+        The estimate, ``sigma^2``, the likelihood and the factor.
+
+    """
+    d = order_of(kind)
+    M = stats.groups
+    if not (math.isfinite(nvr) and nvr > 0.0):
+        raise DataError(f'nvr must be a positive number, got {nvr}')
+    if M <= d:
+        raise DataError(f'{M} distinct state values: an {kind} walk needs more than {d}')
+    bands = penalty_bands(M, kind) / nvr
+    bands[0] += stats.weight
+    if prior is not None:
+        bands = bands + _prior_bands(M, kind, prior)
+    try:
+        factor = cholesky_banded(bands, lower=True, check_finite=False)
+    except LinAlgError:
+        raise DataError('the regressor is zero at too many state values to smooth along '
+                        'them') from None
+    estimate = np.asarray(cho_solve_banded((factor, True), stats.moment, check_finite=False))
+    residual = stats.residual_sum(estimate)
+    penalty = float(np.sum(difference(estimate, kind) ** 2)) / nvr
+    if prior is not None:
+        start = estimate[0] ** 2 + ((estimate[1] - estimate[0]) ** 2 if d == 2 else 0.0)
+        penalty += start / prior
+    dof = stats.count if prior is not None else stats.count - d
+    if dof <= 0:
+        raise DataError(f'{stats.count} observations: too few to smooth an {kind} walk')
+    sigma2 = max(residual + penalty, 0.0) / dof
+    if sigma2 <= 0.0:
+        raise DataError('the observations are fitted exactly: no noise to weigh the walk by')
+    log_det = 2.0 * float(np.sum(np.log(factor[0])))
+    neg2 = dof * (math.log(2.0 * math.pi * sigma2) + 1.0) + log_det + (M - d) * math.log(nvr)
+    if prior is not None:
+        neg2 += d * math.log(prior)
+    return BandedFit(estimate, sigma2, neg2, factor, residual, nvr)
+
+
+@dataclass(frozen=True, eq=False)
+class FlatFit:
+    """
+    The walk's limit at zero NVR: a constant (``rw``) or a line in rank (``irw``).
+
+    Parameters
+    ----------
+    estimate : FloatArray
+        Parameter per group.
+    coefficients : FloatArray
+        Level (and slope per rank) of the fit.
+    covariance : FloatArray
+        Their covariance, ``sigma^2 (N'WN)^{-1}``.
+    sigma2 : float
+        Concentrated noise variance.
+    neg2_log_likelihood : float
+        ``-2 log L``, the limit of the diffuse likelihood of :func:`fit_banded`.
+    residual_sum : float
+        ``sum (z - x p)^2``.
+
+    """
+
+    estimate: FloatArray
+    coefficients: FloatArray
+    covariance: FloatArray
+    sigma2: float
+    neg2_log_likelihood: float
+    residual_sum: float
+
+    def standard_error(self, basis: FloatArray) -> FloatArray:
+        """Return the standard error of the fit at the rows of ``basis``."""
+        return np.sqrt(np.einsum('ij,jk,ik->i', basis, self.covariance, basis))
+
+
+def null_basis(groups: int, kind: str) -> FloatArray:
+    """Return the walks' zero-NVR basis: ``[1]`` (``rw``) or ``[1, j]`` (``irw``), per group."""
+    rank = np.arange(groups, dtype=np.float64)
+    return np.ones((groups, 1)) if order_of(kind) == 1 else np.column_stack([np.ones(groups),
+                                                                            rank])
+
+
+def fit_flat(stats: GroupStats, kind: str) -> FlatFit:
+    """
+    Fit the walk at zero NVR: weighted least squares on its null space.
+
+    As the NVR goes to 0, ``log det A + (M - d) log nvr`` tends to
+    ``log det(N'WN)`` (the pseudo-determinant of ``D'D`` equals ``det(N'N)``
+    for these bases), so the likelihood stays comparable with :func:`fit_banded`.
+
+    Parameters
+    ----------
+    stats : GroupStats
+        Sums of the observations per group.
+    kind : str
+        ``rw`` or ``irw``.
+
+    Returns
+    -------
+    FlatFit
+        The fit and its likelihood.
+
+    """
+    d = order_of(kind)
+    basis = null_basis(stats.groups, kind)
+    normal = np.einsum('ij,i,ik->jk', basis, stats.weight, basis)
+    try:
+        inverse = np.linalg.inv(normal)
+        sign, log_det = np.linalg.slogdet(normal)
+    except np.linalg.LinAlgError:
+        sign = 0.0
+    if sign <= 0.0 or stats.count <= d:
+        raise DataError('the regressor does not excite the parameter (all zero or one value)')
+    coefficients = inverse @ np.einsum('ij,i->j', basis, stats.moment)
+    estimate = np.einsum('ij,j->i', basis, coefficients)
+    residual = stats.residual_sum(estimate)
+    sigma2 = max(residual, 0.0) / (stats.count - d)
+    if sigma2 <= 0.0:
+        raise DataError('the observations are fitted exactly: no noise to weigh the walk by')
+    neg2 = (stats.count - d) * (math.log(2.0 * math.pi * sigma2) + 1.0) + float(log_det)
+    return FlatFit(estimate, coefficients, sigma2 * inverse, sigma2, neg2, residual)
+
+
+def selected_inverse_diagonal(factor: FloatArray) -> FloatArray:
+    """
+    Return ``diag(A^{-1})`` from the lower banded Cholesky factor of ``A``.
+
+    Takahashi's recursion: with ``A = L L'``, ``(A^{-1} L)_{ij} = delta_ij / L_jj``
+    for ``i >= j``, so column ``j`` of ``A^{-1}`` within the band follows from
+    the columns after it, from the last column back (bandwidth 1 or 2).
+
+    Parameters
+    ----------
+    factor : FloatArray
+        Lower banded factor, shape ``(b + 1, M)`` with ``b`` 1 or 2.
+
+    Returns
+    -------
+    FloatArray
+        The diagonal of the inverse.
+
+    """
+    b = factor.shape[0] - 1
+    M = factor.shape[1]
+    diag = factor[0].tolist()
+    sub1 = factor[1].tolist()
+    out = [0.0] * M
+    if b == 1:
+        s11 = 0.0           # Sigma_{j+1, j+1}
+        for j in range(M - 1, -1, -1):
+            ljj = diag[j]
+            if j == M - 1:
+                s11 = 1.0 / (ljj * ljj)
+            else:
+                l1 = sub1[j]
+                s10 = -l1 * s11 / ljj
+                s11 = (1.0 / ljj - l1 * s10) / ljj
+            out[j] = s11
+        return np.array(out)
+    if b != 2:
+        raise DataError(f'bandwidth {b}: only 1 (rw) and 2 (irw) are supported')
+    sub2 = factor[2].tolist()
+    # Window of Sigma over rows j+1, j+2: a = S(j+1,j+1), c = S(j+2,j+1), e = S(j+2,j+2).
+    a = c = e = 0.0
+    for j in range(M - 1, -1, -1):
+        ljj = diag[j]
+        l1 = sub1[j] if j + 1 < M else 0.0
+        l2 = sub2[j] if j + 2 < M else 0.0
+        s20 = -(l1 * c + l2 * e) / ljj
+        s10 = -(l1 * a + l2 * c) / ljj
+        s00 = (1.0 / ljj - l1 * s10 - l2 * s20) / ljj
+        out[j] = s00
+        a, c, e = s00, s10, a
+    return np.array(out)

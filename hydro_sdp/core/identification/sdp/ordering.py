@@ -1,0 +1,156 @@
+"""
+Re-ordering the samples by a state: the groups a state-dependent parameter is estimated over.
+
+Young's step that turns a time-variable parameter into a state-dependent one:
+sort the samples by the state and let the parameter walk along the sorted
+order (Young, McKenna and Bruun 2001). Here the walk steps from one *distinct*
+state value to the next: samples with equal values (a held command, an angle
+at the sensor's resolution) share one parameter value, so the estimate is a
+function of the state and ties are not ordered arbitrarily. Only samples whose
+regressor is not zero inform the parameter; the others are left out of the
+ordering. Beyond ``max_groups`` distinct values, neighbouring values are pooled
+into about ``max_groups`` groups of equal sample count (a group never splits a
+tie), which bounds the size of the smoothing problem and keeps its banded
+equations well conditioned; the group's state value is its samples' mean.
+
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from hydro_sdp.core.arrays import FloatArray, IntArray
+from hydro_sdp.core.errors import DataError
+from hydro_sdp.core.identification.sdp.random_walk import group_stats, GroupStats
+import numpy as np
+
+#: Most groups a state is cut into (distinct values pooled beyond it).
+MAX_GROUPS = 20_000
+
+
+@dataclass(frozen=True, eq=False)
+class Ordering:
+    """
+    Samples grouped by the value of a state, groups sorted by it.
+
+    Parameters
+    ----------
+    samples : IntArray
+        Indices of the samples that inform the parameter (regressor not zero), ascending.
+    group : IntArray
+        Group of each of those samples, ``0..M-1`` in increasing state.
+    values : FloatArray
+        State value of each group (the mean over its samples).
+    pooled : bool
+        Whether neighbouring distinct values were pooled.
+
+    """
+
+    samples: IntArray
+    group: IntArray
+    values: FloatArray
+    pooled: bool = False
+
+    @property
+    def groups(self) -> int:
+        """Return the number of groups ``M``."""
+        return int(self.values.size)
+
+    def stats(self, z: FloatArray, x: FloatArray) -> GroupStats:
+        """Return the per-group sums of ``z = x p + e`` over the ordered samples."""
+        return group_stats(np.asarray(z)[self.samples], np.asarray(x)[self.samples],
+                           self.group, self.groups)
+
+    def at_samples(self, per_group: FloatArray, state: FloatArray) -> FloatArray:
+        """
+        Return a per-group quantity at every sample of the record set.
+
+        Ordered samples take their group's value; the others (regressor zero) the
+        value interpolated at their state.
+
+        Parameters
+        ----------
+        per_group : FloatArray
+            One value per group.
+        state : FloatArray
+            The state at every sample.
+
+        Returns
+        -------
+        FloatArray
+            One value per sample.
+
+        """
+        out = np.interp(np.asarray(state, dtype=np.float64), self.values, per_group)
+        out[self.samples] = np.asarray(per_group)[self.group]
+        return out
+
+
+def order_by_state(state: FloatArray, regressor: FloatArray, *,
+                   max_groups: int | None = MAX_GROUPS) -> Ordering:
+    """
+    Group the informative samples by the value of a state.
+
+    Parameters
+    ----------
+    state : FloatArray
+        The state at every sample.
+    regressor : FloatArray
+        The parameter's regressor at every sample (zero: the sample says nothing).
+    max_groups : int or None
+        Pool neighbouring distinct values beyond this many groups; None: never.
+
+    Returns
+    -------
+    Ordering
+        The groups.
+
+    """
+    state = np.asarray(state, dtype=np.float64)
+    regressor = np.asarray(regressor, dtype=np.float64)
+    if state.shape != regressor.shape:
+        raise DataError(f'state and regressor differ in length ({state.size}, {regressor.size})')
+    if not np.all(np.isfinite(state)):
+        raise DataError('the state has NaN or infinite values')
+    samples = np.flatnonzero(regressor != 0.0)
+    if samples.size == 0:
+        raise DataError('the regressor is zero at every sample')
+    distinct, inverse, counts = np.unique(state[samples], return_inverse=True,
+                                          return_counts=True)
+    ordering = Ordering(samples, inverse, distinct)
+    return ordering if max_groups is None else coarsened(ordering, max_groups, state)
+
+
+def coarsened(ordering: Ordering, max_groups: int, state: FloatArray) -> Ordering:
+    """
+    Pool neighbouring groups of an ordering into about ``max_groups`` of equal sample count.
+
+    Parameters
+    ----------
+    ordering : Ordering
+        The ordering.
+    max_groups : int
+        Most groups kept (>= 2); an ordering within it comes back as it is.
+    state : FloatArray
+        The state at every sample (for the pooled groups' mean values).
+
+    Returns
+    -------
+    Ordering
+        The pooled ordering (a group is never split).
+
+    """
+    if ordering.groups <= max_groups:
+        return ordering
+    if max_groups < 2:
+        raise DataError(f'max_groups must be at least 2, got {max_groups}')
+    counts = np.bincount(ordering.group, minlength=ordering.groups)
+    # Cut the cumulative count into max_groups equal shares, only between groups.
+    ends = np.cumsum(counts)
+    share = ends[-1] / max_groups
+    pool = np.minimum((ends - 1) // share, max_groups - 1).astype(np.int64)
+    _, pool = np.unique(pool, return_inverse=True)
+    group = pool[ordering.group]
+    sizes = np.bincount(group)
+    values = np.bincount(group, weights=np.asarray(state, dtype=np.float64)[ordering.samples])
+    return Ordering(ordering.samples, group, values / sizes, pooled=True)

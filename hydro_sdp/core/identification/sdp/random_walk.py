@@ -1,0 +1,163 @@
+"""
+Random-walk models of a parameter along an ordering, and the statistics a fit needs.
+
+A state-dependent parameter ``p_j`` is estimated along the distinct values of a
+state, sorted (Young, McKenna and Bruun 2001): ``j = 0..M-1`` is the rank of the
+value, and ``p`` moves from one value to the next as
+
+* a random walk (``rw``): ``p_{j+1} = p_j + eta_j``, or
+* an integrated random walk (``irw``): ``p_{j+1} = p_j + s_j``,
+  ``s_{j+1} = s_j + eta_j``, so ``p_{j+2} - 2 p_{j+1} + p_j = eta_{j+1}``,
+
+with ``eta ~ N(0, nvr sigma^2)``: the noise variance ratio (NVR) scales the
+variance of the walk's steps by that of the observation noise ``sigma^2``.
+Either walk is the prior ``D p ~ N(0, nvr sigma^2 I)`` with ``D`` the
+difference operator of order ``d`` (1 or 2) and its first ``d`` states
+diffuse; :data:`STENCILS` holds ``D``'s rows.
+
+Every observation ``z_k = x_k p_{g(k)} + e_k`` of a group ``g(k)`` (samples with
+the same state value) enters a fit only through the sums :class:`GroupStats`.
+
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+from hydro_sdp.core.arrays import FloatArray, IntArray
+from hydro_sdp.core.errors import ConfigurationError, DataError
+import numpy as np
+
+#: The random-walk families: random walk and integrated random walk.
+TvpKind = Literal['rw', 'irw']
+KINDS: tuple[TvpKind, ...] = ('rw', 'irw')
+#: Rows of the difference operator of each family (order 1 and 2).
+STENCILS: dict[str, tuple[float, ...]] = {'rw': (-1.0, 1.0), 'irw': (1.0, -2.0, 1.0)}
+
+
+def inner(a: FloatArray, b: FloatArray) -> float:
+    """
+    Return ``sum(a * b)`` without BLAS.
+
+    The vectors here are short and the products many: a threaded BLAS ``dot`` on a busy
+    machine waits far longer for its threads than it computes.
+    """
+    return float(np.sum(np.multiply(a, b)))
+
+
+def order_of(kind: str) -> int:
+    """
+    Return the order ``d`` of a family's difference operator (its diffuse states).
+
+    Parameters
+    ----------
+    kind : str
+        ``rw`` or ``irw``.
+
+    Returns
+    -------
+    int
+        1 for ``rw``, 2 for ``irw``.
+
+    """
+    if kind not in STENCILS:
+        raise ConfigurationError(f"random-walk model must be 'rw' or 'irw', got {kind!r}")
+    return len(STENCILS[kind]) - 1
+
+
+def transition(kind: str) -> tuple[FloatArray, FloatArray]:
+    """
+    Return the state-space form ``(F, G)`` of a family (the walk's state is ``(p[, s])``).
+
+    Parameters
+    ----------
+    kind : str
+        ``rw`` or ``irw``.
+
+    Returns
+    -------
+    tuple
+        Transition matrix ``F`` and noise input ``G`` (``x_{j+1} = F x_j + G eta``).
+
+    """
+    if order_of(kind) == 1:
+        return np.ones((1, 1)), np.ones((1, 1))
+    return np.array([[1.0, 1.0], [0.0, 1.0]]), np.array([[0.0], [1.0]])
+
+
+def difference(values: FloatArray, kind: str) -> FloatArray:
+    """Return ``D p``: the steps (``rw``) or second differences (``irw``) of ``values``."""
+    return np.diff(np.asarray(values, dtype=np.float64), n=order_of(kind))
+
+
+@dataclass(frozen=True, eq=False)
+class GroupStats:
+    """
+    Sufficient statistics of the observations ``z_k = x_k p_{g(k)} + e_k``, per group.
+
+    Parameters
+    ----------
+    weight : FloatArray
+        ``sum x_k^2`` over each group's observations.
+    moment : FloatArray
+        ``sum x_k z_k`` over each group's observations.
+    total : float
+        ``sum z_k^2`` over all observations.
+    count : int
+        Number of observations.
+
+    """
+
+    weight: FloatArray
+    moment: FloatArray
+    total: float
+    count: int
+
+    @property
+    def groups(self) -> int:
+        """Return the number of groups ``M``."""
+        return int(self.weight.size)
+
+    @property
+    def scale(self) -> float:
+        """Return the mean weight per group (the information of one group)."""
+        return float(np.mean(self.weight)) if self.weight.size else 0.0
+
+    def residual_sum(self, estimate: FloatArray) -> float:
+        """Return ``sum (z_k - x_k p_{g(k)})^2`` for the per-group ``estimate``."""
+        p = np.asarray(estimate, dtype=np.float64)
+        return self.total - 2.0 * inner(p, self.moment) + inner(p * p, self.weight)
+
+
+def group_stats(z: FloatArray, x: FloatArray, group: IntArray, groups: int) -> GroupStats:
+    """
+    Sum the observations of each group.
+
+    Parameters
+    ----------
+    z : FloatArray
+        Observations.
+    x : FloatArray
+        Their regressors.
+    group : IntArray
+        Group of each observation, ``0..groups-1``.
+    groups : int
+        Number of groups.
+
+    Returns
+    -------
+    GroupStats
+        The sums.
+
+    """
+    z = np.asarray(z, dtype=np.float64)
+    x = np.asarray(x, dtype=np.float64)
+    if not (z.shape == x.shape == np.shape(group)):
+        raise DataError(f'observations, regressors and groups differ in length '
+                        f'({z.size}, {x.size}, {np.size(group)})')
+    if not (np.all(np.isfinite(z)) and np.all(np.isfinite(x))):
+        raise DataError('observations and regressors must be finite')
+    weight = np.bincount(group, weights=x * x, minlength=groups).astype(np.float64)
+    moment = np.bincount(group, weights=x * z, minlength=groups).astype(np.float64)
+    return GroupStats(weight, moment, inner(z, z), int(z.size))
