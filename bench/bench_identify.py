@@ -26,9 +26,9 @@ from bench_foundation import best_of, rosbags_baseline
 from hydro_sdp.bags import write_bag
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.identification.delay import level_speeds
+from hydro_sdp.core.identification.experiment import Experiment
 from hydro_sdp.core.identification.map_fit import (
     fit_sdp, FitData, initial_sdp, sdp_from_rate_vector)
-from hydro_sdp.core.identification.segmentation import Experiment
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.simulation import simulate
 from hydro_sdp.core.model.static_maps import SdpMap

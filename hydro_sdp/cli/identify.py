@@ -110,17 +110,15 @@ def describe(result: Identification) -> dict:
 
 def run(args: argparse.Namespace) -> Outcome:
     """Run ``identify``."""
-    from hydro_sdp.core.identification.identify import identify
+    from hydro_sdp.core.identification.identify import identify, IdentifyStage
 
     records, topic = read_records_and_topic(args.bags, args.joint, args.command_topic)
-    stages = ['segmenting', 'estimating the delay', 'fitting the static map',
-              'comparing map families on held-out experiments']
-    with ProgressBar('identify', len(stages)) as bar:
+    with ProgressBar('identify', len(IdentifyStage)) as bar:
         result = identify(
             records, method=args.method, kind=args.kind, max_delay=args.max_delay,
             angle_limits=tuple(args.angle_limits) if args.angle_limits else None,
             input_limits=tuple(args.input_limits) if args.input_limits else None,
-            rest=args.rest, progress=lambda name: bar.update(stages.index(name)))
+            rest=args.rest, progress=bar.update)
     # The model file remembers the topic, so evaluate and diagnose read the same one.
     result = replace(result, model=replace(result.model, command_topic=topic))
     payload = describe(result)

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 import math
-from typing import Any, Callable, Sequence
+from typing import Callable, Sequence
 
 from hydro_sdp.core.control.controller_spec import ControllerSpec, design_from_model, format_pole
 from hydro_sdp.core.control.design_plant import completed_poles
@@ -30,7 +30,7 @@ from hydro_sdp.core.control.loop_obstacles import Obstacle, obstacles, standing_
 from hydro_sdp.core.diagnosis import DETECTORS, diagnose, Diagnosis
 from hydro_sdp.core.errors import DataError, HydroSdpError
 from hydro_sdp.core.identification.evaluation import evaluate, RecordScore
-from hydro_sdp.core.identification.identify import Identification, identify
+from hydro_sdp.core.identification.identify import Identification, identify, IdentifyStage
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.records import Record
 import numpy as np
@@ -201,10 +201,9 @@ def split_records(records: Sequence[Record]) -> tuple[list[Record], list[Record]
 
 
 def _identify(records: Sequence[Record], settings: CalibrationSettings,
-              progress: Callable[[str], None]) -> Identification:
-    options: dict[str, Any] = {'angle_limits': settings.angle_limits,
-                               'input_limits': settings.input_limits, 'progress': progress}
-    return identify(records, rest=settings.rest, **options)
+              progress: Callable[[IdentifyStage], None]) -> Identification:
+    return identify(records, rest=settings.rest, angle_limits=settings.angle_limits,
+                    input_limits=settings.input_limits, progress=progress)
 
 
 class _Designer:
@@ -285,11 +284,9 @@ def calibrate(records: Sequence[Record], validation: Sequence[Record] | None = N
         estimation, checks, note = split_records(records)
         if note.startswith('in-sample'):
             warnings.append('one record: the validation MAE is in-sample')
-    stages = ['segmenting', 'estimating the delay', 'fitting the static map',
-              'comparing map families on held-out experiments']
-    report('identify', 0, len(stages))
+    report('identify', 0, len(IdentifyStage))
     identified = _identify(estimation, settings,
-                           lambda name: report('identify', stages.index(name), len(stages)))
+                           lambda stage: report('identify', stage, len(IdentifyStage)))
     model = identified.model
     report('evaluate', 0, 2)
     scores = tuple(evaluate(checks, model))

@@ -5,8 +5,8 @@ from __future__ import annotations
 from typing import Sequence
 
 from hydro_sdp.core.identification.delay import LevelSpeed
+from hydro_sdp.core.identification.experiment import Experiment
 from hydro_sdp.core.identification.sdp.results import StateDependence
-from hydro_sdp.core.identification.segmentation import Experiment
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.records import Record
 from hydro_sdp.plots.figures import (

@@ -9,9 +9,10 @@ from hydro_sdp.core.diagnosis.residuals import (
     BLOCK_SECONDS, block_sums, compare, MIN_GAIN, Run, T_LIMIT, velocity_residuals)
 from hydro_sdp.core.diagnosis.results import Candidate, Trial
 from hydro_sdp.core.errors import DataError, HydroSdpError
+from hydro_sdp.core.identification.experiment import split_long, thin
 from hydro_sdp.core.identification.map_fit import FitData
 from hydro_sdp.core.identification.segmentation import (
-    estimate_rest_command, segment_records, Segmentation, split_long, thin)
+    estimate_rest_command, segment_records, Segmentation)
 from hydro_sdp.core.model.joint_model import JointModel
 import numpy as np
 from scipy.optimize import minimize_scalar

@@ -36,7 +36,7 @@ from typing import Sequence
 
 from hydro_sdp.core.arrays import FloatArray, IntArray
 from hydro_sdp.core.errors import DataError
-from hydro_sdp.core.identification.segmentation import Experiment
+from hydro_sdp.core.identification.experiment import Experiment
 from hydro_sdp.core.model.timing import delayed_at
 import numpy as np
 from scipy.optimize import minimize_scalar

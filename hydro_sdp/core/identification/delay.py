@@ -28,7 +28,7 @@ from typing import Sequence
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import DataError
 from hydro_sdp.core.identification.change_windows import fit_delay_lag_and_pure, lag_pole
-from hydro_sdp.core.identification.segmentation import Experiment
+from hydro_sdp.core.identification.experiment import Experiment
 from hydro_sdp.core.model.sample_period import whole_samples_seconds
 from hydro_sdp.core.model.timing import delayed_at
 import numpy as np

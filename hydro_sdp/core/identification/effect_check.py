@@ -29,7 +29,7 @@ from typing import Callable, Sequence
 
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import HydroSdpError
-from hydro_sdp.core.identification.segmentation import Experiment
+from hydro_sdp.core.identification.experiment import Experiment
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.simulation import simulate
 import numpy as np

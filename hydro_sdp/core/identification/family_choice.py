@@ -1,5 +1,5 @@
 """
-Choosing the map family on held-out experiments, with folds that never extrapolate.
+The map families, and choosing one on held-out experiments with folds that never extrapolate.
 
 A held-out score is fair only when every fold's training part spans the
 commands its test part holds: both directions, and the levels on either side.
@@ -15,12 +15,30 @@ spread over the range anyway, alternate between the folds in pairs.
 from __future__ import annotations
 
 from collections import defaultdict
+from dataclasses import dataclass
 import math
-from typing import Sequence
+from typing import get_args, Literal, Sequence
 
-from hydro_sdp.core.identification.segmentation import Experiment
+from hydro_sdp.core.errors import DataError, HydroSdpError
+from hydro_sdp.core.identification.delay import level_speeds, LevelSpeed
+from hydro_sdp.core.identification.experiment import Experiment
+from hydro_sdp.core.identification.map_fit import (
+    fit_poly, fit_pwl, fit_sdp, FitData, FitMethod, MapFit)
+from hydro_sdp.core.identification.map_fit.power_sat import fit_power_sat
+from hydro_sdp.core.model.static_maps import SdpMap, StaticMap
 import numpy as np
 
+#: Map families ``identify`` can fit, and the choice among them.
+FittedKind = Literal['sdp', 'pwl', 'poly', 'power_sat']
+KindChoice = Literal[FittedKind, 'auto']
+KINDS: tuple[FittedKind, ...] = get_args(FittedKind)
+#: Families ``auto`` compares first; ``power_sat`` joins them when ``sdp`` loses.
+FIRST_KINDS: tuple[FittedKind, ...] = ('sdp', 'pwl', 'poly')
+#: ``auto`` keeps ``sdp`` when its held-out error is within this factor of the best.
+PARSIMONY = 1.05
+#: Families of a physical shape, and the factor a free-form family must beat them by.
+SMOOTH_KINDS = ('sdp', 'power_sat')
+FREE_FORM_MARGIN = 1.5
 #: Most folds of the leave-one-level-out scheme.
 MAX_FOLDS = 4
 
@@ -94,3 +112,155 @@ def _halves(experiments: Sequence[Experiment]) -> list[tuple[list[Experiment], l
         second.append(Experiment(experiment.v, experiment.y, middle, experiment.kind,
                                  experiment.level, experiment.t0, experiment.source))
     return [(first, second), (second, first)]
+
+
+@dataclass(frozen=True)
+class KindScore:
+    """
+    Held-out simulation error of one map family.
+
+    Parameters
+    ----------
+    kind : str
+        Map family (one of :data:`KINDS`).
+    mae : float
+        Mean absolute simulation error on held-out experiments, degrees (NaN if it
+        could not be fitted).
+    note : str
+        Why it could not be fitted, if so.
+
+    """
+
+    kind: FittedKind
+    mae: float
+    note: str = ''
+
+
+def fit_family(kind: FittedKind, data: FitData, points: Sequence[LevelSpeed], rest: float,
+               method: FitMethod, sdp_map: SdpMap | None, starts: int = 4) -> MapFit[StaticMap]:
+    """
+    Fit one map family to experiments.
+
+    Parameters
+    ----------
+    kind : str
+        The family (one of :data:`KINDS`).
+    data : FitData
+        The experiments arranged for the fit.
+    points : sequence of LevelSpeed
+        Speed of every experiment and command level (the starting values).
+    rest : float
+        Rest command.
+    method : str
+        ``rr`` or ``oe``.
+    sdp_map : SdpMap or None
+        The ``sdp`` fit the others start from (its dead-zone), if already made.
+    starts : int
+        Starts of the ``sdp`` multi-start search.
+
+    Returns
+    -------
+    MapFit
+        The fit.
+
+    """
+    if kind == 'sdp':
+        return fit_sdp(data, points, rest, method=method, starts=starts)
+    if kind == 'poly':
+        # The second paper's fit to the points, refined on the angles by the method asked.
+        return fit_poly(points, rest, data=data, method=method)
+    if sdp_map is None:
+        sdp_map = fit_sdp(data, points, rest, method='rr', starts=1).static_map
+    if kind == 'pwl':
+        return fit_pwl(data, points, rest, sdp_map.dead_zone, method=method)
+    return fit_power_sat(data, points, rest, sdp_map, method=method)
+
+
+def compare_kinds(experiments: Sequence[Experiment], delay: int, dt: float, rest: float,
+                  method: FitMethod, kinds: Sequence[FittedKind] = KINDS,
+                  dead_zone: tuple[float, float] | None = None,
+                  lag: float = 0.0) -> list[KindScore]:
+    """
+    Held-out simulation error of each map family, over folds that never extrapolate.
+
+    Parameters
+    ----------
+    experiments : sequence of Experiment
+        All experiments.
+    delay : int
+        Delay, samples.
+    dt : float
+        Sample period, s.
+    rest : float
+        Rest command.
+    method : str
+        Fitting method (``rr`` or ``oe``), for every family.
+    kinds : sequence of str
+        Families to compare.
+    dead_zone : tuple[float, float] or None
+        Plateau of the ``pwl`` map (default: from the ``sdp`` fit of each fold).
+    lag : float
+        Valve lag time constant, s.
+
+    Returns
+    -------
+    list of KindScore
+        One score per family: the mean over folds of the held-out MAE.
+
+    """
+    parts = folds(experiments, rest)
+    errors: dict[str, list[float]] = {kind: [] for kind in kinds}
+    notes: dict[str, str] = {}
+    for train, test in parts:
+        data = FitData(train, delay, dt, lag)
+        held_out = FitData(test, delay, dt, lag)
+        try:
+            points = level_speeds(train, delay, dt, rest=rest)
+            sdp_map: SdpMap | None = fit_sdp(data, points, rest, method=method,
+                                             starts=2).static_map
+        except HydroSdpError as error:
+            notes.update({kind: str(error) for kind in kinds})
+            break
+        for kind in kinds:
+            if kind in notes:
+                continue
+            try:
+                if kind == 'sdp':
+                    static_map: StaticMap = sdp_map  # type: ignore[assignment]
+                else:
+                    start = sdp_map if dead_zone is None or sdp_map is None else SdpMap(
+                        dead_zone, sdp_map.saturation_velocity, sdp_map.curvature)
+                    static_map = fit_family(kind, data, points, rest, method, start,
+                                            starts=2).static_map
+                errors[kind].append(held_out.simulation_mae(static_map.rate))
+            except HydroSdpError as error:
+                notes[kind] = str(error)
+    return [KindScore(kind, float(np.mean(errors[kind]))
+                      if kind not in notes and errors[kind] else math.nan, notes.get(kind, ''))
+            for kind in kinds]
+
+
+def choose_kind(scores: Sequence[KindScore]) -> FittedKind:
+    """
+    Pick the family with the least held-out error, preferring the smooth families.
+
+    ``sdp`` is kept when it is within :data:`PARSIMONY` of the best smooth
+    family (``sdp``, ``power_sat``), and a smooth family within
+    :data:`FREE_FORM_MARGIN` of a free-form one (``pwl``, ``poly``): folds can
+    only leave out levels between measured ones, where an interpolant is at its
+    best, so a free-form shape must win clearly.
+    """
+    usable = [s for s in scores if math.isfinite(s.mae)]
+    if not usable:
+        raise DataError('no map family could be fitted: ' +
+                        '; '.join(f'{s.kind}: {s.note}' for s in scores))
+    best = min(usable, key=lambda s: s.mae)
+    smooth = [s for s in usable if s.kind in SMOOTH_KINDS]
+    if not smooth:
+        return best.kind
+    best_smooth = min(smooth, key=lambda s: s.mae)
+    sdp = next((s for s in smooth if s.kind == 'sdp'), None)
+    if sdp is not None and sdp.mae <= PARSIMONY * best_smooth.mae:
+        best_smooth = sdp
+    margin = PARSIMONY if best_smooth.kind == 'sdp' else FREE_FORM_MARGIN
+    return best_smooth.kind if best_smooth.mae <= margin * best.mae else best.kind

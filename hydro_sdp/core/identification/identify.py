@@ -21,72 +21,58 @@ geometry found.
 from __future__ import annotations
 
 from dataclasses import dataclass
-import math
-from typing import Callable, get_args, Literal, Sequence
+import enum
+from typing import Callable, Sequence
 
-from hydro_sdp.core.errors import DataError, HydroSdpError
+from hydro_sdp.core.errors import DataError
 from hydro_sdp.core.identification.delay import (
     DelayEstimate, estimate_delay, level_speeds, LevelSpeed)
 from hydro_sdp.core.identification.effect_check import HeldOut, simulation_errors
 from hydro_sdp.core.identification.end_stops import stop_reach
-from hydro_sdp.core.identification.family_choice import folds
-from hydro_sdp.core.identification.map_fit import (
-    FIT_METHODS, fit_poly, fit_pwl, fit_sdp, FitData, FitMethod, MapFit)
-from hydro_sdp.core.identification.map_fit.power_sat import fit_power_sat
+from hydro_sdp.core.identification.experiment import (
+    Experiment, split_long, thin, thin_evenly)
+from hydro_sdp.core.identification.family_choice import (
+    choose_kind, compare_kinds, FIRST_KINDS, fit_family, FittedKind, KindChoice, KINDS,
+    KindScore)
+from hydro_sdp.core.identification.map_fit import FIT_METHODS, fit_sdp, FitData, FitMethod, MapFit
 from hydro_sdp.core.identification.own_effects import (
     check_geometry, check_lag, shape_with_geometry)
 from hydro_sdp.core.identification.segmentation import (
-    check_record, Experiment, segment_records, Segmentation, split_long, thin)
+    check_records, segment_records, Segmentation)
 from hydro_sdp.core.identification.stroke_fit import fit_stroke_geometry
 from hydro_sdp.core.model.effects import Effect, ValveLag
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.records import Record
-from hydro_sdp.core.model.sample_period import nominal_period, whole_samples_seconds
-from hydro_sdp.core.model.static_maps import SdpMap, StaticMap
-import numpy as np
+from hydro_sdp.core.model.sample_period import whole_samples_seconds
+from hydro_sdp.core.model.static_maps import StaticMap
 
-#: Map families ``identify`` can fit, and the choice among them.
-FittedKind = Literal['sdp', 'pwl', 'poly', 'power_sat']
-KindChoice = Literal[FittedKind, 'auto']
-KINDS: tuple[FittedKind, ...] = get_args(FittedKind)
-#: Families ``auto`` compares first; ``power_sat`` joins them when ``sdp`` loses.
-FIRST_KINDS: tuple[FittedKind, ...] = ('sdp', 'pwl', 'poly')
+__all__ = ['experiments_mae', 'Identification', 'identify', 'IdentifyStage', 'KindChoice',
+           'KINDS', 'KindScore', 'PIECE_SAMPLES']
+
 #: Longest piece a fit sees, and the sample budgets of the multi-start search and the
 #: delay search: long records are cut and thinned there, and the best start is then
 #: refined on all the data.
 PIECE_SAMPLES = 3000
 SEARCH_SAMPLES = 60_000
 DELAY_SAMPLES = 100_000
-#: Sample budget of the held-out comparison of map families: every fold refits every
-#: family, and a few hundred experiments score them as well as a thousand.
+#: Sample budget of the held-out comparisons (map families, effects): every fold refits,
+#: and a few hundred experiments score them as well as a thousand.
 COMPARE_SAMPLES = 30_000
-#: ``auto`` keeps ``sdp`` when its held-out error is within this factor of the best.
-PARSIMONY = 1.05
-#: Families of a physical shape, and the factor a free-form family must beat them by.
-SMOOTH_KINDS = ('sdp', 'power_sat')
-FREE_FORM_MARGIN = 1.5
 
 
-@dataclass(frozen=True)
-class KindScore:
-    """
-    Held-out simulation error of one map family.
+class IdentifyStage(enum.IntEnum):
+    """The stages of :func:`identify`, in order (their number counts progress)."""
 
-    Parameters
-    ----------
-    kind : str
-        Map family (one of :data:`KINDS`).
-    mae : float
-        Mean absolute simulation error on held-out experiments, degrees (NaN if it
-        could not be fitted).
-    note : str
-        Why it could not be fitted, if so.
+    SEGMENTING = 0
+    DELAY = 1
+    MAP = 2
+    FAMILIES = 3
 
-    """
-
-    kind: FittedKind
-    mae: float
-    note: str = ''
+    @property
+    def label(self) -> str:
+        """Return what the stage does, for a progress bar."""
+        return ('segmenting', 'estimating the delay', 'fitting the static map',
+                'comparing map families on held-out experiments')[self]
 
 
 @dataclass(frozen=True, eq=False)
@@ -136,110 +122,6 @@ class Identification:
         return self.model.alpha(self.sample_period)
 
 
-def _fit_kind(kind: FittedKind, data: FitData, points: Sequence[LevelSpeed], rest: float,
-              method: FitMethod, sdp_map: SdpMap | None, starts: int = 4) -> MapFit[StaticMap]:
-    if kind == 'sdp':
-        return fit_sdp(data, points, rest, method=method, starts=starts)
-    if kind == 'poly':
-        # The second paper's fit to the points, refined on the angles by the method asked.
-        return fit_poly(points, rest, data=data, method=method)
-    if sdp_map is None:
-        sdp_map = fit_sdp(data, points, rest, method='rr', starts=1).static_map
-    if kind == 'pwl':
-        return fit_pwl(data, points, rest, sdp_map.dead_zone, method=method)
-    return fit_power_sat(data, points, rest, sdp_map, method=method)
-
-
-def compare_kinds(experiments: Sequence[Experiment], delay: int, dt: float, rest: float,
-                  method: FitMethod, kinds: Sequence[FittedKind] = KINDS,
-                  dead_zone: tuple[float, float] | None = None,
-                  lag: float = 0.0) -> list[KindScore]:
-    """
-    Held-out simulation error of each map family, over folds that never extrapolate.
-
-    Parameters
-    ----------
-    experiments : sequence of Experiment
-        All experiments.
-    delay : int
-        Delay, samples.
-    dt : float
-        Sample period, s.
-    rest : float
-        Rest command.
-    method : str
-        Fitting method (``rr`` or ``oe``), for every family.
-    kinds : sequence of str
-        Families to compare.
-    dead_zone : tuple[float, float] or None
-        Plateau of the ``pwl`` map (default: from the ``sdp`` fit of each fold).
-    lag : float
-        Valve lag time constant, s.
-
-    Returns
-    -------
-    list of KindScore
-        One score per family: the mean over folds of the held-out MAE.
-
-    """
-    parts = folds(experiments, rest)
-    errors: dict[str, list[float]] = {kind: [] for kind in kinds}
-    notes: dict[str, str] = {}
-    for train, test in parts:
-        data = FitData(train, delay, dt, lag)
-        held_out = FitData(test, delay, dt, lag)
-        try:
-            points = level_speeds(train, delay, dt, rest=rest)
-            sdp_map: SdpMap | None = fit_sdp(data, points, rest, method=method,
-                                             starts=2).static_map
-        except HydroSdpError as error:
-            notes.update({kind: str(error) for kind in kinds})
-            break
-        for kind in kinds:
-            if kind in notes:
-                continue
-            try:
-                if kind == 'sdp':
-                    static_map: StaticMap = sdp_map  # type: ignore[assignment]
-                else:
-                    start = sdp_map if dead_zone is None or sdp_map is None else SdpMap(
-                        dead_zone, sdp_map.saturation_velocity, sdp_map.curvature)
-                    static_map = _fit_kind(kind, data, points, rest, method, start,
-                                           starts=2).static_map
-                errors[kind].append(held_out.simulation_mae(static_map.rate))
-            except HydroSdpError as error:
-                notes[kind] = str(error)
-    return [KindScore(kind, float(np.mean(errors[kind]))
-                      if kind not in notes and errors[kind] else math.nan, notes.get(kind, ''))
-            for kind in kinds]
-
-
-def choose_kind(scores: Sequence[KindScore]) -> FittedKind:
-    """
-    Pick the family with the least held-out error, preferring the smooth families.
-
-    ``sdp`` is kept when it is within :data:`PARSIMONY` of the best smooth
-    family (``sdp``, ``power_sat``), and a smooth family within
-    :data:`FREE_FORM_MARGIN` of a free-form one (``pwl``, ``poly``): folds can
-    only leave out levels between measured ones, where an interpolant is at its
-    best, so a free-form shape must win clearly.
-    """
-    usable = [s for s in scores if math.isfinite(s.mae)]
-    if not usable:
-        raise DataError('no map family could be fitted: ' +
-                        '; '.join(f'{s.kind}: {s.note}' for s in scores))
-    best = min(usable, key=lambda s: s.mae)
-    smooth = [s for s in usable if s.kind in SMOOTH_KINDS]
-    if not smooth:
-        return best.kind
-    best_smooth = min(smooth, key=lambda s: s.mae)
-    sdp = next((s for s in smooth if s.kind == 'sdp'), None)
-    if sdp is not None and sdp.mae <= PARSIMONY * best_smooth.mae:
-        best_smooth = sdp
-    margin = PARSIMONY if best_smooth.kind == 'sdp' else FREE_FORM_MARGIN
-    return best_smooth.kind if best_smooth.mae <= margin * best.mae else best.kind
-
-
 def experiments_mae(model: JointModel, experiments: Sequence[Experiment], dt: float) -> float:
     """
     Mean absolute simulation error of a model over experiments, degrees (per sample).
@@ -251,63 +133,63 @@ def experiments_mae(model: JointModel, experiments: Sequence[Experiment], dt: fl
     return total / max(count, 1)
 
 
-def thin_evenly(experiments: Sequence[Experiment], max_samples: int,
-                rest: float) -> list[Experiment]:
-    """
-    Keep every k-th experiment of each kind and direction, up to about ``max_samples``.
+@dataclass(frozen=True, eq=False)
+class _Pieces:
+    """The experiments a fit sees: all of them cut to length, and samples of them."""
 
-    Parameters
-    ----------
-    experiments : sequence of Experiment
-        The experiments.
-    max_samples : int
-        Sample budget (predicted samples).
-    rest : float
-        Rest command (splits the directions of step experiments).
-
-    Returns
-    -------
-    list of Experiment
-        All of them when within budget, else every k-th of each kind and direction,
-        in their order: alternating directions are not thinned to one.
-
-    """
-    total = sum(e.samples for e in experiments)
-    if total <= max_samples:
-        return list(experiments)
-    stride = math.ceil(total / max_samples)
-    seen: dict[tuple[str, float], int] = {}
-    out = []
-    for experiment in experiments:
-        side = float(np.sign(experiment.level - rest)) if math.isfinite(experiment.level) \
-            else 0.0
-        group = (experiment.kind, side)
-        count = seen.get(group, 0)
-        seen[group] = count + 1
-        if count % stride == 0:
-            out.append(experiment)
-    return out
+    every: list[Experiment]
+    search: list[Experiment]
+    trial: list[Experiment]
 
 
-def records_period(records: Sequence[Record]) -> float:
-    """
-    Return the nominal sample period shared by records, s.
+def _segment(records: Sequence[Record], dt: float, max_delay: int,
+             angle_limits: tuple[float, float] | None, rest: float | None,
+             input_limits: tuple[float, float] | None) -> tuple[Segmentation, _Pieces]:
+    """Cut the records into experiments, and those into the pieces and samples fits see."""
+    segmentation = segment_records(records, max_delay=max_delay, angle_limits=angle_limits,
+                                   rest=rest, input_limits=input_limits)
+    if not segmentation.experiments:
+        reasons = '; '.join(sorted({d.reason for d in segmentation.dropped})) or 'none found'
+        raise DataError(f'no usable experiments ({reasons})')
+    pieces = split_long(segmentation.experiments, PIECE_SAMPLES, max_delay)
+    search = thin(pieces, SEARCH_SAMPLES)
+    return segmentation, _Pieces(pieces, search,
+                                 thin_evenly(search, COMPARE_SAMPLES, segmentation.rest))
 
-    Each record's nominal period must lie within 1 % of the others'; the result is
-    the nominal period of all their spacings together, so records of one timer
-    give one period whatever their length.
-    """
-    periods = [check_record(record) for record in records]
-    if max(periods) > 1.01 * min(periods):
-        raise DataError(f'records have different sample periods ({min(periods):.4g} s to '
-                        f'{max(periods):.4g} s); resample them first')
-    return nominal_period(np.concatenate([np.diff(record.t) for record in records]))
+
+def _delay(segmentation: Segmentation, pieces: _Pieces, dt: float, max_delay: int
+           ) -> tuple[DelayEstimate, list[HeldOut]]:
+    """Estimate the dead time with the valve lag, keeping the lag only if held-out data need it."""
+    delay = estimate_delay(thin(pieces.every, DELAY_SAMPLES), dt, max_delay=max_delay,
+                           rest=segmentation.rest, noise=segmentation.noise_std)
+    if delay.lag <= 0.0:
+        return delay, []
+    lag_check = check_lag(pieces.trial, delay, dt, segmentation.rest, max_delay)
+    return (delay if lag_check.kept else delay.without_lag(dt)), [lag_check]
+
+
+def _family(kind: KindChoice, pieces: _Pieces, delay: DelayEstimate, dt: float, rest: float,
+            method: FitMethod, step: Callable[[IdentifyStage], None]
+            ) -> tuple[FittedKind, tuple[KindScore, ...]]:
+    """Return the map family asked for, or the one that predicts held-out experiments best."""
+    if kind != 'auto':
+        return kind, ()
+    step(IdentifyStage.FAMILIES)
+    comparison = tuple(compare_kinds(pieces.trial, delay.samples, dt, rest, method,
+                                     FIRST_KINDS, lag=delay.lag))
+    chosen = choose_kind(comparison)
+    if chosen != 'sdp':
+        # Eq. (5) lost: try its generalisation, convex from the dead-zone.
+        comparison += tuple(compare_kinds(pieces.trial, delay.samples, dt, rest, method,
+                                          ('power_sat',), lag=delay.lag))
+        chosen = choose_kind(comparison)
+    return chosen, comparison
 
 
 def identify(records: Sequence[Record], *, method: FitMethod = 'rr', kind: KindChoice = 'auto',
              max_delay: float = 0.5, angle_limits: tuple[float, float] | None = None,
              input_limits: tuple[float, float] | None = None, rest: float | None = None,
-             progress: Callable[[str], None] | None = None) -> Identification:
+             progress: Callable[[IdentifyStage], None] | None = None) -> Identification:
     """
     Identify a joint model from records of one joint.
 
@@ -331,7 +213,7 @@ def identify(records: Sequence[Record], *, method: FitMethod = 'rr', kind: KindC
         The valve's neutral command; default: 0 when the commands take both
         signs and the joint stands still there, else from the data.
     progress : callable or None
-        Called with the name of each stage as it starts.
+        Called with each :class:`IdentifyStage` as it starts.
 
     Returns
     -------
@@ -343,78 +225,47 @@ def identify(records: Sequence[Record], *, method: FitMethod = 'rr', kind: KindC
         raise DataError(f"kind must be auto, {', '.join(KINDS)}; got {kind!r}")
     if method not in FIT_METHODS:
         raise DataError(f"method must be 'rr' or 'oe', got {method!r}")
-    if not records:
-        raise DataError('no records to identify from')
-    joints = {record.joint for record in records}
-    if len(joints) > 1:
-        raise DataError(f"records of several joints ({', '.join(sorted(joints))}); "
-                        'identify one joint at a time')
-    dt = records_period(records)
-    step = (lambda name: progress(name)) if progress is not None else (lambda name: None)
-    step('segmenting')
+    dt = check_records(records)
+    step = progress if progress is not None else (lambda stage: None)
+    step(IdentifyStage.SEGMENTING)
     max_delay_samples = max(2, int(round(max_delay / dt)))
-    segmentation = segment_records(records, max_delay=max_delay_samples,
-                                   angle_limits=angle_limits, rest=rest,
-                                   input_limits=input_limits)
-    if not segmentation.experiments:
-        reasons = '; '.join(sorted({d.reason for d in segmentation.dropped})) or 'none found'
-        raise DataError(f'no usable experiments ({reasons})')
-    step('estimating the delay')
+    segmentation, pieces = _segment(records, dt, max_delay_samples, angle_limits, rest,
+                                    input_limits)
     rest_command = segmentation.rest
-    pieces = split_long(segmentation.experiments, PIECE_SAMPLES, max_delay_samples)
-    delay = estimate_delay(thin(pieces, DELAY_SAMPLES), dt, max_delay=max_delay_samples,
-                           rest=rest_command, noise=segmentation.noise_std)
-    sample = thin(pieces, SEARCH_SAMPLES)
-    trial = thin_evenly(sample, COMPARE_SAMPLES, rest_command)
-    limits = angle_limits
-    low_stop, high_stop = segmentation.end_stops
-    if limits is None and low_stop is not None and high_stop is not None:
-        limits = (low_stop, high_stop)
-    checks: list[HeldOut] = []
-    if delay.lag > 0.0:
-        lag_check = check_lag(trial, delay, dt, rest_command, max_delay_samples)
-        checks.append(lag_check)
-        if not lag_check.kept:
-            delay = delay.without_lag(dt)
-    points = tuple(level_speeds(pieces, delay.samples, dt, rest=rest_command))
-    data = FitData(pieces, delay.samples, dt, delay.lag)
-    search = data if len(sample) == len(pieces) else FitData(sample, delay.samples, dt,
-                                                             delay.lag)
-    step('fitting the static map')
+    step(IdentifyStage.DELAY)
+    delay, checks = _delay(segmentation, pieces, dt, max_delay_samples)
+    points = tuple(level_speeds(pieces.every, delay.samples, dt, rest=rest_command))
+    data = FitData(pieces.every, delay.samples, dt, delay.lag)
+    search = data if len(pieces.search) == len(pieces.every) else FitData(
+        pieces.search, delay.samples, dt, delay.lag)
+    step(IdentifyStage.MAP)
     sdp_fit = fit_sdp(search, points, rest_command, method=method,
                       polish=None if search is data else data)
-    comparison: tuple[KindScore, ...] = ()
-    chosen: FittedKind = 'sdp' if kind == 'auto' else kind
-    if kind == 'auto':
-        step('comparing map families on held-out experiments')
-        comparison = tuple(compare_kinds(trial, delay.samples, dt, rest_command, method,
-                                         FIRST_KINDS, lag=delay.lag))
-        chosen = choose_kind(comparison)
-        if chosen != 'sdp':
-            # Eq. (5) lost: try its generalisation, convex from the dead-zone.
-            comparison += tuple(compare_kinds(trial, delay.samples, dt, rest_command, method,
-                                              ('power_sat',), lag=delay.lag))
-            chosen = choose_kind(comparison)
-    fit: MapFit[StaticMap] = sdp_fit if chosen == 'sdp' else _fit_kind(
+    chosen, comparison = _family(kind, pieces, delay, dt, rest_command, method, step)
+    fit: MapFit[StaticMap] = sdp_fit if chosen == 'sdp' else fit_family(
         chosen, data, points, rest_command, method, sdp_fit.static_map)
+    low_stop, high_stop = segmentation.end_stops
+    limits = angle_limits if angle_limits is not None or low_stop is None or \
+        high_stop is None else (low_stop, high_stop)
     effects: tuple[Effect, ...] = (ValveLag(delay.lag),) if delay.lag > 0.0 else ()
-    model = JointModel(joint=next(iter(joints)) or 'joint', static_map=fit.static_map,
+    model = JointModel(joint=records[0].joint or 'joint', static_map=fit.static_map,
                        delay=whole_samples_seconds(delay.samples, dt), angle_limits=limits,
                        input_limits=input_limits, effects=effects)
     mae = data.simulation_mae(fit.static_map.rate)
+    # The speed along the stroke, kept only when held-out experiments need it.
     stops = limits if limits is not None else (low_stop, high_stop)
     reach = stop_reach(segmentation.noise_std)
-    geometry = fit_stroke_geometry(sample, fit.static_map.rate, delay.samples, dt, delay.lag,
-                                   stops, reach)
+    geometry = fit_stroke_geometry(pieces.search, fit.static_map.rate, delay.samples, dt,
+                                   delay.lag, stops, reach)
     if geometry is not None:
-        geometry_check = check_geometry(trial, model, delay, dt, stops, reach)
+        geometry_check = check_geometry(pieces.trial, model, delay, dt, stops, reach)
         checks.append(geometry_check)
         if geometry_check.kept:
             shaped, refit = shape_with_geometry(
-                model, geometry, lambda gained: _fit_kind(chosen, gained, points, rest_command,
-                                                          method, sdp_fit.static_map),
-                fit, pieces, sample, delay, dt, stops, reach)
+                model, geometry, lambda gained: fit_family(chosen, gained, points, rest_command,
+                                                           method, sdp_fit.static_map),
+                fit, pieces.every, pieces.search, delay, dt, stops, reach)
             if shaped is not None:
-                model, fit, mae = shaped, refit, experiments_mae(shaped, pieces, dt)
+                model, fit, mae = shaped, refit, experiments_mae(shaped, pieces.every, dt)
     return Identification(model, dt, delay, segmentation, points, fit, comparison, mae,
                           tuple(checks))

@@ -21,9 +21,9 @@ from hydro_sdp.core.identification.change_windows import (
 from hydro_sdp.core.identification.delay import DelayEstimate
 from hydro_sdp.core.identification.effect_check import (
     held_out, HeldOut, INCREMENT_GAIN, simulation_errors)
+from hydro_sdp.core.identification.experiment import Experiment
 from hydro_sdp.core.identification.family_choice import folds
 from hydro_sdp.core.identification.map_fit import FitData, MapFit
-from hydro_sdp.core.identification.segmentation import Experiment
 from hydro_sdp.core.identification.stroke_fit import fit_stroke_geometry, speed_gains
 from hydro_sdp.core.model.effects import StrokeGeometry
 from hydro_sdp.core.model.joint_model import JointModel

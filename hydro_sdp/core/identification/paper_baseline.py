@@ -15,9 +15,10 @@ from typing import Sequence
 
 from hydro_sdp.core.identification.change_windows import lagged_residual
 from hydro_sdp.core.identification.delay import level_speeds
-from hydro_sdp.core.identification.identify import PIECE_SAMPLES, records_period
+from hydro_sdp.core.identification.experiment import split_long
+from hydro_sdp.core.identification.identify import PIECE_SAMPLES
 from hydro_sdp.core.identification.map_fit import fit_sdp, FitData
-from hydro_sdp.core.identification.segmentation import segment_records, split_long
+from hydro_sdp.core.identification.segmentation import check_records, segment_records
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.records import Record
 from hydro_sdp.core.model.sample_period import whole_samples_seconds
@@ -43,7 +44,7 @@ def paper_model(records: Sequence[Record], *, max_delay: float = 0.5,
         An ``sdp`` model with the end stops seen in the data and no effects.
 
     """
-    dt = records_period(records)
+    dt = check_records(records)
     most = max(2, int(round(max_delay / dt)))
     segmentation = segment_records(records, max_delay=most, rest=rest)
     pieces = split_long(segmentation.experiments, PIECE_SAMPLES, most)

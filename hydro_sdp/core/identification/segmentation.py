@@ -1,5 +1,5 @@
 """
-Experiments: the pieces of a record that identification fits.
+Segmentation: records cut into the experiments that identification fits.
 
 A record is cut where the command leaves its rest value and where it returns.
 A block of one held command is a *step* experiment (West et al. 2018, Fig. 1);
@@ -24,54 +24,11 @@ from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import DataError
 from hydro_sdp.core.identification.end_stops import (
     arrival_at_stop, clamp_start, pushes_into_stop, stop_reach, stop_window)
+from hydro_sdp.core.identification.experiment import Experiment, MIN_SAMPLES
 from hydro_sdp.core.identification.rest import estimate_rest_command
 from hydro_sdp.core.model.records import Record
+from hydro_sdp.core.model.sample_period import nominal_period
 import numpy as np
-
-__all__ = ['Dropped', 'Experiment', 'MIN_SAMPLES', 'Segmentation', 'check_record',
-           'estimate_rest_command', 'noise_level', 'segment_record', 'segment_records',
-           'split_long', 'thin']
-
-#: Samples an experiment needs beyond its start to be worth fitting.
-MIN_SAMPLES = 10
-
-
-@dataclass(frozen=True, eq=False)
-class Experiment:
-    """
-    One segment of a record, with command history before its start.
-
-    Parameters
-    ----------
-    v : FloatArray
-        Commands from the start of the history to the end.
-    y : FloatArray
-        Angles alongside ``v``, degrees.
-    start : int
-        Index of the initial state: fits predict ``y[start + 1:]`` from ``y[start]``.
-    kind : str
-        ``step`` (one held command) or ``run``.
-    level : float
-        The held command of a step; NaN for a run.
-    t0 : float
-        Record time of ``y[start]``, s.
-    source : str
-        Where the record came from.
-
-    """
-
-    v: FloatArray
-    y: FloatArray
-    start: int
-    kind: str
-    level: float
-    t0: float
-    source: str = ''
-
-    @property
-    def samples(self) -> int:
-        """Return the number of predicted samples."""
-        return int(self.y.size - self.start - 1)
 
 
 @dataclass(frozen=True)
@@ -173,6 +130,43 @@ def check_record(record: Record, *, min_samples: int = 50, max_gap: float = 3.0)
                         f'{record.since_start(record.t[k]):.3f} s from the start (sample period '
                         f'{period:.4f} s); cut the record there (split_at_gaps)')
     return period
+
+
+def check_records(records: Sequence[Record], task: str = 'identify') -> float:
+    """
+    Check records of one joint for a fit, and return their common nominal sample period.
+
+    Parameters
+    ----------
+    records : sequence of Record
+        Records of one joint.
+    task : str
+        What the records are for, in messages (``identify``, ``analyse``).
+
+    Returns
+    -------
+    float
+        The nominal period of all their spacings together, s, so that records of one
+        timer give one period whatever their length.
+
+    Raises
+    ------
+    DataError
+        Without records, with records of several joints, or with periods more than
+        1 % apart (each record is checked by :func:`check_record`).
+
+    """
+    if not records:
+        raise DataError(f'no records to {task} from')
+    joints = {record.joint for record in records}
+    if len(joints) > 1:
+        raise DataError(f"records of several joints ({', '.join(sorted(joints))}); "
+                        f'{task} one joint at a time')
+    periods = [check_record(record) for record in records]
+    if max(periods) > 1.01 * min(periods):
+        raise DataError(f'records have different sample periods ({min(periods):.4g} s to '
+                        f'{max(periods):.4g} s); resample them first')
+    return nominal_period(np.concatenate([np.diff(record.t) for record in records]))
 
 
 def noise_level(record: Record, rest: float, settle: int) -> float:
@@ -326,70 +320,6 @@ def _trim_at_stop(experiment: Experiment, stops: tuple[float | None, float | Non
     stop = experiment.start + arrival + 1
     return Experiment(experiment.v[:stop], experiment.y[:stop], experiment.start,
                       experiment.kind, experiment.level, experiment.t0, experiment.source)
-
-
-def split_long(experiments: Sequence[Experiment], max_samples: int,
-               history: int) -> list[Experiment]:
-    """
-    Cut experiments longer than ``max_samples`` into consecutive pieces.
-
-    Each piece restarts from its measured angle with ``history`` samples of
-    commands before it, so fits see many medium-length pieces instead of one
-    long run (an output-error fit would otherwise drift over an hour).
-
-    Parameters
-    ----------
-    experiments : sequence of Experiment
-        The experiments.
-    max_samples : int
-        Longest piece, predicted samples.
-    history : int
-        Command history kept before each piece, samples.
-
-    Returns
-    -------
-    list of Experiment
-        The pieces, in order.
-
-    """
-    pieces = []
-    for experiment in experiments:
-        if experiment.samples <= max_samples:
-            pieces.append(experiment)
-            continue
-        for start in range(experiment.start, experiment.y.size - 1, max_samples):
-            first = max(start - history, 0)
-            stop = min(start + max_samples + 1, experiment.y.size)
-            if stop - start - 1 < MIN_SAMPLES:
-                break
-            pieces.append(Experiment(experiment.v[first:stop], experiment.y[first:stop],
-                                     start - first, experiment.kind, experiment.level,
-                                     experiment.t0, experiment.source))
-    return pieces
-
-
-def thin(experiments: Sequence[Experiment], max_samples: int) -> list[Experiment]:
-    """
-    Keep evenly spread experiments up to about ``max_samples`` predicted samples.
-
-    Parameters
-    ----------
-    experiments : sequence of Experiment
-        The experiments.
-    max_samples : int
-        Sample budget.
-
-    Returns
-    -------
-    list of Experiment
-        All of them when within budget, else every k-th.
-
-    """
-    total = sum(e.samples for e in experiments)
-    if total <= max_samples:
-        return list(experiments)
-    stride = math.ceil(total / max_samples)
-    return list(experiments[::stride])
 
 
 def segment_records(records: Sequence[Record], *, max_delay: int,

@@ -21,7 +21,7 @@ from typing import Literal, Sequence
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.identification.effect_check import at_stop
 from hydro_sdp.core.identification.end_stops import STOP_REACH
-from hydro_sdp.core.identification.segmentation import Experiment
+from hydro_sdp.core.identification.experiment import Experiment
 from hydro_sdp.core.model.effects import StrokeGeometry
 from hydro_sdp.core.model.timing import delayed_at
 import numpy as np

@@ -5,9 +5,9 @@ import math
 
 from hydro_sdp.core.identification.change_windows import ChangeWindows, fit_delay_and_lag, lag_pole
 from hydro_sdp.core.identification.delay import estimate_delay
+from hydro_sdp.core.identification.experiment import Experiment, split_long
 from hydro_sdp.core.identification.identify import identify
-from hydro_sdp.core.identification.segmentation import (
-    Experiment, segment_records, Segmentation, split_long)
+from hydro_sdp.core.identification.segmentation import segment_records, Segmentation
 from hydro_sdp.core.model.effects import ValveLag
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.records import Record

@@ -7,10 +7,11 @@ from hydro_sdp.cli.main import main
 from hydro_sdp.core.errors import DataError
 from hydro_sdp.core.identification.delay import estimate_delay, level_speeds
 from hydro_sdp.core.identification.evaluation import evaluate
+from hydro_sdp.core.identification.experiment import Experiment
 from hydro_sdp.core.identification.identify import identify
 from hydro_sdp.core.identification.map_fit import fit_sdp, FitData, initial_pwl, pwl_layout
 from hydro_sdp.core.identification.riv import sriv
-from hydro_sdp.core.identification.segmentation import Experiment, segment_record
+from hydro_sdp.core.identification.segmentation import segment_record
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.records import Record
 from hydro_sdp.core.model.simulation import simulate

@@ -1,7 +1,6 @@
 """Sample budgets of ``identify``: thinning that keeps both directions."""
 
-from hydro_sdp.core.identification.identify import thin_evenly
-from hydro_sdp.core.identification.segmentation import Experiment
+from hydro_sdp.core.identification.experiment import Experiment, thin_evenly
 import numpy as np
 
 

@@ -6,11 +6,12 @@ import warnings
 from hydro_sdp.core.identification.delay import estimate_delay
 from hydro_sdp.core.identification.end_stops import clamp_start
 from hydro_sdp.core.identification.evaluation import evaluate
+from hydro_sdp.core.identification.experiment import split_long
 from hydro_sdp.core.identification.family_choice import folds
 from hydro_sdp.core.identification.identify import identify
 from hydro_sdp.core.identification.paper_baseline import paper_model
 from hydro_sdp.core.identification.rest import estimate_rest_command
-from hydro_sdp.core.identification.segmentation import segment_records, split_long
+from hydro_sdp.core.identification.segmentation import segment_records
 from hydro_sdp.core.model.records import Record
 from hydro_sdp.core.synthetic.physics.linkage import Geometry
 from hydro_sdp.core.synthetic.physics.plant import with_payload

@@ -19,7 +19,7 @@ from typing import Callable, Generic, get_args, Literal, Sequence, TypeVar
 
 from hydro_sdp.core.arrays import FloatArray, IntArray
 from hydro_sdp.core.errors import DataError
-from hydro_sdp.core.identification.segmentation import Experiment
+from hydro_sdp.core.identification.experiment import Experiment
 from hydro_sdp.core.model.static_maps import StaticMap
 from hydro_sdp.core.model.timing import delayed_at
 import numpy as np

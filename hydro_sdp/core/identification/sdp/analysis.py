@@ -29,6 +29,7 @@ from typing import Callable, Sequence
 from hydro_sdp.core.arrays import FloatArray, IntArray
 from hydro_sdp.core.errors import DataError, HydroSdpError
 from hydro_sdp.core.identification.delay import estimate_delay
+from hydro_sdp.core.identification.experiment import split_long, thin
 from hydro_sdp.core.identification.rest import estimate_rest_command
 from hydro_sdp.core.identification.sdp.backfit import Backfit, backfit, base_fit, Term
 from hydro_sdp.core.identification.sdp.ordering import MAX_GROUPS
@@ -36,8 +37,7 @@ from hydro_sdp.core.identification.sdp.random_walk import order_of, TvpKind
 from hydro_sdp.core.identification.sdp.results import (
     ordered, ParameterSummary, SdpAnalysis, StateDependence)
 from hydro_sdp.core.identification.sdp.states import check_states, Rows, rows_of, STATES
-from hydro_sdp.core.identification.segmentation import (
-    check_record, segment_records, split_long, thin)
+from hydro_sdp.core.identification.segmentation import check_records, segment_records
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.records import Record
 import numpy as np
@@ -46,21 +46,6 @@ import numpy as np
 MIN_SAMPLES = 20
 #: Model increments below this share of the largest count as "the model does not move".
 STILL = 1e-9
-
-
-def records_period(records: Sequence[Record]) -> float:
-    """Return the records' common sample period, s, refusing records that differ."""
-    if not records:
-        raise DataError('no records to analyse')
-    joints = {record.joint for record in records}
-    if len(joints) > 1:
-        raise DataError(f"records of several joints ({', '.join(sorted(joints))}); "
-                        'analyse one joint at a time')
-    periods = [check_record(record) for record in records]
-    if max(periods) > 1.01 * min(periods):
-        raise DataError(f'records have different sample periods ({min(periods):.4f} s to '
-                        f'{max(periods):.4f} s); resample them first')
-    return float(np.median(periods))
 
 
 def rest_of(records: Sequence[Record]) -> float:
@@ -273,7 +258,7 @@ def analyse(records: Sequence[Record], *, model: JointModel | None = None,
     # A canonical order, so that the bags' order on the command line changes nothing.
     records = sorted(records, key=lambda r: (r.source, float(r.t[0]) if len(r) else 0.0,
                                              len(r), float(np.sum(r.v)), float(np.sum(r.y))))
-    dt = records_period(records)
+    dt = check_records(records, 'analyse')
     if model is not None:
         tau = delay or model.delay_samples(dt)
         rest = model.rest_command if rest is None else rest

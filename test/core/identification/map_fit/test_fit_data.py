@@ -2,8 +2,8 @@
 
 import math
 
+from hydro_sdp.core.identification.experiment import Experiment
 from hydro_sdp.core.identification.map_fit import FitData
-from hydro_sdp.core.identification.segmentation import Experiment
 import numpy as np
 import pytest
 
