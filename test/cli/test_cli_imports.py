@@ -123,3 +123,34 @@ def test_blas_threads_are_left_alone_once_numpy_is_loaded(monkeypatch, capsys):
         main(['--version'])
     assert 'OPENBLAS_NUM_THREADS' not in os.environ   # too late to matter: not set
     assert capsys.readouterr().out.startswith('hydro-sdp ')
+
+
+# What identify's command path imports before it reads a bag (the cost of starting it).
+IDENTIFY_IMPORTS = ('import hydro_sdp.cli.identify, hydro_sdp.core.identification.identify, '
+                    'hydro_sdp.bags.reading')
+TIMED = """
+import sys, time
+started = time.perf_counter()
+exec(sys.argv[1])
+print(time.perf_counter() - started)
+print(' '.join(sorted(sys.modules)))
+"""
+
+
+def _import_time(statement):
+    done = subprocess.run([sys.executable, '-c', TIMED, statement], capture_output=True,
+                          text=True, env=dict(os.environ, PYTHONPATH=str(REPO)), check=True,
+                          timeout=120)
+    seconds, modules = done.stdout.strip().splitlines()
+    return float(seconds), set(modules.split())
+
+
+def test_identify_starts_without_scipy_signal_and_stats_and_stays_light():
+    # scipy.signal (and scipy.stats with it) took 1.2 s of a 2 s identify; the lag filters
+    # are a few lines of numpy now. The bound is a ratio to importing numpy, measured here
+    # (the best of three of each), so a busy machine slows both alike.
+    numpy = min(_import_time('import numpy')[0] for _ in range(3))
+    runs = [_import_time(IDENTIFY_IMPORTS) for _ in range(3)]
+    _, modules = runs[0]
+    assert not {'scipy.signal', 'scipy.stats', 'matplotlib', 'rosbags', 'rclpy'} & modules
+    assert min(seconds for seconds, _ in runs) < 10.0 * numpy

@@ -37,10 +37,10 @@ from typing import Sequence
 from hydro_sdp.core.arrays import FloatArray, IntArray
 from hydro_sdp.core.errors import DataError
 from hydro_sdp.core.identification.experiment import Experiment
+from hydro_sdp.core.model.first_order import first_order
 from hydro_sdp.core.model.timing import delayed_at
 import numpy as np
 from scipy.optimize import minimize_scalar
-from scipy.signal import lfilter
 
 #: Candidate lag time constants, in sample periods (0: pure delay).
 LAG_GRID = (0.0, 1.0, 1.5, 2.0, 3.0, 4.0, 5.0, 6.0, 8.0, 10.0, 12.0, 15.0, 20.0, 25.0, 30.0)
@@ -145,7 +145,7 @@ class ChangeWindows:
             (~after).astype(np.float64)
         step = np.where(after, 1.0 - decay, 0.0)
         drift = np.where(after, i / AFTER, 0.0)
-        ramp = lfilter([1.0 - p], [1.0, -p], drift, axis=1) if p > 0.0 else drift
+        ramp = first_order(drift, p, 1.0 - p) if p > 0.0 else drift
         free = np.broadcast_to(p ** (t + 1.0) if p > 0.0 else np.zeros(width), i.shape)
         basis = np.stack([decay, step, ramp, free], axis=2)
         rhs = np.einsum('wt,wtj->wj', self.dy, basis[place_of])
@@ -233,8 +233,7 @@ def _residual(dy: FloatArray, group: np.ndarray, mask: np.ndarray, time: FloatAr
     intercept = (sr - slope * st) / np.maximum(n, 1.0)
     predicted = np.where(mask, intercept[group] + slope[group] * time, 0.0)
     if pole > 0.0:
-        predicted, _ = lfilter([1.0 - pole], [1.0, -pole], predicted, axis=1,
-                               zi=pole * predicted[:, :1])
+        predicted = first_order(predicted, pole, 1.0 - pole, predicted[:, 0])
     return float(np.sum(((dy - predicted) * mask) ** 2))
 
 

@@ -29,10 +29,10 @@ from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import DataError
 from hydro_sdp.core.identification.change_windows import fit_delay_lag_and_pure, lag_pole
 from hydro_sdp.core.identification.experiment import Experiment
+from hydro_sdp.core.model.first_order import first_order
 from hydro_sdp.core.model.sample_period import whole_samples_seconds
 from hydro_sdp.core.model.timing import delayed_at
 import numpy as np
-from scipy.signal import lfilter
 
 
 @dataclass(frozen=True)
@@ -129,7 +129,7 @@ def _xcorr(experiments: Sequence[Experiment], max_delay: int, pole: float) -> in
         if pole > 0.0:
             # Through the lag a change of command changes the speed over the samples
             # after the dead time: correlate with that shape, not with a spike.
-            change = lfilter([1.0 - pole], [1.0, -pole], change)
+            change = first_order(change, pole, 1.0 - pole)
         for lag in range(1, max_delay + 1):
             score[lag] += float(np.dot(acceleration[lag:], change[:change.size - lag]))
     if not np.any(score):

@@ -23,9 +23,9 @@ from hydro_sdp.core.identification.effect_check import at_stop
 from hydro_sdp.core.identification.end_stops import STOP_REACH
 from hydro_sdp.core.identification.experiment import Experiment
 from hydro_sdp.core.model.effects import StrokeGeometry
+from hydro_sdp.core.model.first_order import first_order
 from hydro_sdp.core.model.timing import delayed_at
 import numpy as np
-from scipy.signal import lfilter
 
 #: Evenly spread knots over the angles moved through.
 KNOTS = 9
@@ -65,7 +65,7 @@ def model_speeds(experiments: Sequence[Experiment], rate_of: object, delay: int,
         k = np.arange(experiment.start + 1, experiment.y.size)
         w = np.asarray(rate_of(delayed_at(experiment.v, k, delay)))  # type: ignore[operator]
         if pole > 0.0 and w.size:
-            w, _ = lfilter([1.0 - pole], [1.0, -pole], w, zi=[pole * w[0]])
+            w = first_order(w, pole, 1.0 - pole, w[0])
         speeds.append(w)
         increments.append(experiment.y[k] - experiment.y[k - 1])
         previous.append(experiment.y[k - 1])

@@ -31,6 +31,7 @@ from hydro_sdp.core.model.effects import (
     AngleDependentVelocity, Backlash, DirectionDependentDelay, FlowSharing, LoadDependence,
     StrokeGeometry, ValveLag)
 from hydro_sdp.core.model.exogenous_signals import Exogenous, exogenous_factor
+from hydro_sdp.core.model.first_order import first_order
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.static_maps import StaticMap
 from hydro_sdp.core.model.timing import check_sample_period, delay_samples, delayed, DelayLine
@@ -162,9 +163,8 @@ def speed_profile(model: JointModel, v: FloatArray, dt: float, *,
         speed = delayed(rates, model.delay_samples(dt), rate_before)
     lag = model.effect(ValveLag.name)
     if isinstance(lag, ValveLag):
-        from scipy.signal import lfilter   # here: importing scipy.signal takes seconds
         p = math.exp(-dt / lag.time_constant)
-        speed, _ = lfilter([1.0 - p], [1.0, -p], speed, zi=[p * rate_before])
+        speed = first_order(speed, p, 1.0 - p, rate_before)
     factor = exogenous_factor(model, speed, exogenous)
     return speed if factor is None else speed * factor
 
@@ -334,7 +334,7 @@ class JointSimulator:
             speed = (max(self._rates.delayed(self._tau_pos), 0.0)
                      + min(self._rates.delayed(self._tau_neg), 0.0))
         if self._lag_p is not None:
-            # Same arithmetic as lfilter's transposed direct form, so results agree exactly.
+            # The lag's recursion, sample by sample (first_order runs it over arrays).
             self._lag_state = (1.0 - self._lag_p) * speed + self._lag_p * self._lag_state
             speed = self._lag_state
         if self._exogenous:

@@ -5,7 +5,7 @@ Every experiment predicts its angles from its initial state with
 ``pred_k = x_{k-1} + dt w_k``, ``Z_k = y_k - pred_k`` and
 ``x_k = pred_k + beta Z_k`` (docs/methods.md section 2), where ``w_k`` is
 ``rate(v_{k-tau})``, passed through the first-order valve lag when there is one. The recursion is a
-first-order filter, so each residual evaluation is a few numpy and ``lfilter``
+first-order filter, so each residual evaluation is a few numpy and ``first_order``
 calls over all experiments at once (experiments of similar length share one
 padded 2-D array), and the map is evaluated once per distinct command level.
 
@@ -20,11 +20,11 @@ from typing import Callable, Generic, get_args, Literal, Sequence, TypeVar
 from hydro_sdp.core.arrays import FloatArray, IntArray
 from hydro_sdp.core.errors import DataError
 from hydro_sdp.core.identification.experiment import Experiment
+from hydro_sdp.core.model.first_order import first_order
 from hydro_sdp.core.model.static_maps import StaticMap
 from hydro_sdp.core.model.timing import delayed_at
 import numpy as np
 import numpy.typing as npt
-from scipy.signal import lfilter
 
 RateFunction = Callable[[FloatArray], FloatArray]
 #: How a map is fitted to the raw angles: regret-regression or output error.
@@ -117,8 +117,7 @@ class FitData:
         out = [per_level[index] for index in self._padded]
         if self.pole != 0.0:
             p = self.pole
-            out = [np.where(mask, lfilter([1.0 - p], [1.0, -p], q, axis=1,
-                                          zi=p * q[:, :1])[0], 0.0)
+            out = [np.where(mask, first_order(q, p, 1.0 - p, q[:, 0]), 0.0)
                    for q, (_, _, _, mask, _) in zip(out, self.buckets)]
         if self.gains:
             out = [q * gain for q, gain in zip(out, self.gains)]
@@ -161,7 +160,7 @@ class FitData:
                 a = 1.0 - beta
                 drive = q * a
                 drive += weighted
-                state, _ = lfilter([1.0], [1.0, -a], drive, axis=1, zi=(a * initial)[:, None])
+                state = first_order(drive, a, 1.0, initial)
                 # Predicted from the state before: the start for the first sample.
                 np.add(initial[:, None], q[:, :1], out=target[:, :1])
                 np.add(state[:, :-1], q[:, 1:], out=target[:, 1:])

@@ -1,0 +1,66 @@
+"""
+The first-order recursion ``y_k = a y_{k-1} + b x_k`` along the last axis, in numpy.
+
+A valve lag, the regret-regression's correction and the lag's step response are
+all this one recursion, run over arrays of up to an hour of samples. Written
+here in a few lines of numpy instead of ``scipy.signal.lfilter``, whose import
+costs a command more time than the filtering itself.
+
+Within blocks short enough that ``a^-k`` stays finite, the recursion is
+``y_k = a^(k+1) (y_{-1} + b sum_{j<=k} a^-(j+1) x_j)``, a cumulative sum; its
+rounding error stays below ``eps max|x| |b| / (1 - a)``.
+
+"""
+
+from __future__ import annotations
+
+import math
+
+from hydro_sdp.core.arrays import FloatArray
+import numpy as np
+
+#: Largest exponent ``k |ln a|`` within a block: ``a^-k`` stays below e^600.
+_EXPONENT = 600.0
+
+
+def first_order(x: FloatArray, a: float, b: float = 1.0,
+                before: float | FloatArray = 0.0) -> FloatArray:
+    """
+    Run ``y_k = a y_{k-1} + b x_k`` along the last axis of ``x``.
+
+    Parameters
+    ----------
+    x : FloatArray
+        Input, one series per row of the last axis.
+    a : float
+        The pole, ``-1 <= a <= 1`` (a valve lag: ``exp(-dt / T)``).
+    b : float
+        The input gain (a lag of unit steady gain: ``1 - a``).
+    before : float or FloatArray
+        ``y_{-1}``, the output before the first sample (one per series, or one for all).
+
+    Returns
+    -------
+    FloatArray
+        ``y``, the shape of ``x``.
+
+    """
+    if not -1.0 <= a <= 1.0:
+        raise ValueError(f'the pole of a first-order recursion must lie in [-1, 1], got {a}')
+    x = np.asarray(x, dtype=np.float64)
+    state = np.array(np.broadcast_to(before, x.shape[:-1]), dtype=np.float64)
+    if a == 0.0:
+        return b * x
+    size = x.shape[-1]
+    block = size if abs(a) == 1.0 else max(1, int(_EXPONENT / -math.log(abs(a))))
+    out = np.empty_like(x)
+    for first in range(0, size, block):
+        part = x[..., first:first + block]
+        powers = a ** np.arange(1, part.shape[-1] + 1)
+        sums = np.cumsum(part / powers, axis=-1)
+        sums *= b
+        sums += state[..., None]
+        sums *= powers
+        out[..., first:first + block] = sums
+        state = sums[..., -1]
+    return out
