@@ -21,6 +21,31 @@ import numpy as np
 
 #: Largest exponent ``k |ln a|`` within a block: ``a^-k`` stays below e^600.
 _EXPONENT = 600.0
+#: Ranks ``1, 2, ...`` the powers of a pole are taken at, grown as longer series come.
+_ranks = np.arange(1.0, 4097.0)
+
+
+def _powers(a: float, count: int) -> FloatArray:
+    """Return ``a^1 .. a^count``."""
+    global _ranks
+    if count > _ranks.size:
+        _ranks = np.arange(1.0, 2.0 * count + 1.0)
+    return np.power(a, _ranks[:count])
+
+
+def _block(x: FloatArray, a: float, b: float, before: float | FloatArray) -> FloatArray:
+    """The recursion over one block, from ``y_{-1} = before``."""
+    powers = _powers(a, x.shape[-1])
+    out = np.divide(x, powers)
+    np.cumsum(out, axis=-1, out=out)
+    if b != 1.0:
+        out *= b
+    if np.ndim(before):
+        out += np.asarray(before)[..., None]
+    elif before:
+        out += before
+    out *= powers
+    return out
 
 
 def first_order(x: FloatArray, a: float, b: float = 1.0,
@@ -48,19 +73,16 @@ def first_order(x: FloatArray, a: float, b: float = 1.0,
     if not -1.0 <= a <= 1.0:
         raise ValueError(f'the pole of a first-order recursion must lie in [-1, 1], got {a}')
     x = np.asarray(x, dtype=np.float64)
-    state = np.array(np.broadcast_to(before, x.shape[:-1]), dtype=np.float64)
     if a == 0.0:
         return b * x
     size = x.shape[-1]
     block = size if abs(a) == 1.0 else max(1, int(_EXPONENT / -math.log(abs(a))))
+    if size <= block:
+        return _block(x, a, b, before)
     out = np.empty_like(x)
+    state: float | FloatArray = before
     for first in range(0, size, block):
-        part = x[..., first:first + block]
-        powers = a ** np.arange(1, part.shape[-1] + 1)
-        sums = np.cumsum(part / powers, axis=-1)
-        sums *= b
-        sums += state[..., None]
-        sums *= powers
-        out[..., first:first + block] = sums
-        state = sums[..., -1]
+        part = _block(x[..., first:first + block], a, b, state)
+        out[..., first:first + block] = part
+        state = part[..., -1]
     return out
