@@ -34,7 +34,7 @@ def _powers(a: float, count: int) -> FloatArray:
 
 
 def _block(x: FloatArray, a: float, b: float, before: float | FloatArray) -> FloatArray:
-    """The recursion over one block, from ``y_{-1} = before``."""
+    """Run the recursion over one block, from ``y_{-1} = before``."""
     powers = _powers(a, x.shape[-1])
     out = np.divide(x, powers)
     np.cumsum(out, axis=-1, out=out)
