@@ -300,7 +300,47 @@ def fit_stroke_geometry(experiments: Sequence[Experiment], rate_of: object, dela
     angles = previous[moving]
     knots = stroke_knots(angles)
     shared, part, _ = fit_factor(angles, dt * w[moving], dy[moving], knots)
-    return geometry_of(knots, shared, part)
+    return geometry_of(knots, *unit_mean_per_direction(knots, shared, part, angles,
+                                                       np.sign(w[moving])))
+
+
+def unit_mean_per_direction(knots: FloatArray, shared: FloatArray, part: FloatArray,
+                            angles: FloatArray, signs: FloatArray
+                            ) -> tuple[FloatArray, FloatArray]:
+    """
+    Scale the factor of each direction to a mean of 1 over the angles it was seen at.
+
+    The map has a speed scale per direction (its two saturation speeds), so a factor's
+    mean in each direction is the map's to carry: left in the factor, a map a little off
+    in scale would be fixed by a flat "geometry" that the joint does not have. What
+    stays is the factor's shape along the stroke.
+
+    Parameters
+    ----------
+    knots : FloatArray
+        Knots, degrees.
+    shared, part : FloatArray
+        Shared and per-direction parts at the knots (``f = s + sign(w) p``).
+    angles : FloatArray
+        Angle of each sample the factor was fitted on, degrees.
+    signs : FloatArray
+        Direction of motion of each of those samples (+1, -1).
+
+    Returns
+    -------
+    tuple[FloatArray, FloatArray]
+        The shared and per-direction parts, rescaled.
+
+    """
+    basis = hats(angles, knots)
+    sides = []
+    for sign in (1.0, -1.0):
+        seen = signs == sign
+        at_knots = shared + sign * part
+        mean = float(np.mean(basis[seen] @ at_knots)) if np.any(seen) else 1.0
+        sides.append(at_knots / mean if mean > 0.0 else at_knots)
+    up, down = sides
+    return 0.5 * (up + down), 0.5 * (up - down)
 
 
 def speed_gains(experiments: Sequence[Experiment], rate_of: object, delay: int, dt: float,
