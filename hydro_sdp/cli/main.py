@@ -20,7 +20,9 @@ import argparse
 import importlib
 import json
 import os
+import signal
 import sys
+import threading
 import traceback
 from typing import Any
 
@@ -103,6 +105,35 @@ def _fail(message: str, code: int) -> int:
     return code
 
 
+class _Interrupts:
+    """
+    Note every Ctrl-C (SIGINT) while a command runs, and raise KeyboardInterrupt as usual.
+
+    A Ctrl-C that lands inside an extension (rclpy's nodes in the demo) can come out of
+    it as another exception: noted, it still ends the command as interrupted (130).
+    Only Python's own handler is wrapped, in the main thread: a shell's ignored SIGINT
+    stays ignored.
+    """
+
+    def __init__(self) -> None:
+        self.seen = False
+        self._previous: Any = None
+
+    def __enter__(self) -> _Interrupts:
+        if threading.current_thread() is threading.main_thread() and \
+                signal.getsignal(signal.SIGINT) is signal.default_int_handler:
+            self._previous = signal.signal(signal.SIGINT, self._note)
+        return self
+
+    def _note(self, signum: int, frame: object) -> None:
+        self.seen = True
+        raise KeyboardInterrupt
+
+    def __exit__(self, *exc: object) -> None:
+        if self._previous is not None:
+            signal.signal(signal.SIGINT, self._previous)
+
+
 def main(argv: list[str] | None = None) -> int:
     """
     Run one ``hydro-sdp`` command.
@@ -118,6 +149,11 @@ def main(argv: list[str] | None = None) -> int:
         Exit code.
 
     """
+    with _Interrupts() as interrupts:
+        return _main(argv, interrupts)
+
+
+def _main(argv: list[str] | None, interrupts: _Interrupts) -> int:
     # Only before numpy loads OpenBLAS (a fresh process: the console script), where it
     # is read; a value the user set is kept.
     if 'numpy' not in sys.modules:
@@ -138,6 +174,8 @@ def main(argv: list[str] | None = None) -> int:
     except (HydroSdpError, OSError) as error:
         return _fail(str(error).replace('\n', ' '), 2)
     except Exception as error:  # noqa: B902 - the last line of defence: no traceback
+        if interrupts.seen:
+            return _fail('interrupted; nothing partial was written', 130)
         if os.environ.get('HYDRO_SDP_DEBUG'):
             traceback.print_exc()
         return _fail(f'internal failure ({type(error).__name__}: {error}); '

@@ -109,3 +109,21 @@ def test_sigint_during_demo(tmp_path, delay):
     code, stderr = _interrupt(['demo', '--short', '--out', 'report'], delay, tmp_path)
     _check_interrupted(code, stderr)
     assert _leftovers(tmp_path) == []
+
+
+def test_a_ctrl_c_that_an_extension_turns_into_another_error_still_exits_130(monkeypatch, capsys):
+    # rclpy's pybind11 code can turn the KeyboardInterrupt of a Ctrl-C into a RuntimeError
+    # (the demo's nodes); the command still ends as interrupted, not as an internal failure.
+    from hydro_sdp.cli import reindex
+    from hydro_sdp.cli.main import main
+
+    def run(args):
+        try:
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(1.0)
+        except KeyboardInterrupt:
+            raise RuntimeError('Unable to convert call argument to Python object') from None
+    monkeypatch.setattr(reindex, 'run', run)
+    assert main(['reindex', 'anything']) == 130
+    assert capsys.readouterr().err.strip() == 'error: interrupted; nothing partial was written'
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
