@@ -7,7 +7,7 @@ from scipy.signal import lfilter
 
 
 @pytest.mark.parametrize('pole', [0.0, 1e-5, 0.3, 0.9, 0.999, 0.99999, 1.0, -0.5])
-@pytest.mark.parametrize('shape', [(1000,), (7, 5000), (2, 120_000)])
+@pytest.mark.parametrize('shape', [(1000,), (7, 3000), (2, 40_000)])
 def test_first_order_equals_lfilter(rng, pole, shape):
     x = 10.0 * rng.normal(size=shape)
     before = rng.normal(size=shape[:-1]) if len(shape) > 1 else 2.5
