@@ -209,12 +209,13 @@ def run_trajectory(args: argparse.Namespace) -> Outcome:
     in_motion = result.path_in_motion()
     if in_motion is not None:
         worst, spread = in_motion
-        payload['path_error_mm'] = {'max': worst, 'rms': spread}
+        path: dict[str, float] = {'max': worst, 'rms': spread}
+        payload['path_error_mm'] = path
         lines.append(f'tip distance from the line in motion: max {worst:.1f} mm, '
                      f'RMS {spread:.1f} mm')
         after = result.path_after_motion()
         if after is not None:
-            payload['path_error_mm']['after_motion'] = after
+            path['after_motion'] = after
             lines.append(f'after the motion ended (t > {result.motion[1]:.2f} s), while the '
                          f'joints settle at the end point: max {after:.1f} mm')
     if args.plot:

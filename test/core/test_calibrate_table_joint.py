@@ -18,8 +18,8 @@ and ends its hold without a limit cycle.
 
 from hydro_sdp.core.calibration import calibrate, CalibrationSettings
 from hydro_sdp.io.controller_files import load_controller, save_controller
-from hydro_sdp.io.logs.csv_logs import read_csv_log
 from hydro_sdp.io.documents import load_yaml
+from hydro_sdp.io.logs.csv_logs import read_csv_log
 import pytest
 from support.real_valve_joints import cases, cycles, SETTLE, settles, truth_loop
 

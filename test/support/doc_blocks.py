@@ -11,7 +11,8 @@ otherwise:
 * ``<!-- same as: PATH -->``: the block shows a file of the repository; its YAML must
   equal that file's.
 * ``<!-- expect: REGEX | REGEX ... -->``: the block is run, and each regular
-  expression must match a line of its output (the figures the text quotes).
+  expression (separated by `` | ``, a bar between spaces) must match a line of its
+  output (the figures the text quotes).
 """
 
 from __future__ import annotations
@@ -69,7 +70,7 @@ class Block:
         """Return the regular expressions its output must match."""
         if self.note != 'expect':
             return []
-        return [part.strip() for part in self.argument.split('|') if part.strip()]
+        return [part.strip() for part in self.argument.split(' | ') if part.strip()]
 
 
 def blocks(path: Path) -> list[Block]:
@@ -113,9 +114,9 @@ def commands(text: str) -> list[list[str]]:
         if line.lstrip().startswith('#') and not pending:
             continue
         if line.endswith('\\'):
-            pending += line[:-1] + ' '
+            pending += line[:-1].strip() + ' '
             continue
-        scenes[-1].append(_without_comment(pending + line).strip())
+        scenes[-1].append(_without_comment(pending + line.strip()).strip())
         pending = ''
     return [scene for scene in scenes if scene]
 

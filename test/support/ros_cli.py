@@ -174,11 +174,19 @@ class Scene:
         request.transition.id = ids[transition]
         assert self._call(ChangeState, f'{node}/change_state', request).success
 
+    def nodes_up(self) -> int:
+        """Return how many nodes other than the client the graph shows."""
+        return len([name for name, _ in self.node.get_node_names_and_namespaces()
+                    if name != self.node.get_name()])
+
     def close(self) -> None:
         """Check every node still runs, end each with Ctrl-C, and check it ended cleanly."""
         import rclpy
 
         try:
+            # A user presses Ctrl-C once the nodes run: every process has its node up.
+            assert self.spin_until(lambda: self.nodes_up() >= len(self.processes)), \
+                f'{self.nodes_up()} of {len(self.processes)} nodes came up; {self.died()}'
             self.spin_for(1.0)
             assert not self.died(), self.died()
             for _, process in self.processes:
