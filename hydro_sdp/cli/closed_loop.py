@@ -149,6 +149,8 @@ def run(args: argparse.Namespace) -> Outcome:
     lines += table(rows, ['step at (s)', 'size (deg)', 'settling (s)', 'overshoot (%)',
                           'steady error (deg)'])
     lines.append(f'wrote {bag}')
+    if args.plot:
+        lines.append(f'wrote {payload["plot"]}')
     if np.isnan(trace.y).any():  # pragma: no cover - the simulation never produces NaN
         raise ConfigurationError('the closed loop produced NaN angles')
     return Outcome(payload, lines)

@@ -166,4 +166,6 @@ def run(args: argparse.Namespace) -> Outcome:
     lines += table(rows, ['', 'value'])
     if args.out:
         lines.append(f'wrote {payload["controller"]}')
+    if args.plot:
+        lines.append(f'wrote {payload["plot"]}')
     return Outcome(payload, lines)

@@ -90,6 +90,7 @@ def run(args: argparse.Namespace) -> Outcome:
                    ['run', 'model', 'SDP-DZ', 'linear'])
     lines.append('mean over runs: each run counts once (Table 2); time-weighted: each sample '
                  'counts once')
+    lines += [f'wrote {path}' for path in payload.get('plots', [])]
     return Outcome(payload, lines)
 
 

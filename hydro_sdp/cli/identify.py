@@ -19,9 +19,11 @@ import numpy as np
 if TYPE_CHECKING:
     from hydro_sdp.core.identification.identify import Identification
 
-HELP = 'identify a joint model from step or random-level bags'
+HELP = 'identify a joint model from experiments or routine operation'
 DESCRIPTION = """\
-Identify a hydraulic joint from recorded bags, as West et al. (2018) section 4:
+Identify a hydraulic joint from recorded bags. From experiments with held
+command levels (steps, random levels, full strokes), as West et al. (2018)
+section 4:
 
   1. cut the records into step experiments (command leaves rest, holds, returns)
      and runs, dropping what an end stop clamps; rest is the valve's neutral:
@@ -40,13 +42,25 @@ Identify a hydraulic joint from recorded bags, as West et al. (2018) section 4:
   6. when the runs span the stroke, fit how the speed changes along it
      (effect stroke_geometry) and keep it if it lowers the simulation error.
 
+Routine operation (a closed loop, an operator's joystick: the command changes
+every control period and held levels carry under half of the driving) is
+identified from the one-step angle increments against the delayed command:
+the delay that explains them best, the speed along the command by the SDP
+smoother, each map family fitted to the increments and chosen on held-out
+pieces; data that never moved the joint one way are refused, naming the
+commands never seen.
+
 Commands may be in any unit (volts, percent duty): nothing assumes +-10 V.
-The model file remembers the command topic read (key command_topic):
-evaluate and diagnose read bags from it when --command-topic is not given.
+Without --input-limits the model's valve range is the range of commands the
+records used; end stops given with --angle-limits are written as given, else
+those the joint was seen held at. The model file remembers the command topic
+read (key command_topic): evaluate and diagnose read bags from it when
+--command-topic is not given.
 
 examples:
   hydro-sdp identify steps_bag --out j2_model.yaml --plot-dir figures
   hydro-sdp identify run1 run2 --joint boom --command-topic /boom/cmd --kind pwl
+  hydro-sdp identify loop_bag --out j2_from_work.yaml     # a recorded closed loop
 """
 
 
@@ -67,13 +81,15 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument('--angle-limits', nargs=2, type=finite_float, metavar=('LOW', 'HIGH'),
                         help='known end stops, deg (default: those seen in the data)')
     parser.add_argument('--input-limits', nargs=2, type=finite_float, metavar=('LOW', 'HIGH'),
-                        help='command range of the valve, written to the model')
+                        help='command range of the valve, written to the model (default: '
+                             'the range of commands the records used)')
     parser.add_argument('--rest', type=finite_float, metavar='COMMAND',
                         help="the valve's neutral command (default: 0 when the commands take "
                              'both signs, else the middle of --input-limits or a command at '
                              'which the joint stands still)')
     parser.add_argument('--out', help='model file to write (YAML)')
-    parser.add_argument('--plot-dir', help='folder for Figs. 1-3 (step responses, gains, speeds)')
+    parser.add_argument('--plot-dir', help='folder for Figs. 1-3 (step responses, gains, speeds; '
+                                           'routine operation: gains and speeds)')
     parser.set_defaults(run=run)
 
 
@@ -92,8 +108,12 @@ def describe(result: Identification) -> dict:
             'runs': segmentation.runs,
             'dropped': [{'t': d.t0, 'reason': d.reason, 'source': d.source}
                         for d in segmentation.dropped]},
+        'route': result.route,
         'rest': segmentation.rest,
         'end_stops': list(segmentation.end_stops),
+        'end_stops_from': _source(result, 'angle'),
+        'input_limits_from': _source(result, 'input'),
+        'commands_seen': list(result.commands.seen) if result.commands else None,
         'delay_estimates': {'samples': result.delay.samples, 'seconds': result.delay.seconds,
                             'lag': result.delay.lag,
                             'fit': result.delay.fit, 'onset': result.delay.onset,
@@ -128,38 +148,8 @@ def run(args: argparse.Namespace) -> Outcome:
     if args.out:
         payload['model'] = str(save_model(model, args.out))
     if args.plot_dir:
-        from hydro_sdp.plots import (
-            plot_gains, plot_step_responses, plot_velocity_map, save_figure)
-
-        folder = Path(args.plot_dir)
-        segmentation = result.segmentation
-        moving = [p for p in result.points if p.level != segmentation.rest]
-        payload['plots'] = [
-            str(save_figure(plot_step_responses(segmentation.experiments, result.delay.samples,
-                                                result.sample_period),
-                            folder / 'step_responses.png')),
-            str(save_figure(plot_gains(result.points, model, result.sample_period,
-                                       rest=segmentation.rest, measured=_measured_gain(
-                                           records, result)), folder / 'gains.png')),
-            str(save_figure(plot_velocity_map(
-                model, v_range=_command_range(result),
-                points=(np.array([p.level for p in moving]), np.array([p.speed for p in moving])),
-                title=f'Velocity map of joint {model.joint} (West et al. 2018, Fig. 3)'),
-                folder / 'velocity_map.png')),
-        ]
-    segmentation = result.segmentation
-    lines = pieces_note(args.bags, records)
-    lines.append(f'joint {model.joint}: {len(segmentation.experiments)} experiments '
-                 f'({segmentation.steps} steps, {segmentation.runs} runs), '
-                 f'{len(segmentation.dropped)} segments dropped, sample period '
-                 f'{result.sample_period:g} s, noise {segmentation.noise_std:.3g} deg')
-    for dropped in segmentation.dropped[:5]:
-        lines.append(f'  dropped {dropped.since_start:.2f} s from the start: {dropped.reason}')
-    delay = result.delay
-    lines.append(f'rest command {segmentation.rest:g}; end stops seen '
-                 f'{_stops(segmentation.end_stops)}')
-    lines.append(f'delay: {delay.samples} samples = {delay.seconds:g} s, valve lag '
-                 f'{delay.lag:g} s (fit; onset {delay.onset}, cross-correlation {delay.xcorr})')
+        payload['plots'] = _plots(result, records, Path(args.plot_dir))
+    lines = pieces_note(args.bags, records) + _summary(result)
     rows = [[key, _format(value), _format(result.fit.standard_errors.get(name, math.nan))]
             for key, value, name in _parameter_rows(model)]
     lines += table(rows, ['parameter', 'value', 'std. error'])
@@ -167,14 +157,77 @@ def run(args: argparse.Namespace) -> Outcome:
         lines.append('held-out simulation MAE by map family:')
         lines += table([[s.kind, _format(s.mae), s.note[:60]] for s in result.comparison],
                        ['kind', 'MAE (deg)', 'note'])
-    lines.append(f'chosen: {model.kind} ({result.fit.method}, beta {result.fit.beta:.3f}); '
-                 f'simulation MAE on the experiments {result.mae:.4f} deg')
+    if result.route == 'routine':
+        lines.append(f'chosen: {model.kind} (least squares on the one-step increments); '
+                     f'simulation MAE on 1 s pieces of the runs {result.mae:.4f} deg')
+    else:
+        lines.append(f'chosen: {model.kind} ({result.fit.method}, beta {result.fit.beta:.3f}); '
+                     f'simulation MAE on the experiments {result.mae:.4f} deg')
     lines += [f'held-out check of {check.describe()}' for check in result.effect_checks]
     if model.effect('stroke_geometry') is not None:
         lines.append('speed along the stroke: effect stroke_geometry (see the model file)')
+    lines += [f'wrote {path}' for path in payload.get('plots', [])]
     if args.out:
         lines.append(f'wrote {payload["model"]}')
     return Outcome(payload, lines)
+
+
+def _summary(result: Identification) -> list[str]:
+    """Return the lines on what was read: experiments or runs, rest, stops, range, delay."""
+    segmentation, model, delay = result.segmentation, result.model, result.delay
+    common = (f'{len(segmentation.dropped)} segments dropped, sample period '
+              f'{result.sample_period:g} s, noise {segmentation.noise_std:.3g} deg')
+    if result.route == 'routine':
+        lines = [f'joint {model.joint}: routine operation (few held levels), '
+                 f'{len(segmentation.experiments)} runs, {common}']
+    else:
+        lines = [f'joint {model.joint}: {len(segmentation.experiments)} experiments '
+                 f'({segmentation.steps} steps, {segmentation.runs} runs), {common}']
+    for dropped in segmentation.dropped[:5]:
+        lines.append(f'  dropped {dropped.since_start:.2f} s from the start: {dropped.reason}')
+    lines.append(f'rest command {segmentation.rest:g}; end stops {_stops(result)}')
+    if result.commands is not None:
+        low, high = result.commands.seen
+        lines.append(f'commands seen {low:.4g} .. {high:.4g}; valve range '
+                     f'{_pair(model.input_limits)} '
+                     + ('(given)' if result.commands.input_limits_from == 'given' else
+                        '(the commands seen; --input-limits gives the whole range)'))
+    if result.route == 'routine':
+        lines.append(f'delay: {delay.samples} samples = {delay.seconds:g} s (the increments '
+                     f'against the delayed command; linear cross-correlation {delay.xcorr}); '
+                     'no valve lag from routine operation')
+    else:
+        lines.append(f'delay: {delay.samples} samples = {delay.seconds:g} s, valve lag '
+                     f'{delay.lag:g} s (fit; onset {delay.onset}, cross-correlation '
+                     f'{delay.xcorr})')
+    return lines
+
+
+def _plots(result: Identification, records: list, folder: Path) -> list[str]:
+    """Draw Figs. 1-3 (routine operation: 2 and 3) into ``folder``; return the files."""
+    from hydro_sdp.plots import (
+        plot_gains, plot_step_responses, plot_velocity_map, save_figure)
+
+    model, segmentation = result.model, result.segmentation
+    moving = [p for p in result.points if p.level != segmentation.rest]
+    written = []
+    routine = result.route == 'routine'
+    # Routine operation's points are the SDP smoother's curve itself.
+    label = 'SDP smoother along the delayed command' if routine else None
+    if not routine:
+        written.append(save_figure(plot_step_responses(
+            segmentation.experiments, result.delay.samples, result.sample_period),
+            folder / 'step_responses.png'))
+    written.append(save_figure(plot_gains(
+        result.points, model, result.sample_period, rest=segmentation.rest,
+        measured=() if routine else _measured_gain(records, result),
+        points_label=label or 'per experiment (RIV)'), folder / 'gains.png'))
+    written.append(save_figure(plot_velocity_map(
+        model, v_range=_command_range(result),
+        points=(np.array([p.level for p in moving]), np.array([p.speed for p in moving])),
+        title=f'Velocity map of joint {model.joint} (West et al. 2018, Fig. 3)',
+        points_label=label or 'experiments'), folder / 'velocity_map.png'))
+    return [str(path) for path in written]
 
 
 def _measured_gain(records: list, result: Identification) -> tuple:
@@ -193,8 +246,25 @@ def _measured_gain(records: list, result: Identification) -> tuple:
     return tuple(analysis.dependence('command', parameter='b'))
 
 
-def _stops(stops: tuple[float | None, float | None]) -> str:
-    return ', '.join('-' if stop is None else f'{stop:.2f} deg' for stop in stops)
+def _source(result: Identification, which: str) -> str | None:
+    if result.commands is None:
+        return None
+    return result.commands.angle_limits_from if which == 'angle' else \
+        result.commands.input_limits_from
+
+
+def _stops(result: Identification) -> str:
+    stops = result.segmentation.end_stops
+    shown = ', '.join('-' if stop is None else f'{stop:.2f} deg' for stop in stops)
+    if _source(result, 'angle') == 'given':
+        return f'given {shown} (--angle-limits)'
+    if all(stop is None for stop in stops):
+        return 'none seen (the joint was never held against a stop)'
+    return f'seen {shown}'
+
+
+def _pair(limits: tuple[float, float] | None) -> str:
+    return '-' if limits is None else f'[{limits[0]:.4g}, {limits[1]:.4g}]'
 
 
 def _command_range(result: Identification) -> tuple[float, float]:

@@ -72,6 +72,13 @@ class TrajectoryRun:
         path = self.path_error_mm[(t >= self.motion[0]) & (t <= self.motion[1])]
         return float(np.max(path)), float(np.sqrt(np.mean(path ** 2)))
 
+    def path_after_motion(self) -> float | None:
+        """Return the largest distance from the line after the motion ended, mm (None: none)."""
+        if self.path_error_mm is None:
+            return None
+        after = self.path_error_mm[self.traces[0].t > self.motion[1]]
+        return float(np.max(after)) if after.size else None
+
     def error_table(self) -> list[str]:
         """Return the per-joint table of the RMS error in motion and the final error."""
         rows = [[trace.joint, f'{self.rms_error[trace.joint]:.3f}',
@@ -202,20 +209,28 @@ def run_trajectory(args: argparse.Namespace) -> Outcome:
     in_motion = result.path_in_motion()
     if in_motion is not None:
         worst, spread = in_motion
-        payload['path_error_mm'] = {'max': worst, 'rms': spread}
+        path: dict[str, float] = {'max': worst, 'rms': spread}
+        payload['path_error_mm'] = path
         lines.append(f'tip distance from the line in motion: max {worst:.1f} mm, '
                      f'RMS {spread:.1f} mm')
+        after = result.path_after_motion()
+        if after is not None:
+            path['after_motion'] = after
+            lines.append(f'after the motion ended (t > {result.motion[1]:.2f} s), while the '
+                         f'joints settle at the end point: max {after:.1f} mm')
     if args.plot:
         from hydro_sdp.plots import plot_closed_loop, save_figure
-        from hydro_sdp.plots.trajectory import plot_tip_path
+        from hydro_sdp.plots.bucket_line import plot_bucket_line
 
         if result.tip is not None and result.path_error_mm is not None and \
                 plan.line is not None:
-            figure = plot_tip_path(traces[0].t, *result.tip, plan.line, result.path_error_mm,
-                                   motion=result.motion,
-                                   title='PIP-IDZ control: bucket tip on a straight line')
+            figure = plot_bucket_line(*result.tip, plan.line, result.path_error_mm, traces,
+                                      result.motion,
+                                      title='PIP-IDZ control: bucket tip on a straight line')
         else:
             figure = plot_closed_loop(traces, title='PIP-IDZ control along a trajectory')
         payload['plot'] = str(save_figure(figure, args.plot))
     lines.append(f'wrote {bag}')
+    if args.plot:
+        lines.append(f'wrote {payload["plot"]}')
     return Outcome(payload, lines)

@@ -6,7 +6,7 @@ import os
 from pathlib import Path
 
 from hydro_sdp.core.control.controller_spec import ControllerSpec, design_from_model
-from hydro_sdp.core.control.safety import check_controller_fits
+from hydro_sdp.core.control.safety import controller_within_model
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.io.atomic import atomic_write_text
 from hydro_sdp.io.documents import load_document, yaml_text
@@ -40,8 +40,9 @@ def controller_for(model: JointModel, path: str | os.PathLike[str] | None,
     model : JointModel
         The joint's model.
     path : str, PathLike or None
-        Controller file (checked to be for this joint and valve range), or None to
-        design the PIP-IDZ controller from the model.
+        Controller file (checked to be for this joint and to command the valve within
+        the model's range, and given that range when it has none), or None to design
+        the PIP-IDZ controller from the model.
     control_period : float
         Control period of a designed controller, s.
 
@@ -52,9 +53,7 @@ def controller_for(model: JointModel, path: str | os.PathLike[str] | None,
 
     """
     if path:
-        spec = load_controller(path)
-        check_controller_fits(spec, model)
-        return spec
+        return controller_within_model(load_controller(path), model)
     return design_from_model(model, control_period=control_period)
 
 

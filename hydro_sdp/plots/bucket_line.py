@@ -22,6 +22,19 @@ def _shade(ax: Axes, motion: tuple[float, float]) -> None:
     ax.axvspan(motion[0], motion[1], color=LIMIT, alpha=0.10, linewidth=0, label='motion')
 
 
+def _mark_after_motion(ax: Axes, t: FloatArray, path_error_mm: FloatArray,
+                       motion: tuple[float, float]) -> None:
+    """Point at the largest distance after the motion ended, saying the motion had ended."""
+    after = np.flatnonzero(t > motion[1])
+    if after.size == 0:
+        return
+    peak = int(after[np.argmax(path_error_mm[after])])
+    ax.annotate(f'{path_error_mm[peak]:.1f} mm after the motion ended\n(the joints settle at '
+                'the end point)', xy=(float(t[peak]), float(path_error_mm[peak])),
+                xytext=(0.97, 0.93), textcoords='axes fraction', ha='right', va='top',
+                fontsize=8, arrowprops={'arrowstyle': '->', 'color': LIMIT, 'linewidth': 0.8})
+
+
 def plot_bucket_line(x: FloatArray, z: FloatArray,
                      line: tuple[tuple[float, float], tuple[float, float]],
                      path_error_mm: FloatArray, traces: Sequence[LoopTrace],
@@ -71,12 +84,13 @@ def plot_bucket_line(x: FloatArray, z: FloatArray,
     # Unit normal of the line: the tip is drawn with its signed offset along it magnified.
     nx, nz = -(z1 - z0) / length, (x1 - x0) / length
     offset = (x - x0) * nx + (z - z0) * nz
-    path_ax.plot([x0, x1], [z0, z1], color=MODEL, linestyle='--', linewidth=2.0,
-                 label='demanded line')
     # Only the motion: after it the joints settle and the magnified offset says nothing new.
     shown = (magnify - 1.0) * offset[moving]
     path_ax.plot(x[moving] + shown * nx, z[moving] + shown * nz, color=MEASURED, linewidth=1.4,
-                 label=f'bucket tip in motion (deviation x{magnify:g})')
+                 label=f'bucket tip in motion (deviation x{magnify:g})', zorder=2)
+    # The demanded line on top, dashed, so that the tip shows through where they meet.
+    path_ax.plot([x0, x1], [z0, z1], color=MODEL, linestyle=(0, (5, 4)), linewidth=2.0,
+                 label='demanded line', zorder=3)
     path_ax.plot([x0], [z0], marker='o', color=MODEL, markersize=6, linestyle='none',
                  label='start')
     path_ax.plot([x1], [z1], marker='s', color=MODEL, markersize=6, linestyle='none',
@@ -92,9 +106,10 @@ def plot_bucket_line(x: FloatArray, z: FloatArray,
         rms = float(np.sqrt(np.mean(path_error_mm[moving] ** 2)))
         error_ax.text(0.02, 0.72, f'in motion: max {worst:.2f} mm, RMS {rms:.2f} mm',
                       transform=error_ax.transAxes, ha='left', va='top', fontsize=8)
+    _mark_after_motion(error_ax, t, path_error_mm, motion)
     error_ax.set_xlabel('time (s)')
     error_ax.set_ylabel('path error (mm)')
-    error_ax.set_ylim(bottom=0.0, top=max(1.0, 1.15 * float(np.max(path_error_mm, initial=0.0))))
+    error_ax.set_ylim(bottom=0.0, top=max(1.0, 1.4 * float(np.max(path_error_mm, initial=0.0))))
     error_ax.legend(loc='upper left', fontsize=8, frameon=False)
     for ax, trace in zip(joint_axes, traces):
         _shade(ax, motion)

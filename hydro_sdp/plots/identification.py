@@ -69,7 +69,8 @@ def plot_record(record: Record, model: JointModel | None = None, *,
 
 def plot_velocity_map(model: JointModel, *, v_range: tuple[float, float] | None = None,
                       title: str = '', command_unit: str | None = None,
-                      points: tuple[ArrayLike, ArrayLike] | None = None) -> Figure:
+                      points: tuple[ArrayLike, ArrayLike] | None = None,
+                      points_label: str = 'experiments') -> Figure:
     """
     Angular velocity against steady command, as the paper's Fig. 3.
 
@@ -85,6 +86,8 @@ def plot_velocity_map(model: JointModel, *, v_range: tuple[float, float] | None 
         Unit of the command; default: from the model's input range.
     points : tuple of array_like or None
         Per-experiment ``(v, velocity)`` estimates to show as circles.
+    points_label : str
+        What the points are, for the legend.
 
     Returns
     -------
@@ -98,7 +101,7 @@ def plot_velocity_map(model: JointModel, *, v_range: tuple[float, float] | None 
     ax.plot(v, model.rate(v), color=MODEL, linewidth=1.8, label=f'{model.kind} map')
     if points is not None:
         ax.plot(points[0], points[1], 'o', color=MEASURED, markersize=4,
-                markerfacecolor='none', label='experiments')
+                markerfacecolor='none', label=points_label)
     if model.dead_zone is not None:
         mark_dead_zone(ax, model.dead_zone)
     saturation = getattr(model.static_map, 'saturation_velocity', None)
@@ -157,7 +160,8 @@ def plot_step_responses(experiments: Sequence[Experiment], delay: int, dt: float
 
 def plot_gains(points: Sequence[LevelSpeed], model: JointModel, dt: float, *, rest: float = 0.0,
                command_unit: str | None = None,
-               measured: Sequence[StateDependence] = ()) -> Figure:
+               measured: Sequence[StateDependence] = (),
+               points_label: str = 'per experiment (RIV)') -> Figure:
     """
     State-dependent gain against command, as the paper's Fig. 2.
 
@@ -176,6 +180,8 @@ def plot_gains(points: Sequence[LevelSpeed], model: JointModel, dt: float, *, re
     measured : sequence of StateDependence
         The gain estimated along the delayed command without a map family (the SDP
         analysis, one entry per direction), drawn with its +-2 standard-error band.
+    points_label : str
+        What the points are, for the legend.
 
     Returns
     -------
@@ -190,7 +196,7 @@ def plot_gains(points: Sequence[LevelSpeed], model: JointModel, dt: float, *, re
     levels = np.array([p.level for p in points if p.level != rest])
     gains = np.array([p.gain * 1.0 for p in points if p.level != rest])
     ax.plot(levels, gains, 'o', color=MEASURED, markerfacecolor='none', markersize=5,
-            label='per experiment (RIV)')
+            label=points_label)
     span = max(np.max(np.abs(levels - rest)), 1e-9) if levels.size else 1.0
     v = np.linspace(rest - 1.05 * span, rest + 1.05 * span, 801)
     v = v[np.abs(v - rest) > 1e-9 * span]

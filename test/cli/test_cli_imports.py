@@ -114,7 +114,7 @@ def test_the_command_list_keeps_its_help_when_help_comes_first(argv, capsys):
         main(argv)
     listing = capsys.readouterr().out
     assert listing == build_parser().format_help()
-    assert 'identify a joint model from step or random-level bags' in listing
+    assert 'identify a joint model from experiments or routine operation' in listing
 
 
 def test_blas_threads_are_left_alone_once_numpy_is_loaded(monkeypatch, capsys):

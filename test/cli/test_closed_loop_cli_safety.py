@@ -42,6 +42,7 @@ def test_a_controller_for_another_valve_range_is_refused(tmp_path, capsys):
     code, _, err = run(capsys, 'closed-loop', str(default_model_path()), '--controller',
                        str(controller), '--setpoints', '10', '--out', str(tmp_path / 'bag'))
     assert code == 2
-    assert "controller is for valve range [-100.0, 100.0], the model of joint 'j2' has " \
-           '[-10.0, 10.0]' in err
+    assert 'controller commands the valve over [-100.0, 100.0], beyond the range ' \
+           "[-10.0, 10.0] of the model of joint 'j2': design the controller from this model " \
+           '(hydro-sdp design MODEL --out CONTROLLER)' in err
     assert not (tmp_path / 'bag').exists()

@@ -37,3 +37,24 @@ def test_tip_deviation_is_drawn_magnified_during_the_motion_only():
     assert any('RMS error 0.10 deg' in text.get_text() for text in boom_ax.texts)
     assert dipper_ax.get_ylabel() == 'dipper angle (deg)'
     assert any('RMS error 0.00 deg' in text.get_text() for text in dipper_ax.texts)
+
+
+def test_the_demanded_line_is_drawn_over_the_tip_and_a_peak_after_the_motion_says_so():
+    t = np.linspace(0.0, 4.0, 401)
+    line = ((0.0, 0.0), (1.0, -1.0))
+    along = np.clip(t - 1.0, 0.0, 1.0)
+    # On the line during the motion; 6 mm off at 3 s, while the joints settle.
+    path = np.where(np.abs(t - 3.0) < 0.2, 6.0, 0.2)
+    traces = [_trace('boom', t, along, along), _trace('dipper', t, along, along)]
+    figure = plot_bucket_line(along, -along, line, path, traces, (1.0, 2.0))
+    path_ax, error_ax = figure.axes[:2]
+    drawn = {artist.get_label(): artist for artist in path_ax.get_lines()}
+    demanded = drawn['demanded line']
+    tip = next(a for label, a in drawn.items() if label.startswith('bucket tip'))
+    assert demanded.get_zorder() > tip.get_zorder() and demanded.get_linestyle() == '--'
+    notes = [text for text in error_ax.texts if 'after the motion ended' in text.get_text()]
+    assert len(notes) == 1 and notes[0].get_text().startswith('6.0 mm after the motion ended')
+    assert notes[0].xy == (float(t[np.argmax(path)]), 6.0)
+    # No peak after the motion: nothing to say.
+    quiet = plot_bucket_line(along, -along, line, np.full_like(t, 0.2), traces, (1.0, 4.0))
+    assert not [text for text in quiet.axes[1].texts if 'after' in text.get_text()]

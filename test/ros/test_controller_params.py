@@ -150,7 +150,8 @@ def test_a_controller_file_for_another_valve_range_is_refused(ros, tmp_path):
     percent = replace(model, input_limits=(-100.0, 100.0))
     save_controller(design_from_model(percent), tmp_path / 'c.yaml')
     with pytest.raises(ConfigurationError,
-                       match=r'controller is for valve range \[-100.0, 100.0\]'):
+                       match=r'controller commands the valve over \[-100.0, 100.0\], beyond '
+                             r'the range \[-10.0, 10.0\].*hydro-sdp design'):
         ros.add(PipControllerNode, parameters={'controller_file': str(tmp_path / 'c.yaml')})
     other = tmp_path / 'boom.yaml'
     other.write_text(default_model_path().read_text().replace('joint: j2', 'joint: boom'))

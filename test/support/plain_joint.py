@@ -160,6 +160,81 @@ class PlainJoint:
                 k += 1
         return self._record(v, np.array(y), loads, seed, source)
 
+    def run_joystick(self, duration: float, *, reach: float = 4.0, period: float = 0.05,
+                     hand: float = 0.15, moves: tuple[float, float] = (0.4, 1.6),
+                     release: float = 0.2, neutral: float = 0.0, directions: str = 'both',
+                     y0: float = 0.0, margin: float = 10.0, seed: int = 0,
+                     source: str = 'operator') -> Record:
+        """
+        Drive the joint by an operator's joystick: a deflection chasing random targets.
+
+        Each target is a deflection in ``(-1, 1)`` (0 with probability ``release``: the
+        stick let go), chosen away from the nearer stop and held for a time drawn from
+        ``moves``; the hand follows it with a first-order lag ``hand`` and lets go within
+        ``margin`` of the stop it heads for. The command, sent every ``period`` on the
+        joystick's bus, is the deflection times ``reach`` from ``neutral``, and
+        ``neutral`` when the stick is let go.
+
+        Parameters
+        ----------
+        duration : float
+            Length, s.
+        reach : float
+            Command at full deflection.
+        period : float
+            Time between two commands on the bus, s.
+        hand : float
+            Time constant of the hand, s.
+        moves : tuple[float, float]
+            Range of the times a target is kept, s.
+        release : float
+            Probability that a target is the stick let go.
+        neutral : float
+            The valve's neutral command (0 for volts, 50 for a duty resting at 50 %).
+        directions : str
+            ``both``, or ``up`` for an operator who only ever pushes the stick one way.
+        y0 : float
+            Starting angle, deg.
+        margin : float
+            Distance from a stop at which the stick is let go, deg.
+        seed : int
+            Seed of the targets, the noise and the jitter.
+        source : str
+            Name of the record.
+
+        Returns
+        -------
+        Record
+            The run.
+
+        """
+        rng = np.random.default_rng([seed, 11])
+        n = int(round(duration / self.dt))
+        every = max(int(round(period / self.dt)), 1)
+        follow = math.exp(-self.dt / hand)
+        v = np.zeros(n)
+        drive = _Drive(self, y0)
+        y = [y0]
+        v[0] = neutral
+        deflection, target, until = 0.0, 0.0, 0
+        for k in range(1, n):
+            low, high = self.stops
+            if k >= until:
+                upward = directions == 'up' or rng.random() > (y[-1] - low) / (high - low)
+                target = 0.0 if rng.random() < release else \
+                    (1.0 if upward else -1.0) * rng.uniform(0.1, 1.0)
+                until = k + int(round(rng.uniform(*moves) / self.dt))
+            if (target > 0.0 and y[-1] > high - margin) or (target < 0.0 and y[-1] < low + margin):
+                target = 0.0
+            deflection = follow * deflection + (1.0 - follow) * target
+            if k % every == 0:
+                v[k] = neutral if target == 0.0 and abs(deflection) < 0.02 else \
+                    neutral + reach * deflection
+            else:
+                v[k] = v[k - 1]
+            y.append(drive.step(v, k, None))
+        return self._record(v, np.array(y), None, seed, source)
+
     def _record(self, v: np.ndarray, y: np.ndarray, load: Sequence[float] | None, seed: int,
                 source: str) -> Record:
         rng = np.random.default_rng(seed)
@@ -168,6 +243,30 @@ class PlainJoint:
         measured = y + rng.normal(0.0, self.noise, n)
         return Record(t, v, measured, 'plain', source, origin=EPOCH,
                       load=None if load is None else np.asarray(load, dtype=float))
+
+
+class PlainPlant:
+    """
+    The joint stepped one sample at a time, a plant of ``support.independent_loop.run_loop``.
+
+    ``angle`` is the noisy reading, ``true_angle`` the joint's angle; each ``step`` holds
+    the command over one sample period.
+    """
+
+    def __init__(self, joint: PlainJoint, y0: float = 0.0, *, rest: float = 0.0,
+                 seed: int = 0) -> None:
+        self.joint = joint
+        self.commands = [rest]
+        self.drive = _Drive(joint, y0)
+        self.rng = np.random.default_rng([seed, 13])
+        self.true_angle = y0
+        self.angle = y0 + float(self.rng.normal(0.0, joint.noise))
+
+    def step(self, command: float) -> None:
+        """Hold ``command`` over the next sample period."""
+        self.commands.append(float(command))
+        self.true_angle = self.drive.step(self.commands, len(self.commands) - 1, None)
+        self.angle = self.true_angle + float(self.rng.normal(0.0, self.joint.noise))
 
 
 class _Drive:
@@ -179,7 +278,7 @@ class _Drive:
         self.flow = 0.0
         self.y = y0
 
-    def step(self, v: np.ndarray, k: int, load: float | None) -> float:
+    def step(self, v: Sequence[float], k: int, load: float | None) -> float:
         """Advance over the interval ending at sample ``k``; return the angle there."""
         joint = self.joint
         target = joint.speed(float(v[max(k - joint.delay, 0)]))

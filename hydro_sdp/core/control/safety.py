@@ -3,13 +3,16 @@ Safety rules shared by the controller node and ``hydro-sdp closed-loop``.
 
 * Set-points are kept ``margin`` degrees inside the end stops, so the loop never
   drives the joint into a stop (where the integral would press against it).
-* A controller designed for another joint or another valve range than the model
-  in use is refused, with the reason.
+* A controller designed for another joint, or one that commands the valve beyond
+  the range of the model in use, is refused with the reason and the fix. A range
+  known on one side only is the range: a controller made from a model without
+  one runs within the model's, and one made with a range runs a model without one.
 
 """
 
 from __future__ import annotations
 
+from dataclasses import replace
 import math
 
 from hydro_sdp.core.control.controller_spec import ControllerSpec
@@ -83,7 +86,7 @@ def clamp_setpoint(setpoint: float, angle_limits: tuple[float, float] | None,
 
 def check_controller_fits(spec: ControllerSpec, model: JointModel) -> None:
     """
-    Refuse a controller made for another joint or another valve range than ``model``.
+    Refuse a controller made for another joint or for commands beyond the model's valve range.
 
     Parameters
     ----------
@@ -95,17 +98,48 @@ def check_controller_fits(spec: ControllerSpec, model: JointModel) -> None:
     Raises
     ------
     ConfigurationError
-        Naming the joint or the valve ranges that differ.
+        Naming the joint or the ranges that differ, and what to do.
 
     """
     if spec.joint != model.joint:
         raise ConfigurationError(f'the controller is for joint {spec.joint!r}, the model is '
-                                 f'joint {model.joint!r}')
+                                 f'joint {model.joint!r}: design a controller from this model '
+                                 '(hydro-sdp design MODEL --out CONTROLLER)')
     ours, theirs = spec.v_limits, model.input_limits
-    same = (ours is None and theirs is None) or (
-        ours is not None and theirs is not None
-        and all(math.isclose(a, b, rel_tol=1e-9, abs_tol=1e-12) for a, b in zip(ours, theirs)))
-    if not same:
-        show = [None if r is None else list(r) for r in (ours, theirs)]
-        raise ConfigurationError(f'the controller is for valve range {show[0]}, the model '
-                                 f'of joint {model.joint!r} has {show[1]}')
+    if ours is None or theirs is None:
+        return
+    slack = 1e-9 * max(abs(theirs[0]), abs(theirs[1]), 1.0)
+    if ours[0] < theirs[0] - slack or ours[1] > theirs[1] + slack:
+        raise ConfigurationError(
+            f'the controller commands the valve over {list(ours)}, beyond the range '
+            f'{list(theirs)} of the model of joint {model.joint!r}: design the controller '
+            'from this model (hydro-sdp design MODEL --out CONTROLLER), or give the model '
+            "the valve's whole range (identify --input-limits LOW HIGH)")
+
+
+def controller_within_model(spec: ControllerSpec, model: JointModel) -> ControllerSpec:
+    """
+    Return the controller to run on ``model``: checked, and limited to its valve range.
+
+    Parameters
+    ----------
+    spec : ControllerSpec
+        The controller.
+    model : JointModel
+        The joint it is to control.
+
+    Returns
+    -------
+    ControllerSpec
+        ``spec``, with the model's valve range when it has none of its own.
+
+    Raises
+    ------
+    ConfigurationError
+        As :func:`check_controller_fits`.
+
+    """
+    check_controller_fits(spec, model)
+    if spec.v_limits is None and model.input_limits is not None:
+        return replace(spec, v_limits=model.input_limits)
+    return spec

@@ -14,19 +14,20 @@ experiments best is chosen (``kind='auto'``, folds that never extrapolate:
 within 5 % of the best. When the data span the stroke, a ``stroke_geometry``
 factor of the angle is fitted on top. The result is a
 :class:`~hydro_sdp.core.model.joint_model.JointModel` whose effects carry the lag and the
-geometry found.
+geometry found. Records of routine operation (a closed loop, an operator: few
+held levels) take their own route, the map from the one-step increments
+(:mod:`hydro_sdp.core.identification.routine`).
 
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-import enum
 from typing import Callable, Sequence
 
 from hydro_sdp.core.errors import DataError
 from hydro_sdp.core.identification.delay import (
-    DelayEstimate, estimate_delay, level_speeds, LevelSpeed)
+    DelayEstimate, estimate_delay, level_speeds)
 from hydro_sdp.core.identification.effect_check import HeldOut, simulation_errors
 from hydro_sdp.core.identification.end_stops import stop_reach
 from hydro_sdp.core.identification.experiment import (
@@ -34,9 +35,12 @@ from hydro_sdp.core.identification.experiment import (
 from hydro_sdp.core.identification.family_choice import (
     choose_kind, compare_kinds, FIRST_KINDS, fit_family, FittedKind, KindChoice, KINDS,
     KindScore)
+from hydro_sdp.core.identification.identified import Identification, IdentifyStage
+from hydro_sdp.core.identification.limits import model_limits
 from hydro_sdp.core.identification.map_fit import FIT_METHODS, fit_sdp, FitData, FitMethod, MapFit
 from hydro_sdp.core.identification.own_effects import (
     check_geometry, check_lag, shape_with_geometry)
+from hydro_sdp.core.identification.routine import identify_routine, routine_operation
 from hydro_sdp.core.identification.segmentation import (
     check_records, segment_records, Segmentation)
 from hydro_sdp.core.identification.stroke_fit import fit_stroke_geometry
@@ -58,68 +62,6 @@ DELAY_SAMPLES = 100_000
 #: Sample budget of the held-out comparisons (map families, effects): every fold refits,
 #: and a few hundred experiments score them as well as a thousand.
 COMPARE_SAMPLES = 30_000
-
-
-class IdentifyStage(enum.IntEnum):
-    """The stages of :func:`identify`, in order (their number counts progress)."""
-
-    SEGMENTING = 0
-    DELAY = 1
-    MAP = 2
-    FAMILIES = 3
-
-    @property
-    def label(self) -> str:
-        """Return what the stage does, for a progress bar."""
-        return ('segmenting', 'estimating the delay', 'fitting the static map',
-                'comparing map families on held-out experiments')[self]
-
-
-@dataclass(frozen=True, eq=False)
-class Identification:
-    """
-    Everything ``identify`` found.
-
-    Parameters
-    ----------
-    model : JointModel
-        The identified joint.
-    sample_period : float
-        Sample period of the records, s.
-    delay : DelayEstimate
-        The delay and what each estimator found.
-    segmentation : Segmentation
-        The experiments used and dropped.
-    points : tuple[LevelSpeed, ...]
-        Speed of every experiment and command level.
-    fit : MapFit
-        The chosen map's fit.
-    comparison : tuple[KindScore, ...]
-        Held-out errors of the map families tried.
-    mae : float
-        Mean absolute simulation error of the model on all experiments, degrees.
-    effect_checks : tuple[HeldOut, ...]
-        Held-out errors without and with each effect identify proposed by itself
-        (``valve_lag``, ``stroke_geometry``), and whether it was kept.
-
-    """
-
-    model: JointModel
-    sample_period: float
-    delay: DelayEstimate
-    segmentation: Segmentation
-    points: tuple[LevelSpeed, ...]
-    fit: MapFit[StaticMap]
-    comparison: tuple[KindScore, ...]
-    mae: float
-    effect_checks: tuple[HeldOut, ...] = ()
-
-    @property
-    def alpha(self) -> tuple[float, ...] | None:
-        """Return the paper's ``alpha_1..alpha_6`` at the records' sample period (``sdp``)."""
-        if self.model.kind != 'sdp':
-            return None
-        return self.model.alpha(self.sample_period)
 
 
 def experiments_mae(model: JointModel, experiments: Sequence[Experiment], dt: float) -> float:
@@ -232,6 +174,11 @@ def identify(records: Sequence[Record], *, method: FitMethod = 'rr', kind: KindC
     segmentation, pieces = _segment(records, dt, max_delay_samples, angle_limits, rest,
                                     input_limits)
     rest_command = segmentation.rest
+    # A closed loop or an operator holds few levels: the map from the increments.
+    if routine_operation(records, rest_command, max_delay_samples):
+        return identify_routine(records, segmentation, dt, max_delay=max_delay_samples,
+                                kind=kind, angle_limits=angle_limits,
+                                input_limits=input_limits, progress=step)
     step(IdentifyStage.DELAY)
     delay, checks = _delay(segmentation, pieces, dt, max_delay_samples)
     points = tuple(level_speeds(pieces.every, delay.samples, dt, rest=rest_command))
@@ -245,12 +192,13 @@ def identify(records: Sequence[Record], *, method: FitMethod = 'rr', kind: KindC
     fit: MapFit[StaticMap] = sdp_fit if chosen == 'sdp' else fit_family(
         chosen, data, points, rest_command, method, sdp_fit.static_map)
     low_stop, high_stop = segmentation.end_stops
-    limits = angle_limits if angle_limits is not None or low_stop is None or \
-        high_stop is None else (low_stop, high_stop)
+    bounds = model_limits(records, segmentation.end_stops, rest_command,
+                          angle_limits=angle_limits, input_limits=input_limits)
+    limits = bounds.angle_limits
     effects: tuple[Effect, ...] = (ValveLag(delay.lag),) if delay.lag > 0.0 else ()
     model = JointModel(joint=records[0].joint or 'joint', static_map=fit.static_map,
                        delay=whole_samples_seconds(delay.samples, dt), angle_limits=limits,
-                       input_limits=input_limits, effects=effects)
+                       input_limits=bounds.input_limits, effects=effects)
     mae = data.simulation_mae(fit.static_map.rate)
     # The speed along the stroke, kept only when held-out experiments need it.
     stops = limits if limits is not None else (low_stop, high_stop)
@@ -268,4 +216,4 @@ def identify(records: Sequence[Record], *, method: FitMethod = 'rr', kind: KindC
             if shaped is not None:
                 model, fit, mae = shaped, refit, experiments_mae(shaped, pieces.every, dt)
     return Identification(model, dt, delay, segmentation, points, fit, comparison, mae,
-                          tuple(checks))
+                          tuple(checks), commands=bounds.commands)

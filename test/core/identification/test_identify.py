@@ -205,7 +205,11 @@ def test_end_stops_are_cut_out_and_reported(rng):
 
 @pytest.mark.parametrize(('levels', 'message'), [
     ((0.5, -0.5, 0.8, -0.9), 'no excitation: the joint never moves'),
-    ((3.0, 0.5, 4.0, 0.9), 'moves in the positive direction only'),
+    ((3.0, 0.5, 4.0, 0.9), 'moves in the positive direction only: no command below rest 0 '
+                           'was held'),
+    ((3.0, -0.5, 4.0, -0.9), 'moves in the positive direction only: the levels held below '
+                             'rest reach only -0.9 and leave it still; commands below -0.9 '
+                             'were never held'),
 ])
 def test_data_that_cannot_identify_a_map(levels, message):
     truth = j2_like()

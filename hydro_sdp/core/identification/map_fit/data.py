@@ -189,9 +189,11 @@ class MapFit(Generic[MapT]):
     static_map : StaticMap
         The map.
     method : str
-        ``rr``, ``oe`` or ``points`` (fitted to the per-level speeds).
+        ``rr``, ``oe``, ``points`` (fitted to the per-level speeds) or ``increments``
+        (least squares on the one-step angle increments, routine operation).
     beta : float
-        Regret-regression gain (0 for ``oe``).
+        Regret-regression gain (0 for ``oe``; 1 for ``increments``, whose one-step
+        prediction starts from every measured angle).
     cost : float
         Sum of squared residuals at the optimum.
     standard_errors : dict
@@ -204,7 +206,7 @@ class MapFit(Generic[MapT]):
     """
 
     static_map: MapT
-    method: Literal['rr', 'oe', 'points']
+    method: Literal['rr', 'oe', 'points', 'increments']
     beta: float
     cost: float
     standard_errors: dict[str, float] = field(default_factory=dict)

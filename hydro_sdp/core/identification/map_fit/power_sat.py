@@ -28,8 +28,16 @@ NAMES = ('saturation_velocity[0]', 'curvature[0]', 'exponent[0]', 'dead_zone[0]'
 START_EXPONENTS = (1.0, 2.0, 3.0, 5.0)
 
 
-def _rate(x: FloatArray) -> Any:
+def power_sat_rate_function(x: FloatArray) -> Any:
+    """Return the map of ``x = (vn, cn, nn, a3, vp, cp, np, a6)`` (rates in deg/s)."""
     return lambda v: power_sat_rate(v, *(float(value) for value in x[:8]))
+
+
+def power_sat_from_vector(x: FloatArray) -> PowerSatMap:
+    """Build a :class:`PowerSatMap` from ``(vn, cn, nn, a3, vp, cp, np, a6)``."""
+    return PowerSatMap(dead_zone=(float(x[3]), float(x[7])),
+                       saturation_velocity=(float(x[0]), float(x[4])),
+                       curvature=(float(x[1]), float(x[5])), exponent=(float(x[2]), float(x[6])))
 
 
 def _bounds(levels: FloatArray, speeds: FloatArray, rest: float
@@ -52,6 +60,48 @@ def _bounds(levels: FloatArray, speeds: FloatArray, rest: float
             lower += [0.7 * fastest, 1e-3 / scale, 0.5, edge[0]]
             upper += [1.5 * fastest, 1e3 / scale, 8.0, edge[1]]
     return np.array(lower), np.array(upper)
+
+
+def power_sat_start(points: Sequence[LevelSpeed], rest: float, start: SdpMap
+                    ) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """
+    Return the starting parameters and their bounds from the per-level speeds.
+
+    The best of :data:`START_EXPONENTS`, each fitted to the points from the edges
+    of ``start``.
+
+    Parameters
+    ----------
+    points : sequence of LevelSpeed
+        Per-level speeds.
+    rest : float
+        Rest command.
+    start : SdpMap
+        An ``sdp`` fit: its edges and saturation speeds start the search.
+
+    Returns
+    -------
+    tuple of FloatArray
+        ``(x0, lower, upper)`` of ``(vn, cn, nn, a3, vp, cp, np, a6)``.
+
+    """
+    levels = np.array([p.level for p in points])
+    speeds = np.array([p.speed for p in points])
+    weights = 1.0 / np.maximum([p.standard_error for p in points], 1e-3 * np.max(np.abs(speeds)))
+    lower, upper = _bounds(levels, speeds, rest)
+    low, high = start.dead_zone
+    best: tuple[float, FloatArray] | None = None
+    for exponent in START_EXPONENTS:
+        x0 = np.array([lower[0], 0.0, exponent, low, upper[4], 0.0, exponent, high])
+        reach = [max(low - float(np.min(levels)), 1e-6), max(float(np.max(levels)) - high, 1e-6)]
+        x0[[1, 5]] = 1.0 / np.array(reach)
+        x0 = np.clip(x0, lower + 1e-9 * np.abs(lower), upper - 1e-9 * np.abs(upper))
+        result = least_squares(lambda x: (power_sat_rate_function(x)(levels) - speeds) * weights,
+                               x0, bounds=(lower, upper), x_scale='jac')
+        if best is None or result.cost < best[0]:
+            best = (float(result.cost), np.asarray(result.x))
+    assert best is not None
+    return best[1], lower, upper
 
 
 def fit_power_sat(data: FitData, points: Sequence[LevelSpeed], rest: float, start: SdpMap, *,
@@ -78,37 +128,18 @@ def fit_power_sat(data: FitData, points: Sequence[LevelSpeed], rest: float, star
         The fitted ``power_sat`` map.
 
     """
-    levels = np.array([p.level for p in points])
-    speeds = np.array([p.speed for p in points])
-    weights = 1.0 / np.maximum([p.standard_error for p in points], 1e-3 * np.max(np.abs(speeds)))
-    lower, upper = _bounds(levels, speeds, rest)
-    low, high = start.dead_zone
-    best: tuple[float, FloatArray] | None = None
-    for exponent in START_EXPONENTS:
-        x0 = np.array([lower[0], 0.0, exponent, low, upper[4], 0.0, exponent, high])
-        reach = [max(low - float(np.min(levels)), 1e-6), max(float(np.max(levels)) - high, 1e-6)]
-        x0[[1, 5]] = 1.0 / np.array(reach)
-        x0 = np.clip(x0, lower + 1e-9 * np.abs(lower), upper - 1e-9 * np.abs(upper))
-        result = least_squares(lambda x: (_rate(x)(levels) - speeds) * weights, x0,
-                               bounds=(lower, upper), x_scale='jac')
-        if best is None or result.cost < best[0]:
-            best = (float(result.cost), np.asarray(result.x))
-    assert best is not None
+    x0, lower, upper = power_sat_start(points, rest, start)
     if method == 'rr':
-        result = least_squares(lambda x: data.residuals(_rate(x), float(x[8])),
-                               np.r_[best[1], 0.5], bounds=(np.r_[lower, 0.0], np.r_[upper, 1.0]),
+        result = least_squares(lambda x: data.residuals(power_sat_rate_function(x), float(x[8])),
+                               np.r_[x0, 0.5], bounds=(np.r_[lower, 0.0], np.r_[upper, 1.0]),
                                x_scale='jac', tr_solver=TR_SOLVER)
         beta = float(result.x[8])
     else:
-        result = least_squares(lambda x: data.residuals(_rate(x)), best[1],
+        result = least_squares(lambda x: data.residuals(power_sat_rate_function(x)), x0,
                                bounds=(lower, upper), x_scale='jac', tr_solver=TR_SOLVER)
         beta = 0.0
     x = np.asarray(result.x)
     errors = covariance_errors(np.asarray(result.jac), float(result.cost), data.samples)
     names = NAMES + (('beta',) if method == 'rr' else ())
-    static_map = PowerSatMap(dead_zone=(float(x[3]), float(x[7])),
-                             saturation_velocity=(float(x[0]), float(x[4])),
-                             curvature=(float(x[1]), float(x[5])),
-                             exponent=(float(x[2]), float(x[6])))
-    return MapFit(static_map, method, beta, float(result.cost), dict(zip(names, errors.tolist())),
-                  int(result.nfev), len(START_EXPONENTS))
+    return MapFit(power_sat_from_vector(x), method, beta, float(result.cost),
+                  dict(zip(names, errors.tolist())), int(result.nfev), len(START_EXPONENTS))

@@ -137,9 +137,17 @@ def check_excitation(points: Sequence[LevelSpeed], rest: float) -> None:
     up = np.any(moving & (speeds > 0) & (levels > rest))
     down = np.any(moving & (speeds < 0) & (levels < rest))
     if not (up and down):
-        direction = 'positive' if up else 'negative'
-        raise DataError(f'the joint moves in the {direction} direction only: the map needs '
-                        'commands on both sides of rest that move it')
+        direction, sign = ('positive', -1.0) if up else ('negative', 1.0)
+        beyond = 'below' if sign < 0 else 'above'
+        side = sign * (levels - rest) > 0
+        if not np.any(side):
+            seen = f'no command {beyond} rest {rest:g} was held'
+        else:
+            reach = rest + sign * float(np.max(sign * (levels[side] - rest)))
+            seen = (f'the levels held {beyond} rest reach only {reach:.4g} and leave it still; '
+                    f'commands {beyond} {reach:.4g} were never held')
+        raise DataError(f'the joint moves in the {direction} direction only: {seen}; the map '
+                        'needs commands on both sides of rest that move it')
 
 
 def _moving(speeds: FloatArray, errors: FloatArray) -> npt.NDArray[np.bool_]:

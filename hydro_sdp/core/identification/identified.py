@@ -1,0 +1,97 @@
+"""
+What ``identify`` found (:class:`Identification`), and the stages it goes through.
+
+Both routes of :func:`hydro_sdp.core.identification.identify.identify` return it:
+experiments with held command levels (West et al. 2018, section 4) and routine
+operation (:mod:`hydro_sdp.core.identification.routine`).
+
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+import enum
+from typing import get_args, Literal
+
+from hydro_sdp.core.identification.delay import DelayEstimate, LevelSpeed
+from hydro_sdp.core.identification.effect_check import HeldOut
+from hydro_sdp.core.identification.family_choice import KindScore
+from hydro_sdp.core.identification.limits import CommandRange
+from hydro_sdp.core.identification.map_fit import MapFit
+from hydro_sdp.core.identification.segmentation import Segmentation
+from hydro_sdp.core.model.joint_model import JointModel
+from hydro_sdp.core.model.static_maps import StaticMap
+
+#: How the records were identified: from experiments with held levels, or from routine
+#: operation (commands changing every control period).
+Route = Literal['experiments', 'routine']
+ROUTES: tuple[Route, ...] = get_args(Route)
+
+
+class IdentifyStage(enum.IntEnum):
+    """The stages of ``identify``, in order (their number counts progress)."""
+
+    SEGMENTING = 0
+    DELAY = 1
+    MAP = 2
+    FAMILIES = 3
+
+    @property
+    def label(self) -> str:
+        """Return what the stage does, for a progress bar."""
+        return ('segmenting', 'estimating the delay', 'fitting the static map',
+                'comparing map families on held-out experiments')[self]
+
+
+@dataclass(frozen=True, eq=False)
+class Identification:
+    """
+    Everything ``identify`` found.
+
+    Parameters
+    ----------
+    model : JointModel
+        The identified joint.
+    sample_period : float
+        Sample period of the records, s.
+    delay : DelayEstimate
+        The delay and what each estimator found.
+    segmentation : Segmentation
+        The experiments used and dropped.
+    points : tuple[LevelSpeed, ...]
+        Speed of every experiment and command level (routine operation: the speed
+        along the delayed command estimated by the SDP smoother).
+    fit : MapFit
+        The chosen map's fit.
+    comparison : tuple[KindScore, ...]
+        Held-out errors of the map families tried.
+    mae : float
+        Mean absolute simulation error of the model on all experiments, degrees.
+    effect_checks : tuple[HeldOut, ...]
+        Held-out errors without and with each effect identify proposed by itself
+        (``valve_lag``, ``stroke_geometry``), and whether it was kept.
+    route : str
+        ``experiments`` or ``routine`` (:data:`ROUTES`).
+    commands : CommandRange or None
+        The commands seen and where the model's limits come from.
+
+    """
+
+    model: JointModel
+    sample_period: float
+    delay: DelayEstimate
+    segmentation: Segmentation
+    points: tuple[LevelSpeed, ...]
+    fit: MapFit[StaticMap]
+    comparison: tuple[KindScore, ...]
+    mae: float
+    effect_checks: tuple[HeldOut, ...] = ()
+    route: Route = 'experiments'
+    commands: CommandRange | None = None
+
+    @property
+    def alpha(self) -> tuple[float, ...] | None:
+        """Return the paper's ``alpha_1..alpha_6`` at the records' sample period (``sdp``)."""
+        if self.model.kind != 'sdp':
+            return None
+        return self.model.alpha(self.sample_period)

@@ -1,0 +1,112 @@
+"""
+The end stops and the valve range an identified model is given, and where each comes from.
+
+A model says only what was given or seen: end stops passed in are written as
+given, else the angles where the joint was seen held against a stop (none when
+it never was); the valve range passed in is written as given, else the range
+of commands the records used (with the rest command inside it), which is all
+the data show of the valve.
+
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal, Sequence
+
+from hydro_sdp.core.model.records import Record
+import numpy as np
+
+#: Where a limit comes from: passed in, seen in the data, or neither.
+LimitsSource = Literal['given', 'data', 'none']
+
+
+@dataclass(frozen=True)
+class CommandRange:
+    """
+    The commands the records used, and where the model's limits come from.
+
+    Parameters
+    ----------
+    seen : tuple[float, float]
+        Smallest and largest command in the records, input units.
+    input_limits_from : str
+        ``given`` (``input_limits`` passed in) or ``data`` (the range seen).
+    angle_limits_from : str
+        ``given`` (``angle_limits`` passed in), ``data`` (end stops the joint was
+        seen held at) or ``none``.
+
+    """
+
+    seen: tuple[float, float]
+    input_limits_from: LimitsSource
+    angle_limits_from: LimitsSource
+
+
+@dataclass(frozen=True)
+class ModelLimits:
+    """
+    The limits written to an identified model.
+
+    Parameters
+    ----------
+    angle_limits : tuple[float, float] or None
+        End stops, degrees.
+    input_limits : tuple[float, float]
+        Valve range, input units.
+    commands : CommandRange
+        What the records used and where each limit comes from.
+
+    """
+
+    angle_limits: tuple[float, float] | None
+    input_limits: tuple[float, float]
+    commands: CommandRange
+
+
+def commands_seen(records: Sequence[Record]) -> tuple[float, float]:
+    """Return the smallest and largest command of the records."""
+    return (min(float(np.min(record.v)) for record in records),
+            max(float(np.max(record.v)) for record in records))
+
+
+def model_limits(records: Sequence[Record], end_stops: tuple[float | None, float | None],
+                 rest: float, *, angle_limits: tuple[float, float] | None = None,
+                 input_limits: tuple[float, float] | None = None) -> ModelLimits:
+    """
+    Return the limits of an identified model: given, else what the data show.
+
+    Parameters
+    ----------
+    records : sequence of Record
+        The records identified from.
+    end_stops : tuple[float | None, float | None]
+        Angles where the joint was seen held against a stop (or the stops given).
+    rest : float
+        The rest command (kept inside the valve range).
+    angle_limits : tuple[float, float] or None
+        End stops given.
+    input_limits : tuple[float, float] or None
+        Valve range given.
+
+    Returns
+    -------
+    ModelLimits
+        The limits and their sources.
+
+    """
+    low, high = commands_seen(records)
+    angles: tuple[float, float] | None
+    angles_from: LimitsSource
+    if angle_limits is not None:
+        angles, angles_from = angle_limits, 'given'
+    elif end_stops[0] is not None and end_stops[1] is not None:
+        angles, angles_from = (end_stops[0], end_stops[1]), 'data'
+    else:
+        angles, angles_from = None, 'none'
+    if input_limits is not None:
+        valve: tuple[float, float] = input_limits
+        valve_from: LimitsSource = 'given'
+    else:
+        valve, valve_from = (min(low, rest), max(high, rest)), 'data'
+    return ModelLimits(angles, valve, CommandRange((low, high), valve_from, angles_from))

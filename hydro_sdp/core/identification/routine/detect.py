@@ -1,0 +1,77 @@
+"""
+Telling routine operation from experiments: how much of the driving is done by held levels.
+
+The experiments route of ``identify`` measures the speed of every command
+level held after the delay has passed (West et al. 2018, Figs. 2 and 3). A
+machine at work is driven otherwise: a closed loop or an operator's joystick
+changes the command every control period, and few levels, if any, are held
+long enough to show their speed. Such records go the routine route
+(:mod:`hydro_sdp.core.identification.routine`).
+
+"""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+from hydro_sdp.core.model.records import Record
+import numpy as np
+
+#: Records are routine operation when held levels carry less than this share of the
+#: samples at which the command is away from rest.
+HELD_SHARE = 0.5
+
+
+def held_share(records: Sequence[Record], rest: float, hold: int) -> float:
+    """
+    Share of the driven samples that belong to levels held for at least ``hold`` samples.
+
+    Parameters
+    ----------
+    records : sequence of Record
+        The records.
+    rest : float
+        Rest command (samples at rest are not driven).
+    hold : int
+        Samples a level must last to count as held.
+
+    Returns
+    -------
+    float
+        The share, 0..1 (1 when nothing is driven: there is nothing routine to use).
+
+    """
+    driven = held = 0
+    for record in records:
+        v = record.v
+        if v.size == 0:
+            continue
+        starts = np.flatnonzero(np.r_[True, v[1:] != v[:-1]])
+        lengths = np.diff(np.r_[starts, v.size])
+        away = v[starts] != rest
+        driven += int(np.sum(lengths[away]))
+        held += int(np.sum(lengths[away & (lengths >= hold)]))
+    return held / driven if driven else 1.0
+
+
+def routine_operation(records: Sequence[Record], rest: float, hold: int) -> bool:
+    """
+    Whether records are routine operation rather than experiments with held levels.
+
+    Parameters
+    ----------
+    records : sequence of Record
+        The records.
+    rest : float
+        Rest command.
+    hold : int
+        Samples a level must last to show its speed after any delay considered (the
+        largest delay considered).
+
+    Returns
+    -------
+    bool
+        True when held levels carry less than :data:`HELD_SHARE` of the driven samples.
+
+    """
+    return held_share(records, rest, hold) < HELD_SHARE
