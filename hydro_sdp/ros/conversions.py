@@ -51,9 +51,35 @@ def joint_angle(message: Any, joint: str) -> tuple[int, float]:
         position is not finite.
 
     """
-    # The controller calls this for every sample: attributes are read once, nothing copied.
-    names = message.name
-    positions = message.position
+    return stamp_to_ns(message.header.stamp), position_of(message.name, message.position, joint)
+
+
+def position_of(names: Sequence[str], positions: Sequence[float], joint: str) -> float:
+    """
+    Return the angle (degrees) of ``joint`` from a JointState's ``name`` and ``position``.
+
+    Parameters
+    ----------
+    names : sequence of str
+        The message's joint names.
+    positions : sequence of float
+        Its positions, rad.
+    joint : str
+        Joint name.
+
+    Returns
+    -------
+    float
+        The angle, degrees.
+
+    Raises
+    ------
+    DataError
+        If the names and positions differ in length, the joint is missing, or its
+        position is not finite.
+
+    """
+    # The controller calls this for every sample and joint: nothing is copied.
     if len(names) != len(positions):
         raise DataError(f'JointState has {len(names)} names but {len(positions)} positions')
     try:
@@ -63,7 +89,7 @@ def joint_angle(message: Any, joint: str) -> tuple[int, float]:
     value = float(positions[index])
     if not isfinite(value):
         raise DataError(f'position of joint {joint!r} is not finite ({value})')
-    return stamp_to_ns(message.header.stamp), degrees(value)
+    return degrees(value)
 
 
 def fill_joint_state(message: Any, stamp_ns: int, names: Sequence[str],

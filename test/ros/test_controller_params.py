@@ -103,7 +103,7 @@ def test_integers_are_accepted_for_double_parameters(ros):
 
 def test_feedback_timeout_applies_at_run_time(ros):
     controller = ros.add(PipControllerNode)
-    assert controller._watchdog.timer_period_ns == 10**8
+    assert controller.interfaces.watchdog.timer_period_ns == 10**8
     assert controller.set_parameters([Parameter('feedback_timeout', value=2.0)])[0].successful
     assert controller.gate.timeout_ns == 2 * 10**9
     ros.set_time(10**8)
@@ -113,25 +113,25 @@ def test_feedback_timeout_applies_at_run_time(ros):
     for k in range(2, 21):                      # 1.9 s of silence: still inside the timeout
         ros.set_time(k * 10**8)
         ros.spin_for(0.002)
-    assert not controller._blind and controller.last_command > 1.0
+    assert not controller.gate.blind and controller.last_command > 1.0
     # A stamp 1.5 s old is fresh enough for a 2 s timeout.
     controller._on_state(_state(5 * 10**8))
     assert controller.refused == 0
     assert controller.set_parameters([Parameter('feedback_timeout', value=0.06)])[0].successful
-    assert controller._watchdog.timer_period_ns == 3 * 10**7
+    assert controller.interfaces.watchdog.timer_period_ns == 3 * 10**7
     ros.set_time(21 * 10**8)
     ros.spin_for(0.01)
-    assert controller._blind and controller.last_command == 0.0
+    assert controller.gate.blind and controller.last_command == 0.0
 
 
 def test_setpoint_margin_applies_at_run_time(ros):
     controller = ros.add(PipControllerNode)
     controller._on_setpoint(Float64(data=math.radians(90.0)))
-    assert controller._setpoint == pytest.approx(63.1)
+    assert controller.loops[0].setpoint == pytest.approx(63.1)
     assert controller.set_parameters([Parameter('setpoint_margin', value=5.0)])[0].successful
-    assert controller._setpoint == pytest.approx(58.6)          # the held set-point too
+    assert controller.loops[0].setpoint == pytest.approx(58.6)          # the held set-point too
     controller._on_setpoint(Float64(data=math.radians(-40.0)))
-    assert controller._setpoint == pytest.approx(-8.8)
+    assert controller.loops[0].setpoint == pytest.approx(-8.8)
     result = controller.set_parameters([Parameter('setpoint_margin', value=40.0)])
     assert not result[0].successful and 'leaves no set-point' in result[0].reason
     assert controller.setpoint_margin == 5.0

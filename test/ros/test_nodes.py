@@ -147,9 +147,9 @@ def test_setpoints_beyond_the_end_stops_are_clamped_and_nan_is_refused(ros):
     controller = ros.add(PipControllerNode)
     send = _setpoint_publisher(ros, controller)
     send(90.0)
-    assert controller._setpoint == pytest.approx(63.6 - 0.5)   # setpoint_margin
+    assert controller.loops[0].setpoint == pytest.approx(63.6 - 0.5)   # setpoint_margin
     controller._on_setpoint(Float64(data=math.nan))
-    assert controller._setpoint == pytest.approx(63.6 - 0.5)   # setpoint_margin
+    assert controller.loops[0].setpoint == pytest.approx(63.6 - 0.5)   # setpoint_margin
 
 
 def test_watchdog_closes_the_valve_and_control_resumes_without_a_bump(ros):
@@ -166,12 +166,12 @@ def test_watchdog_closes_the_valve_and_control_resumes_without_a_bump(ros):
     for k in range(1, 41):
         ros.set_time((steps + k) * 10**7)
         ros.spin_for(0.002)
-    assert controller._blind and controller.last_command == 0.0
+    assert controller.gate.blind and controller.last_command == 0.0
     ros.executor.add_node(plant)
     before = plant.commands_received
     loop.steps = plant.ticks
     loop.run(5)
-    assert not controller._blind
+    assert not controller.gate.blind
     assert plant.commands_received > before
     assert abs(controller.controller.last_u) < 0.3    # restarted from rest, no jump
 
