@@ -49,12 +49,15 @@ class RosHarness:
     ----------
     domain_id : int or None
         DDS domain; default: a random one, so parallel test runs do not meet.
+    args : list of str or None
+        Command-line arguments of the context, as ``ros2 run`` passes them to every node of
+        a process (``['--ros-args', '-r', '__ns:=/arm2', '--params-file', 'p.yaml']``).
 
     """
 
-    def __init__(self, domain_id: int | None = None) -> None:
+    def __init__(self, domain_id: int | None = None, args: list[str] | None = None) -> None:
         self.context = Context()
-        rclpy.init(context=self.context,
+        rclpy.init(args=args, context=self.context,
                    domain_id=random.randint(1, 200) if domain_id is None else domain_id)
         self.executor = SingleThreadedExecutor(context=self.context)
         self.nodes: list[Node] = []

@@ -73,19 +73,6 @@ def test_lockstep_loop_reproduces_the_offline_closed_loop(ros):
     assert controller.outputs == steps // 5 and identifier.samples == steps
 
 
-def test_shipped_parameter_file_loads_into_every_node(ros):
-    params = str(REPO / 'config' / 'hydro_sdp.yaml')
-    plant = ros.add(PlantNode, cli_args=['--ros-args', '--params-file', params])
-    controller = ros.add(PipControllerNode, cli_args=['--ros-args', '--params-file', params])
-    identifier = ros.add(IdentifierNode, cli_args=['--ros-args', '--params-file', params])
-    assert plant.get_parameter('noise_std').value == 0.02
-    assert plant.get_parameter('seed').value == 1
-    assert controller.get_parameter('feedback_timeout').value == 0.5
-    assert controller.joint == 'j2'
-    assert identifier.get_parameter('publish_period').value == 0.1
-    assert identifier.get_parameter('auto_recalibrate').value is False
-
-
 def _state(stamp_ns, names=('j2',), positions=(0.0,)):
     message = JointState()
     message.header.stamp.sec, message.header.stamp.nanosec = divmod(stamp_ns, 10**9)

@@ -17,8 +17,8 @@ CONTROLLER_PARAMETERS = ParameterTable('controller_node', 'pip_controller', (
     ParameterSpec('model_file', 'string', 'model of the joint (end stops, design)',
                   default_text='shipped J2 model', unit='path', read_only=True),
     ParameterSpec('controller_file', 'string',
-                  "controller file from hydro-sdp design; '' designs from the model at "
-                  'configuration', default='', unit='path', read_only=True),
+                  "controller file from hydro-sdp design (interfaces.md section 6); '' designs "
+                  'from the model at configuration', default='', unit='path', read_only=True),
     ParameterSpec('joints', 'string_array',
                   'several joints in one node, as named in JointState (overrides model_file, '
                   'controller_file and joint); names must differ', read_only=True),
@@ -43,8 +43,8 @@ CONTROLLER_PARAMETERS = ParameterTable('controller_node', 'pip_controller', (
                   'set-point would be left between them)', default=SETPOINT_MARGIN, unit='deg',
                   low=0.0, high=90.0),
     ParameterSpec('feedforward', 'bool',
-                  'feed the set-point rate of trajectories forward through the IDZ',
-                  default=True),
+                  'feed the set-point rate of trajectories forward through the IDZ (methods.md '
+                  'section 4.9)', default=True),
     ParameterSpec('diagnostic_period', 'double', 'time between /diagnostics reports',
                   default=1.0, unit='s', low=0.01, high=60.0, read_only=True),
     ParameterSpec('autostart', 'bool',

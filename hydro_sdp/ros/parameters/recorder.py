@@ -7,8 +7,8 @@ RECORDER_PARAMETERS = ParameterTable('bag_recorder', 'bag_recorder', (
                   default='', default_text='required', unit='path', read_only=True,
                   required=True),
     ParameterSpec('topics', 'string_array', 'topics to record',
-                  default_text='joint_states, and <j>/valve_command and <j>/setpoint of '
-                  'every joint j of joint_names', read_only=True),
+                  default_text='`joint_states`, and `<j>/valve_command` and `<j>/setpoint` of '
+                  'each joint `j` of `joint_names`', read_only=True),
     ParameterSpec('joint_names', 'string_array',
                   'joints whose command and set-point topics are recorded by default',
                   default=('j2',), read_only=True),
