@@ -64,11 +64,12 @@ class ControllerInterfaces:
         self._publishers = []
         self._subscriptions = []
         for loop in loops:
-            loop.command_pub = node.create_publisher(Float64, f'{loop.joint}/valve_command',
-                                                     qos.COMMAND_QOS)
-            loop.state_pub = node.create_publisher(Float64MultiArray,
-                                                   f'{loop.joint}/controller_state',
-                                                   qos.COMMAND_QOS)
+            loop.command_pub = node.create_publisher(
+                Float64, f'{loop.joint}/valve_command', qos.COMMAND_QOS,
+                event_callbacks=qos.QUIET_PUBLISHER)
+            loop.state_pub = node.create_publisher(
+                Float64MultiArray, f'{loop.joint}/controller_state', qos.COMMAND_QOS,
+                event_callbacks=qos.QUIET_PUBLISHER)
             self._publishers += [loop.command_pub, loop.state_pub]
             self._subscriptions.append(node.create_subscription(
                 Float64, f'{loop.joint}/setpoint',

@@ -91,7 +91,8 @@ class DiagnosticsReporter:
         self._node = node
         self._statuses = statuses
         self._publisher = node.create_publisher(DiagnosticArray, '/diagnostics',
-                                                qos.DIAGNOSTICS_QOS)
+                                                qos.DIAGNOSTICS_QOS,
+                                                event_callbacks=qos.QUIET_PUBLISHER)
         self._timer = node.create_timer(period, self.publish)
 
     def publish(self) -> None:

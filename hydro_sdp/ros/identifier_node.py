@@ -50,7 +50,6 @@ from hydro_sdp.ros.parameters.identifier import IDENTIFIER_PARAMETERS, POLICY_PA
 from hydro_sdp.ros.parameters.node_parameters import NodeParameters, ParameterRequest
 from hydro_sdp.ros.runner import run_node
 from rcl_interfaces.srv import SetParametersAtomically
-from rclpy.event_handler import PublisherEventCallbacks
 from rclpy.node import Node
 from rclpy.task import Future
 from sensor_msgs.msg import JointState
@@ -129,9 +128,7 @@ class IdentifierNode(Node):
 
     def _create_topics(self) -> None:
         """Create each joint's estimate topics and command subscription, and joint_states'."""
-        # Fifteen estimate topics per joint: skip their QoS event handlers, which cost
-        # every wait.
-        quiet = PublisherEventCallbacks(use_default_callbacks=False)
+        quiet = qos.QUIET_PUBLISHER       # fifteen estimate topics per joint
         for item in self.identified:
             base = f'{item.joint}/sdp/'
             topics = tuple(estimate_topics(item.estimator.named_estimate())) + (
@@ -141,7 +138,7 @@ class IdentifierNode(Node):
                                             event_callbacks=quiet)
                 for name in topics}
             item.flag_pub = self.create_publisher(Bool, base + 'recalibration_needed',
-                                                  qos.ESTIMATE_QOS)
+                                                  qos.ESTIMATE_QOS, event_callbacks=quiet)
             self.create_subscription(Float64, f'{item.joint}/valve_command',
                                      partial(self._on_command, item=item), qos.COMMAND_QOS)
         self.create_subscription(JointState, 'joint_states', self._on_state, qos.STATE_QOS)

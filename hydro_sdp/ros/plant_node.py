@@ -79,7 +79,8 @@ class PlantNode(Node):
         self.ticks = 0
         self.commands_received = 0
         self.last_angles = [sim.angle for sim in self._simulators]
-        self._state_pub = self.create_publisher(JointState, 'joint_states', qos.STATE_QOS)
+        self._state_pub = self.create_publisher(JointState, 'joint_states', qos.STATE_QOS,
+                                                event_callbacks=qos.QUIET_PUBLISHER)
         self._command_subs = [
             self.create_subscription(Float64, f'{name}/valve_command',
                                      partial(self._on_command, index), qos.COMMAND_QOS)
