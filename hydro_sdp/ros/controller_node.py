@@ -20,7 +20,8 @@ The node holds its parts: its parameters
 :data:`~hydro_sdp.ros.parameters.controller.CONTROLLER_PARAMETERS`), what configure
 builds (:class:`~hydro_sdp.ros.controller_configuration.ControllerConfiguration`: one
 :class:`~hydro_sdp.ros.joint_loop.JointLoop` per joint), its topics and watchdog
-(:class:`~hydro_sdp.ros.controller_interfaces.ControllerInterfaces`) and its
+(:class:`~hydro_sdp.ros.controller_interfaces.ControllerInterfaces`), what follows its
+trajectories (:class:`~hydro_sdp.ros.trajectory_follower.TrajectoryFollower`) and its
 diagnostics (:class:`~hydro_sdp.ros.diagnostics.DiagnosticsReporter`).
 
 The core :class:`~hydro_sdp.core.control.pip_controller.PipIdzController` does the
@@ -60,18 +61,18 @@ from typing import Any, Sequence
 from hydro_sdp.core.control.health import HealthStatus, joint_health
 from hydro_sdp.core.control.safety import clamp_setpoint, setpoint_range
 from hydro_sdp.core.control.scheduling import seconds_to_ns
-from hydro_sdp.core.control.trajectory import check_trajectory, start_time, TrajectorySampler
 from hydro_sdp.core.errors import ConfigurationError, DataError, HydroSdpError
 from hydro_sdp.io.model_files import default_model_path
 from hydro_sdp.ros.controller_configuration import ControllerConfiguration
 from hydro_sdp.ros.controller_interfaces import ControllerInterfaces
-from hydro_sdp.ros.conversions import fill_controller_state, position_of, trajectory_from_message
+from hydro_sdp.ros.conversions import fill_controller_state, position_of
 from hydro_sdp.ros.diagnostics import DiagnosticsReporter
 from hydro_sdp.ros.first_joint import first_joint
 from hydro_sdp.ros.joint_loop import JointLoop
 from hydro_sdp.ros.parameters.controller import CONTROLLER_PARAMETERS
 from hydro_sdp.ros.parameters.node_parameters import NodeParameters, ParameterRequest
 from hydro_sdp.ros.runner import run_node
+from hydro_sdp.ros.trajectory_follower import TrajectoryFollower
 from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64
@@ -106,7 +107,7 @@ class PipControllerNode(LifecycleNode):
         self.diagnostics: DiagnosticsReporter | None = None
         self.samples = self.outputs = self.refused = 0
         self.setpoints_received = self.trajectories_received = self.trajectories_refused = 0
-        self._sampler: TrajectorySampler | None = None
+        self.trajectories: TrajectoryFollower | None = None
         self._configure_error: HydroSdpError | None = None
         self._clock_handle = self.get_clock().handle
         self.parameters = NodeParameters(
@@ -153,7 +154,7 @@ class PipControllerNode(LifecycleNode):
             self.get_logger().error(f'configuration failed: {error}')
             return TransitionCallbackReturn.FAILURE
         self.loops = loops
-        self._sampler = TrajectorySampler({loop.joint: 0.0 for loop in loops})
+        self.trajectories = TrajectoryFollower(loops)
         self.interfaces = ControllerInterfaces(
             self, loops, on_state=self._on_state, on_setpoint=self._on_setpoint,
             on_trajectory=self._on_trajectory, on_watchdog=self._on_watchdog,
@@ -167,7 +168,7 @@ class PipControllerNode(LifecycleNode):
         now = self._now_ns()
         for loop in self.loops:
             loop.reset(now)
-        self._sampler = TrajectorySampler({loop.joint: 0.0 for loop in self.loops})
+        self.trajectories = TrajectoryFollower(self.loops)
         self.active = True
         return SUCCESS
 
@@ -238,7 +239,9 @@ class PipControllerNode(LifecycleNode):
             controller.reset(u=0.0)
         feedforward: float | None = None
         if loop.following:
-            setpoint, feedforward = self._follow(loop, stamp * 1e-9)
+            assert self.trajectories is not None
+            setpoint, feedforward = self.trajectories.setpoint(loop, stamp * 1e-9,
+                                                               self.feedforward)
         elif loop.setpoint is not None:
             setpoint = loop.setpoint
         else:
@@ -265,16 +268,6 @@ class PipControllerNode(LifecycleNode):
                 state_pub.get_subscription_count():
             state_pub.publish(fill_controller_state(interfaces.state_message, setpoint, angle,
                                                     u, command))
-
-    def _follow(self, loop: JointLoop, t: float) -> tuple[float, float | None]:
-        """Return the set-point (deg) and feed-forward (deg per control sample) at ``t`` (s)."""
-        sampler = self._sampler
-        assert sampler is not None
-        setpoint = sampler.setpoint(loop.joint, t)
-        if not self.feedforward:
-            return setpoint, None
-        return setpoint, sampler.feedforward(loop.joint, t, loop.spec.control_period,
-                                             loop.spec.delay_samples)
 
     def _refuse(self, loop: JointLoop, error: DataError) -> None:
         self.refused += 1
@@ -339,33 +332,12 @@ class PipControllerNode(LifecycleNode):
     def _on_trajectory(self, message: TrajectoryMessage) -> None:
         self.trajectories_received += 1
         try:
-            trajectory, stamp = trajectory_from_message(message)
-            check_trajectory(trajectory, {loop.joint: loop.model.angle_limits
-                                          for loop in self.loops}, self.setpoint_margin)
-            loops = [self.loop(name) for name in trajectory.joint_names]
-            waiting = [loop.joint for loop in loops if loop.setpoint is None and
-                       not loop.following]
-            if not self.active or waiting:
-                raise DataError('trajectory refused: ' + (
-                    f"no feedback yet from {', '.join(waiting)}" if self.active
-                    else 'the controller is not active'))
+            assert self.trajectories is not None
+            self.trajectories.take(message, self._now_ns() * 1e-9, self.setpoint_margin,
+                                   self.active)
         except DataError as error:
             self.trajectories_refused += 1
             self.get_logger().warning(str(error))
-            return
-        sampler = self._sampler
-        assert sampler is not None
-        now = self._now_ns() * 1e-9
-        start = start_time(stamp, now)
-        for loop in loops:
-            if not loop.following:
-                # Its set-point held until now is the trajectory's anchor.
-                assert loop.setpoint is not None
-                sampler.hold(loop.joint, loop.setpoint, min(start, now) - 1e-3)
-                loop.following = True
-                loop.clamped = False
-        sampler.replace(trajectory, start)
-        sampler.prune(now - 1.0)
 
     # Parameters: checked whole by _check_request, then applied by the handlers below.
     def _check_request(self, request: ParameterRequest) -> None:

@@ -21,7 +21,7 @@ from hydro_sdp.core.control.pip_controller import PipIdzController
 from hydro_sdp.core.control.pip_design import PipGains
 from hydro_sdp.core.control.scheduling import ControlSchedule, FeedbackGate, seconds_to_ns
 from hydro_sdp.core.model.joint_model import JointModel
-from hydro_sdp.ros.parameters.node_parameters import ParameterRequest
+from hydro_sdp.ros.parameters.request import ParameterRequest
 from hydro_sdp.ros.parameters.spec import ParameterValue
 from hydro_sdp.ros.protocols import MessagePublisher
 from std_msgs.msg import Float64

@@ -18,7 +18,8 @@ from hydro_sdp.ros.bag_recorder import BagRecorderNode
 from hydro_sdp.ros.controller_node import PipControllerNode
 from hydro_sdp.ros.identifier_node import IdentifierNode
 from hydro_sdp.ros.parameters import documents
-from hydro_sdp.ros.parameters.node_parameters import NodeParameters, ROS_TYPES
+from hydro_sdp.ros.parameters.descriptors import ROS_TYPES
+from hydro_sdp.ros.parameters.node_parameters import NodeParameters
 from hydro_sdp.ros.parameters.spec import ParameterSpec, ParameterTable
 from hydro_sdp.ros.plant_node import PlantNode
 from hydro_sdp.ros.testing import RosHarness

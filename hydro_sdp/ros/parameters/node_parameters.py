@@ -22,145 +22,17 @@ ros2_controllers controller: the node owns one, built from its
 
 from __future__ import annotations
 
-from typing import Callable, cast, Iterable, Mapping, Sequence
+from typing import Callable, cast, Iterable, Mapping
 
 from hydro_sdp.core.errors import ConfigurationError, HydroSdpError
+from hydro_sdp.ros.parameters.descriptors import as_double, descriptor, ROS_TYPES
+from hydro_sdp.ros.parameters.request import array_items, ParameterRequest
 from hydro_sdp.ros.parameters.spec import ParameterSpec, ParameterTable, ParameterValue
-from rcl_interfaces.msg import (FloatingPointRange, IntegerRange, ParameterDescriptor,
-                                SetParametersResult)
+from rcl_interfaces.msg import SetParametersResult
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 
-#: rclpy's type of each table type.
-ROS_TYPES = {'bool': Parameter.Type.BOOL, 'int': Parameter.Type.INTEGER,
-             'double': Parameter.Type.DOUBLE, 'string': Parameter.Type.STRING,
-             'double_array': Parameter.Type.DOUBLE_ARRAY,
-             'string_array': Parameter.Type.STRING_ARRAY}
-_WIDENED = {Parameter.Type.INTEGER: Parameter.Type.DOUBLE,
-            Parameter.Type.INTEGER_ARRAY: Parameter.Type.DOUBLE_ARRAY}
-
-
-def _items(value: object) -> list[float | str]:
-    # An array parameter's value: a list, or an array.array when it came in a message.
-    assert isinstance(value, Iterable)
-    return list(value)
-
-
-class ParameterRequest:
-    """
-    The values of a set request, by name.
-
-    Parameters
-    ----------
-    parameters : sequence of Parameter
-        The request.
-
-    """
-
-    def __init__(self, parameters: Sequence[Parameter]) -> None:
-        self._values: dict[str, object] = {p.name: p.value for p in parameters}
-
-    @property
-    def names(self) -> frozenset[str]:
-        """Return the names the request sets."""
-        return frozenset(self._values)
-
-    def __contains__(self, name: object) -> bool:
-        """Return whether the request sets ``name``."""
-        return name in self._values
-
-    def get(self, name: str, current: object) -> object:
-        """Return the value the request gives ``name``, or ``current``."""
-        return self._values.get(name, current)
-
-    def number(self, name: str, current: float) -> float:
-        """Return the number the request gives ``name``, or ``current``."""
-        value = self._values.get(name, current)
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise ConfigurationError(f'parameter {name!r} needs a number, got {value!r}')
-        return float(value)
-
-    def numbers(self, name: str, current: Sequence[float]) -> tuple[float, ...]:
-        """Return the numbers the request gives ``name`` (an unset array: none), or ``current``."""
-        value = self._values.get(name, current)
-        if value is None:
-            return ()
-        if isinstance(value, (str, bytes)) or not isinstance(value, Iterable):
-            raise ConfigurationError(f'parameter {name!r} needs numbers, got {value!r}')
-        return tuple(float(x) for x in value)
-
-    def pair(self, name: str, current: tuple[float, float]) -> tuple[float, float]:
-        """Return the two numbers the request gives ``name``, or ``current``."""
-        values = self.numbers(name, current)
-        if len(values) != 2:
-            raise ConfigurationError(f'parameter {name!r} needs two numbers, got {list(values)}')
-        return values[0], values[1]
-
-    def text(self, name: str, current: str) -> str:
-        """Return the string the request gives ``name``, or ``current``."""
-        return str(self._values.get(name, current))
-
-
-def as_double(parameter: Parameter, declared: Parameter.Type) -> Parameter:
-    """
-    Return ``parameter`` as a double (array) if it is an integer (array) and ``declared`` is.
-
-    Parameters
-    ----------
-    parameter : Parameter
-        A value being set.
-    declared : Parameter.Type
-        The declared type of the parameter.
-
-    Returns
-    -------
-    Parameter
-        The converted parameter, or ``parameter`` itself.
-
-    """
-    if _WIDENED.get(parameter.type_) != declared:
-        return parameter
-    value = parameter.value
-    converted = [float(x) for x in value] if declared == Parameter.Type.DOUBLE_ARRAY \
-        else float(value)
-    return Parameter(parameter.name, declared, converted)
-
-
-def descriptor(spec: ParameterSpec, description: str | None = None) -> ParameterDescriptor:
-    """
-    Return the descriptor of a parameter: description, read-only, range, constraints.
-
-    Parameters
-    ----------
-    spec : ParameterSpec
-        The table's row.
-    description : str or None
-        The text to show instead of the table's (a joint's name in front).
-
-    Returns
-    -------
-    rcl_interfaces/ParameterDescriptor
-        The descriptor rclpy checks every set against.
-
-    """
-    result = ParameterDescriptor(description=description or spec.documented,
-                                 read_only=spec.read_only, type=ROS_TYPES[spec.kind].value)
-    if spec.low is not None and spec.high is not None:
-        if spec.kind == 'int':
-            result.integer_range = [IntegerRange(from_value=int(spec.low),
-                                                 to_value=int(spec.high), step=0)]
-        else:
-            result.floating_point_range = [FloatingPointRange(
-                from_value=float(spec.low), to_value=float(spec.high), step=0.0)]
-    constraints = []
-    if spec.length is not None:
-        constraints.append(f'exactly {spec.length} values')
-    if spec.choices:
-        constraints.append(f"one of: {', '.join(spec.choices)}")
-    if spec.required:
-        constraints.append('required')
-    result.additional_constraints = '; '.join(constraints)
-    return result
+__all__ = ['NodeParameters', 'ParameterRequest']
 
 
 class NodeParameters:
@@ -357,12 +229,12 @@ class NodeParameters:
     def texts(self, name: str) -> list[str] | None:
         """Return a string-array parameter (None if unset)."""
         value = self._typed(name, 'string_array')
-        return None if value is None else [str(v) for v in _items(value)]
+        return None if value is None else [str(v) for v in array_items(value)]
 
     def doubles(self, name: str) -> list[float] | None:
         """Return a double-array parameter (None if unset)."""
         value = self._typed(name, 'double_array')
-        return None if value is None else [float(v) for v in _items(value)]
+        return None if value is None else [float(v) for v in array_items(value)]
 
     def _typed(self, name: str, kind: str) -> object:
         spec = self.table.find(name)
