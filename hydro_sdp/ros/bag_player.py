@@ -17,9 +17,9 @@ import time
 from typing import Any
 
 from hydro_sdp.bags import EmptyBagError, FLOAT64, JOINT_STATE, raw_messages
-from hydro_sdp.core.errors import ConfigurationError
 from hydro_sdp.ros.conversions import fill_stamp
-from hydro_sdp.ros.params import declare
+from hydro_sdp.ros.parameters.node_parameters import NodeParameters
+from hydro_sdp.ros.parameters.player import PLAYER_PARAMETERS
 from hydro_sdp.ros.runner import run_node
 from rclpy.node import Node
 from rosgraph_msgs.msg import Clock  # type: ignore[import-untyped, unused-ignore]
@@ -44,17 +44,15 @@ class BagPlayerNode(Node):
 
     def __init__(self, *, node_name: str = 'bag_player', **kwargs: Any) -> None:
         super().__init__(node_name, **kwargs)
-        bag = declare(self, 'bag', '', 'bag to play (required)', read_only=True)
-        self.rate = declare(self, 'rate', 1.0, 'playback speed relative to the recording',
-                            low=1e-3, high=1e3, read_only=True)
-        self.publish_clock = declare(self, 'publish_clock', False,
-                                     'publish the bag time on /clock', read_only=True)
-        self.loop = declare(self, 'loop', False, 'play the bag again from its start when it '
-                            'ends, instead of exiting', read_only=True)
-        autostart = declare(self, 'autostart', True,
-                            'start playing on a wall-clock timer at once', read_only=True)
-        if not bag:
-            raise ConfigurationError("parameter 'bag' is required")
+        self.parameters = NodeParameters(self, PLAYER_PARAMETERS)
+        self.parameters.declare()      # refuses a missing bag
+        self.parameters.start()
+        parameters = self.parameters
+        bag = parameters.text('bag')
+        self.rate = parameters.double('rate')
+        self.publish_clock = parameters.flag('publish_clock')
+        self.loop = parameters.flag('loop')
+        autostart = parameters.flag('autostart')
         messages = [m for m in raw_messages(Path(bag)) if m[1] in TYPES]
         if not messages:
             raise EmptyBagError(f'{bag}: no JointState or Float64 messages to play')

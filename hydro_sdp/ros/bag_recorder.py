@@ -23,12 +23,11 @@ import sys
 from typing import Any, Callable
 
 from hydro_sdp.bags.live_writer import Sqlite3BagWriter
-from hydro_sdp.core.errors import ConfigurationError
-from hydro_sdp.ros.params import declare
+from hydro_sdp.ros.parameters.node_parameters import NodeParameters
+from hydro_sdp.ros.parameters.recorder import RECORDER_PARAMETERS
 from hydro_sdp.ros.runner import run_node
 from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
-from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.topic_endpoint_info import TopicEndpointInfo
 
@@ -91,30 +90,16 @@ class BagRecorderNode(Node):
 
     def __init__(self, *, node_name: str = 'bag_recorder', **kwargs: Any) -> None:
         super().__init__(node_name, **kwargs)
-        output = declare(self, 'output', '', 'bag folder to create (required; must not exist)',
-                         read_only=True)
-        topics = declare(self, 'topics', Parameter.Type.STRING_ARRAY,
-                         'topics to record (default: joint_states and every valve_command '
-                         'and setpoint of the joints in joint_names)', read_only=True)
-        joints = declare(self, 'joint_names', ['j2'], 'joints whose command and set-point '
-                         'topics are recorded by default', read_only=True)
-        storage = declare(self, 'storage', 'sqlite3', 'storage: sqlite3 (the only one '
-                          'written while recording)', read_only=True)
-        flush_period = declare(self, 'flush_period', 1.0, 'longest time between commits to '
-                               'disk, s: what a crash can lose', low=0.01, high=60.0,
-                               read_only=True)
-        discovery_period = declare(self, 'discovery_period', 0.2, 'how often topics not yet '
-                                   'advertised are looked up in the graph, s', low=0.01,
-                                   high=10.0, read_only=True)
-        if not output:
-            raise ConfigurationError("parameter 'output' (the bag folder) is required")
-        if storage != 'sqlite3':
-            raise ConfigurationError(f"parameter 'storage' must be sqlite3 (committed while "
-                                     f'recording, so a crash loses at most flush_period), '
-                                     f'got {storage!r}')
-        if not topics:
-            topics = ['joint_states'] + [f'{j}/{t}' for j in joints
-                                         for t in ('valve_command', 'setpoint')]
+        self.parameters = NodeParameters(self, RECORDER_PARAMETERS)
+        self.parameters.declare()      # refuses a missing output, a storage not sqlite3
+        self.parameters.start()
+        parameters = self.parameters
+        output = parameters.text('output')
+        flush_period = parameters.double('flush_period')
+        discovery_period = parameters.double('discovery_period')
+        joints = parameters.texts('joint_names') or []
+        topics = parameters.texts('topics') or ['joint_states'] + [
+            f'{joint}/{topic}' for joint in joints for topic in ('valve_command', 'setpoint')]
         self.closed = False
         # Refuses an existing output before anything is subscribed.
         self._writer = Sqlite3BagWriter(output, flush_period=flush_period)

@@ -15,6 +15,15 @@ controlled or leaves the end stops less ``setpoint_margin``, or if the node is n
 active or has had no feedback from a joint it names). ``/diagnostics``
 gets one status per joint every ``diagnostic_period`` (:mod:`~hydro_sdp.core.control.health`).
 
+The node holds its parts: its parameters
+(:class:`~hydro_sdp.ros.parameters.node_parameters.NodeParameters` over
+:data:`~hydro_sdp.ros.parameters.controller.CONTROLLER_PARAMETERS`), what configure
+builds (:class:`~hydro_sdp.ros.controller_configuration.ControllerConfiguration`: one
+:class:`~hydro_sdp.ros.joint_loop.JointLoop` per joint), its topics and watchdog
+(:class:`~hydro_sdp.ros.controller_interfaces.ControllerInterfaces`), what follows its
+trajectories (:class:`~hydro_sdp.ros.trajectory_follower.TrajectoryFollower`) and its
+diagnostics (:class:`~hydro_sdp.ros.diagnostics.DiagnosticsReporter`).
+
 The core :class:`~hydro_sdp.core.control.pip_controller.PipIdzController` does the
 control and the core :mod:`~hydro_sdp.core.control.scheduling` decides when: the first
 JointState sample at or after each control instant is controlled (so the
@@ -25,7 +34,8 @@ from the node's clock) is refused for that joint with a throttled warning and it
 valve is closed; if no valid feedback arrives for ``feedback_timeout`` the
 watchdog closes the valve, and control resumes from the next valid sample
 without a bump. Set-points are kept ``setpoint_margin`` degrees inside the end
-stops (:mod:`~hydro_sdp.core.control.safety`).
+stops (:mod:`~hydro_sdp.core.control.safety`). Per message the node reads the clock once
+and the stamp once, and publishes the command before anything else it does.
 
 Lifecycle: configure loads the files and designs, and declares the joints'
 parameters; activate starts commanding (every joint first holds where it is
@@ -38,29 +48,32 @@ Every writable parameter applies at run time: ``<joint>.gains.k_i``,
 ``gains.k_i``, ``idz.dead_zone``..., kept in step). With a table IDZ (the map's own
 inverse) a new ``idz.dead_zone`` shifts the branch of the edge that moved and a new
 ``idz.slopes`` scales a branch's increments (its chord slope to two thirds of its
-largest increment). A change request is checked as
-a whole before anything is applied and applied in the post-set callback.
+largest increment). A change request is checked as a whole before anything is
+applied and applied in the post-set callback.
 
 """
 
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import Any, Sequence
 
-from hydro_sdp.core.control.safety import clamp_setpoint, SETPOINT_MARGIN, setpoint_range
-from hydro_sdp.core.control.scheduling import seconds_to_ns, watchdog_period_ns
-from hydro_sdp.core.control.trajectory import check_trajectory, start_time, TrajectorySampler
+from hydro_sdp.core.control.health import HealthStatus, joint_health
+from hydro_sdp.core.control.safety import clamp_setpoint, setpoint_range
+from hydro_sdp.core.control.scheduling import seconds_to_ns
 from hydro_sdp.core.errors import ConfigurationError, DataError, HydroSdpError
 from hydro_sdp.io.model_files import default_model_path
-from hydro_sdp.ros.controller_setup import ControllerSetup
-from hydro_sdp.ros.conversions import fill_controller_state, joint_angle, trajectory_from_message
+from hydro_sdp.ros.controller_configuration import ControllerConfiguration
+from hydro_sdp.ros.controller_interfaces import ControllerInterfaces
+from hydro_sdp.ros.conversions import fill_controller_state, position_of
+from hydro_sdp.ros.diagnostics import DiagnosticsReporter
 from hydro_sdp.ros.first_joint import first_joint
 from hydro_sdp.ros.joint_loop import JointLoop
-from hydro_sdp.ros.params import declare, value_of
+from hydro_sdp.ros.parameters.controller import CONTROLLER_PARAMETERS
+from hydro_sdp.ros.parameters.node_parameters import NodeParameters, ParameterRequest
 from hydro_sdp.ros.runner import run_node
+from hydro_sdp.ros.trajectory_follower import TrajectoryFollower
 from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
-from rclpy.parameter import Parameter
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64
 from trajectory_msgs.msg import JointTrajectory as TrajectoryMessage
@@ -68,7 +81,7 @@ from trajectory_msgs.msg import JointTrajectory as TrajectoryMessage
 SUCCESS = TransitionCallbackReturn.SUCCESS
 
 
-class PipControllerNode(ControllerSetup, LifecycleNode):
+class PipControllerNode(LifecycleNode):
     """
     PIP-IDZ control of one or several joints from ``joint_states``, set-points and trajectories.
 
@@ -81,53 +94,32 @@ class PipControllerNode(ControllerSetup, LifecycleNode):
 
     """
 
+    #: The writable parameters in force (set by their handlers, read per message).
+    feedback_timeout: float
+    setpoint_margin: float
+    feedforward: bool
+
     def __init__(self, *, node_name: str = 'pip_controller', **kwargs: Any) -> None:
         LifecycleNode.__init__(self, node_name, **kwargs)
-        self.files = {
-            'model_file': declare(self, 'model_file', str(default_model_path()),
-                                  'model file of the joint', read_only=True),
-            'controller_file': declare(self, 'controller_file', '',
-                                       'controller file from hydro-sdp design (default: '
-                                       'designed from the model at configuration)',
-                                       read_only=True),
-            'joints': declare(self, 'joints', Parameter.Type.STRING_ARRAY,
-                              'joints of one node, in JointState (overrides model_file)',
-                              read_only=True),
-            'model_files': declare(self, 'model_files', Parameter.Type.STRING_ARRAY,
-                                   'model file of each of the joints', read_only=True),
-            'controller_files': declare(self, 'controller_files', Parameter.Type.STRING_ARRAY,
-                                        "controller file of each of the joints ('': designed "
-                                        'from the model)', read_only=True)}
-        declare(self, 'control_period', 0.05, 'control period when designing from a model, s',
-                low=1e-3, high=10.0, read_only=True)
-        self.feedback_timeout = declare(self, 'feedback_timeout', 0.5,
-                                        'watchdog: close the valve after this long without '
-                                        'valid feedback, s', low=1e-3, high=60.0)
-        self.setpoint_margin = declare(self, 'setpoint_margin', SETPOINT_MARGIN,
-                                       'set-points are kept this far inside the end stops, deg',
-                                       low=0.0, high=90.0)
-        self.feedforward = declare(self, 'feedforward', True,
-                                   'feed the set-point rate of trajectories forward')
-        self.diagnostic_period = declare(self, 'diagnostic_period', 1.0,
-                                         'time between /diagnostics reports, s', low=0.01,
-                                         high=60.0, read_only=True)
-        autostart = declare(self, 'autostart', True,
-                            'configure and activate at start', read_only=True)
         self.loops: list[JointLoop] = []
         self.active = False
-        self.samples = 0
-        self.outputs = 0
-        self.refused = 0
-        self.setpoints_received = 0
-        self.trajectories_received = 0
-        self.trajectories_refused = 0
-        self._sampler: TrajectorySampler | None = None
-        self._entities: list[Any] = []
+        self.interfaces: ControllerInterfaces | None = None
+        self.diagnostics: DiagnosticsReporter | None = None
+        self.samples = self.outputs = self.refused = 0
+        self.setpoints_received = self.trajectories_received = self.trajectories_refused = 0
+        self.trajectories: TrajectoryFollower | None = None
         self._configure_error: HydroSdpError | None = None
         self._clock_handle = self.get_clock().handle
-        self.add_on_set_parameters_callback(self._check_parameters)
-        self.add_post_set_parameters_callback(self._apply_parameters)
-        if autostart:
+        self.parameters = NodeParameters(
+            self, CONTROLLER_PARAMETERS, check=self._check_request,
+            apply={'feedback_timeout': self._apply_feedback_timeout,
+                   'setpoint_margin': self._apply_setpoint_margin,
+                   'feedforward': self._apply_feedforward},
+            apply_joint=self._apply_joints)
+        self.parameters.declare(defaults={'model_file': str(default_model_path())})
+        self.parameters.start()
+        self.configuration = ControllerConfiguration(self.parameters)
+        if self.parameters.flag('autostart'):
             if self.trigger_configure() != SUCCESS:
                 raise self._configure_error or ConfigurationError('configuration failed')
             self.trigger_activate()
@@ -140,9 +132,6 @@ class PipControllerNode(ControllerSetup, LifecycleNode):
     model = first_joint('loops', 'model', "The first joint's model.")
     gate = first_joint('loops', 'gate', "The first joint's feedback gate.")
     last_command = first_joint('loops', 'last_command', "The first joint's last valve command.")
-    _setpoint = first_joint('loops', 'setpoint', "The first joint's set-point, or None.")
-    _blind = first_joint('loops', 'gate.blind', 'Whether the watchdog found no valid feedback '
-                         '(the valve is closed).')
 
     @property
     def joints(self) -> list[str]:
@@ -157,15 +146,21 @@ class PipControllerNode(ControllerSetup, LifecycleNode):
     def on_configure(self, state: LifecycleState) -> TransitionCallbackReturn:
         """Load the files, design, declare the joints' parameters, create the interfaces."""
         try:
-            self.loops = self.build_loops(self._now_ns())
+            loops = self.configuration.build(seconds_to_ns(self.feedback_timeout),
+                                             self.setpoint_margin, self._now_ns())
         except (HydroSdpError, OSError) as error:
             self._configure_error = error if isinstance(error, HydroSdpError) \
                 else ConfigurationError(str(error))
-            self.loops = []
             self.get_logger().error(f'configuration failed: {error}')
             return TransitionCallbackReturn.FAILURE
-        self._sampler = TrajectorySampler({loop.joint: 0.0 for loop in self.loops})
-        self.create_interfaces()
+        self.loops = loops
+        self.trajectories = TrajectoryFollower(loops)
+        self.interfaces = ControllerInterfaces(
+            self, loops, on_state=self._on_state, on_setpoint=self._on_setpoint,
+            on_trajectory=self._on_trajectory, on_watchdog=self._on_watchdog,
+            timeout_ns=seconds_to_ns(self.feedback_timeout))
+        self.diagnostics = DiagnosticsReporter(self, self.parameters.double('diagnostic_period'),
+                                               self._statuses)
         return SUCCESS
 
     def on_activate(self, state: LifecycleState) -> TransitionCallbackReturn:
@@ -173,7 +168,7 @@ class PipControllerNode(ControllerSetup, LifecycleNode):
         now = self._now_ns()
         for loop in self.loops:
             loop.reset(now)
-        self._sampler = TrajectorySampler({loop.joint: 0.0 for loop in self.loops})
+        self.trajectories = TrajectoryFollower(self.loops)
         self.active = True
         return SUCCESS
 
@@ -181,27 +176,112 @@ class PipControllerNode(ControllerSetup, LifecycleNode):
         """Close every valve once and stop commanding."""
         self.active = False
         for loop in self.loops:
-            self._close_valve(loop)
+            loop.close_valve()
         return SUCCESS
 
     def on_cleanup(self, state: LifecycleState) -> TransitionCallbackReturn:
         """Undo configure."""
-        self.destroy_interfaces()
+        if self.interfaces is not None:
+            self.interfaces.destroy(self.loops)
+            self.interfaces = None
+        if self.diagnostics is not None:
+            self.diagnostics.destroy()
+            self.diagnostics = None
+        self.configuration.release(self.loops)
+        self.loops = []
         return SUCCESS
 
     def on_shutdown(self, state: LifecycleState) -> TransitionCallbackReturn:
         """Close the valves if commanding, and release everything."""
         if self.active:
             self.on_deactivate(state)
-        if self.loops:
-            self.destroy_interfaces()
-        return SUCCESS
+        return self.on_cleanup(state)
 
     def state_label(self) -> str:
         """Return the lifecycle state's label (``active``, ``inactive``...)."""
         return str(self._state_machine.current_state[1])
 
-    # Control.
+    # Control: every sample comes through _on_state; rare paths (refusals, warnings) are
+    # methods of their own, so the common path stays short.
+    def _on_state(self, message: JointState) -> None:
+        self.samples += 1
+        if not self.active:
+            return
+        stamp = message.header.stamp
+        stamp_ns = stamp.sec * 1_000_000_000 + stamp.nanosec
+        names = message.name
+        positions = message.position
+        now = self._now_ns()
+        for loop in self.loops:
+            self._control(loop, stamp_ns, names, positions, now)
+
+    def _control(self, loop: JointLoop, stamp: int, names: Sequence[str],
+                 positions: Sequence[float], now: int) -> None:
+        try:
+            angle = position_of(names, positions, loop.joint)
+            admission = loop.gate.admit(stamp, now)
+        except DataError as error:
+            self._refuse(loop, error)
+            return
+        if admission != 'accepted':
+            if admission == 'ignored':
+                self._ignore(loop, stamp)
+                return
+            self.get_logger().info(f'{loop.joint}: feedback is back; control resumes')
+        loop.angle = angle
+        schedule = loop.schedule
+        tick = schedule.tick(stamp)
+        if tick == 'wait':
+            return
+        controller = loop.controller
+        if tick == 'resume':
+            # Resume bumplessly: the valve was closed, so the last applied increment is 0.
+            controller.reset(u=0.0)
+        feedforward: float | None = None
+        if loop.following:
+            assert self.trajectories is not None
+            setpoint, feedforward = self.trajectories.setpoint(loop, stamp * 1e-9,
+                                                               self.feedforward)
+        elif loop.setpoint is not None:
+            setpoint = loop.setpoint
+        else:
+            setpoint = loop.setpoint = angle   # hold where the joint is until told otherwise
+        try:
+            u, command = controller.step(setpoint, angle, feedforward)
+        except HydroSdpError as error:
+            self._warn(f'{loop.joint}: controller refused the sample ({error}); valve closed')
+            loop.close_valve()
+            return
+        loop.publish_command(command)
+        # After the command, so none of it adds to the feedback-to-command latency.
+        loop.last_setpoint = setpoint
+        self.outputs += 1
+        schedule.stepped(stamp)
+        self._report_step(loop, setpoint, angle, u, command)
+
+    def _report_step(self, loop: JointLoop, setpoint: float, angle: float, u: float,
+                     command: float) -> None:
+        # Skipped, serialisation and all, while nobody listens.
+        state_pub = loop.state_pub
+        interfaces = self.interfaces
+        if state_pub is not None and interfaces is not None and \
+                state_pub.get_subscription_count():
+            state_pub.publish(fill_controller_state(interfaces.state_message, setpoint, angle,
+                                                    u, command))
+
+    def _refuse(self, loop: JointLoop, error: DataError) -> None:
+        self.refused += 1
+        loop.refused_since_report += 1
+        self._warn(f'{loop.joint}: refused feedback ({error}); valve closed')
+        loop.close_valve()
+
+    def _ignore(self, loop: JointLoop, stamp: int) -> None:
+        # A duplicate or a sample overtaken by a newer one: the command in force was
+        # computed from fresher feedback, so it stays; the sample is only dropped.
+        self.refused += 1
+        self._warn(f'{loop.joint}: ignored JointState stamp {stamp * 1e-9:.6f} s: it is not '
+                   f'after the last one ({(loop.gate.last_stamp or 0) * 1e-9:.6f} s)')
+
     def _warn(self, text: str) -> None:
         self.get_logger().warning(text, throttle_duration_sec=1.0,
                                   throttle_time_source_type=self.get_clock())
@@ -212,11 +292,23 @@ class PipControllerNode(ControllerSetup, LifecycleNode):
         with handle:
             return int(handle.get_now().nanoseconds)
 
-    def _close_valve(self, loop: JointLoop) -> None:
-        loop.last_command = loop.rest
-        loop.command_pub.publish(Float64(data=float(loop.rest)))
-        loop.schedule.hold()
+    def _on_watchdog(self) -> None:
+        if not self.active:
+            return
+        now = self._now_ns()
+        for loop in self.loops:
+            state = loop.gate.watchdog(now)
+            if state == 'lost':
+                self._warn(f'{loop.joint}: no valid feedback for '
+                           f'{loop.gate.silence_ns(now) * 1e-9:.2f} s; valve closed')
+            if state != 'fed':
+                loop.close_valve()
 
+    def _statuses(self, now_ns: int) -> list[tuple[str, HealthStatus]]:
+        return [(loop.joint, joint_health(loop.snapshot(now_ns, self.active)))
+                for loop in self.loops]
+
+    # Set-points and trajectories.
     def _on_setpoint(self, message: Float64, loop: JointLoop | None = None) -> None:
         loop = loop or self.loops[0]
         self.setpoints_received += 1
@@ -237,159 +329,46 @@ class PipControllerNode(ControllerSetup, LifecycleNode):
                        f'using {safe:.2f} deg')
         return safe
 
-    def _on_state(self, message: JointState) -> None:
-        # Every sample comes through here: the rare paths (refusals, warnings) go to methods.
-        self.samples += 1
-        if not self.active:
-            return
-        for loop in self.loops:
-            self._control(loop, message)
-
-    def _control(self, loop: JointLoop, message: JointState) -> None:
-        try:
-            stamp, angle = joint_angle(message, loop.joint)
-            admission = loop.gate.admit(stamp, self._now_ns())
-        except DataError as error:
-            self._refuse(loop, error)
-            return
-        if admission != 'accepted':
-            if admission == 'ignored':
-                self._ignore(loop, stamp)
-                return
-            self.get_logger().info(f'{loop.joint}: feedback is back; control resumes')
-        loop.angle = angle
-        schedule = loop.schedule
-        tick = schedule.tick(stamp)
-        if tick == 'wait':
-            return
-        controller = loop.controller
-        if tick == 'resume':
-            # Resume bumplessly: the valve was closed, so the last applied increment is 0.
-            controller.reset(u=0.0)
-        feedforward: float | None = None
-        if loop.following:
-            setpoint, feedforward = self._follow(loop, stamp * 1e-9)
-        elif loop.setpoint is not None:
-            setpoint = loop.setpoint
-        else:
-            setpoint = loop.setpoint = angle   # hold where the joint is until told otherwise
-        try:
-            u, command = controller.step(setpoint, angle, feedforward)
-        except HydroSdpError as error:
-            self._warn(f'{loop.joint}: controller refused the sample ({error}); valve closed')
-            self._close_valve(loop)
-            return
-        loop.last_command = command
-        loop.last_setpoint = setpoint
-        loop.command_pub.publish(Float64(data=float(command)))
-        self.outputs += 1
-        schedule.stepped(stamp)
-        # After the command, so it adds nothing to the feedback-to-command latency; skipped
-        # (serialisation and all) while nobody listens.
-        state_pub = loop.state_pub
-        if state_pub.get_subscription_count():
-            state_pub.publish(fill_controller_state(self._state_message, setpoint, angle,
-                                                    u, command))
-
-    def _follow(self, loop: JointLoop, t: float) -> tuple[float, float | None]:
-        """Return the set-point (deg) and feed-forward (deg per control sample) at ``t`` (s)."""
-        sampler = self._sampler
-        assert sampler is not None
-        setpoint = sampler.setpoint(loop.joint, t)
-        if not self.feedforward:
-            return setpoint, None
-        return setpoint, sampler.feedforward(loop.joint, t, loop.spec.control_period,
-                                             loop.spec.delay_samples)
-
-    def _refuse(self, loop: JointLoop, error: DataError) -> None:
-        self.refused += 1
-        loop.refused_since_report += 1
-        self._warn(f'{loop.joint}: refused feedback ({error}); valve closed')
-        self._close_valve(loop)
-
-    def _ignore(self, loop: JointLoop, stamp: int) -> None:
-        # A duplicate or a sample overtaken by a newer one: the command in force was
-        # computed from fresher feedback, so it stays; the sample is only dropped.
-        self.refused += 1
-        self._warn(f'{loop.joint}: ignored JointState stamp {stamp * 1e-9:.6f} s: it is not '
-                   f'after the last one ({(loop.gate.last_stamp or 0) * 1e-9:.6f} s)')
-
-    def _on_watchdog(self) -> None:
-        if not self.active:
-            return
-        now = self._now_ns()
-        for loop in self.loops:
-            state = loop.gate.watchdog(now)
-            if state == 'lost':
-                self._warn(f'{loop.joint}: no valid feedback for '
-                           f'{loop.gate.silence_ns(now) * 1e-9:.2f} s; valve closed')
-            if state != 'fed':
-                self._close_valve(loop)
-
     def _on_trajectory(self, message: TrajectoryMessage) -> None:
         self.trajectories_received += 1
         try:
-            trajectory, stamp = trajectory_from_message(message)
-            check_trajectory(trajectory, {loop.joint: loop.model.angle_limits
-                                          for loop in self.loops}, self.setpoint_margin)
-            loops = [self.loop(name) for name in trajectory.joint_names]
-            waiting = [loop.joint for loop in loops if loop.setpoint is None and
-                       not loop.following]
-            if not self.active or waiting:
-                raise DataError('trajectory refused: ' + (
-                    f"no feedback yet from {', '.join(waiting)}" if self.active
-                    else 'the controller is not active'))
+            assert self.trajectories is not None
+            self.trajectories.take(message, self._now_ns() * 1e-9, self.setpoint_margin,
+                                   self.active)
         except DataError as error:
             self.trajectories_refused += 1
             self.get_logger().warning(str(error))
-            return
-        sampler = self._sampler
-        assert sampler is not None
-        now = self._now_ns() * 1e-9
-        start = start_time(stamp, now)
-        for loop in loops:
-            if not loop.following:
-                # Its set-point held until now is the trajectory's anchor.
-                assert loop.setpoint is not None
-                sampler.hold(loop.joint, loop.setpoint, min(start, now) - 1e-3)
-                loop.following = True
-                loop.clamped = False
-        sampler.replace(trajectory, start)
-        sampler.prune(now - 1.0)
 
-    # Parameters.
-    def _check_parameters(self, parameters: list[Parameter]) -> Any:
-        # On-set: validate the whole request; nothing is applied here.
-        try:
-            for loop in self.loops:
-                loop.candidate(parameters)
-                margin = value_of(parameters, 'setpoint_margin', self.setpoint_margin)
-                setpoint_range(loop.model.angle_limits, float(margin))
-        except (HydroSdpError, TypeError, ValueError) as error:
-            return self.parameter_result(False, str(error))
-        return self.parameter_result(True)
-
-    def _apply_parameters(self, parameters: list[Parameter]) -> None:
-        # Post-set: the request was accepted as a whole; apply all of it.
-        names = {parameter.name for parameter in parameters}
+    # Parameters: checked whole by _check_request, then applied by the handlers below.
+    def _check_request(self, request: ParameterRequest) -> None:
+        margin = request.number('setpoint_margin', self.parameters.double('setpoint_margin'))
         for loop in self.loops:
-            for change in loop.apply(loop.candidate(parameters)):
+            loop.candidate(request)
+            setpoint_range(loop.model.angle_limits, margin)
+
+    def _apply_joints(self, request: ParameterRequest) -> None:
+        for loop in self.loops:
+            for change in loop.apply(loop.candidate(request)):
                 self.get_logger().info(change)
-        if 'feedback_timeout' in names:
-            self.feedback_timeout = float(value_of(parameters, 'feedback_timeout', 0.0))
-            timeout_ns = seconds_to_ns(self.feedback_timeout)
-            for loop in self.loops:
-                loop.gate.timeout_ns = timeout_ns
-            if self._watchdog is not None:
-                self._watchdog.timer_period_ns = watchdog_period_ns(timeout_ns)
+
+    def _apply_feedback_timeout(self) -> None:
+        self.feedback_timeout = self.parameters.double('feedback_timeout')
+        timeout_ns = seconds_to_ns(self.feedback_timeout)
+        for loop in self.loops:
+            loop.gate.timeout_ns = timeout_ns
+        if self.interfaces is not None:
+            self.interfaces.set_timeout(timeout_ns)
+        if self.parameters.live:
             self.get_logger().info(f'feedback_timeout now {self.feedback_timeout:g} s')
-        if 'setpoint_margin' in names:
-            self.setpoint_margin = float(value_of(parameters, 'setpoint_margin', 0.0))
-            for loop in self.loops:
-                if loop.setpoint is not None:
-                    loop.setpoint = self._safe_setpoint(loop, loop.setpoint)
-        if 'feedforward' in names:
-            self.feedforward = bool(value_of(parameters, 'feedforward', True))
+
+    def _apply_setpoint_margin(self) -> None:
+        self.setpoint_margin = self.parameters.double('setpoint_margin')
+        for loop in self.loops:
+            if loop.setpoint is not None:
+                loop.setpoint = self._safe_setpoint(loop, loop.setpoint)
+
+    def _apply_feedforward(self) -> None:
+        self.feedforward = self.parameters.flag('feedforward')
 
 
 def main(args: list[str] | None = None) -> None:

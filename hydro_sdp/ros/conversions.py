@@ -11,24 +11,73 @@ from __future__ import annotations
 
 import math
 from math import degrees, isfinite
-from typing import Any, Sequence
+from typing import Protocol, Sequence, TypeVar
 
 from hydro_sdp.core.control.trajectory import JointTrajectory
 from hydro_sdp.core.errors import DataError
 import numpy as np
 
 
-def stamp_to_ns(stamp: Any) -> int:
+class TimeField(Protocol):
+    """A ``builtin_interfaces/Time`` or ``Duration``."""
+
+    sec: int
+    nanosec: int
+
+
+class HeaderField(Protocol):
+    """A ``std_msgs/Header``."""
+
+    stamp: TimeField
+
+
+class JointStateMessage(Protocol):
+    """A ``sensor_msgs/JointState`` (rclpy's, or rosbags' deserialised one)."""
+
+    header: HeaderField
+    name: Sequence[str]
+    position: Sequence[float]
+    velocity: Sequence[float]
+
+
+class TrajectoryPointMessage(Protocol):
+    """A ``trajectory_msgs/JointTrajectoryPoint``."""
+
+    positions: Sequence[float]
+    velocities: Sequence[float]
+    time_from_start: TimeField
+
+
+class TrajectoryMessage(Protocol):
+    """A ``trajectory_msgs/JointTrajectory``."""
+
+    header: HeaderField
+    joint_names: Sequence[str]
+    points: Sequence[TrajectoryPointMessage]
+
+
+class ArrayMessage(Protocol):
+    """A ``std_msgs/Float64MultiArray`` (its layout set elsewhere)."""
+
+    data: Sequence[float]
+
+
+JointStateT = TypeVar('JointStateT', bound=JointStateMessage)
+TrajectoryT = TypeVar('TrajectoryT', bound=TrajectoryMessage)
+ArrayT = TypeVar('ArrayT', bound=ArrayMessage)
+
+
+def stamp_to_ns(stamp: TimeField) -> int:
     """Return a ``builtin_interfaces/Time`` as integer nanoseconds."""
     return int(stamp.sec) * 1_000_000_000 + int(stamp.nanosec)
 
 
-def fill_stamp(stamp: Any, stamp_ns: int) -> None:
+def fill_stamp(stamp: TimeField, stamp_ns: int) -> None:
     """Set a ``builtin_interfaces/Time`` to ``stamp_ns`` integer nanoseconds."""
     stamp.sec, stamp.nanosec = divmod(int(stamp_ns), 1_000_000_000)
 
 
-def joint_angle(message: Any, joint: str) -> tuple[int, float]:
+def joint_angle(message: JointStateMessage, joint: str) -> tuple[int, float]:
     """
     Return the stamp (ns) and the angle (degrees) of ``joint`` in a JointState.
 
@@ -51,9 +100,35 @@ def joint_angle(message: Any, joint: str) -> tuple[int, float]:
         position is not finite.
 
     """
-    # The controller calls this for every sample: attributes are read once, nothing copied.
-    names = message.name
-    positions = message.position
+    return stamp_to_ns(message.header.stamp), position_of(message.name, message.position, joint)
+
+
+def position_of(names: Sequence[str], positions: Sequence[float], joint: str) -> float:
+    """
+    Return the angle (degrees) of ``joint`` from a JointState's ``name`` and ``position``.
+
+    Parameters
+    ----------
+    names : sequence of str
+        The message's joint names.
+    positions : sequence of float
+        Its positions, rad.
+    joint : str
+        Joint name.
+
+    Returns
+    -------
+    float
+        The angle, degrees.
+
+    Raises
+    ------
+    DataError
+        If the names and positions differ in length, the joint is missing, or its
+        position is not finite.
+
+    """
+    # The controller calls this for every sample and joint: nothing is copied.
     if len(names) != len(positions):
         raise DataError(f'JointState has {len(names)} names but {len(positions)} positions')
     try:
@@ -63,12 +138,12 @@ def joint_angle(message: Any, joint: str) -> tuple[int, float]:
     value = float(positions[index])
     if not isfinite(value):
         raise DataError(f'position of joint {joint!r} is not finite ({value})')
-    return stamp_to_ns(message.header.stamp), degrees(value)
+    return degrees(value)
 
 
-def fill_joint_state(message: Any, stamp_ns: int, names: Sequence[str],
+def fill_joint_state(message: JointStateT, stamp_ns: int, names: Sequence[str],
                      angles_deg: Sequence[float],
-                     speeds_deg: Sequence[float] | None = None) -> Any:
+                     speeds_deg: Sequence[float] | None = None) -> JointStateT:
     """
     Fill a JointState message (stamp, names, positions and velocities in radians).
 
@@ -99,7 +174,7 @@ def fill_joint_state(message: Any, stamp_ns: int, names: Sequence[str],
     return message
 
 
-def trajectory_from_message(message: Any) -> tuple[JointTrajectory, float]:
+def trajectory_from_message(message: TrajectoryMessage) -> tuple[JointTrajectory, float]:
     """
     Return a ``trajectory_msgs/JointTrajectory`` in core units, and its stamp.
 
@@ -141,8 +216,8 @@ def trajectory_from_message(message: Any) -> tuple[JointTrajectory, float]:
     return trajectory, stamp_to_ns(message.header.stamp) * 1e-9
 
 
-def fill_trajectory(message: Any, names: Sequence[str], times: Sequence[float],
-                    positions_deg: Sequence[Sequence[float]], stamp_ns: int = 0) -> Any:
+def fill_trajectory(message: TrajectoryT, names: Sequence[str], times: Sequence[float],
+                    positions_deg: Sequence[Sequence[float]], stamp_ns: int = 0) -> TrajectoryT:
     """
     Fill a ``trajectory_msgs/JointTrajectory`` (positions in rad).
 
@@ -168,13 +243,14 @@ def fill_trajectory(message: Any, names: Sequence[str], times: Sequence[float],
     from trajectory_msgs.msg import JointTrajectoryPoint
     fill_stamp(message.header.stamp, stamp_ns)
     message.joint_names = list(names)
-    message.points = []
+    points = []
     for t, row in zip(times, positions_deg):
         point = JointTrajectoryPoint(positions=[math.radians(a) for a in row])
         whole = math.floor(t)
         point.time_from_start.sec = int(whole)
         point.time_from_start.nanosec = int(round((t - whole) * 1e9))
-        message.points.append(point)
+        points.append(point)
+    message.points = points
     return message
 
 
@@ -186,8 +262,8 @@ CONTROLLER_STATE_LABELS = ('setpoint_rad', 'angle_rad', 'error_rad', 'u_rad_per_
                            'v_command')
 
 
-def fill_controller_state(message: Any, setpoint_deg: float, angle_deg: float, u_deg: float,
-                          v: float) -> Any:
+def fill_controller_state(message: ArrayT, setpoint_deg: float, angle_deg: float,
+                          u_deg: float, v: float) -> ArrayT:
     """
     Fill a ``Float64MultiArray`` with one control step (layout: :data:`CONTROLLER_STATE_LABELS`).
 

@@ -1,12 +1,21 @@
-"""DiagnosticArray from :class:`~hydro_sdp.core.control.health.HealthStatus`."""
+"""
+``/diagnostics`` of the nodes: DiagnosticArray from joints' health statuses.
+
+:class:`~hydro_sdp.core.control.health.HealthStatus` says what each status holds.
+
+:class:`DiagnosticsReporter` is the part of a node that publishes them on a timer.
+
+"""
 
 from __future__ import annotations
 
-from typing import Sequence
+from typing import Callable, Sequence
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from hydro_sdp.core.control.health import HealthStatus
+from hydro_sdp.ros import qos
 from hydro_sdp.ros.conversions import fill_stamp
+from rclpy.node import Node
 
 
 def diagnostic_status(node_name: str, joint: str, health: HealthStatus) -> DiagnosticStatus:
@@ -60,3 +69,42 @@ def diagnostic_array(stamp_ns: int, node_name: str, joints: Sequence[str],
     array.status = [diagnostic_status(node_name, joint, health)
                     for joint, health in zip(joints, statuses)]
     return array
+
+
+class DiagnosticsReporter:
+    """
+    A node's ``/diagnostics``: one status per joint every ``period`` seconds.
+
+    Parameters
+    ----------
+    node : Node
+        The reporting node (its clock stamps the reports).
+    period : float
+        Time between reports, s.
+    statuses : callable
+        Called with the node clock's reading (ns); returns ``(joint, HealthStatus)`` pairs.
+
+    """
+
+    def __init__(self, node: Node, period: float,
+                 statuses: Callable[[int], Sequence[tuple[str, HealthStatus]]]) -> None:
+        self._node = node
+        self._statuses = statuses
+        self._publisher = node.create_publisher(DiagnosticArray, '/diagnostics',
+                                                qos.DIAGNOSTICS_QOS,
+                                                event_callbacks=qos.QUIET_PUBLISHER)
+        self._timer = node.create_timer(period, self.publish)
+
+    def publish(self) -> None:
+        """Publish one status per joint now."""
+        node = self._node
+        now = node.get_clock().now().nanoseconds
+        pairs = self._statuses(now)
+        self._publisher.publish(diagnostic_array(now, node.get_name(),
+                                                 [joint for joint, _ in pairs],
+                                                 [health for _, health in pairs]))
+
+    def destroy(self) -> None:
+        """Stop reporting."""
+        self._node.destroy_timer(self._timer)
+        self._node.destroy_publisher(self._publisher)

@@ -10,13 +10,36 @@ from __future__ import annotations
 
 from dataclasses import asdict
 import math
-from typing import Any
+from typing import Protocol
 
 from hydro_sdp.core.control.health import JointSnapshot
 from hydro_sdp.core.control.idz_recalibration import Decision, Recalibration, RecalibrationPolicy
-from hydro_sdp.core.identification.online import OnlineSdpIdentifier, SdpEstimate
+from hydro_sdp.core.identification.online import SdpEstimate
 from hydro_sdp.core.model.joint_model import JointModel
+from hydro_sdp.ros.protocols import MessagePublisher
 from rcl_interfaces.msg import Parameter as ParameterMessage, ParameterType, ParameterValue
+from rclpy.task import Future
+
+
+class OnlineEstimator(Protocol):
+    """
+    What the node needs of an online estimator (tests put a stand-in with a set estimate).
+
+    :class:`~hydro_sdp.core.identification.online.OnlineSdpIdentifier` is the real one.
+    """
+
+    @property
+    def delay(self) -> int:
+        """Return the delay, samples."""
+
+    def update(self, v: float, y: float) -> bool:
+        """Take the command in force and the measured angle of one sample."""
+
+    def named_estimate(self) -> SdpEstimate:
+        """Return the estimates with their standard deviations."""
+
+    def estimate(self) -> JointModel:
+        """Return the estimate as a joint model."""
 
 
 def estimate_topics(estimate: SdpEstimate) -> dict[str, float]:
@@ -72,18 +95,18 @@ class IdentifiedJoint:
         Joint name in JointState, topics, and the controller's parameters.
     model : JointModel
         The model to start from.
-    estimator : OnlineSdpIdentifier
+    estimator : OnlineEstimator
         The online filter.
     policy : RecalibrationPolicy
         The recalibration thresholds.
 
     """
 
-    def __init__(self, joint: str, model: JointModel, estimator: OnlineSdpIdentifier,
+    def __init__(self, joint: str, model: JointModel, estimator: OnlineEstimator,
                  policy: RecalibrationPolicy) -> None:
         self.joint = joint
         self.model = model
-        self.estimator: Any = estimator
+        self.estimator = estimator
         # The IDZ edges the controller uses: those of the model it was designed from.
         self.recalibration = Recalibration(estimator.named_estimate().edges, policy)
         self.recalibrations = 0
@@ -94,11 +117,11 @@ class IdentifiedJoint:
         self.angle: float | None = None
         self.last_publish: int | None = None
         self.last_sample_ns: int | None = None
-        self.pending: Any = None
-        # Set by the node.
-        self.estimate_pubs: dict[str, Any] = {}
-        self.flag_pub: Any = None
-        self.command_sub: Any = None
+        #: The controller's answer to a recalibration request, while it is awaited.
+        self.pending: Future | None = None
+        # Set by the node: where the estimates and the recalibration flag go.
+        self.estimate_pubs: dict[str, MessagePublisher] = {}
+        self.flag_pub: MessagePublisher | None = None
 
     def parameter_names(self) -> tuple[str, str]:
         """Return the controller's parameters of this joint's IDZ edges and slopes."""

@@ -34,8 +34,7 @@ from functools import partial
 import math
 from typing import Any
 
-from diagnostic_msgs.msg import DiagnosticArray
-from hydro_sdp.core.control.health import joint_health
+from hydro_sdp.core.control.health import HealthStatus, joint_health
 from hydro_sdp.core.control.idz import InverseDeadZone
 from hydro_sdp.core.control.idz_design import chord_idz
 from hydro_sdp.core.control.idz_recalibration import recalibrated_idz, RecalibrationPolicy
@@ -44,24 +43,19 @@ from hydro_sdp.core.identification.online import input_scale, OnlineSdpIdentifie
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.io.model_files import default_model_path, load_model
 from hydro_sdp.ros import conversions, qos
-from hydro_sdp.ros.diagnostics import diagnostic_array
+from hydro_sdp.ros.diagnostics import DiagnosticsReporter
 from hydro_sdp.ros.first_joint import first_joint
 from hydro_sdp.ros.identifier_joint import double_array, estimate_topics, IdentifiedJoint
-from hydro_sdp.ros.params import declare, value_of
+from hydro_sdp.ros.parameters.identifier import IDENTIFIER_PARAMETERS, POLICY_PARAMETERS
+from hydro_sdp.ros.parameters.node_parameters import NodeParameters, ParameterRequest
 from hydro_sdp.ros.runner import run_node
-from rcl_interfaces.msg import SetParametersResult
 from rcl_interfaces.srv import SetParametersAtomically
-from rclpy.event_handler import PublisherEventCallbacks
 from rclpy.node import Node
-from rclpy.parameter import Parameter
 from rclpy.task import Future
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Bool, Float64
 
 __all__ = ['estimate_topics', 'IdentifierNode', 'main']
-
-#: Recalibration thresholds, by parameter name (the fields of RecalibrationPolicy).
-POLICY_PARAMETERS = ('significance', 'settle', 'confidence', 'min_change', 'cooldown')
 
 
 class IdentifierNode(Node):
@@ -77,68 +71,64 @@ class IdentifierNode(Node):
 
     """
 
+    #: The writable parameters in force (set by their handlers).
+    publish_period: float
+    auto_recalibrate: bool
+
     def __init__(self, *, node_name: str = 'sdp_identifier', **kwargs: Any) -> None:
         super().__init__(node_name, **kwargs)
-        model_file = declare(self, 'model_file', str(default_model_path()),
-                             'model file to start from (kind sdp)', read_only=True)
-        joints = declare(self, 'joints', Parameter.Type.STRING_ARRAY,
-                         'joints of one node, in JointState (overrides model_file)',
-                         read_only=True)
-        model_files = declare(self, 'model_files', Parameter.Type.STRING_ARRAY,
-                              'model file of each of the joints', read_only=True)
-        models = [load_model(path) for path in (model_files or [model_file])]
-        if joints:
-            if len(models) != len(joints) or len(set(joints)) != len(joints):
-                raise ConfigurationError(f'joints needs distinct names, one per model file '
-                                         f'({len(models)}), got {list(joints)}')
-            names = list(joints)
-        else:
-            names = [declare(self, 'joint', models[0].joint, 'joint name in JointState',
-                             read_only=True)]
-        self.sample_period = declare(self, 'sample_period', 0.01,
-                                     'sample period of joint_states, s', low=1e-4, high=1.0,
-                                     read_only=True)
-        noise = declare(self, 'noise_std', 0.03, 'angle measurement noise, deg',
-                        low=1e-6, high=10.0, read_only=True)
-        self.publish_period = declare(self, 'publish_period', 0.1,
-                                      'time between published estimates, s', low=1e-3,
-                                      high=60.0)
-        self.auto_recalibrate = declare(self, 'auto_recalibrate', False,
-                                        'set the controller IDZ when the estimates call for it')
-        self.controller_name = declare(self, 'controller_node', 'pip_controller',
-                                       'controller node whose IDZ is recalibrated',
-                                       read_only=True)
-        self.control_period = declare(self, 'control_period', 0.05,
-                                      'control period of that controller, s', low=1e-3,
-                                      high=10.0, read_only=True)
-        diagnostic_period = declare(self, 'diagnostic_period', 1.0,
-                                    'time between /diagnostics reports, s', low=0.01,
-                                    high=60.0, read_only=True)
-        defaults = RecalibrationPolicy()
-        declare(self, 'significance', defaults.significance,
-                'edge change that counts as real, in standard deviations of the estimate',
-                low=1.0, high=100.0)
-        declare(self, 'settle', defaults.settle,
-                'time over which an edge estimate must move less than its std, s',
-                low=0.0, high=600.0)
-        declare(self, 'confidence', defaults.confidence,
-                'largest edge std to act on, fraction of the dead-zone width',
-                low=1e-4, high=1.0)
-        declare(self, 'min_change', defaults.min_change * input_scale(models[0].input_limits),
-                'smallest edge change worth a recalibration, input units', low=0.0, high=1e6)
-        declare(self, 'cooldown', defaults.cooldown, 'least time between recalibrations, s',
-                low=0.0, high=3600.0)
-        self.identified = [
-            IdentifiedJoint(name, model, OnlineSdpIdentifier(
-                model, self.sample_period,
-                OnlineSettings.for_input_limits(model.input_limits, noise_std=noise)),
-                self._policy([]))
-            for name, model in zip(names, models)]
-        self.samples = 0
-        self.commands_received = 0
-        # Fifteen estimate topics per joint: skip their QoS event handlers, which cost
-        # every wait.
-        quiet = PublisherEventCallbacks(use_default_callbacks=False)
+        self.samples = self.commands_received = 0
+        self.parameters = NodeParameters(
+            self, IDENTIFIER_PARAMETERS, check=self._check_request,
+            apply={'publish_period': self._apply_publish_period,
+                   'auto_recalibrate': self._apply_auto_recalibrate,
+                   **{name: self._apply_policy for name in POLICY_PARAMETERS}})
+        models = self._declare_parameters()
+        self.sample_period = self.parameters.double('sample_period')
+        self.control_period = self.parameters.double('control_period')
+        self.controller_name = self.parameters.text('controller_node')
+        self.identified = [self._identified_joint(joint, model)
+                           for joint, model in zip(self._joint_names(models), models)]
+        self._create_topics()
+        self._client = self.create_client(SetParametersAtomically,
+                                          f'{self.controller_name}/set_parameters_atomically')
+        self.diagnostics = DiagnosticsReporter(self, self.parameters.double('diagnostic_period'),
+                                               self._statuses)
+        self.parameters.start()
+
+    def _declare_parameters(self) -> list[JointModel]:
+        """Declare the parameters; return the starting models (some defaults depend on them)."""
+        parameters = self.parameters
+        parameters.declare(['model_file', 'joints', 'model_files'],
+                           defaults={'model_file': str(default_model_path())})
+        models = [load_model(path) for path in
+                  (parameters.texts('model_files') or [parameters.text('model_file')])]
+        parameters.declare(defaults={'min_change': RecalibrationPolicy().min_change *
+                                     input_scale(models[0].input_limits)})
+        return models
+
+    def _joint_names(self, models: list[JointModel]) -> list[str]:
+        """Return the joints' names: ``joints``, or the ``joint`` of a one-joint node."""
+        joints = self.parameters.texts('joints')
+        if not joints:
+            self.parameters.declare(['joint'], defaults={'joint': models[0].joint})
+            return [self.parameters.text('joint')]
+        if len(models) != len(joints) or len(set(joints)) != len(joints):
+            raise ConfigurationError(f'joints needs distinct names, one per model file '
+                                     f'({len(models)}), got {joints}')
+        return joints
+
+    def _identified_joint(self, joint: str, model: JointModel) -> IdentifiedJoint:
+        """Return a joint's online filter and recalibration decision, from its start model."""
+        settings = OnlineSettings.for_input_limits(
+            model.input_limits, noise_std=self.parameters.double('noise_std'))
+        return IdentifiedJoint(joint, model,
+                               OnlineSdpIdentifier(model, self.sample_period, settings),
+                               self._policy(ParameterRequest([])))
+
+    def _create_topics(self) -> None:
+        """Create each joint's estimate topics and command subscription, and joint_states'."""
+        quiet = qos.QUIET_PUBLISHER       # fifteen estimate topics per joint
         for item in self.identified:
             base = f'{item.joint}/sdp/'
             topics = tuple(estimate_topics(item.estimator.named_estimate())) + (
@@ -148,19 +138,10 @@ class IdentifierNode(Node):
                                             event_callbacks=quiet)
                 for name in topics}
             item.flag_pub = self.create_publisher(Bool, base + 'recalibration_needed',
-                                                  qos.ESTIMATE_QOS)
-            item.command_sub = self.create_subscription(
-                Float64, f'{item.joint}/valve_command',
-                partial(self._on_command, item=item), qos.COMMAND_QOS)
-        self._state_sub = self.create_subscription(JointState, 'joint_states', self._on_state,
-                                                   qos.STATE_QOS)
-        self._client = self.create_client(SetParametersAtomically,
-                                          f'{self.controller_name}/set_parameters_atomically')
-        self._diagnostics_pub = self.create_publisher(DiagnosticArray, '/diagnostics',
-                                                      qos.DIAGNOSTICS_QOS)
-        self._diagnostics = self.create_timer(diagnostic_period, self.publish_diagnostics)
-        self.add_on_set_parameters_callback(self._check_parameters)
-        self.add_post_set_parameters_callback(self._apply_parameters)
+                                                  qos.ESTIMATE_QOS, event_callbacks=quiet)
+            self.create_subscription(Float64, f'{item.joint}/valve_command',
+                                     partial(self._on_command, item=item), qos.COMMAND_QOS)
+        self.create_subscription(JointState, 'joint_states', self._on_state, qos.STATE_QOS)
 
     # The first (only) joint under the names of the one-joint node.
     joint = first_joint('identified', 'joint', "The first joint's name.")
@@ -185,26 +166,25 @@ class IdentifierNode(Node):
         """Return the identification of ``joint``."""
         return next(item for item in self.identified if item.joint == joint)
 
-    def _policy(self, parameters: list[Parameter]) -> RecalibrationPolicy:
+    def _policy(self, request: ParameterRequest) -> RecalibrationPolicy:
         # The thresholds after a set request (current values for the names it leaves out).
         return RecalibrationPolicy(**{
-            name: float(value_of(parameters, name, self.get_parameter(name).value))
+            name: request.number(name, self.parameters.double(name))
             for name in POLICY_PARAMETERS})
 
-    def _check_parameters(self, parameters: list[Parameter]) -> SetParametersResult:
-        try:
-            self._policy(parameters)
-        except HydroSdpError as error:
-            return SetParametersResult(successful=False, reason=str(error))
-        return SetParametersResult(successful=True)
+    def _check_request(self, request: ParameterRequest) -> None:
+        self._policy(request)
 
-    def _apply_parameters(self, parameters: list[Parameter]) -> None:
-        # Called once the whole request is accepted: every writable parameter takes effect.
-        policy = self._policy([])
+    def _apply_policy(self) -> None:
+        policy = self._policy(ParameterRequest([]))
         for item in self.identified:
             item.recalibration.policy = policy
-        self.auto_recalibrate = bool(self.get_parameter('auto_recalibrate').value)
-        self.publish_period = float(self.get_parameter('publish_period').value)
+
+    def _apply_publish_period(self) -> None:
+        self.publish_period = self.parameters.double('publish_period')
+
+    def _apply_auto_recalibrate(self) -> None:
+        self.auto_recalibrate = self.parameters.flag('auto_recalibrate')
 
     def _on_command(self, message: Float64, item: IdentifiedJoint | None = None) -> None:
         item = item or self.identified[0]
@@ -252,6 +232,7 @@ class IdentifierNode(Node):
             pass
         for name, value in values.items():
             item.estimate_pubs[name].publish(Float64(data=float(value)))
+        assert item.flag_pub is not None
         item.flag_pub.publish(Bool(data=decision.needed))
         if decision.due and self.auto_recalibrate and item.pending is None:
             try:
@@ -294,13 +275,14 @@ class IdentifierNode(Node):
                 self.get_logger().warning(f'{item.joint}: recalibration refused: {reasons}')
         item.pending.add_done_callback(done)
 
-    def publish_diagnostics(self) -> None:
-        """Publish one status per joint on ``/diagnostics``."""
-        now = self.get_clock().now().nanoseconds
+    def _statuses(self, now_ns: int) -> list[tuple[str, HealthStatus]]:
         stale_after = max(0.5, 10.0 * self.sample_period)
-        statuses = [joint_health(item.snapshot(now, stale_after)) for item in self.identified]
-        self._diagnostics_pub.publish(diagnostic_array(
-            now, self.get_name(), [item.joint for item in self.identified], statuses))
+        return [(item.joint, joint_health(item.snapshot(now_ns, stale_after)))
+                for item in self.identified]
+
+    def publish_diagnostics(self) -> None:
+        """Publish one status per joint on ``/diagnostics`` now."""
+        self.diagnostics.publish()
 
     def estimate(self, joint: str | None = None) -> JointModel:
         """Return the current estimate of ``joint`` (default: the first) as a joint model."""

@@ -3,43 +3,31 @@ One joint of the controller node: its model, design, controller, schedule and pa
 
 The node (:mod:`hydro_sdp.ros.controller_node`) holds one :class:`JointLoop` per
 joint and wires them to ROS; a loop knows its run-time parameters by their
-name under the joint (``<joint>.gains.k_i``, ``<joint>.idz.dead_zone``...) and
-builds the spec a set request would give (:meth:`JointLoop.candidate`).
+name under the joint (``<joint>.gains.k_i``, ``<joint>.idz.dead_zone``...: the per-joint
+rows of :data:`~hydro_sdp.ros.parameters.controller.CONTROLLER_PARAMETERS`) and builds
+the spec a set request would give (:meth:`JointLoop.candidate`).
 
 """
 
 from __future__ import annotations
 
 from dataclasses import replace
-from typing import Any
 
 from hydro_sdp.core.control.controller_spec import ControllerSpec
 from hydro_sdp.core.control.health import JointSnapshot
-from hydro_sdp.core.control.idz import idz_mode, IDZ_MODES, InverseDeadZone
+from hydro_sdp.core.control.idz import idz_mode, InverseDeadZone
 from hydro_sdp.core.control.idz_table import TableInverseDeadZone
 from hydro_sdp.core.control.pip_controller import PipIdzController
 from hydro_sdp.core.control.pip_design import PipGains
 from hydro_sdp.core.control.scheduling import ControlSchedule, FeedbackGate, seconds_to_ns
 from hydro_sdp.core.model.joint_model import JointModel
-from hydro_sdp.ros.params import pair, value_of
-from rclpy.parameter import Parameter
+from hydro_sdp.ros.parameters.request import ParameterRequest
+from hydro_sdp.ros.parameters.spec import ParameterValue
+from hydro_sdp.ros.protocols import MessagePublisher
+from std_msgs.msg import Float64
 
 IDZ_PARAMETERS = ('idz.dead_zone', 'idz.slopes', 'idz.beta', 'idz.mode')
 GAIN_PARAMETERS = ('gains.f', 'gains.g', 'gains.k_i')
-
-#: Description and range of each run-time parameter of a joint, by name under the joint.
-PARAMETERS: dict[str, tuple[str, float | None, float | None]] = {
-    'gains.f': ('PIP output feedback gains f0.., (deg per control sample) per deg', None, None),
-    'gains.g': ('PIP input feedback gains g1.. (dimensionless)', None, None),
-    'gains.k_i': ('PIP integral gain kI, (deg per control sample) per deg of error', 0.0, 10.0),
-    'idz.dead_zone': ('IDZ edges, input units (a table: each branch moves with its edge)',
-                      None, None),
-    'idz.slopes': ('IDZ slopes, deg per control sample per input unit (a table: chord slopes '
-                   'to two thirds of its largest increment; a new value scales the branch)',
-                   None, None),
-    'idz.beta': ('IDZ chatter band, deg per control sample', 0.0, 100.0),
-    'idz.mode': (f"IDZ mode: {', '.join(IDZ_MODES)}", None, None),
-}
 
 
 class JointLoop:
@@ -80,10 +68,25 @@ class JointLoop:
         self.last_setpoint: float | None = None
         self.last_command = self.rest
         self.refused_since_report = 0
-        # Set by the node: ROS publishers and subscriptions of this joint.
-        self.command_pub: Any = None
-        self.state_pub: Any = None
-        self.setpoint_sub: Any = None
+        #: Where the valve commands go (set by the node when it creates its topics).
+        self.command_pub: MessagePublisher | None = None
+        #: Where each control step is reported (``<joint>/controller_state``).
+        self.state_pub: MessagePublisher | None = None
+        # One command message, filled and published for every step (publish serialises it).
+        self._command = Float64()
+
+    def publish_command(self, command: float) -> None:
+        """Send ``command`` to the valve and remember it."""
+        self.last_command = command
+        message = self._command
+        message.data = float(command)
+        assert self.command_pub is not None
+        self.command_pub.publish(message)
+
+    def close_valve(self) -> None:
+        """Send the rest command; the next step starts from rest."""
+        self.publish_command(self.rest)
+        self.schedule.hold()
 
     def reset(self, now_ns: int) -> None:
         """Forget set-points and feedback (on activation): hold where the joint is found."""
@@ -94,26 +97,24 @@ class JointLoop:
         self.schedule.hold()
         self.refused_since_report = 0
 
-    def parameter_defaults(self) -> dict[str, Any]:
+    def parameter_defaults(self) -> dict[str, ParameterValue | None]:
         """Return the current value of each run-time parameter, by name under the joint."""
         gains = self.spec.gains
-        values: dict[str, Any] = {
-            'gains.f': list(gains.f),
-            'gains.g': list(gains.g) or Parameter.Type.DOUBLE_ARRAY,
-            'gains.k_i': gains.k_i}
+        values: dict[str, ParameterValue | None] = {
+            'gains.f': list(gains.f), 'gains.g': list(gains.g) or None, 'gains.k_i': gains.k_i}
         idz = self.spec.idz
         if idz is not None:
             values.update({'idz.dead_zone': list(idz.dead_zone), 'idz.slopes': list(idz.slopes),
                            'idz.beta': idz.beta, 'idz.mode': idz.mode})
         return values
 
-    def candidate(self, parameters: list[Parameter]) -> ControllerSpec:
+    def candidate(self, request: ParameterRequest) -> ControllerSpec:
         """
         Return the spec a set request would give; raises if it is not valid.
 
         Parameters
         ----------
-        parameters : list of Parameter
+        request : ParameterRequest
             The request (names under the joint, ``<joint>.gains.k_i``...).
 
         Returns
@@ -123,37 +124,36 @@ class JointLoop:
 
         """
         prefix = self.prefix
-        names = {p.name[len(prefix):] for p in parameters if p.name.startswith(prefix)}
+        names = {name[len(prefix):] for name in request.names if name.startswith(prefix)}
         spec = self.spec
-
-        def new(name: str, current: Any) -> Any:
-            return value_of(parameters, prefix + name, current)
         if names & set(IDZ_PARAMETERS) and spec.idz is not None:
-            current = spec.idz
-            edges = pair(new('idz.dead_zone', current.dead_zone), prefix + 'idz.dead_zone')
-            slopes = pair(new('idz.slopes', current.slopes), prefix + 'idz.slopes')
-            beta = float(new('idz.beta', current.beta))
-            mode = idz_mode(new('idz.mode', current.mode))
-            idz: InverseDeadZone | TableInverseDeadZone
-            if isinstance(current, TableInverseDeadZone):
-                # A table keeps its shape: new slopes scale a branch, new edges shift it.
-                idz = current
-                if slopes != current.slopes:
-                    idz = idz.with_slopes(slopes)
-                if edges != current.dead_zone:
-                    idz = idz.with_edges(edges)
-                idz = replace(idz, beta=beta, mode=mode)
-            else:
-                idz = InverseDeadZone(dead_zone=edges, slopes=slopes, beta=beta, mode=mode,
-                                      rest=current.rest)
-            spec = replace(spec, idz=idz)    # checks the IDZ against the valve range
+            spec = replace(spec, idz=self._idz(request))    # checks it against the valve range
         if names & set(GAIN_PARAMETERS):
             gains = spec.gains
             spec = replace(spec, gains=PipGains(    # checks orders and closed-loop stability
-                f=tuple(float(x) for x in new('gains.f', gains.f)),
-                g=tuple(float(x) for x in new('gains.g', gains.g) or ()),
-                k_i=float(new('gains.k_i', gains.k_i))))
+                f=request.numbers(prefix + 'gains.f', gains.f),
+                g=request.numbers(prefix + 'gains.g', gains.g),
+                k_i=request.number(prefix + 'gains.k_i', gains.k_i)))
         return spec
+
+    def _idz(self, request: ParameterRequest) -> InverseDeadZone | TableInverseDeadZone:
+        prefix = self.prefix
+        current = self.spec.idz
+        assert current is not None
+        edges = request.pair(prefix + 'idz.dead_zone', current.dead_zone)
+        slopes = request.pair(prefix + 'idz.slopes', current.slopes)
+        beta = request.number(prefix + 'idz.beta', current.beta)
+        mode = idz_mode(request.text(prefix + 'idz.mode', current.mode))
+        if isinstance(current, TableInverseDeadZone):
+            # A table keeps its shape: new slopes scale a branch, new edges shift it.
+            idz = current
+            if slopes != current.slopes:
+                idz = idz.with_slopes(slopes)
+            if edges != current.dead_zone:
+                idz = idz.with_edges(edges)
+            return replace(idz, beta=beta, mode=mode)
+        return InverseDeadZone(dead_zone=edges, slopes=slopes, beta=beta, mode=mode,
+                               rest=current.rest)
 
     def apply(self, spec: ControllerSpec) -> list[str]:
         """Use ``spec`` from now on; return what changed, for the log."""

@@ -14,7 +14,9 @@ a test can run the machine in lockstep.
 
 Two parameters change at run time, from the next tick: ``noise_std`` (a sensor
 that degrades) and ``dead_zone_shift`` (a valve that wears); a request is checked
-whole before either applies. The others shape the machine and are read-only.
+whole before either applies, and values given at start-up apply the same way. The
+others shape the machine and are read-only
+(:data:`~hydro_sdp.ros.parameters.plant.PLANT_PARAMETERS`).
 
 """
 
@@ -24,18 +26,17 @@ from functools import partial
 import math
 from typing import Any
 
-from hydro_sdp.core.errors import ConfigurationError, HydroSdpError
+from hydro_sdp.core.errors import ConfigurationError
 from hydro_sdp.core.model.simulation import JointSimulator
-from hydro_sdp.core.model.static_maps import shifted_map
+from hydro_sdp.core.model.static_maps import shifted_map, StaticMap
 from hydro_sdp.core.synthetic.programs import start_angle
 from hydro_sdp.io.model_files import default_model_path, load_model
 from hydro_sdp.ros import conversions, qos
-from hydro_sdp.ros.params import declare, pair
+from hydro_sdp.ros.parameters.node_parameters import NodeParameters, ParameterRequest
+from hydro_sdp.ros.parameters.plant import PLANT_PARAMETERS
 from hydro_sdp.ros.runner import run_node
 import numpy as np
-from rcl_interfaces.msg import SetParametersResult
 from rclpy.node import Node
-from rclpy.parameter import Parameter
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64
 
@@ -55,80 +56,71 @@ class PlantNode(Node):
 
     def __init__(self, *, node_name: str = 'hydro_plant', **kwargs: Any) -> None:
         super().__init__(node_name, **kwargs)
-        period = declare(self, 'sample_period', 0.01, 'plant sample period, s',
-                         low=1e-4, high=1.0, read_only=True)
-        model_file = declare(self, 'model_file', str(default_model_path()),
-                             'model file of the simulated joint', read_only=True)
-        model_files = declare(self, 'model_files', Parameter.Type.STRING_ARRAY,
-                              'model files of several joints (overrides model_file)',
-                              read_only=True)
-        noise = declare(self, 'noise_std', 0.0,
-                        'angle measurement noise (std), deg; applies from the next tick',
-                        low=0.0, high=10.0)
-        seed = declare(self, 'seed', 0, 'seed of the measurement noise', read_only=True)
-        initial = declare(self, 'initial_angles', Parameter.Type.DOUBLE_ARRAY,
-                          'starting angle of each joint, deg (default: 0, or mid-travel)',
-                          read_only=True)
-        declare(self, 'dead_zone_shift', [0.0, 0.0],
-                'moves every dead-zone edge by [lower, upper] input units (wear, new parts)')
-        self.models = [load_model(path) for path in (model_files or [model_file])]
-        names = [model.joint for model in self.models]
-        if len(set(names)) != len(names):
-            raise ConfigurationError(f'joint names must be distinct, got {names}')
-        if initial is not None and len(initial) != len(self.models):
-            raise ConfigurationError(f'initial_angles needs {len(self.models)} values')
-        self.names = names
-        self.sample_period = period
-        self._noise = noise
-        self._rngs = [np.random.default_rng([seed, index]) for index in range(len(names))]
+        self.parameters = NodeParameters(
+            self, PLANT_PARAMETERS, check=self._check_request,
+            apply={'noise_std': self._apply_noise, 'dead_zone_shift': self._apply_shift})
+        self.parameters.declare(defaults={'model_file': str(default_model_path())})
+        parameters = self.parameters
+        self.sample_period = parameters.double('sample_period')
+        self.models = [load_model(path) for path in
+                       (parameters.texts('model_files') or [parameters.text('model_file')])]
+        self.names = [model.joint for model in self.models]
+        if len(set(self.names)) != len(self.names):
+            raise ConfigurationError(f'joint names must be distinct, got {self.names}')
+        seed = parameters.integer('seed')
+        self._rngs = [np.random.default_rng([seed, index]) for index in range(len(self.names))]
         self._base_maps = [model.static_map for model in self.models]
-        self._simulators = []
-        self._commands = []
-        for index, model in enumerate(self.models):
-            if initial is not None:
-                y0 = float(initial[index])
-            else:
-                limits = model.angle_limits
-                y0 = 0.0 if limits is None or limits[0] < 0.0 < limits[1] else start_angle(model)
-            rest = model.rest_command
-            self._simulators.append(JointSimulator(model, period, y0, v_before=rest))
-            self._commands.append(rest)
+        self._shift = (0.0, 0.0)
+        self._noise = 0.0
+        self._simulators = [JointSimulator(model, self.sample_period, angle,
+                                           v_before=model.rest_command)
+                            for model, angle in zip(self.models, self._initial_angles())]
+        self._commands = [model.rest_command for model in self.models]
         self.ticks = 0
         self.commands_received = 0
         self.last_angles = [sim.angle for sim in self._simulators]
-        self._state_pub = self.create_publisher(JointState, 'joint_states', qos.STATE_QOS)
+        self._state_pub = self.create_publisher(JointState, 'joint_states', qos.STATE_QOS,
+                                                event_callbacks=qos.QUIET_PUBLISHER)
         self._command_subs = [
             self.create_subscription(Float64, f'{name}/valve_command',
                                      partial(self._on_command, index), qos.COMMAND_QOS)
-            for index, name in enumerate(names)]
-        self.add_on_set_parameters_callback(self._check_parameters)
-        self.add_post_set_parameters_callback(self._apply_parameters)
-        self._timer = self.create_timer(period, self._on_tick)
+            for index, name in enumerate(self.names)]
+        parameters.start()
+        self._timer = self.create_timer(self.sample_period, self._on_tick)
 
-    def _shifted_maps(self, value: Any) -> list[Any]:
-        shift = pair(value, 'dead_zone_shift')
+    def _initial_angles(self) -> list[float]:
+        """Return each joint's starting angle: given, or 0, or mid-travel if 0 is beyond a stop."""
+        initial = self.parameters.doubles('initial_angles')
+        if initial is not None:
+            if len(initial) != len(self.models):
+                raise ConfigurationError(f'initial_angles needs {len(self.models)} values')
+            return initial
+        return [0.0 if model.angle_limits is None or
+                model.angle_limits[0] < 0.0 < model.angle_limits[1] else start_angle(model)
+                for model in self.models]
+
+    def _shifted_maps(self, shift: tuple[float, float]) -> list[StaticMap]:
         return [shifted_map(base, shift) for base in self._base_maps]
 
-    def _check_parameters(self, parameters: list[Parameter]) -> SetParametersResult:
+    def _check_request(self, request: ParameterRequest) -> None:
         # Checks only: nothing applies before the whole request is accepted.
-        for parameter in parameters:
-            if parameter.name == 'dead_zone_shift':
-                try:
-                    self._shifted_maps(parameter.value)
-                except (HydroSdpError, TypeError) as error:
-                    return SetParametersResult(successful=False, reason=str(error))
-        return SetParametersResult(successful=True)
+        self._shifted_maps(request.pair('dead_zone_shift', self._shift))
 
-    def _apply_parameters(self, parameters: list[Parameter]) -> None:
-        for parameter in parameters:
-            if parameter.name == 'dead_zone_shift':
-                for simulator, static_map in zip(self._simulators,
-                                                 self._shifted_maps(parameter.value)):
-                    simulator.set_static_map(static_map)
-                self.get_logger().info(f'dead-zone edges moved by {list(parameter.value)}')
-            elif parameter.name == 'noise_std':
-                self._noise = float(parameter.value)
-                self.get_logger().info(f'measurement noise now {self._noise} deg')
+    def _apply_shift(self) -> None:
+        request = self.parameters.current(['dead_zone_shift'])
+        shift = request.pair('dead_zone_shift', self._shift)
+        if shift == self._shift:
+            return
+        for simulator, static_map in zip(self._simulators, self._shifted_maps(shift)):
+            simulator.set_static_map(static_map)
+        self._shift = shift
+        self.get_logger().info(f'dead-zone edges moved by {list(shift)}')
+
+    def _apply_noise(self) -> None:
+        noise = self.parameters.double('noise_std')
+        if self.parameters.live and noise != self._noise:
+            self.get_logger().info(f'measurement noise now {noise} deg')
+        self._noise = noise
 
     def _on_command(self, index: int, message: Float64) -> None:
         value = float(message.data)

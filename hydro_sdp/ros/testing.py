@@ -14,6 +14,10 @@ Usable in any test::
         controller = ros.add(PipControllerNode)
         loop = Lockstep(ros, plant, controllers=[controller])
         loop.run(500)
+        ParameterClient(ros, 'pip_controller').set_atomically(feedback_timeout=1)
+
+:class:`ParameterClient` sets and gets parameters over a node's services, as
+``ros2 param`` does (values travel as messages: an integer stays an integer).
 
 """
 
@@ -24,12 +28,13 @@ import random
 import time
 from typing import Any, Callable, cast, Iterable
 
+from rcl_interfaces.srv import GetParameters, SetParameters, SetParametersAtomically
 import rclpy
 from rclpy.clock import ROSClock
 from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
-from rclpy.parameter import Parameter
+from rclpy.parameter import Parameter, parameter_value_to_python
 from rclpy.time import Time
 
 # Nodes of one context still match with discovery off; nothing else on the host is seen.
@@ -49,12 +54,15 @@ class RosHarness:
     ----------
     domain_id : int or None
         DDS domain; default: a random one, so parallel test runs do not meet.
+    args : list of str or None
+        Command-line arguments of the context, as ``ros2 run`` passes them to every node of
+        a process (``['--ros-args', '-r', '__ns:=/arm2', '--params-file', 'p.yaml']``).
 
     """
 
-    def __init__(self, domain_id: int | None = None) -> None:
+    def __init__(self, domain_id: int | None = None, args: list[str] | None = None) -> None:
         self.context = Context()
-        rclpy.init(context=self.context,
+        rclpy.init(args=args, context=self.context,
                    domain_id=random.randint(1, 200) if domain_id is None else domain_id)
         self.executor = SingleThreadedExecutor(context=self.context)
         self.nodes: list[Node] = []
@@ -286,3 +294,59 @@ class Lockstep:
             self.step()
             if on_step is not None:
                 on_step(self.steps)
+
+
+class ParameterClient:
+    """
+    A node's parameter services, called as ``ros2 param`` calls them, in a harness.
+
+    Parameters
+    ----------
+    harness : RosHarness
+        The harness holding the node.
+    node_name : str
+        Full name of the node (``/pip_controller``, or without the slash).
+
+    """
+
+    def __init__(self, harness: RosHarness, node_name: str) -> None:
+        self.harness = harness
+        name = '/' + node_name.lstrip('/')
+        helper = harness.helper(f'parameter_client_{len(harness.nodes)}')
+        self._clients = {kind: helper.create_client(service, f'{name}/{kind}')
+                         for kind, service in (('get_parameters', GetParameters),
+                                               ('set_parameters', SetParameters),
+                                               ('set_parameters_atomically',
+                                                SetParametersAtomically))}
+        ready = harness.spin_until(lambda: all(c.service_is_ready()
+                                               for c in self._clients.values()))
+        if not ready:
+            raise TimeoutError(f'{name} offers no parameter services')
+
+    def _call(self, kind: str, request: Any) -> Any:
+        future = self._clients[kind].call_async(request)
+        if not self.harness.spin_until(future.done):
+            raise TimeoutError(f'no answer from {kind}')
+        return future.result()
+
+    @staticmethod
+    def _messages(values: dict[str, Any]) -> list[Any]:
+        # Keyword names cannot hold dots: ``gains__k_i`` is ``gains.k_i``.
+        return [Parameter(name.replace('__', '.'), value=value).to_parameter_msg()
+                for name, value in values.items()]
+
+    def set_atomically(self, **values: Any) -> Any:
+        """Set parameters in one atomic request; return its ``SetParametersResult``."""
+        request = SetParametersAtomically.Request(parameters=self._messages(values))
+        return self._call('set_parameters_atomically', request).result
+
+    def set_each(self, **values: Any) -> list[Any]:
+        """Set parameters one by one; return a ``SetParametersResult`` for each."""
+        request = SetParameters.Request(parameters=self._messages(values))
+        return list(self._call('set_parameters', request).results)
+
+    def get(self, *names: str) -> list[tuple[Parameter.Type, Any]]:
+        """Return the type and value of each of ``names``."""
+        answer = self._call('get_parameters', GetParameters.Request(names=list(names)))
+        return [(Parameter.Type(value.type), parameter_value_to_python(value))
+                for value in answer.values]

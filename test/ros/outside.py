@@ -10,9 +10,7 @@ import time
 
 from conftest import REPO
 import pytest
-from rcl_interfaces.srv import GetParameters, SetParametersAtomically
 import rclpy
-from rclpy.parameter import Parameter, parameter_value_to_python
 
 MODELS = [str(REPO / 'config' / 'lucie_boom.yaml'), str(REPO / 'config' / 'lucie_dipper.yaml')]
 ARM = ['-p', f"model_files:=[{','.join(MODELS)}]"]
@@ -108,43 +106,6 @@ class Processes:
         self.executor.shutdown()
         self.node.destroy_node()
         rclpy.try_shutdown(context=self.context)
-
-
-class NodeProcess(Processes):
-    """One node process with its parameter services, and a client node."""
-
-    def __init__(self, monkeypatch, script_name, node_name, *arguments):
-        super().__init__(monkeypatch, (script_name, list(arguments)))
-        self.name = script_name
-        self.process = self.processes[script_name]
-        self.set_client = self.node.create_client(
-            SetParametersAtomically, f'/{node_name}/set_parameters_atomically')
-        self.get_client = self.node.create_client(GetParameters, f'/{node_name}/get_parameters')
-
-    def wait_until_up(self, predicate):
-        """Wait for the parameter services, then until ``predicate()`` holds."""
-        assert self.set_client.wait_for_service(timeout_sec=30.0), self.died()
-        assert self.get_client.wait_for_service(timeout_sec=10.0), self.died()
-        assert self.spin_until(predicate), self.died()
-
-    def set_atomically(self, **values):
-        """Set parameters atomically (dots written as ``__``); return the result."""
-        request = SetParametersAtomically.Request()
-        request.parameters = [Parameter(name.replace('__', '.'), value=value).to_parameter_msg()
-                              for name, value in values.items()]
-        return self.call(self.set_client, request, attempts=3).result
-
-    def get(self, *names):
-        """Return ``(type, value)`` of parameters."""
-        answer = self.call(self.get_client, GetParameters.Request(names=list(names)), attempts=3)
-        return [(Parameter.Type(value.type), parameter_value_to_python(value))
-                for value in answer.values]
-
-    def close(self):
-        """Stop the process and the client; the process must have been alive."""
-        alive = self.process.poll() is None
-        super().close()
-        assert alive, f'{self.name} died'
 
 
 def node_process_fixture(kind, monkeypatch):

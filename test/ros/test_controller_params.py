@@ -1,8 +1,9 @@
 """
 The controller node's parameters: checked as a whole, applied at run time, integers for doubles.
 
-In-process with the harness, and over the parameter services of a ``controller_node``
-process from an outside rclpy client (what ``ros2 param set`` does).
+In-process with the harness, over the node's parameter services as ``ros2 param set`` calls
+them (:class:`~hydro_sdp.ros.testing.ParameterClient`: values travel as messages, an integer
+stays an integer), and with the command-line arguments ``ros2 run`` passes.
 """
 
 from dataclasses import replace
@@ -17,8 +18,7 @@ from hydro_sdp.core.model.static_maps import PowerSatMap
 from hydro_sdp.io.controller_files import save_controller
 from hydro_sdp.io.model_files import default_model_path, load_model, save_model
 from hydro_sdp.ros.controller_node import PipControllerNode
-from hydro_sdp.ros.testing import RosHarness
-from outside import node_process_fixture, NodeProcess
+from hydro_sdp.ros.testing import ParameterClient, RosHarness
 import pytest
 from rclpy.parameter import Parameter
 from sensor_msgs.msg import JointState
@@ -54,17 +54,26 @@ def _first_command(setpoint, angle=0.0, edges=None):
 
 def test_a_refused_atomic_change_changes_nothing(ros):
     controller = ros.add(PipControllerNode)
+    client = ParameterClient(ros, 'pip_controller')
     before = (controller.spec, controller.controller.settings)
-    result = controller.set_parameters_atomically([
-        Parameter('idz.dead_zone', value=NEW_EDGES), Parameter('gains.k_i', value=5.0)])
+    result = client.set_atomically(idz__dead_zone=NEW_EDGES, gains__k_i=5.0)
     assert not result.successful and 'unstable' in result.reason
     assert (controller.spec, controller.controller.settings) == before
-    assert controller.get_parameter('idz.dead_zone').value == [-1.3298, 1.3124]
-    assert controller.get_parameter('gains.k_i').value == before[0].gains.k_i
+    (_, edges), (_, k_i) = client.get('idz.dead_zone', 'gains.k_i')
+    assert list(edges) == [-1.3298, 1.3124] and k_i == before[0].gains.k_i
     ros.set_time(10**8)
     controller._on_setpoint(Float64(data=math.radians(20.0)))
     controller._on_state(_state(10**8))
+    # The first answer is the unchanged controller's, to the last digit.
     assert controller.last_command == pytest.approx(_first_command(20.0), abs=1e-12)
+    # The IDZ alone is accepted and applies to the next step from rest (after the watchdog
+    # closed the valve: 0.6 s without feedback).
+    assert client.set_atomically(idz__dead_zone=NEW_EDGES).successful
+    ros.set_time(7 * 10**8)
+    assert ros.spin_until(lambda: controller.gate.blind) and controller.last_command == 0.0
+    controller._on_state(_state(7 * 10**8))
+    assert controller.last_command == pytest.approx(_first_command(20.0, edges=NEW_EDGES),
+                                                    abs=1e-12)
 
 
 def test_an_accepted_change_keeps_the_spec_current(ros):
@@ -83,28 +92,30 @@ def test_an_accepted_change_keeps_the_spec_current(ros):
     assert controller.spec.design == design_from_model(controller.model).design
 
 
-def test_integers_are_accepted_for_double_parameters(ros):
-    controller = ros.add(PipControllerNode, parameters={'feedback_timeout': 1,
-                                                        'setpoint_margin': 2})
-    assert controller.get_parameter('feedback_timeout').value == 1.0
-    assert controller.get_parameter('feedback_timeout').type_ == Parameter.Type.DOUBLE
-    assert controller.gate.timeout_ns == 10**9 and controller.setpoint_margin == 2.0
-    result = controller.set_parameters([Parameter('idz.beta', value=0),
-                                        Parameter('idz.dead_zone', value=[-1, 1]),
-                                        Parameter('gains.k_i', value=1)])
-    assert result[0].successful and controller.spec.idz.beta == 0.0
-    assert result[1].successful and controller.spec.idz.dead_zone == (-1.0, 1.0)
-    assert controller.get_parameter('idz.dead_zone').type_ == Parameter.Type.DOUBLE_ARRAY
-    # kI = 1 arrives as a double and is then refused for what it does, not for its type.
-    assert not result[2].successful and 'unstable' in result[2].reason
-    result = controller.set_parameters([Parameter('idz.beta', value=500)])
-    assert not result[0].successful and 'out of range' in result[0].reason
+def test_integers_are_accepted_for_double_parameters():
+    # At start-up from the command line (as ros2 run passes -p), and at run time over the
+    # services (as ros2 param set sends them).
+    with RosHarness(args=['--ros-args', '-p', 'feedback_timeout:=1',
+                          '-p', 'setpoint_margin:=2']) as ros:
+        controller = ros.add(PipControllerNode)
+        client = ParameterClient(ros, 'pip_controller')
+        assert client.get('feedback_timeout') == [(Parameter.Type.DOUBLE, 1.0)]
+        assert controller.gate.timeout_ns == 10**9 and controller.setpoint_margin == 2.0
+        result = client.set_each(idz__beta=0, idz__dead_zone=[-1, 1], gains__k_i=1)
+        assert result[0].successful and controller.spec.idz.beta == 0.0
+        assert result[1].successful and controller.spec.idz.dead_zone == (-1.0, 1.0)
+        assert client.get('idz.dead_zone')[0][0] == Parameter.Type.DOUBLE_ARRAY
+        # kI = 1 arrives as a double and is then refused for what it does, not for its type.
+        assert not result[2].successful and 'unstable' in result[2].reason
+        result = client.set_each(idz__beta=500)
+        assert not result[0].successful and 'out of range' in result[0].reason
 
 
 def test_feedback_timeout_applies_at_run_time(ros):
     controller = ros.add(PipControllerNode)
-    assert controller._watchdog.timer_period_ns == 10**8
-    assert controller.set_parameters([Parameter('feedback_timeout', value=2.0)])[0].successful
+    client = ParameterClient(ros, 'pip_controller')
+    assert controller.interfaces.watchdog.timer_period_ns == 10**8
+    assert client.set_atomically(feedback_timeout=2).successful          # an integer
     assert controller.gate.timeout_ns == 2 * 10**9
     ros.set_time(10**8)
     controller._on_setpoint(Float64(data=math.radians(20.0)))
@@ -113,35 +124,36 @@ def test_feedback_timeout_applies_at_run_time(ros):
     for k in range(2, 21):                      # 1.9 s of silence: still inside the timeout
         ros.set_time(k * 10**8)
         ros.spin_for(0.002)
-    assert not controller._blind and controller.last_command > 1.0
+    assert not controller.gate.blind and controller.last_command > 1.0
     # A stamp 1.5 s old is fresh enough for a 2 s timeout.
     controller._on_state(_state(5 * 10**8))
     assert controller.refused == 0
-    assert controller.set_parameters([Parameter('feedback_timeout', value=0.06)])[0].successful
-    assert controller._watchdog.timer_period_ns == 3 * 10**7
+    assert client.set_atomically(feedback_timeout=0.06).successful
+    assert controller.interfaces.watchdog.timer_period_ns == 3 * 10**7
     ros.set_time(21 * 10**8)
     ros.spin_for(0.01)
-    assert controller._blind and controller.last_command == 0.0
+    assert controller.gate.blind and controller.last_command == 0.0
 
 
 def test_setpoint_margin_applies_at_run_time(ros):
     controller = ros.add(PipControllerNode)
     controller._on_setpoint(Float64(data=math.radians(90.0)))
-    assert controller._setpoint == pytest.approx(63.1)
+    assert controller.loops[0].setpoint == pytest.approx(63.1)
     assert controller.set_parameters([Parameter('setpoint_margin', value=5.0)])[0].successful
-    assert controller._setpoint == pytest.approx(58.6)          # the held set-point too
+    assert controller.loops[0].setpoint == pytest.approx(58.6)          # the held set-point too
     controller._on_setpoint(Float64(data=math.radians(-40.0)))
-    assert controller._setpoint == pytest.approx(-8.8)
+    assert controller.loops[0].setpoint == pytest.approx(-8.8)
     result = controller.set_parameters([Parameter('setpoint_margin', value=40.0)])
     assert not result[0].successful and 'leaves no set-point' in result[0].reason
     assert controller.setpoint_margin == 5.0
 
 
 def test_read_only_parameters_refuse_changes(ros):
-    controller = ros.add(PipControllerNode)
+    ros.add(PipControllerNode)
+    client = ParameterClient(ros, 'pip_controller')
     for name, value in (('joint', 'j3'), ('control_period', 0.1), ('model_file', 'x.yaml'),
                         ('controller_file', 'c.yaml')):
-        result = controller.set_parameters([Parameter(name, value=value)])[0]
+        result = client.set_atomically(**{name: value})
         assert not result.successful and 'read-only' in result.reason
 
 
@@ -159,77 +171,6 @@ def test_a_controller_file_for_another_valve_range_is_refused(ros, tmp_path):
     with pytest.raises(ConfigurationError, match="controller is for joint 'boom'"):
         ros.add(PipControllerNode,
                 parameters={'controller_file': str(tmp_path / 'boom_c.yaml')})
-
-
-class OutsideClient(NodeProcess):
-    """A controller_node process and a client in this process: parameter services and topics."""
-
-    def __init__(self, monkeypatch, *arguments):
-        super().__init__(monkeypatch, 'controller_node', 'pip_controller', *arguments)
-        self.commands = []
-        self.node.create_subscription(Float64, 'j2/valve_command',
-                                      lambda m: self.commands.append(m.data), 100)
-        self.states = self.node.create_publisher(JointState, 'joint_states', 10)
-        self.setpoints = self.node.create_publisher(Float64, 'j2/setpoint', 10)
-        self.wait_until_up(lambda: self.states.get_subscription_count() >= 1
-                           and self.setpoints.get_subscription_count() >= 1)
-
-    def setpoint(self, degrees):
-        self.setpoints.publish(Float64(data=math.radians(degrees)))
-        self.spin_for(0.3)
-
-    def answer(self, angle=0.0):
-        """Send one fresh sample and return the controller's (non-rest) answer."""
-        count = len(self.commands)
-        self.states.publish(_state(self.node.get_clock().now().nanoseconds, angle))
-        assert self.spin_until(lambda: any(c != 0.0 for c in self.commands[count:]))
-        return next(c for c in self.commands[count:] if c != 0.0)
-
-    def wait_for_rest(self, timeout):
-        """Return whether the watchdog closed the valve within ``timeout`` seconds."""
-        count = len(self.commands)
-        return self.spin_until(lambda: 0.0 in self.commands[count:], timeout)
-
-
-@pytest.fixture
-def outside(monkeypatch):
-    """Start a controller_node process and an outside client; stop both after the test."""
-    yield from node_process_fixture(OutsideClient, monkeypatch)
-
-
-@pytest.mark.slow
-def test_a_refused_atomic_change_changes_nothing_over_the_services(outside):
-    client = outside()
-    result = client.set_atomically(idz__dead_zone=NEW_EDGES, gains__k_i=5.0)
-    assert not result.successful and 'unstable' in result.reason
-    (_, edges), (_, k_i) = client.get('idz.dead_zone', 'gains.k_i')
-    assert list(edges) == [-1.3298, 1.3124] and k_i < 0.01
-    client.setpoint(20.0)
-    # The first answer is the unchanged controller's, to the last digit.
-    assert client.answer() == pytest.approx(_first_command(20.0), abs=1e-12)
-    # The IDZ alone is accepted and applies to the next step from rest.
-    assert client.set_atomically(idz__dead_zone=NEW_EDGES).successful
-    assert client.wait_for_rest(3.0)
-    assert client.answer() == pytest.approx(_first_command(20.0, edges=NEW_EDGES), abs=1e-12)
-
-
-@pytest.mark.slow
-def test_run_time_changes_take_effect_over_the_services(outside):
-    client = outside('-p', 'feedback_timeout:=1')           # an integer at start-up
-    assert client.get('feedback_timeout') == [(Parameter.Type.DOUBLE, 1.0)]
-    assert client.set_atomically(feedback_timeout=3).successful         # and at run time
-    client.setpoint(20.0)
-    assert client.answer() > 1.0
-    assert not client.wait_for_rest(1.5)                     # the old 0.5 s would have fired
-    assert client.set_atomically(feedback_timeout=0.2).successful
-    assert client.wait_for_rest(1.0)
-    result = client.set_atomically(gains__k_i=1)        # a double, refused as unstable
-    assert not result.successful and 'unstable' in result.reason
-    assert client.set_atomically(setpoint_margin=5).successful
-    client.setpoint(90.0)
-    assert client.answer() == pytest.approx(_first_command(63.6 - 5.0), abs=1e-12)
-    result = client.set_atomically(joint='j3')
-    assert not result.successful and 'read-only' in result.reason
 
 
 #: A convex valve in signed percent (a power_sat map as identify fits to an arm's logs).

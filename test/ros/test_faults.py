@@ -143,7 +143,7 @@ def test_blackout_closes_the_valve_and_control_resumes_without_a_bump(ros, basel
     loop.run(60)                                   # 0.6 s in: valve wide open
     assert loop.controller.last_command > 1.0
     loop.run(100, hold=lambda k: True)             # 1 s without feedback
-    assert loop.controller._blind and loop.controller.last_command == 0.0
+    assert loop.controller.gate.blind and loop.controller.last_command == 0.0
     refused = loop.controller.refused
     angles, commands = loop.run(STEPS - 160)       # the stale backlog is refused, then control
     assert loop.controller.refused > refused

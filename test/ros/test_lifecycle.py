@@ -7,9 +7,8 @@ from hydro_sdp.ros.plant_node import PlantNode
 from hydro_sdp.ros.testing import Lockstep, RosHarness
 from lifecycle_msgs.msg import Transition
 from lifecycle_msgs.srv import ChangeState, GetState
-from outside import ARM, CONTROLLER, MODELS, Processes
+from outside import MODELS
 import pytest
-from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64
 
 pytestmark = pytest.mark.ros
@@ -84,43 +83,39 @@ def test_deactivate_closes_every_valve_once_and_activate_resumes(ros):
     assert abs(boom.controller.last_u) < 1.0                     # no bump
 
 
-@pytest.mark.slow
-def test_an_outside_client_deactivates_and_activates_the_controller(monkeypatch):
-    nodes = Processes(monkeypatch, ('plant_node', ARM), ('controller_node', CONTROLLER))
-    try:
-        client = nodes.node
-        commands = {joint: [] for joint in JOINTS}
-        for joint in JOINTS:
-            client.create_subscription(Float64, f'{joint}/valve_command',
-                                       lambda m, j=joint: commands[j].append(m.data), 100)
-        states = []
-        client.create_subscription(JointState, 'joint_states', states.append, 100)
-        change = client.create_client(ChangeState, '/pip_controller/change_state')
-        get = client.create_client(GetState, '/pip_controller/get_state')
-        assert nodes.call(get, GetState.Request()).current_state.label == 'active'
-        assert nodes.spin_until(lambda: all(len(commands[j]) > 10 for j in JOINTS),
-                                30.0), nodes.died()
+def test_a_client_deactivates_and_activates_the_controller_over_its_services(ros):
+    # As ros2 lifecycle set does: the ~/change_state and ~/get_state services.
+    plant = ros.add(PlantNode, parameters={'model_files': MODELS})
+    controller = ros.add(PipControllerNode, parameters={'joints': JOINTS, 'model_files': MODELS})
+    commands = _commands(ros)
+    loop = Lockstep(ros, plant, controllers=[controller])
+    client = ros.helper('lifecycle_client')
+    change = client.create_client(ChangeState, '/pip_controller/change_state')
+    get = client.create_client(GetState, '/pip_controller/get_state')
+    assert ros.spin_until(lambda: change.service_is_ready() and get.service_is_ready())
+
+    def call(service, request):
+        future = service.call_async(request)
+        assert ros.spin_until(future.done)
+        return future.result()
+
+    def change_to(transition):
         request = ChangeState.Request()
-        request.transition.id = Transition.TRANSITION_DEACTIVATE
-        assert nodes.call(change, request).success
-        assert nodes.call(get, GetState.Request()).current_state.label == 'inactive'
-        nodes.spin_for(0.3)                  # the last commands in flight arrive
-        sent = {joint: len(commands[joint]) for joint in JOINTS}
-        for joint in JOINTS:
-            assert commands[joint][-1] == 0.0                     # the valve closed
-        samples = len(states)
-        # The plant goes on (half a second of its samples; a loaded machine may take longer).
-        assert nodes.spin_until(lambda: len(states) > samples + 50, 5.0)
-        assert {joint: len(commands[joint]) for joint in JOINTS} == sent   # no command
-        request.transition.id = Transition.TRANSITION_ACTIVATE
-        assert nodes.call(change, request).success
-        assert nodes.spin_until(lambda: all(len(commands[j]) > sent[j] + 10 for j in JOINTS),
-                                10.0)
-        assert nodes.call(get, GetState.Request()).current_state.label == 'active'
-        stderr = nodes.stop('controller_node')
-        assert 'Traceback' not in stderr and 'Error' not in stderr
-    finally:
-        nodes.close()
+        request.transition.id = transition
+        assert call(change, request).success
+        return call(get, GetState.Request()).current_state.label
+
+    assert call(get, GetState.Request()).current_state.label == 'active'
+    loop.run(100)
+    assert all(len(commands[joint]) >= 20 for joint in JOINTS)
+    assert change_to(Transition.TRANSITION_DEACTIVATE) == 'inactive'
+    assert ros.spin_until(lambda: all(commands[joint][-1] == 0.0 for joint in JOINTS))
+    sent = {joint: len(commands[joint]) for joint in JOINTS}
+    loop.run(50)                                   # the plant goes on; no command
+    assert {joint: len(commands[joint]) for joint in JOINTS} == sent
+    assert change_to(Transition.TRANSITION_ACTIVATE) == 'active'
+    loop.run(50)
+    assert all(len(commands[joint]) >= sent[joint] + 10 for joint in JOINTS)
 
 
 def test_shutdown_from_active_closes_the_valves_and_releases_everything(ros):

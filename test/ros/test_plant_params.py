@@ -1,19 +1,17 @@
 """
 The plant node's parameters: the writable ones apply from the next tick, the rest are read-only.
 
-In-process on simulated time (known answers to the last digit), and over the parameter
-services of a ``plant_node`` process from an outside rclpy client (what ``ros2 param set``
-does).
+In-process on simulated time (known answers to the last digit), set directly and over the
+node's parameter services as ``ros2 param set`` calls them (values as messages: an integer
+stays an integer), with the command-line arguments ``ros2 run`` passes.
 """
 
 import math
-import time
 
 from hydro_sdp.io.model_files import default_model_path, load_model
 from hydro_sdp.ros.plant_node import PlantNode
-from hydro_sdp.ros.testing import Lockstep, RosHarness
+from hydro_sdp.ros.testing import Lockstep, ParameterClient, RosHarness
 import numpy as np
-from outside import node_process_fixture, NodeProcess
 import pytest
 from rclpy.parameter import Parameter
 from sensor_msgs.msg import JointState
@@ -96,65 +94,54 @@ def test_machine_parameters_are_read_only(ros):
         assert not result.successful and 'read-only' in result.reason, name
 
 
-class _OutsidePlant(NodeProcess):
-    """A plant_node process, and a client in this process on the same fresh domain."""
+def test_run_time_changes_take_effect_over_the_services():
+    with RosHarness(args=['--ros-args', '-p', 'noise_std:=0']) as ros:     # an integer
+        plant = ros.add(PlantNode, parameters={'seed': 5})
+        client = ParameterClient(ros, 'hydro_plant')
+        assert client.get('noise_std') == [(Parameter.Type.DOUBLE, 0.0)]
+        states = []
+        helper = ros.helper('outside')
+        helper.create_subscription(JointState, 'joint_states', states.append, 1000)
+        commands = helper.create_publisher(Float64, 'j2/valve_command', 10)
+        loop = Lockstep(ros, plant)
+        assert ros.spin_until(lambda: commands.get_subscription_count() >= 1)
 
-    def __init__(self, monkeypatch, *arguments):
-        super().__init__(monkeypatch, 'plant_node', 'hydro_plant', *arguments)
-        self.states = []
-        self.node.create_subscription(JointState, 'joint_states', self.states.append, 1000)
-        self.commands = self.node.create_publisher(Float64, 'j2/valve_command', 10)
-        self.wait_until_up(lambda: len(self.states) > 0
-                           and self.commands.get_subscription_count() >= 1)
+        def next_states(count):
+            start = len(states)
+            loop.run(count)
+            assert ros.spin_until(lambda: len(states) >= start + count)
+            return states[start:start + count]
 
-    def next_states(self, count):
-        """Return the next ``count`` joint_states published (after this call)."""
-        start = len(self.states)
-        assert self.spin_until(lambda: len(self.states) >= start + count, 20.0)
-        return self.states[start:start + count]
+        assert len({s.position[0] for s in next_states(30)}) == 1        # a perfect sensor
+        assert client.set_atomically(noise_std=1).successful              # an integer
+        assert client.get('noise_std') == [(Parameter.Type.DOUBLE, 1.0)]
+        noisy = np.degrees([s.position[0] for s in next_states(400)])
+        assert np.std(noisy) == pytest.approx(1.0, rel=0.15)
+        assert client.set_atomically(noise_std=0.0).successful
+        assert len({s.position[0] for s in next_states(30)}) == 1
+        # The valve: a command inside the dead-zone holds the joint until the edges move.
+        count = plant.commands_received
+        commands.publish(Float64(data=COMMAND))
+        assert ros.spin_until(lambda: plant.commands_received > count)
+        assert all(s.velocity[0] == 0.0 for s in next_states(50))
+        result = client.set_atomically(dead_zone_shift=SHIFT, noise_std=50.0)
+        assert not result.successful and 'noise_std' in result.reason
+        assert all(s.velocity[0] == 0.0 for s in next_states(30))
+        assert client.get('dead_zone_shift', 'noise_std') == [
+            (Parameter.Type.DOUBLE_ARRAY, [0.0, 0.0]), (Parameter.Type.DOUBLE, 0.0)]
+        assert client.set_atomically(dead_zone_shift=SHIFT).successful
+        moving = next_states(DELAY + 10)[DELAY:]
+        assert [s.velocity[0] for s in moving] == pytest.approx([_speed(COMMAND, SHIFT)] * 10,
+                                                                rel=1e-9)
+        result = client.set_atomically(seed=5)
+        assert not result.successful and 'read-only' in result.reason
 
-    def close(self):
-        super().close()
-        assert self.process.returncode == 0
 
-
-@pytest.fixture
-def outside(monkeypatch):
-    """Start a plant_node process and an outside client; stop both after the test."""
-    yield from node_process_fixture(_OutsidePlant, monkeypatch)
-
-
-@pytest.mark.slow
-def test_run_time_changes_take_effect_over_the_services(outside):
-    plant = outside('-p', 'noise_std:=0')
-    assert len({s.position[0] for s in plant.next_states(30)}) == 1      # a perfect sensor
-    assert plant.set_atomically(noise_std=1).successful                  # an integer
-    assert plant.get('noise_std') == [(Parameter.Type.DOUBLE, 1.0)]
-    plant.next_states(3)                        # ticks that may predate the change
-    noisy = np.degrees([s.position[0] for s in plant.next_states(400)])
-    assert np.std(noisy) == pytest.approx(1.0, rel=0.15)
-    assert plant.set_atomically(noise_std=0.0).successful
-    plant.next_states(3)
-    assert len({s.position[0] for s in plant.next_states(30)}) == 1
-
-    # The valve: a command inside the dead-zone holds the joint until the edges move.
-    def hold(seconds):
-        end = time.monotonic() + seconds
-        while time.monotonic() < end:
-            plant.commands.publish(Float64(data=COMMAND))
-            plant.spin_until(lambda: False, 0.05)
-    hold(0.5)
-    assert all(s.velocity[0] == 0.0 for s in plant.next_states(10))
-    result = plant.set_atomically(dead_zone_shift=SHIFT, noise_std=50.0)
-    assert not result.successful and 'noise_std' in result.reason
-    hold(0.3)
-    assert all(s.velocity[0] == 0.0 for s in plant.next_states(10))
-    assert plant.get('dead_zone_shift', 'noise_std') == [
-        (Parameter.Type.DOUBLE_ARRAY, [0.0, 0.0]), (Parameter.Type.DOUBLE, 0.0)]
-    assert plant.set_atomically(dead_zone_shift=SHIFT).successful
-    hold(0.3)
-    moving = plant.next_states(10)
-    assert [s.velocity[0] for s in moving] == pytest.approx([_speed(COMMAND, SHIFT)] * 10,
-                                                            rel=1e-6)
-    result = plant.set_atomically(seed=5)
-    assert not result.successful and 'read-only' in result.reason
+def test_a_dead_zone_shift_given_at_start_up_takes_effect(ros):
+    plant = ros.add(PlantNode, parameters={'dead_zone_shift': SHIFT})
+    loop = Lockstep(ros, plant)
+    plant._on_command(0, Float64(data=COMMAND))
+    angles = [plant.last_angles[0]]
+    loop.run(DELAY + 10, lambda k: angles.append(plant.last_angles[0]))
+    speeds = np.radians(np.diff(angles)) / 0.01
+    assert speeds[-5:] == pytest.approx([_speed(COMMAND, SHIFT)] * 5, rel=1e-9)

@@ -130,33 +130,3 @@ def test_wear_is_recalibrated_within_a_minute_at_the_readme_noise(machine):
     # Both edges moved most of the way to the worn valve's (0.3 V each).
     assert abs(edges[0] - worn[0]) < 0.1 and abs(edges[1] - worn[1]) < 0.1, edges
     assert True in running.flags
-
-
-def test_identifier_parameters_apply_at_run_time_over_the_services(machine):
-    running = machine()                          # auto_recalibrate false: the default
-    running.hold(0)
-    # publish_period: 0.1 s (default), then 0.5 s.
-    count = len(running.estimates)
-    running.spin_until(lambda: False, 2.0)
-    assert 15 <= len(running.estimates) - count <= 25
-    assert running.set_atomically('sdp_identifier', publish_period=0.5).successful
-    running.spin_until(lambda: False, 0.6)
-    count = len(running.estimates)
-    running.spin_until(lambda: False, 2.0)
-    assert 3 <= len(running.estimates) - count <= 5
-    assert running.set_atomically('sdp_identifier', publish_period=0.1).successful
-    # Wear without auto_recalibrate: the need is published, the controller left alone.
-    assert running.set_atomically('hydro_plant', dead_zone_shift=list(SHIFT)).successful
-    hold = 1
-    while not any(running.flags) and hold < 1 + LIMIT / HOLD:
-        running.hold(hold)
-        hold += 1
-    assert True in running.flags, 'recalibration_needed was never published true'
-    assert running.controller_edges() == _edges()
-    # Switched on at run time, it recalibrates at once (the need is already established).
-    assert running.set_atomically('sdp_identifier', auto_recalibrate=True).successful
-    changed = running.spin_until(lambda: running.controller_edges() != _edges(), 5.0)
-    assert changed, 'auto_recalibrate true did not recalibrate'
-    worn = tuple(e + s for e, s in zip(_edges(), SHIFT))
-    edges = running.controller_edges()
-    assert any(abs(e - w) < 0.1 for e, w in zip(edges, worn)), edges

@@ -1,0 +1,157 @@
+"""
+What the controller node's configure transition builds: one loop per joint, with its parameters.
+
+:class:`ControllerConfiguration` reads the file parameters of
+:data:`~hydro_sdp.ros.parameters.controller.CONTROLLER_PARAMETERS`, loads each joint's
+model and controller (or designs one), builds one
+:class:`~hydro_sdp.ros.joint_loop.JointLoop` per joint and declares the joints' run-time
+parameters; cleanup undeclares them. It touches no topic: that is
+:class:`~hydro_sdp.ros.controller_interfaces.ControllerInterfaces`.
+
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from hydro_sdp.core.control.safety import setpoint_range
+from hydro_sdp.core.errors import ConfigurationError
+from hydro_sdp.io.controller_files import controller_for
+from hydro_sdp.io.model_files import load_model
+from hydro_sdp.ros.joint_loop import JointLoop
+from hydro_sdp.ros.parameters.node_parameters import NodeParameters
+
+
+@dataclass(frozen=True)
+class JointFiles:
+    """
+    The files of one joint.
+
+    Parameters
+    ----------
+    joint : str
+        Joint name, or '' for the one joint of a node without ``joints`` (named by the
+        ``joint`` parameter, whose default is the controller's joint).
+    model_file : str
+        Its model file.
+    controller_file : str or None
+        Its controller file, or None to design from the model.
+
+    """
+
+    joint: str
+    model_file: str
+    controller_file: str | None
+
+
+def joint_files(parameters: NodeParameters) -> list[JointFiles]:
+    """
+    Return the files of every joint, from ``joints``, ``model_files``, ``controller_files``.
+
+    Parameters
+    ----------
+    parameters : NodeParameters
+        The controller's parameters.
+
+    Returns
+    -------
+    list of JointFiles
+        One per joint; one (unnamed) from ``model_file`` and ``controller_file`` when
+        ``joints`` is not set.
+
+    Raises
+    ------
+    ConfigurationError
+        If the lists do not match ``joints`` or a joint is named twice.
+
+    """
+    joints = parameters.texts('joints')
+    if not joints:
+        return [JointFiles('', parameters.text('model_file'),
+                           parameters.text('controller_file') or None)]
+    models = parameters.texts('model_files') or []
+    controllers = parameters.texts('controller_files') or []
+    if len(models) != len(joints):
+        raise ConfigurationError(f'model_files needs one file per joint of joints '
+                                 f'({len(joints)}), got {len(models)}')
+    if controllers and len(controllers) != len(joints):
+        raise ConfigurationError(f'controller_files needs one file per joint of joints '
+                                 f'({len(joints)}) or none, got {len(controllers)}')
+    if len(set(joints)) != len(joints):
+        raise ConfigurationError(f'joint names must be distinct, got {joints}')
+    return [JointFiles(joint, model, (controllers[i] if controllers else '') or None)
+            for i, (joint, model) in enumerate(zip(joints, models))]
+
+
+class ControllerConfiguration:
+    """
+    Build the controller's joints from its file parameters, and declare their parameters.
+
+    Parameters
+    ----------
+    parameters : NodeParameters
+        The controller's parameters.
+
+    """
+
+    def __init__(self, parameters: NodeParameters) -> None:
+        self.parameters = parameters
+
+    def build(self, timeout_ns: int, margin: float, now_ns: int) -> list[JointLoop]:
+        """
+        Load the files and design; declare each joint's parameters; return the loops.
+
+        Values given at start-up (``-p``, a parameter file) to the joints' parameters go
+        through the same check as a run-time request.
+
+        Parameters
+        ----------
+        timeout_ns : int
+            Feedback timeout, ns.
+        margin : float
+            Set-point margin, deg (it must leave room between the end stops).
+        now_ns : int
+            The node clock's reading, ns.
+
+        Returns
+        -------
+        list of JointLoop
+            One per joint.
+
+        Raises
+        ------
+        HydroSdpError
+            If a file cannot be used or a value given at start-up is refused (nothing
+            stays declared).
+
+        """
+        parameters = self.parameters
+        period = parameters.double('control_period')
+        loops = []
+        for files in joint_files(parameters):
+            model = load_model(files.model_file)
+            spec = controller_for(model, files.controller_file, period)
+            joint = files.joint
+            if not joint:
+                if not parameters.declared('joint'):
+                    parameters.declare(['joint'], defaults={'joint': spec.joint})
+                joint = parameters.text('joint')
+            setpoint_range(model.angle_limits, margin)      # leaves room between the stops?
+            loops.append(JointLoop(joint, model, spec, timeout_ns, now_ns))
+        declared: list[JointLoop] = []
+        try:
+            for loop in loops:
+                declared.append(loop)
+                names = parameters.declare_joint(loop.joint, loop.parameter_defaults(),
+                                                 single=len(loops) == 1)
+                loop.apply(loop.candidate(parameters.current(names)))
+        except Exception:
+            self.release(declared, single=len(loops) == 1)
+            raise
+        return loops
+
+    def release(self, loops: list[JointLoop], single: bool | None = None) -> None:
+        """Undeclare the joints' parameters (cleanup)."""
+        single = len(loops) == 1 if single is None else single
+        for loop in loops:
+            self.parameters.undeclare_joint(loop.joint, loop.parameter_defaults(), single)

@@ -1,0 +1,168 @@
+"""
+One table per node: the nodes declare what it says, check by it, and the docs are written from it.
+
+The parameter tables of docs/interfaces.md section 3 and docs/guide/nodes.md and the shipped
+config/hydro_sdp.yaml are checked against the tables here (the same code that writes them,
+in check mode); the declarations are checked on running nodes.
+"""
+
+import math
+import shutil
+
+from conftest import REPO
+from hydro_sdp.bags import write_bag
+from hydro_sdp.core.errors import ConfigurationError
+from hydro_sdp.core.model.records import Record
+from hydro_sdp.ros.bag_player import BagPlayerNode
+from hydro_sdp.ros.bag_recorder import BagRecorderNode
+from hydro_sdp.ros.controller_node import PipControllerNode
+from hydro_sdp.ros.identifier_node import IdentifierNode
+from hydro_sdp.ros.parameters import documents
+from hydro_sdp.ros.parameters.descriptors import ROS_TYPES
+from hydro_sdp.ros.parameters.node_parameters import NodeParameters
+from hydro_sdp.ros.parameters.spec import ParameterSpec, ParameterTable
+from hydro_sdp.ros.plant_node import PlantNode
+from hydro_sdp.ros.testing import RosHarness
+import numpy as np
+import pytest
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+
+pytestmark = pytest.mark.ros
+
+NODES = {'plant_node': PlantNode, 'controller_node': PipControllerNode,
+         'identifier_node': IdentifierNode, 'bag_recorder': BagRecorderNode,
+         'bag_player': BagPlayerNode}
+
+
+def test_the_docs_and_the_params_file_are_written_from_the_tables():
+    stale = documents.stale_files(REPO)
+    assert stale == [], ('regenerate with python -m hydro_sdp.ros.parameters.documents '
+                         f'--write: {stale}')
+    executables = [table.executable for table in documents.TABLES]
+    for path, style in zip(documents.MARKDOWN_FILES, ('reference', 'guide')):
+        assert documents.blocks((REPO / path).read_text()) == \
+            [(style, executable) for executable in executables], path
+
+
+def test_an_edited_table_in_the_docs_is_found_and_rewritten(tmp_path):
+    for path in (*documents.MARKDOWN_FILES, documents.PARAMS_FILE):
+        (tmp_path / path).parent.mkdir(parents=True, exist_ok=True)
+        shutil.copy(REPO / path, tmp_path / path)
+    interfaces = tmp_path / documents.MARKDOWN_FILES[0]
+    text = interfaces.read_text()
+    edited = text.replace('| `feedback_timeout` | double | `0.5` |',
+                          '| `feedback_timeout` | double | `0.3` |')
+    assert edited != text
+    interfaces.write_text(edited)
+    params = tmp_path / documents.PARAMS_FILE
+    params.write_text(params.read_text().replace('feedback_timeout: 0.5', 'feedback_timeout: 1'))
+    assert documents.stale_files(tmp_path) == [interfaces, params]
+    assert documents.main(['--root', str(tmp_path)]) == 1
+    assert documents.main(['--root', str(tmp_path), '--write']) == 0
+    assert interfaces.read_text() == text and documents.stale_files(tmp_path) == []
+
+
+@pytest.fixture(scope='module')
+def nodes(tmp_path_factory):
+    """Run one node of each executable (the controller with one joint) in one harness."""
+    folder = tmp_path_factory.mktemp('tables')
+    t = np.arange(1, 21) * 0.01
+    bag = write_bag(folder / 'played', [Record(t=t, v=np.zeros(20), y=np.zeros(20),
+                                               joint='j2')])
+    given = {'bag_recorder': {'output': str(folder / 'recorded')},
+             'bag_player': {'bag': str(bag), 'autostart': False}}
+    with RosHarness() as ros:
+        yield {executable: ros.add(cls, parameters=given.get(executable))
+               for executable, cls in NODES.items()}
+
+
+@pytest.mark.parametrize('table', documents.TABLES, ids=lambda table: table.executable)
+def test_every_node_declares_its_table(nodes, table):
+    node = nodes[table.executable]
+    declared = set(node.list_parameters([], 0).names) - {'use_sim_time',
+                                                         'start_type_description_service'}
+    joints = getattr(node, 'joints', [])
+    expected = set()
+    for spec in table.specs:
+        names = [f'{joint}.{spec.name}' for joint in joints] + [spec.name] if spec.per_joint \
+            else [spec.name]
+        for name in names:
+            if not node.has_parameter(name):
+                assert spec.on_demand or spec.per_joint, name
+                continue
+            expected.add(name)
+            descriptor = node.describe_parameter(name)
+            assert descriptor.description.endswith(spec.documented), name
+            assert descriptor.read_only == spec.read_only, name
+            assert descriptor.type == ROS_TYPES[spec.kind].value, name
+            ranges = [*descriptor.floating_point_range, *descriptor.integer_range]
+            assert [(r.from_value, r.to_value) for r in ranges] == (
+                [] if spec.low is None else [(spec.low, spec.high)]), name
+            if spec.default is not None and name not in ('autostart', 'bag', 'output'):
+                assert node.get_parameter(name).value == pytest.approx(spec.default), name
+    # Nothing is declared that the table does not hold.
+    assert declared == expected
+
+
+def test_the_controller_declares_its_joints_per_joint():
+    with RosHarness() as ros:
+        models = [str(REPO / 'config' / f'lucie_{joint}.yaml') for joint in ('boom', 'dipper')]
+        controller = ros.add(PipControllerNode, parameters={'joints': ['boom', 'dipper'],
+                                                            'model_files': models})
+        for spec in documents.CONTROLLER_PARAMETERS.joint_specs:
+            assert not controller.has_parameter(spec.name)
+            for joint in ('boom', 'dipper'):
+                description = controller.describe_parameter(f'{joint}.{spec.name}').description
+                assert description == f'{joint}: {spec.documented}'
+
+
+@pytest.mark.parametrize('name, value, message', [
+    ('idz.mode', 'fast', "must be one of zero, smooth, hysteresis, got 'fast'"),
+    ('idz.dead_zone', [-1.0, 0.0, 1.0], 'needs two numbers'),
+    ('idz.dead_zone', [-1.0, math.nan], 'must be finite'),
+    ('gains.f', [math.inf], 'must be finite'),
+    ('j2.gains.k_i', 11.0, 'out of range'),
+])
+def test_a_value_that_breaks_the_table_is_refused_naming_the_parameter(
+        nodes, name, value, message):
+    controller = nodes['controller_node']
+    before = controller.spec
+    result = controller.set_parameters([Parameter(name, value=value)])[0]
+    assert not result.successful and message in result.reason
+    assert controller.spec == before
+
+
+def test_a_start_up_value_that_breaks_the_table_stops_the_node():
+    from rclpy.exceptions import ParameterException
+    with RosHarness() as ros:
+        with pytest.raises(ParameterException, match='needs two numbers'):
+            ros.add(PlantNode, parameters={'dead_zone_shift': [0.1, 0.2, 0.3]})
+        with pytest.raises(ParameterException, match='must be one of sqlite3'):
+            ros.add(BagRecorderNode, parameters={'output': 'x', 'storage': 'mcap'})
+        with pytest.raises(ConfigurationError, match="'bag' is required"):
+            ros.add(BagPlayerNode)
+
+
+def test_a_writable_parameter_without_an_effect_is_refused_when_the_node_is_built():
+    table = ParameterTable('demo', 'demo', (
+        ParameterSpec('gain', 'double', 'a gain', default=1.0),
+        ParameterSpec('period', 'double', 'a period', default=1.0, read_only=True)))
+    with RosHarness() as ros:
+        node = ros.add(Node, node_name='demo')
+        with pytest.raises(ValueError, match="handlers differ: \\['gain'\\]"):
+            NodeParameters(node, table)
+        NodeParameters(node, table, apply={'gain': lambda: None}).declare()
+        assert node.get_parameter('gain').value == 1.0
+
+
+@pytest.mark.parametrize('spec', [
+    {'name': 'a', 'kind': 'string', 'description': 'x', 'default': '', 'low': 0.0, 'high': 1.0},
+    {'name': 'a', 'kind': 'double', 'description': 'x', 'default': 1.0, 'choices': ('b',)},
+    {'name': 'a', 'kind': 'double', 'description': 'x', 'default': 5.0, 'low': 0.0, 'high': 1.0},
+    {'name': 'a', 'kind': 'double', 'description': 'x'},
+    {'name': 'a', 'kind': 'double_array', 'description': 'x', 'default': (1.0,), 'length': 2},
+])
+def test_a_spec_that_contradicts_itself_is_refused(spec):
+    with pytest.raises((ValueError, ConfigurationError)):
+        ParameterSpec(**spec)
