@@ -28,3 +28,8 @@ def rng():
 def j2():
     """Load the shipped BROKK J2 model."""
     return load_model(default_model_path())
+
+
+def pytest_collection_modifyitems(items):
+    """Run the slow files first, so that two workers end together rather than one waiting."""
+    items.sort(key=lambda item: item.get_closest_marker('slow') is None)

@@ -20,7 +20,8 @@ from __future__ import annotations
 
 import importlib
 import sys
-from typing import Any, Callable
+import time
+from typing import Any, Callable, Mapping
 
 from hydro_sdp.bags.live_writer import Sqlite3BagWriter
 from hydro_sdp.ros.parameters.node_parameters import NodeParameters
@@ -30,6 +31,10 @@ from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.topic_endpoint_info import TopicEndpointInfo
+
+#: Longest a callback may run after its message arrived for the arrival stamp to be used, ns
+#: (beyond it, or with a stamp from another clock, the callback's own time is).
+LATE_LIMIT = 1_000_000_000
 
 
 def message_class(msgtype: str) -> Any:
@@ -169,13 +174,18 @@ class BagRecorderNode(Node):
         if self._announced:
             self.get_logger().info(f'now recording {topic} ({msgtype})')
 
-    def _recorder_for(self, topic: str) -> Callable[[bytes], None]:
-        return lambda raw: self._on_message(topic, raw)
+    def _recorder_for(self, topic: str) -> Callable[[bytes, Mapping[str, int]], None]:
+        return lambda raw, info: self._on_message(topic, raw, info)
 
-    def _on_message(self, topic: str, raw: bytes) -> None:
+    def _on_message(self, topic: str, raw: bytes, info: Mapping[str, int]) -> None:
         if self.closed:
             return
-        self._writer.write(self._ids[topic], self.get_clock().now().nanoseconds, raw)
+        now = self.get_clock().now().nanoseconds
+        # Stamped when the middleware received the message, not when this callback ran:
+        # on a busy machine the callback runs tens of ms late, and a command stamped that
+        # late moves every step it starts against the samples of the joint it drove.
+        late = time.time_ns() - int(info.get('received_timestamp', 0) or 0)
+        self._writer.write(self._ids[topic], now - late if 0 <= late < LATE_LIMIT else now, raw)
 
     def _flush(self) -> None:
         if not self.closed:

@@ -2,7 +2,6 @@
 
 import os
 from pathlib import Path
-import random
 import shutil
 import subprocess
 import sys
@@ -11,6 +10,7 @@ import time
 from conftest import REPO
 import pytest
 import rclpy
+from support.domains import fresh_domain
 
 MODELS = [str(REPO / 'config' / 'lucie_boom.yaml'), str(REPO / 'config' / 'lucie_dipper.yaml')]
 ARM = ['-p', f"model_files:=[{','.join(MODELS)}]"]
@@ -35,7 +35,7 @@ class Processes:
 
     def __init__(self, monkeypatch, *commands, cwd=None):
         scripts = {name: required_script(name) for name, _ in commands}
-        domain = random.randint(1, 200)
+        domain = fresh_domain()
         # The in-process harness turns discovery off; a process must be found on the host.
         monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
         environment = dict(os.environ, ROS_DOMAIN_ID=str(domain))

@@ -24,6 +24,7 @@ import pytest
 import rclpy
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64
+from support.domains import fresh_domain
 
 pytestmark = pytest.mark.ros
 
@@ -222,7 +223,7 @@ def test_separate_processes_survive_a_faulty_link_and_restarts(monkeypatch):
     from rclpy.context import Context
     from rclpy.executors import SingleThreadedExecutor
     from rclpy.node import Node
-    domain = str(100 + (os.getpid() + 50) % 100)
+    domain = str(fresh_domain())
     # The in-process harness turns discovery off; processes must find each other on the host.
     monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
     processes = _Processes(domain)

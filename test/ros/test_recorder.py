@@ -22,6 +22,7 @@ import pytest
 import rclpy
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Bool
+from support.domains import fresh_domain
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
 
@@ -36,7 +37,7 @@ class _Domain:
         from rclpy.context import Context
         from rclpy.executors import SingleThreadedExecutor
         from rclpy.node import Node
-        self.domain = 100 + (os.getpid() + 17) % 100
+        self.domain = fresh_domain()
         monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
         self.environment = dict(os.environ, ROS_DOMAIN_ID=str(self.domain))
         self.processes = []

@@ -13,7 +13,6 @@ the recorder's bag must be closed.
 
 import os
 from pathlib import Path
-import random
 import shutil
 import signal
 import subprocess
@@ -25,6 +24,7 @@ from hydro_sdp.core.model.records import Record
 import numpy as np
 import pytest
 import rclpy
+from support.domains import fresh_domain
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
 
@@ -50,7 +50,7 @@ def graph(tmp_path_factory):
     """Return ``(environment, node, bag)``: a fresh domain, a node watching it, a bag to play."""
     from rclpy.context import Context
     from rclpy.node import Node
-    domain = random.randint(1, 200)
+    domain = fresh_domain()
     environment = dict(os.environ, ROS_DOMAIN_ID=str(domain),
                        ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST')
     bag = tmp_path_factory.mktemp('shutdown') / 'long_bag'
@@ -124,26 +124,37 @@ def test_a_signal_stops_every_node_cleanly(graph, moment, delay, signum):
         assert 'wrote' in errors['bag_recorder']
 
 
-@pytest.mark.parametrize('delay', [0.05, 0.15, 0.4])
+def _loading_extensions(pid, limit=30.0):
+    """Wait until process ``pid`` maps a compiled module of site-packages (its imports run)."""
+    end = time.monotonic() + limit
+    while time.monotonic() < end:
+        try:
+            if '/site-packages/' in Path(f'/proc/{pid}/maps').read_text():
+                return True
+        except OSError:
+            return False
+        time.sleep(0.005)
+    return False
+
+
+@pytest.mark.parametrize('delay', [0.0, 0.1, 0.3])
 def test_sigint_while_a_node_loads_prints_no_traceback(delay):
     # A Ctrl-C while the node's modules still load ends it quietly (130), as the command line.
-    # One that lands while the interpreter itself still starts (its site module, before any
-    # line of the node runs; on a loaded machine 0.05 s can be that early) ends in CPython's
-    # own "Fatal Python error" for any program: that start is tried again, a few times.
-    for _ in range(5):
-        process = subprocess.Popen(
-            [_script('plant_node')], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-            env=dict(os.environ, ROS_DOMAIN_ID=str(random.randint(1, 200))),
-            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
-        time.sleep(delay)
-        process.send_signal(signal.SIGINT)
-        try:
-            output, _ = process.communicate(timeout=EXIT_LIMIT)
-        except subprocess.TimeoutExpired:
-            process.kill()
-            output, _ = process.communicate()
-            pytest.fail(f'plant_node did not end within {EXIT_LIMIT} s of SIGINT')
-        if b'init_import_site' not in output:
-            break
+    # The signal is sent once the node's own imports run (a compiled module of site-packages
+    # is mapped): one that lands while the interpreter itself still starts, before any line
+    # of the node runs, ends in CPython's own "Fatal Python error" for any program.
+    process = subprocess.Popen(
+        [_script('plant_node')], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+        env=dict(os.environ, ROS_DOMAIN_ID=str(fresh_domain())),
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    assert _loading_extensions(process.pid), 'plant_node never started importing'
+    time.sleep(delay)
+    process.send_signal(signal.SIGINT)
+    try:
+        output, _ = process.communicate(timeout=EXIT_LIMIT)
+    except subprocess.TimeoutExpired:
+        process.kill()
+        output, _ = process.communicate()
+        pytest.fail(f'plant_node did not end within {EXIT_LIMIT} s of SIGINT')
     assert b'Traceback' not in output, output.decode(errors='replace')
     assert process.returncode in (0, 130)

@@ -14,12 +14,12 @@ from __future__ import annotations
 import importlib
 import os
 from pathlib import Path
-import random
 import signal
 import subprocess
 import time
 from typing import Any
 
+from support.domains import fresh_domain
 import yaml
 
 #: Seconds a stand-in waits for a node to answer (a service, a subscriber).
@@ -72,7 +72,7 @@ class Scene:
         from rclpy.node import Node
 
         self.cwd, self.bin_dir = cwd, bin_dir
-        domain = random.randint(1, 200)
+        domain = fresh_domain()
         # The processes must be found on the host; in-process tests turn discovery off.
         self.environment = dict(os.environ, ROS_DOMAIN_ID=str(domain),
                                 ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST')

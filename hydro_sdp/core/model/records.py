@@ -283,7 +283,9 @@ def split_at_gaps(record: Record, *, max_gap: float = 3.0,
     if len(record) < 3:
         return Pieces((record,), ())
     steps = np.diff(record.t)
-    period = float(np.median(steps))
+    # The nominal period, as every later check of the pieces uses: a spacing a hair above
+    # max_gap nominal periods but below max_gap median spacings is cut here, not refused there.
+    period = period_of_stamps(record.t)
     cuts = np.flatnonzero(steps > max_gap * period) + 1
     if cuts.size == 0:
         return Pieces((record,), ())

@@ -1,0 +1,30 @@
+"""
+ROS domains for tests that start node processes.
+
+Two test workers (``pytest -n 2``) run process tests at the same time; each draws its
+domains from its own range, so that their nodes never find each other. Within a worker,
+the domains are drawn in turn from a random start, so that a test never meets the
+leftovers of the test before it.
+"""
+
+import itertools
+import os
+import random
+
+#: Domains per worker; domain ids 1..232 are valid with the default port mapping.
+SPAN = 50
+
+
+def _worker() -> int:
+    name = os.environ.get('PYTEST_XDIST_WORKER', 'gw0')
+    return int(name.removeprefix('gw') or 0) % 4
+
+
+_NEXT = itertools.cycle(range(SPAN))
+for _ in range(random.randrange(SPAN)):
+    next(_NEXT)
+
+
+def fresh_domain() -> int:
+    """Return a ROS domain id that no other worker uses and this worker has not just used."""
+    return 1 + _worker() * SPAN + next(_NEXT)
