@@ -113,6 +113,7 @@ class BagRecorderNode(Node):
         self._typestore = get_typestore(Stores.ROS2_JAZZY)
         self._ids: dict[str, int] = {}
         self.recorded: dict[str, str] = {}     # topic -> type
+        self._last_stamp: dict[str, int] = {}
         self._waiting = {self.resolve_topic_name(t) for t in topics}
         self._announced = False
         steady = Clock(clock_type=ClockType.STEADY_TIME)
@@ -185,7 +186,12 @@ class BagRecorderNode(Node):
         # on a busy machine the callback runs tens of ms late, and a command stamped that
         # late moves every step it starts against the samples of the joint it drove.
         late = time.time_ns() - int(info.get('received_timestamp', 0) or 0)
-        self._writer.write(self._ids[topic], now - late if 0 <= late < LATE_LIMIT else now, raw)
+        stamp = now - late if 0 <= late < LATE_LIMIT else now
+        # Arrival stamps of one topic can come out of order by a few ms across the
+        # middleware's transports; a topic's stamps stay in the order its messages came.
+        stamp = max(stamp, self._last_stamp.get(topic, stamp - 1) + 1)
+        self._last_stamp[topic] = stamp
+        self._writer.write(self._ids[topic], stamp, raw)
 
     def _flush(self) -> None:
         if not self.closed:
