@@ -171,7 +171,10 @@ class BagRecorderNode(Node):
                                                   type_hash=digest,
                                                   offered_qos_profiles=qos_text(publishers))
         self.recorded[topic] = msgtype
-        self.create_subscription(cls, topic, self._recorder_for(topic), qos, raw=True)
+        # rclpy hands a callback of two parameters the message info too (Subscription's
+        # callback setter); its annotation names only the one-parameter form.
+        self.create_subscription(cls, topic, self._recorder_for(topic),  # type: ignore[arg-type]
+                                 qos, raw=True)
         if self._announced:
             self.get_logger().info(f'now recording {topic} ({msgtype})')
 
