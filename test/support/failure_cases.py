@@ -142,7 +142,8 @@ def resisting_load(seconds: float = 30.0) -> Case:
     """Return the boom identified lifting nothing; runs with 0 and 600 kg, pressure logged."""
     boom = load_machine(shipped_config('physics_boom_power.yaml'))
     light, heavy = with_payload(boom, 0.0), with_payload(boom, 600.0)
-    model = identify(full_stroke_runs(light, DT, (45, 70, 100), seed=1, longest=30.0)).model
+    model = identify(full_stroke_runs(light, DT, (45, 70, 100), seed=1, longest=30.0),
+                     kind='sdp').model
 
     def runs(machine: Plant, seed: int, tag: str) -> Record:
         levels = random_levels(machine, DT, seconds, seed=seed, pressure=True)

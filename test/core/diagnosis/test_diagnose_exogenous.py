@@ -29,8 +29,8 @@ DT = 0.01
 DUTIES = (55, 65, 75, 85, 100)
 #: The model identified, the records with the boom still and moving, and the diagnosis.
 Sharing = tuple[JointModel, list[Record], list[Record], Diagnosis]
-#: The arm, the model identified without payload, and the runs at both payloads.
-Payloads = tuple[Machine, JointModel, list[Record]]
+#: The arm, the model identified without payload, and the runs without and with 1200 kg.
+Payloads = tuple[Machine, JointModel, list[Record], list[Record]]
 
 
 def levels(machine: Machine, duration: float, moving: Sequence[int], seed: int) -> Record:
@@ -73,7 +73,8 @@ def excavator() -> Machine:
 def sharing(excavator: Machine) -> Sharing:
     """Identify the arm with the boom still; diagnose it on runs with both moving."""
     alone = [levels(excavator, 40.0, [0], seed) for seed in (1, 2, 3)]
-    model = identify([Record(r.t, r.v, r.y, r.joint, r.source) for r in alone]).model
+    plain = [Record(r.t, r.v, r.y, r.joint, r.source) for r in alone]
+    model = identify(plain, kind='sdp').model
     both = [levels(excavator, 40.0, [0, 1], seed) for seed in (4, 5, 6)]
     # No validation given: the third recording is held out to judge on.
     return model, alone, both, diagnose(both, model, max_iterations=1)
@@ -130,8 +131,8 @@ def payload_runs(arm: Machine, payload: float, seed: int) -> list[Record]:
 def payloads() -> Payloads:
     """Identify the arm without payload; return runs without and with 1200 kg."""
     arm = load_machine(shipped_config('physics_arm.yaml'))
-    model = identify(payload_runs(arm, 0.0, 1), kind='power_sat').model
-    return arm, model, payload_runs(arm, 0.0, 50) + payload_runs(arm, 1200.0, 80)
+    model = identify(payload_runs(arm, 0.0, 1), kind='sdp').model
+    return arm, model, payload_runs(arm, 0.0, 50), payload_runs(arm, 1200.0, 80)
 
 
 def test_without_a_load_signal_each_record_gets_its_own_scale(tmp_path: Path) -> None:
@@ -166,12 +167,12 @@ def test_without_a_load_signal_each_record_gets_its_own_scale(tmp_path: Path) ->
     assert effect.record_positive[order[0]] > effect.record_positive[order[-1]] + 0.05
 
 
-def pressure_runs(arm: Machine, payload: float, seed: int) -> list[Record]:
-    """Full-stroke runs at one payload with the holding load pressure as the load, bar."""
+def with_pressure(arm: Machine, payload: float, runs: list[Record]) -> list[Record]:
+    """Return the runs at one payload with the holding load pressure as the load, bar."""
     loaded = with_payload(arm, payload)
     actuator = Actuator(loaded.joints[0], loaded.pump)
     out = []
-    for r in payload_runs(arm, payload, seed):
+    for r in runs:
         # Signed: the pressure the load puts on the piston side, less the rod side's share.
         force = [actuator.geometry.load_force(actuator.geometry.extension(a)) for a in r.y]
         out.append(replace(r, load=np.array(force) / actuator.piston / 1e5))
@@ -181,8 +182,8 @@ def pressure_runs(arm: Machine, payload: float, seed: int) -> list[Record]:
 @pytest.fixture(scope='module')
 def pressures(payloads: Payloads) -> tuple[list[Record], Diagnosis]:
     """Return runs without and with 1200 kg carrying their holding pressure, diagnosed."""
-    arm, model, _ = payloads
-    runs = pressure_runs(arm, 0.0, 50) + pressure_runs(arm, 1200.0, 80)
+    arm, model, light, heavy = payloads
+    runs = with_pressure(arm, 0.0, light) + with_pressure(arm, 1200.0, heavy)
     return runs, diagnose(runs, model, max_iterations=1)
 
 
@@ -214,9 +215,10 @@ def test_an_overrunning_load_is_named_from_the_holding_pressure(
 
 
 def test_one_payload_with_its_pressure_gives_no_load_dependence(payloads: Payloads) -> None:
-    arm, model, _ = payloads
+    arm, model, light, _ = payloads
     # The same payload twice (other noise): the load pressure moves a few bar with the angle.
-    same = pressure_runs(arm, 0.0, 50) + pressure_runs(arm, 0.0, 120)
+    other = payload_runs(arm, 0.0, 120)
+    same = with_pressure(arm, 0.0, light) + with_pressure(arm, 0.0, other)
     same = [replace(r, source=f'{r.source} {i}') for i, r in enumerate(same)]
     result = diagnose(same, model, max_iterations=1)
     candidate = next(c for c in result.candidates if c.effect == 'load_dependence')

@@ -19,8 +19,14 @@ def context_of(case):
     return Context(case.model, runs_of(case.estimation, 0.5), 50)
 
 
-def test_a_shared_factor_is_fitted_where_it_is_and_not_where_the_factor_is_opposite():
-    case = make_case('stroke_geometry', 'stroke', 'signed_percent', 0, seconds=40.0)
+@pytest.fixture(scope='module')
+def stroked():
+    """Return full strokes of a generator joint with a linkage factor the model lacks."""
+    return make_case('stroke_geometry', 'stroke', 'signed_percent', 0, seconds=40.0)
+
+
+def test_a_shared_factor_is_fitted_where_it_is_and_not_where_the_factor_is_opposite(stroked):
+    case = stroked
     truth = case.truth.model.effect('stroke_geometry')
     context = context_of(case)
     parts = factor_parts(stroke_samples(context))
@@ -51,7 +57,7 @@ def test_a_shared_factor_is_fitted_where_it_is_and_not_where_the_factor_is_oppos
 
 @pytest.mark.slow
 @pytest.mark.parametrize('word, kind, units', [
-    ('stroke_geometry', 'random', 'percent'), ('angle_dependent_velocity', 'random', 'volt'),
+    ('stroke_geometry', 'random', 'percent'),
     ('angle_dependent_velocity', 'stroke', 'signed_percent')])
 def test_shared_and_opposite_angle_factors_are_told_apart(word, kind, units):
     result = run_case(make_case(word, kind, units, 0, seconds=40.0), max_iterations=2)
@@ -59,8 +65,8 @@ def test_shared_and_opposite_angle_factors_are_told_apart(word, kind, units):
     assert result.mae_after <= 0.5 * result.mae_before
 
 
-def test_the_signature_draws_each_direction_along_its_motion():
-    case = make_case('stroke_geometry', 'stroke', 'signed_percent', 0, seconds=40.0)
+def test_the_signature_draws_each_direction_along_its_motion(stroked):
+    case = stroked
     context = context_of(case)
     _, augmented = detector('stroke_geometry').fit(context)
     run = context.runs[0]
@@ -92,8 +98,8 @@ def plant(request):
     """Full-stroke runs, the model identified from them, and held-out random levels."""
     machine = with_payload(load_machine(shipped_config(f'physics_{request.param}.yaml')),
                            PAYLOAD[request.param])
-    runs = full_stroke_runs(machine, 0.01, (40, 60, 80, 100), seed=11)
-    held_out = [random_levels(machine, 0.01, 60.0, seed=1)]
+    runs = full_stroke_runs(machine, 0.01, (40, 70, 100), seed=11)
+    held_out = [random_levels(machine, 0.01, 30.0, seed=1)]
     return runs, identify(runs).model, held_out
 
 
@@ -114,9 +120,9 @@ def test_the_linkage_of_the_physics_plant_is_named_and_the_gap_shrinks(plant):
     assert result.signature.x.size == result.signature.before.size
 
 
-def test_the_report_shows_the_residual_against_the_angle_per_direction(tmp_path):
+def test_the_report_shows_the_residual_against_the_angle_per_direction(stroked, tmp_path):
     from hydro_sdp.report.diagnosis import write_report
-    case = make_case('stroke_geometry', 'stroke', 'signed_percent', 0, seconds=40.0)
+    case = stroked
     result = diagnose(case.estimation, case.model, validation=case.validation,
                       max_iterations=1)
     assert result.effect == 'stroke_geometry'
