@@ -12,7 +12,7 @@ speed ``flow_sharing``, the load ``load_dependence``, the travel since a reversa
 ``backlash``; along the angle, ``stroke_geometry`` when the two directions' ratios agree
 and ``angle_dependent_velocity`` when they mirror. The estimate along the state is the
 shape the effect is given (``load_dependence``'s factor of the load) and what the report
-draws (docs/methods.md section 8.2).
+draws (docs/methods.md section 8.3).
 
 """
 

@@ -10,7 +10,7 @@ the candidate is right: cut into blocks longer than its correlation (one second 
 least), each block's sign flipped at random. The blocks keep the residuals'
 autocorrelation and their size where they occur; the reduction keeps its magnitude:
 two seconds of a joint held at a stop the model lacks remove far more than the noise
-could, though they are two blocks of sixty (docs/methods.md section 8.3).
+could, though they are two blocks of sixty (docs/methods.md section 8.4).
 
 The same distribution gives the reduction a standard score, ``z = (R + sum d^2) /
 (2 sqrt(sum_b c_b^2))`` with ``c_b = sum_{k in b} eps'_k d_k``: the cluster-robust t
