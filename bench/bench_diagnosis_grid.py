@@ -19,7 +19,8 @@ import time
 # The grid builds its cases with the test suite's helpers.
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / 'test'))
 from support.diagnosis_grid import (  # noqa: E402, I100
-    confusion_table, make_case, PROGRAMS, run_case, UNITS, WORDS)
+    make_case, PROGRAMS, run_case, UNITS, WORDS)
+from support.grid_results import confusion_table  # noqa: E402
 
 
 def main():
@@ -41,7 +42,7 @@ def main():
                               f'{result.named}, MAE {result.mae_before:.3g} -> '
                               f'{result.mae_after:.3g} deg', flush=True)
     took = time.perf_counter() - started
-    print('\n'.join(confusion_table(results)))
+    print('\n'.join(confusion_table(results, WORDS)))
     hidden = [r for r in results if r.word != 'none']
     correct = [r for r in results if r.word == 'none']
     print(f'right word first and gap halved: {sum(r.right for r in hidden)}/{len(hidden)} '

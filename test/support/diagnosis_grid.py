@@ -22,11 +22,12 @@ from dataclasses import dataclass, replace
 import math
 from typing import Any, Sequence
 
-from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.diagnosis.search import diagnose
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.records import Record
 import numpy as np
+from support.grid_programs import load_signal, other_levels, program
+from support.grid_results import GridResult
 from support.joint_generator import Joint, Machine, record, SpeedMap, Stroke
 
 #: Input units of the grid: name, command range, rest command.
@@ -108,37 +109,6 @@ class GridCase:
     model: JointModel
     estimation: tuple[Record, ...]
     validation: tuple[Record, ...]
-
-
-@dataclass(frozen=True)
-class GridResult:
-    """
-    What the workflow named for one case.
-
-    Parameters
-    ----------
-    word, program, units : str
-        The case.
-    named : str
-        The first word named.
-    mae_before, mae_after : float
-        Validation MAE of the nominal and of the final model, degrees.
-
-    """
-
-    word: str
-    program: str
-    units: str
-    named: str
-    mae_before: float
-    mae_after: float
-
-    @property
-    def right(self) -> bool:
-        """Whether the right word came first and (when one is missing) the gap halved."""
-        if self.word == 'none':
-            return self.named == 'none'
-        return self.named == self.word and self.mae_after <= 0.5 * self.mae_before
 
 
 def _base(rng: np.random.Generator, units: str) -> dict[str, Any]:
@@ -315,103 +285,6 @@ def hide(word: str, rng: np.random.Generator, units: str) -> tuple[Truth, dict[s
     return Truth(truth_file, Joint(**joint), other), nominal
 
 
-def _level(rng: np.random.Generator, truth: JointModel, sign: float, smallest: float) -> float:
-    """Return a command driving ``truth`` towards ``sign`` at a random share of its range."""
-    assert truth.dead_zone is not None and truth.input_limits is not None
-    side = 1 if sign > 0 else 0
-    edge = truth.dead_zone[side]
-    end = truth.input_limits[side]
-    return edge + float(rng.uniform(smallest, 0.9)) * (end - edge)
-
-
-def program(truth: JointModel, kind: str, rng: np.random.Generator, seconds: float,
-            dt: float) -> tuple[FloatArray, float]:
-    """
-    Return commands for ``truth`` and the angle to start from.
-
-    ``random``: random levels (dead-zone included) held 0.5-3 s, cut short before the
-    joint would leave the middle 80 % of its stroke. ``stroke``: runs at a random level
-    from one stop to the other, pushed against the stop for 0.3-1.5 s, some rests.
-
-    Parameters
-    ----------
-    truth : JointModel
-        The true joint's model (its stops and map plan the program).
-    kind : str
-        ``random`` or ``stroke``.
-    rng : numpy.random.Generator
-        Random draws.
-    seconds : float
-        Length, s.
-    dt : float
-        Sample period, s.
-
-    Returns
-    -------
-    tuple[FloatArray, float]
-        Commands and the start angle, degrees.
-
-    """
-    assert truth.angle_limits is not None
-    low, high = truth.angle_limits
-    rest = truth.rest_command
-    total = int(round(seconds / dt))
-    pieces: list[FloatArray] = []
-    filled = 0
-    y = 0.5 * (low + high)
-    margin = 0.1 * (high - low)
-    while filled < total:
-        if kind == 'random':
-            up = rng.random() < min(max((high - margin - y) / (high - low - 2 * margin),
-                                        0.1), 0.9)
-            sign = 1.0 if up else -1.0
-            level = _level(rng, truth, sign, -0.3)
-            if (level - rest) * sign < 0.0:
-                level = rest
-            speed = float(truth.rate(level))
-            hold = float(rng.uniform(0.5, 3.0))
-            if speed != 0.0:
-                room = (high - margin - y) if speed > 0 else (y - low - margin)
-                hold = min(hold, max(room, 0.0) / abs(speed))
-            samples = max(1, int(round(hold / dt)))
-            y += speed * samples * dt
-            pieces.append(np.full(samples, level))
-        else:
-            sign = 1.0 if y < 0.5 * (low + high) else -1.0
-            level = _level(rng, truth, sign, 0.3)
-            speed = abs(float(truth.rate(level)))
-            travel = (high - y) if sign > 0 else (y - low)
-            hold = travel / max(speed, 1e-6) + float(rng.uniform(0.3, 1.5))
-            pieces.append(np.full(int(round(hold / dt)), level))
-            y = high if sign > 0 else low
-            if rng.random() < 0.5:
-                pieces.append(np.full(int(round(float(rng.uniform(0.3, 1.5)) / dt)), rest))
-        filled = sum(p.size for p in pieces)
-    return np.concatenate(pieces)[:total], 0.5 * (low + high)
-
-
-def _other_levels(rng: np.random.Generator, n: int, dt: float) -> FloatArray:
-    """Return random levels of the other joint, moving half the time, within its stops."""
-    out = np.zeros(n)
-    k = 0
-    sign = 1.0
-    while k < n:
-        samples = int(round(float(rng.uniform(0.5, 2.0)) / dt))
-        out[k:k + samples] = sign * float(rng.uniform(2.0, 8.0)) if rng.random() < 0.5 else 0.0
-        sign = -sign
-        k += samples
-    return out
-
-
-def _load(rng: np.random.Generator, n: int, dt: float, payload: float) -> FloatArray:
-    """Return a measured load: the record's payload and a digging force that comes and goes."""
-    t = dt * np.arange(n)
-    period = float(rng.uniform(6.0, 15.0))
-    force = float(rng.uniform(10.0, 40.0)) * np.maximum(
-        0.0, np.sin(2.0 * np.pi * t / period + float(rng.uniform(0.0, 6.3))))
-    return payload + force
-
-
 def make_case(word: str, kind: str, units: str, seed: int, *, seconds: float = 60.0,
               dt: float = 0.01, noise: float = 0.02, records: int = 3) -> GridCase:
     """
@@ -494,8 +367,8 @@ def records_of(truth: Truth, kind: str, rng: np.random.Generator, *, seconds: fl
     for index in range(count):
         v, y0 = program(planner, kind, rng, seconds, dt)
         commands = v[:, None] if truth.other is None else np.column_stack(
-            [v, _other_levels(rng, v.size, dt)])
-        load = _load(rng, v.size, dt, float(payloads[index])) if loaded else None
+            [v, other_levels(rng, v.size, dt)])
+        load = load_signal(rng, v.size, dt, float(payloads[index])) if loaded else None
         made.append(record(machine, commands, angles0=[y0, 0.0][:commands.shape[1]],
                            load=load, seed=int(rng.integers(1 << 30)),
                            source=f'{name} #{index}'))
@@ -507,36 +380,3 @@ def run_case(case: GridCase, **options: Any) -> GridResult:
     result = diagnose(case.estimation, case.model, validation=case.validation, **options)
     return GridResult(case.word, case.program, case.units, result.effect, result.mae_before,
                       result.mae_after)
-
-
-def confusion_table(results: Sequence[GridResult]) -> list[str]:
-    """
-    Return the confusion table as Markdown rows: hidden word against first word named.
-
-    Parameters
-    ----------
-    results : sequence of GridResult
-        Grid results.
-
-    Returns
-    -------
-    list[str]
-        Header, one row per hidden word (with the share right, gap halved), a total.
-
-    """
-    hidden = [w for w in WORDS if any(r.word == w for r in results)]
-    named = list(dict.fromkeys([*hidden, *sorted({r.named for r in results} - set(hidden))]))
-    short = {w: w.replace('direction_dependent_delay', 'dir_delay')
-             .replace('angle_dependent_velocity', 'angle_vel')
-             .replace('velocity_saturation', 'saturation') for w in named}
-    rows = ['| hidden \\ named | ' + ' | '.join(short[w] for w in named) + ' | right |',
-            '|---' * (len(named) + 2) + '|']
-    for word in hidden:
-        mine = [r for r in results if r.word == word]
-        counts = [sum(r.named == w for r in mine) for w in named]
-        right = sum(r.right for r in mine)
-        rows.append(f'| {short.get(word, word)} | ' + ' | '.join(str(c) for c in counts)
-                    + f' | {right}/{len(mine)} |')
-    right = sum(r.right for r in results)
-    rows.append(f'| all | {" | ".join("" for _ in named)} | {right}/{len(results)} |')
-    return rows

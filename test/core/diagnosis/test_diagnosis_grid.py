@@ -9,7 +9,8 @@ from hydro_sdp.core.model.records import Record
 from hydro_sdp.core.model.static_maps import LinearMap
 import numpy as np
 import pytest
-from support.diagnosis_grid import confusion_table, GridResult, make_case, run_case
+from support.diagnosis_grid import make_case, run_case
+from support.grid_results import confusion_table, GridResult
 
 
 def test_validation_mae_is_the_per_record_mean_of_evaluate():
