@@ -86,9 +86,9 @@ def test_the_confusion_table_counts_hidden_against_named():
 
 #: A subset of the grid (bench/bench_diagnosis_grid.py runs it whole): every program and
 #: unit, the states the other tests leave (the stops and the dead-zone are in
-#: test_diagnose_failures.py, the angle factors in test_diagnose_stroke.py), and correct
-#: models.
-CASES = [('valve_lag', 'stroke', 'percent'), ('backlash', 'random', 'volt'),
+#: test_diagnose_failures.py, the angle factors in test_diagnose_stroke.py, the lag in the
+#: report's test below), and correct models.
+CASES = [('backlash', 'random', 'volt'),
          ('flow_sharing', 'random', 'percent'), ('load_dependence', 'random', 'volt'),
          ('none', 'stroke', 'signed_percent'), ('none', 'random', 'percent')]
 
@@ -125,6 +125,7 @@ def test_a_report_with_an_effect_shows_the_candidates_and_the_state_that_named_i
     result = diagnose(case.estimation, case.model, validation=case.validation,
                       max_iterations=1)
     assert result.effect == 'valve_lag'
+    assert result.mae_after <= 0.5 * result.mae_before
     written = write_report(tmp_path, result)
     assert written == [str(tmp_path / name) for name in (
         'gap.png', 'ledger.png', 'signature.png', 'evidence.png', 'candidates.png',
