@@ -26,7 +26,7 @@ from support.diagnosis_grid import hide
 from support.joint_generator import record
 
 DT = 0.01
-DUTIES = (55, 65, 75, 85, 100)
+DUTIES = (55, 75, 100)
 #: The model identified, the records with the boom still and moving, and the diagnosis.
 Sharing = tuple[JointModel, list[Record], list[Record], Diagnosis]
 #: The arm, the model identified without payload, and the runs without and with 1200 kg.
