@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from dataclasses import replace
 from pathlib import Path
+import textwrap
 from typing import Any, TYPE_CHECKING
 
 from hydro_sdp.cli.common import add_bag_options, json_number, Outcome, read_records, table
@@ -15,30 +16,40 @@ if TYPE_CHECKING:
     from hydro_sdp.core.diagnosis import Diagnosis
 
 HELP = 'find where a model and the data disagree, name the missing effect, add it'
+#: Width the evidence is wrapped to in the terminal table.
+EVIDENCE_WIDTH = 60
 #: Filled with the vocabulary when the parser is built (the detectors load scipy).
 DESCRIPTION = """\
 Hold a model against measured bags, name what it misses and add it.
 
 The measured commands are replayed through the model; the velocity residual
 (measured increments against the model's one-step predictions) localises the
-disagreement. Every effect of the vocabulary is added in turn and fitted:
+disagreement, and the SDP analysis of what the model misses against the command,
+the angle, the time since a command change, the travel since a reversal, the
+other joints' speed and the load says which state explains it: the data name the
+effect (see `hydro-sdp sdp`). Every effect of the vocabulary is added in turn and
+fitted:
 
 {words}
 
-An effect is named when it removes a significant share of the residual (sign
-test over one-second blocks, z > 3, at least 2 %), the largest first (a stop the
-model lacks, seen as motion ending at one angle whenever driven there, first);
-it is kept only if the simulation error on the validation bags shrinks; the
-search repeats until nothing significant is left. `none` when the model already
-explains the data within the noise. The augmented model is a normal model file.
+Each is judged on held-out data (--validation, else every third bag when there
+are three or more): an effect is named when it lowers the simulation error over
+2-second windows by at least 10 % and its reduction of the squared residual is
+significant under a block bootstrap (p <= 0.01), which weighs a large effect
+seen for a few seconds as much as a small one seen throughout; one that removes
+half the residual is never dismissed. The first accepted is added (a stop the
+joint is held at while driven beyond its dead-zone first, then the words of the
+state the data name), and the search repeats until none is accepted: `none`.
+The augmented model is a normal model file.
 
 Two words need more than the joint's own command and angle. `flow_sharing`
 uses the other joints of the same JointState (read whenever the bags have
 them): the joint slowing while another moves is fitted as a shared pump-flow
 limit. `load_dependence` uses a measured load when --load-topic names a Float64
-topic (a load pressure, held between messages like the command): a load that
-overruns the joint speeds it up as the root of the load pressure (the outlet
-edge meters the flow), or a plain speed change per load unit and direction,
+topic (a load pressure, held between messages like the command): the speed
+follows the load as the SDP analysis draws it, a smooth factor per direction of
+either sign (a valve without compensation, a pump whose power binds), or an
+overrunning load that speeds the joint up as the root of the load pressure,
 whichever the data show. Without it, each record gets its own speed
 scale per direction, named only when the records' scales at the same command
 differ beyond their noise; those factors hold for the bags they were fitted on.
@@ -83,14 +94,20 @@ def describe(result: Diagnosis) -> dict[str, Any]:
     return {
         'effect': result.effect,
         'candidates': [{'effect': c.effect, 'applicable': c.applicable, 'gain': c.gain,
-                        't': json_number(c.t), 'significant': c.significant,
-                        'parameters': c.parameters, 'evidence': c.evidence}
+                        't': json_number(c.t), 'p_value': c.p_value,
+                        'significant': c.significant, 'held_out': c.held_out,
+                        'accepted': c.accepted, 'state': c.state,
+                        'named_by_data': c.named_by_data, 'parameters': c.parameters,
+                        'evidence': c.evidence}
                        for c in result.candidates],
         'ledger': [{'effect': s.effect, 'parameters': s.parameters,
-                    'mae_before': s.mae_before, 'mae_after': s.mae_after}
+                    'mae_before': s.mae_before, 'mae_after': s.mae_after,
+                    'windowed_before': s.window_before, 'windowed_after': s.window_after}
                    for s in result.ledger],
         'mae_before': result.mae_before,
         'mae_after': result.mae_after,
+        'validation': result.validation,
+        'states': dict(result.shares),
         'model': result.model.to_mapping(),
     }
 
@@ -136,10 +153,17 @@ def run(args: argparse.Namespace) -> Outcome:
                          ', '.join(f'{k}={_short(v)}' for k, v in s.parameters.items())]
                         for i, s in enumerate(result.ledger, start=1)],
                        ['step', 'effect', 'MAE before', 'MAE after', 'parameters'])
-    lines.append('candidates (first round):')
-    lines += table([[c.effect, 'yes' if c.significant else 'no', f'{100 * c.gain:.1f}',
-                     f'{c.t:.1f}', c.evidence[:70]] for c in result.candidates if c.applicable],
-                   ['effect', 'significant', 'gain %', 'z', 'evidence'])
+    lines.append(f'candidates (first round, judged on {result.validation}):')
+    rows = []
+    for c in result.candidates:
+        if not c.applicable:
+            continue
+        # The evidence wrapped, not cut: its lines below the candidate's row.
+        evidence = textwrap.wrap(c.evidence, EVIDENCE_WIDTH) or ['']
+        rows.append([c.effect, 'yes' if c.accepted else 'no', f'{100 * c.held_out:.1f}',
+                     f'{100 * c.gain:.1f}', f'{c.t:.3g}', evidence[0]])
+        rows += [['', '', '', '', '', line] for line in evidence[1:]]
+    lines += table(rows, ['effect', 'accepted', 'held-out %', 'residual %', 'z', 'evidence'])
     if args.out:
         lines.append(f'wrote {payload["model_file"]}')
     return Outcome(payload, lines)

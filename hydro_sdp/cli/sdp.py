@@ -15,7 +15,7 @@ if TYPE_CHECKING:
     from hydro_sdp.core.identification.sdp import SdpAnalysis, StateDependence
 
 HELP = 'estimate how a parameter depends on each state, without assuming its shape (SDP)'
-STATE_NAMES = ('command', 'angle', 'since_change', 'others_speed', 'load')
+STATE_NAMES = ('command', 'angle', 'since_change', 'others_speed', 'load', 'reversals')
 DESCRIPTION = """\
 The non-parametric stage of the SDP method (Young, McKenna and Bruun 2001;
 CAPTAIN's sdp): the samples are sorted by a candidate state, the parameter is
@@ -40,6 +40,8 @@ States (--states, comma-separated; default all the records can give):
   since_change  time since the delayed command last changed, s
   others_speed  the other joints' summed speed, from the JointState, deg/s
   load          the --load-topic signal (a cylinder pressure, say)
+  reversals     travel since the motion last reversed (the model's, with
+                --model), deg: play shows as motion lost right after it
 
 Each state is first weighed alone; the one that explains most comes first, and
 every other is weighed by what it adds to it. For each: its share of the

@@ -1,13 +1,12 @@
-"""Figures of the discrepancy workflow: residual signature, gap, gap ledger, candidates."""
+"""Figures of the discrepancy workflow: residual signature, gap, gap ledger, record scales."""
 
 from __future__ import annotations
 
 from typing import Sequence
 
 from hydro_sdp.core.arrays import FloatArray, IntArray
-from hydro_sdp.core.diagnosis.residuals import T_LIMIT
 from hydro_sdp.core.diagnosis.results import Candidate, LedgerStep, Signature
-from hydro_sdp.plots.figures import LIMIT, MEASURED, MODEL, new_figure
+from hydro_sdp.plots.figures import MEASURED, MODEL, new_figure
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 import numpy as np
@@ -175,44 +174,6 @@ def plot_ledger(mae_start: float, steps: Sequence[LedgerStep]) -> Figure:
     ax.set_yscale('log')
     ax.set_ylabel('validation MAE (deg, log scale)')
     figure.suptitle('Gap ledger', fontsize=11)
-    return figure
-
-
-def plot_candidates(candidates: Sequence[Candidate], named: str) -> Figure:
-    """
-    Draw what every word of the vocabulary removes, and whether that is significant.
-
-    One bar per applicable candidate: the share of the squared velocity residual it
-    removes (left) and its block sign-test statistic (right, with the threshold);
-    significant candidates are drawn dark, the one named is labelled.
-
-    Parameters
-    ----------
-    candidates : sequence of Candidate
-        The candidates of the first round, ranked.
-    named : str
-        The word named (``none``: nothing).
-
-    Returns
-    -------
-    Figure
-        The figure.
-
-    """
-    shown = [c for c in candidates if c.applicable]
-    figure, (gain_ax, z_ax) = new_figure(2, height=2.6, width=8.0)
-    place = np.arange(len(shown))
-    colours = [MEASURED if c.significant else LIMIT for c in shown]
-    gain_ax.bar(place, [100.0 * c.gain for c in shown], color=colours)
-    gain_ax.set_ylabel('residual removed (%)')
-    z_ax.bar(place, [c.t for c in shown], color=colours)
-    z_ax.axhline(T_LIMIT, color=MODEL, linewidth=1.0, linestyle='--',
-                 label=f'significant above {T_LIMIT:g}')
-    z_ax.set_ylabel('sign-test z')
-    z_ax.legend(loc='best', fontsize=8, frameon=False)
-    labels = [f'{c.effect}\n(named)' if c.effect == named else c.effect for c in shown]
-    z_ax.set_xticks(place, labels, fontsize=7, rotation=30, ha='right')
-    figure.suptitle('Candidates: what each word explains', fontsize=11)
     return figure
 
 

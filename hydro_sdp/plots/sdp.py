@@ -30,11 +30,13 @@ PARAMETERS = {'b': 'gain b (deg per sample per unit)',
               'a1': 'a1'}
 
 
-def _label(state: str, command_unit: str | None) -> str:
+def state_label(state: str, command_unit: str | None) -> str:
+    """Return the axis label of a state, with its unit."""
     unit = command_unit if state == 'command' and command_unit else UNITS[state]
     names = {'command': 'delayed command', 'angle': 'angle y_{k-1}',
              'since_change': 'time since the command changed',
-             'others_speed': "other joints' summed speed", 'load': 'measured load'}
+             'others_speed': "other joints' summed speed", 'load': 'measured load',
+             'reversals': 'travel since the motion reversed'}
     return f'{names[state]} ({unit})'
 
 
@@ -118,7 +120,7 @@ def plot_state(analysis: SdpAnalysis, state: str, *, command_unit: str | None = 
         axes[1].set_ylabel(PARAMETERS['residual'])
     for ax in axes:
         ax.legend(loc='best', fontsize=8, frameon=False)
-    axes[-1].set_xlabel(_label(state, command_unit))
+    axes[-1].set_xlabel(state_label(state, command_unit))
     first = analysis.states[0].state if analysis.states else ''
     what = 'alone' if state == first else f'added to {first}'
     figure.suptitle(title or f'{parameter} against {state} ({what}), +-2 standard errors',

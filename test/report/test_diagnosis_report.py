@@ -10,17 +10,18 @@ from hydro_sdp.report.diagnosis import write_report
 import numpy as np
 
 
-def test_a_report_without_an_effect_has_no_signature(tmp_path, j2):
+def test_a_report_without_an_effect_has_no_signature_but_its_candidates(tmp_path, j2):
     records = [experiment_record(j2, 'random', seed=seed, duration=20.0) for seed in (1, 2)]
     result = diagnose(records[:1], j2, validation=records[1:], max_iterations=0)
     written = write_report(tmp_path / 'report', result)
     assert written == [str(tmp_path / 'report' / name)
-                       for name in ('gap.png', 'ledger.png', 'summary.md')]
+                       for name in ('gap.png', 'ledger.png', 'candidates.png', 'summary.md')]
     summary = (tmp_path / 'report' / 'summary.md').read_text()
     assert '**Named effect: `none`.**' in summary
     assert f'Validation MAE {result.mae_before:.4g} deg before, {result.mae_before:.4g} deg ' \
-        'after (0 effects added).' in summary
-    assert '| - | none | - | - |' in summary
+        'after (0 effects added; judged on given: 1 validation record).' in summary
+    assert '![candidates](candidates.png)' in summary
+    assert '| - | none | - | - | - | - |' in summary
     assert '![signature]' not in summary
     (tmp_path / 'model.yaml').write_text(summary.split('```yaml\n')[1].split('```')[0])
     assert load_model(tmp_path / 'model.yaml') == j2

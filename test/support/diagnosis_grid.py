@@ -1,29 +1,34 @@
 """
-A grid of simulated joints to check the discrepancy workflow on (docs/methods.md section 8.7).
+A grid of joints to check the discrepancy workflow on (docs/methods.md section 8.7).
 
-Each case is a true joint, a nominal model that misses one word of the
-vocabulary (or nothing: ``none``), and records of the true joint driven by one
-of two programs: random levels kept inside the end stops, or full-stroke runs
-from stop to stop. The joints differ from J2 on purpose: dead-zones from narrow
-to wide, slow and fast, delays of 0.03-0.3 s, commands in volts (+-10), in
-percent resting at 50 (0..100) or in signed percent (-100..100).
+Each case is a true joint simulated by the independent generator
+(:mod:`support.joint_generator`: its own maps, lags, integrator and effects), a
+nominal model that misses one word of the vocabulary (or nothing: ``none``) written
+from the same numbers through the model file's documented keys, and records of the
+true joint driven by one of two programs: random levels kept inside the end stops, or
+full-stroke runs from stop to stop. The joints differ from J2 on purpose: dead-zones
+from narrow to wide, slow and fast, delays of 0.03-0.3 s, commands in volts (+-10),
+in percent resting at 50 (0..100) or in signed percent (-100..100). For
+``flow_sharing`` a second joint on the same pump moves at random; for
+``load_dependence`` each record carries a measured load (a payload of its own and a
+digging force that comes and goes) that slows the joint through a valve without
+pressure compensation.
 
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from typing import Sequence
+import math
+from typing import Any, Sequence
 
-from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.diagnosis.search import diagnose
-from hydro_sdp.core.model.effects import (
-    AngleDependentVelocity, Backlash, DirectionDependentDelay, StrokeGeometry, ValveLag)
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.records import Record
-from hydro_sdp.core.model.simulation import simulate
-from hydro_sdp.core.model.static_maps import linearise, LinearMap, SdpDzMap, SdpMap, StaticMap
 import numpy as np
+from support.grid_programs import load_signal, other_levels, program
+from support.grid_results import GridResult
+from support.joint_generator import Joint, Machine, record, SpeedMap, Stroke
 
 #: Input units of the grid: name, command range, rest command.
 UNITS: dict[str, tuple[tuple[float, float], float]] = {
@@ -37,10 +42,42 @@ UNITS: dict[str, tuple[tuple[float, float], float]] = {
 WORDS: tuple[str, ...] = (
     'dead_zone', 'velocity_saturation', 'asymmetry', 'time_delay',
     'direction_dependent_delay', 'angle_limits', 'valve_lag', 'backlash',
-    'angle_dependent_velocity', 'none', 'stroke_geometry')
+    'angle_dependent_velocity', 'none', 'stroke_geometry', 'flow_sharing', 'load_dependence')
 
 #: The two programs.
 PROGRAMS: tuple[str, ...] = ('random', 'stroke')
+
+
+@dataclass(frozen=True)
+class Truth:
+    """
+    A true joint: the numbers of its model file and what the generator adds to them.
+
+    Parameters
+    ----------
+    mapping : dict
+        Its model file (docs/interfaces.md section 1), the documented keys.
+    joint : Joint
+        The generator's joint with the same numbers.
+    other : Joint or None
+        The other joint on the pump.
+
+    """
+
+    mapping: dict[str, Any]
+    joint: Joint
+    other: Joint | None = None
+
+    @property
+    def model(self) -> JointModel:
+        """Return the true joint's model, read from its model file."""
+        return JointModel.from_mapping(self.mapping)
+
+    @property
+    def machine(self) -> Machine:
+        """Return the generator's machine."""
+        joints = (self.joint,) if self.other is None else (self.joint, self.other)
+        return Machine(joints)
 
 
 @dataclass(frozen=True, eq=False)
@@ -56,8 +93,10 @@ class GridCase:
         ``random`` (levels inside the stops) or ``stroke`` (stop to stop).
     units : str
         Key of :data:`UNITS`.
-    truth, model : JointModel
-        The true joint and the nominal model.
+    truth : Truth
+        The true joint.
+    model : JointModel
+        The nominal model.
     estimation, validation : tuple of Record
         Records of the true joint.
 
@@ -66,80 +105,99 @@ class GridCase:
     word: str
     program: str
     units: str
-    truth: JointModel
+    truth: Truth
     model: JointModel
     estimation: tuple[Record, ...]
     validation: tuple[Record, ...]
 
 
-@dataclass(frozen=True)
-class GridResult:
-    """
-    What the workflow named for one case.
-
-    Parameters
-    ----------
-    word, program, units : str
-        The case.
-    named : str
-        The first word named.
-    mae_before, mae_after : float
-        Validation MAE of the nominal and of the final model, degrees.
-
-    """
-
-    word: str
-    program: str
-    units: str
-    named: str
-    mae_before: float
-    mae_after: float
-
-    @property
-    def right(self) -> bool:
-        """Whether the right word came first and (when one is missing) the gap halved."""
-        if self.word == 'none':
-            return self.named == 'none'
-        return self.named == self.word and self.mae_after <= 0.5 * self.mae_before
-
-
-def _joint(rng: np.random.Generator, units: str) -> JointModel:
-    """Return a random true joint in ``units``: sdp map, asymmetric, with end stops."""
+def _base(rng: np.random.Generator, units: str) -> dict[str, Any]:
+    """Return a random true joint's model file in ``units``: sdp map, asymmetric, stops."""
     (low, high), rest = UNITS[units]
     half = min(rest - low, high - rest)
     width = float(rng.uniform(0.03, 0.25)) * half
-    edges = (rest - width * float(rng.uniform(0.7, 1.3)),
-             rest + width * float(rng.uniform(0.7, 1.3)))
+    edges = [rest - width * float(rng.uniform(0.7, 1.3)),
+             rest + width * float(rng.uniform(0.7, 1.3))]
     speed = float(rng.uniform(10.0, 70.0))
     # The speed saturates within the command range: 95 % at 40-90 % of the span.
     reach = [(half - width) * float(r) for r in rng.uniform(0.4, 0.9, 2)]
-    curvature = (3.0 / reach[0], 3.0 / reach[1])
-    static_map = SdpMap(edges, (-speed * float(rng.uniform(0.7, 1.0)),
-                                speed * float(rng.uniform(0.9, 1.3))), curvature)
     bottom = float(rng.uniform(-60.0, 10.0))
-    return JointModel('joint', static_map, delay=round(float(rng.uniform(0.03, 0.3)), 2),
-                      angle_limits=(bottom, bottom + float(rng.uniform(50.0, 120.0))),
-                      input_limits=(low, high))
+    return {'format': 'hydro_sdp/model/v1', 'joint': 'joint', 'kind': 'sdp',
+            'delay': round(float(rng.uniform(0.03, 0.3)), 2),
+            'angle_limits': [bottom, bottom + float(rng.uniform(50.0, 120.0))],
+            'input_limits': [low, high], 'dead_zone': edges,
+            'saturation_velocity': [-speed * float(rng.uniform(0.7, 1.0)),
+                                    speed * float(rng.uniform(0.9, 1.3))],
+            'curvature': [3.0 / reach[0], 3.0 / reach[1]], 'effects': {}}
 
 
-def _symmetric(static_map: SdpMap, rest: float) -> SdpMap:
-    edge = 0.5 * (static_map.dead_zone[1] - static_map.dead_zone[0])
-    speed = 0.5 * (static_map.saturation_velocity[1] - static_map.saturation_velocity[0])
-    curvature = 0.5 * (static_map.curvature[0] + static_map.curvature[1])
-    return SdpMap((rest - edge, rest + edge), (-speed, speed), (curvature, curvature))
+def _speed_map(mapping: dict[str, Any]) -> SpeedMap:
+    """Return the generator's map with the numbers of a model file's ``sdp`` or ``sdp_dz`` map."""
+    edges = tuple(mapping['dead_zone'])
+    if mapping['kind'] == 'sdp_dz':
+        return SpeedMap('linear', edges, rise=tuple(mapping['slope']))
+    low, high = mapping['saturation_velocity']
+    return SpeedMap('exp', edges, (-low, high), tuple(mapping['curvature']))
 
 
-def _without_dead_zone(static_map: SdpDzMap, rest: float) -> StaticMap:
-    slope = static_map.slope[1]
-    if rest == 0.0:
-        return LinearMap(slope)
-    # A linear map turns about 0; about another rest it is an sdp_dz map with no width.
-    return SdpDzMap((rest, rest), (slope, slope))
+def _chords(mapping: dict[str, Any], equal: bool) -> dict[str, Any]:
+    """Return an ``sdp_dz`` map through the sdp map's two-thirds-of-saturation points."""
+    low, high = mapping['dead_zone']
+    vn, vp = mapping['saturation_velocity']
+    cn, cp = mapping['curvature']
+    # rate = V (1 - exp(-c u)) reaches 2/3 V at u = ln(3) / c: slope (2/3 V) / u.
+    slopes = [2.0 / 3.0 * -vn * cn / math.log(3.0), 2.0 / 3.0 * vp * cp / math.log(3.0)]
+    if equal:
+        slopes = [slopes[1], slopes[1]]
+    out = {k: v for k, v in mapping.items()
+           if k not in ('saturation_velocity', 'curvature')}
+    return {**out, 'kind': 'sdp_dz', 'dead_zone': [low, high], 'slope': slopes}
 
 
-def hide(word: str, rng: np.random.Generator, units: str) -> tuple[JointModel, JointModel]:
+def _symmetric(mapping: dict[str, Any], rest: float) -> dict[str, Any]:
+    low, high = mapping['dead_zone']
+    edge = 0.5 * (high - low)
+    vn, vp = mapping['saturation_velocity']
+    cn, cp = mapping['curvature']
+    speed, curvature = 0.5 * (vp - vn), 0.5 * (cn + cp)
+    return {**mapping, 'dead_zone': [rest - edge, rest + edge],
+            'saturation_velocity': [-speed, speed], 'curvature': [curvature, curvature]}
+
+
+def _stroke(rng: np.random.Generator, limits: Sequence[float]) -> dict[str, Any]:
     """
-    Return a true joint and a nominal model that misses ``word``.
+    Return a linkage factor over the stroke, the same for both directions.
+
+    Smooth (a random cosine and a slope over five knots), the fastest part of the
+    stroke x1.4-2 the slowest, with cushions over 5 % of the stroke at each end.
+    """
+    low, high = limits
+    share = np.linspace(0.0, 1.0, 5)
+    shape = np.cos(np.pi * share + float(rng.uniform(0.0, np.pi))) + \
+        float(rng.uniform(-1.0, 1.0)) * share
+    shape = (shape - shape.min()) / np.ptp(shape)
+    factors = np.exp(np.log(float(rng.uniform(1.4, 2.0))) * (shape - 0.5))
+    return {'knots': (low + (high - low) * share).tolist(), 'factors': factors.tolist(),
+            'cushion': 0.05 * (high - low), 'cushion_factor': float(rng.uniform(0.3, 0.6))}
+
+
+def _load_factor(supply: float, reference: float) -> Any:
+    """
+    Return the speed factor of a valve without compensation fed at a fixed ``supply`` pressure.
+
+    Lifting (positive), the load pressure resists: the flow is ``sqrt(supply - L)`` over
+    its value at the ``reference`` load; lowering, it helps: ``sqrt(supply + L)``.
+    """
+    def factor(load: float, direction: float) -> float:
+        if direction > 0.0:
+            return math.sqrt(max(supply - load, 0.0025 * supply) / (supply - reference))
+        return math.sqrt((supply + load) / (supply + reference))
+    return factor
+
+
+def hide(word: str, rng: np.random.Generator, units: str) -> tuple[Truth, dict[str, Any]]:
+    """
+    Return a true joint and the model file of a nominal model that misses ``word``.
 
     Parameters
     ----------
@@ -152,152 +210,85 @@ def hide(word: str, rng: np.random.Generator, units: str) -> tuple[JointModel, J
 
     Returns
     -------
-    tuple[JointModel, JointModel]
-        ``(truth, model)``.
+    tuple
+        ``(truth, nominal model file)``.
 
     """
-    truth = _joint(rng, units)
+    base = _base(rng, units)
     rest = UNITS[units][1]
-    static_map = truth.static_map
-    assert isinstance(static_map, SdpMap)
-    span = (static_map.dead_zone[0] - 2.0 / static_map.curvature[0],
-            static_map.dead_zone[1] + 2.0 / static_map.curvature[1])
+    nominal = dict(base)
+    joint = {'speed_map': _speed_map(base), 'delay': base['delay'],
+             'stops': tuple(base['angle_limits'])}
+    effects: dict[str, Any] = {}
+    other = None
     if word == 'dead_zone':
         # A linear nominal model (or one with no width about the rest) of a dead-zone joint
         # whose sides have one slope (a linear model cannot tell the sides apart either).
-        chords = linearise(static_map, *span)
-        chords = replace(chords, slope=(chords.slope[1], chords.slope[1]))
-        return replace(truth, static_map=chords), replace(
-            truth, static_map=_without_dead_zone(chords, rest))
-    if word == 'velocity_saturation':
-        return truth, replace(truth, static_map=linearise(static_map, *span))
-    if word == 'asymmetry':
-        return truth, replace(truth, static_map=_symmetric(static_map, rest))
-    if word == 'time_delay':
-        shift = max(0.03, 0.5 * truth.delay) * float(rng.choice([-1.0, 1.0]))
-        wrong = round(truth.delay + shift, 2) if truth.delay + shift >= 0.01 else \
-            round(truth.delay + abs(shift), 2)
-        return truth, replace(truth, delay=wrong)
-    if word == 'direction_dependent_delay':
-        later = truth.delay + max(0.05, float(rng.uniform(0.4, 0.8)) * truth.delay)
+        base = _chords(base, equal=True)
+        joint['speed_map'] = _speed_map(base)
+        nominal = {k: v for k, v in base.items() if k not in ('dead_zone', 'slope')}
+        slope = base['slope'][1]
+        nominal.update({'kind': 'linear', 'gain': slope} if rest == 0.0 else
+                       {'dead_zone': [rest, rest], 'slope': [slope, slope]})
+    elif word == 'velocity_saturation':
+        nominal = _chords(base, equal=False)
+    elif word == 'asymmetry':
+        nominal = _symmetric(base, rest)
+    elif word == 'time_delay':
+        shift = max(0.03, 0.5 * base['delay']) * float(rng.choice([-1.0, 1.0]))
+        wrong = base['delay'] + shift if base['delay'] + shift >= 0.01 else \
+            base['delay'] + abs(shift)
+        nominal = {**base, 'delay': round(wrong, 2)}
+    elif word == 'direction_dependent_delay':
+        later = base['delay'] + max(0.05, float(rng.uniform(0.4, 0.8)) * base['delay'])
         slower = round(min(later, 0.45), 2)
-        split = (truth.delay, slower) if rng.random() < 0.5 else (slower, truth.delay)
-        return truth.with_effect(DirectionDependentDelay(*split)), truth
-    if word == 'angle_limits':
-        return truth, replace(truth, angle_limits=None)
-    if word == 'valve_lag':
-        return truth.with_effect(ValveLag(float(rng.uniform(0.05, 0.3)))), truth
-    if word == 'backlash':
-        return truth.with_effect(Backlash(float(rng.uniform(1.0, 3.0)))), truth
-    if word == 'angle_dependent_velocity':
-        return truth.with_effect(AngleDependentVelocity(float(rng.uniform(0.2, 0.4)),
-                                                        float(rng.uniform(0.0, 360.0)))), truth
-    if word == 'stroke_geometry':
-        return truth.with_effect(stroke_geometry(rng, truth)), truth
-    return truth, truth
-
-
-def stroke_geometry(rng: np.random.Generator, truth: JointModel) -> StrokeGeometry:
-    """
-    Return a linkage factor over the stroke of ``truth``, the same for both directions.
-
-    Smooth (a random cosine and a slope over five knots), the fastest part of the
-    stroke x1.4-2 the slowest, with cushions over 5 % of the stroke at each end.
-    """
-    assert truth.angle_limits is not None
-    low, high = truth.angle_limits
-    share = np.linspace(0.0, 1.0, 5)
-    shape = np.cos(np.pi * share + float(rng.uniform(0.0, np.pi))) + \
-        float(rng.uniform(-1.0, 1.0)) * share
-    shape = (shape - shape.min()) / np.ptp(shape)
-    factors = np.exp(np.log(float(rng.uniform(1.4, 2.0))) * (shape - 0.5))
-    return StrokeGeometry(tuple(low + (high - low) * share), tuple(factors.tolist()),
-                          cushion=0.05 * (high - low),
-                          cushion_factor=float(rng.uniform(0.3, 0.6)))
-
-
-def _levels(rng: np.random.Generator, truth: JointModel, sign: float,
-            smallest: float) -> float:
-    """Return a command driving ``truth`` towards ``sign`` at a random share of its range."""
-    static_map = truth.static_map
-    assert static_map.dead_zone is not None and truth.input_limits is not None
-    side = 1 if sign > 0 else 0
-    edge = static_map.dead_zone[side]
-    end = truth.input_limits[side]
-    return edge + rng.uniform(smallest, 0.9) * (end - edge)
-
-
-def program(truth: JointModel, kind: str, rng: np.random.Generator, seconds: float,
-            dt: float) -> tuple[FloatArray, float]:
-    """
-    Return commands for ``truth`` and the angle to start from.
-
-    ``random``: random levels (dead-zone included) held 0.5-3 s, cut short before the
-    joint would leave the middle 80 % of its stroke. ``stroke``: runs at a random level
-    from one stop to the other, pushed against the stop for 0.3-1.5 s, some rests.
-
-    Parameters
-    ----------
-    truth : JointModel
-        The true joint (its stops and map shape the program).
-    kind : str
-        ``random`` or ``stroke``.
-    rng : numpy.random.Generator
-        Random draws.
-    seconds : float
-        Length, s.
-    dt : float
-        Sample period, s.
-
-    Returns
-    -------
-    tuple[FloatArray, float]
-        Commands and the start angle, degrees.
-
-    """
-    assert truth.angle_limits is not None and truth.dead_zone is not None
-    low, high = truth.angle_limits
-    rest = truth.rest_command
-    total = int(round(seconds / dt))
-    pieces: list[FloatArray] = []
-    filled = 0
-    y = 0.5 * (low + high)
-    margin = 0.1 * (high - low)
-    while filled < total:
-        if kind == 'random':
-            up = rng.random() < min(max((high - margin - y) / (high - low - 2 * margin),
-                                        0.1), 0.9)
-            sign = 1.0 if up else -1.0
-            level = _levels(rng, truth, sign, -0.3)
-            if (level - rest) * sign < 0.0:
-                level = rest
-            speed = float(truth.rate(level))
-            hold = rng.uniform(0.5, 3.0)
-            if speed != 0.0:
-                room = (high - margin - y) if speed > 0 else (y - low - margin)
-                hold = min(hold, max(room, 0.0) / abs(speed))
-            samples = max(1, int(round(hold / dt)))
-            y += speed * samples * dt
-            pieces.append(np.full(samples, level))
-        else:
-            sign = 1.0 if y < 0.5 * (low + high) else -1.0
-            level = _levels(rng, truth, sign, 0.3)
-            speed = abs(float(truth.rate(level)))
-            travel = (high - y) if sign > 0 else (y - low)
-            hold = travel / max(speed, 1e-6) + rng.uniform(0.3, 1.5)
-            samples = int(round(hold / dt))
-            pieces.append(np.full(samples, level))
-            y = high if sign > 0 else low
-            if rng.random() < 0.5:
-                pieces.append(np.full(int(round(rng.uniform(0.3, 1.5) / dt)), rest))
-        filled = sum(p.size for p in pieces)
-    return np.concatenate(pieces)[:total], 0.5 * (low + high)
+        split = (base['delay'], slower) if rng.random() < 0.5 else (slower, base['delay'])
+        joint.update(delay=split[0], delay_negative=split[1])
+        effects['direction_dependent_delay'] = {'positive': split[0], 'negative': split[1]}
+    elif word == 'angle_limits':
+        nominal = {**base, 'angle_limits': None}
+    elif word == 'valve_lag':
+        joint['lag'] = float(rng.uniform(0.05, 0.3))
+        effects['valve_lag'] = {'time_constant': joint['lag']}
+    elif word == 'backlash':
+        joint['play'] = float(rng.uniform(1.0, 3.0))
+        effects['backlash'] = {'play': joint['play']}
+    elif word == 'angle_dependent_velocity':
+        joint['gravity'] = (float(rng.uniform(0.2, 0.4)), float(rng.uniform(0.0, 360.0)))
+        effects['angle_dependent_velocity'] = dict(zip(('amplitude', 'phase'),
+                                                       joint['gravity']))
+    elif word == 'stroke_geometry':
+        stroke = _stroke(rng, base['angle_limits'])
+        joint['stroke'] = Stroke(tuple(stroke['knots']), tuple(stroke['factors']),
+                                 stroke['cushion'], stroke['cushion_factor'])
+        effects['stroke_geometry'] = stroke
+    elif word == 'flow_sharing':
+        # The pump gives 1.05-1.3 full demands of this joint (alone it never runs short);
+        # the other joint's 25-45 deg/s count as one: both at full speed ask for twice it.
+        # A full demand of this joint is its top speed in that direction (as the model
+        # file has it).
+        low, high = base['saturation_velocity']
+        other_speed = float(rng.uniform(20.0, 40.0))
+        full = float(rng.uniform(0.6, 1.2))
+        joint['sharing'] = (float(rng.uniform(1.05, 1.3)), high, -low, other_speed / full,
+                            other_speed / full)
+        other = Joint(SpeedMap('exp', (-1.0, 1.0), (other_speed, other_speed), (0.8, 0.8)),
+                      delay=0.1, stops=(-40.0, 40.0))
+    elif word == 'load_dependence':
+        reference = float(rng.uniform(20.0, 60.0))
+        joint['load_factor'] = _load_factor(float(rng.uniform(2.0, 3.0)) * 150.0, reference)
+    truth_file = {**base, 'effects': effects}
+    if word == 'none':
+        nominal = truth_file
+    nominal = {**nominal, 'effects': {k: v for k, v in effects.items()
+                                      if k != word or word == 'none'}}
+    return Truth(truth_file, Joint(**joint), other), nominal
 
 
 def make_case(word: str, kind: str, units: str, seed: int, *, seconds: float = 60.0,
-              dt: float = 0.01, noise: float = 0.02) -> GridCase:
+              dt: float = 0.01, noise: float = 0.02, records: int = 3) -> GridCase:
     """
-    Return one case: joint, nominal model, two estimation records and one validation record.
+    Return one case: joint, nominal model, estimation records and one validation record.
 
     Parameters
     ----------
@@ -315,6 +306,8 @@ def make_case(word: str, kind: str, units: str, seed: int, *, seconds: float = 6
         Sample period, s.
     noise : float
         Standard deviation of the angle noise, degrees.
+    records : int
+        Records made: all but the last for estimation, the last for validation.
 
     Returns
     -------
@@ -324,50 +317,66 @@ def make_case(word: str, kind: str, units: str, seed: int, *, seconds: float = 6
     """
     rng = np.random.default_rng([seed, WORDS.index(word), PROGRAMS.index(kind),
                                  list(UNITS).index(units)])
-    truth, model = hide(word, rng, units)
-    records = []
-    for _ in range(3):
-        v, y0 = program(truth, kind, rng, seconds, dt)
-        y = simulate(truth, v, dt, y0, v_before=float(v[0])) + rng.normal(0.0, noise, v.size)
-        records.append(Record(np.arange(1, v.size + 1) * dt, v, y, joint=truth.joint))
-    return GridCase(word, kind, units, truth, model, tuple(records[:2]), (records[2],))
+    truth, nominal = hide(word, rng, units)
+    truth = replace(truth, joint=replace(truth.joint, noise=noise))
+    made = records_of(truth, kind, rng, seconds=seconds, dt=dt, count=records,
+                      loaded=word == 'load_dependence', name=f'{word} {kind} {units} {seed}')
+    return GridCase(word, kind, units, truth, JointModel.from_mapping(nominal),
+                    tuple(made[:-1]), (made[-1],))
 
 
-def run_case(case: GridCase) -> GridResult:
-    """Diagnose one case and return what was named."""
-    result = diagnose(case.estimation, case.model, validation=case.validation)
-    return GridResult(case.word, case.program, case.units, result.effect, result.mae_before,
-                      result.mae_after)
-
-
-def confusion_table(results: Sequence[GridResult]) -> list[str]:
+def records_of(truth: Truth, kind: str, rng: np.random.Generator, *, seconds: float = 60.0,
+               dt: float = 0.01, count: int = 3, loaded: bool = False,
+               name: str = 'generated') -> list[Record]:
     """
-    Return the confusion table as Markdown rows: hidden word against first word named.
+    Return records of a true joint driven by one of the grid's programs.
 
     Parameters
     ----------
-    results : sequence of GridResult
-        Grid results.
+    truth : Truth
+        The true joint (with the other joint on its pump, if any).
+    kind : str
+        One of :data:`PROGRAMS`.
+    rng : numpy.random.Generator
+        Random draws.
+    seconds : float
+        Length of each record, s.
+    dt : float
+        Sample period, s.
+    count : int
+        Records made.
+    loaded : bool
+        Whether each record carries a measured load (its own payload).
+    name : str
+        Start of each record's source.
 
     Returns
     -------
-    list[str]
-        Header, one row per hidden word (with the share right, gap halved), a total.
+    list[Record]
+        The records.
 
     """
-    hidden = [w for w in WORDS if any(r.word == w for r in results)]
-    named = list(dict.fromkeys([*hidden, *sorted({r.named for r in results} - set(hidden))]))
-    short = {w: w.replace('direction_dependent_delay', 'dir_delay')
-             .replace('angle_dependent_velocity', 'angle_vel')
-             .replace('velocity_saturation', 'saturation') for w in named}
-    rows = ['| hidden \\ named | ' + ' | '.join(short[w] for w in named) + ' | right |',
-            '|---' * (len(named) + 2) + '|']
-    for word in hidden:
-        mine = [r for r in results if r.word == word]
-        counts = [sum(r.named == w for r in mine) for w in named]
-        right = sum(r.right for r in mine)
-        rows.append(f'| {short.get(word, word)} | ' + ' | '.join(str(c) for c in counts)
-                    + f' | {right}/{len(mine)} |')
-    right = sum(r.right for r in results)
-    rows.append(f'| all | {" | ".join("" for _ in named)} | {right}/{len(results)} |')
-    return rows
+    planner = truth.model
+    machine = replace(truth.machine, dt=dt)
+    made = []
+    # Each record its own payload, spread over the range; the last (the validation
+    # record's) in the middle of those before it, not beyond what they saw.
+    spread = np.linspace(10.0, 120.0, count)
+    middle = count // 2
+    payloads = np.r_[rng.permutation(np.delete(spread, middle)), spread[middle]]
+    for index in range(count):
+        v, y0 = program(planner, kind, rng, seconds, dt)
+        commands = v[:, None] if truth.other is None else np.column_stack(
+            [v, other_levels(rng, v.size, dt)])
+        load = load_signal(rng, v.size, dt, float(payloads[index])) if loaded else None
+        made.append(record(machine, commands, angles0=[y0, 0.0][:commands.shape[1]],
+                           load=load, seed=int(rng.integers(1 << 30)),
+                           source=f'{name} #{index}'))
+    return made
+
+
+def run_case(case: GridCase, **options: Any) -> GridResult:
+    """Diagnose one case and return what was named."""
+    result = diagnose(case.estimation, case.model, validation=case.validation, **options)
+    return GridResult(case.word, case.program, case.units, result.effect, result.mae_before,
+                      result.mae_after)

@@ -5,8 +5,10 @@ from __future__ import annotations
 import math
 from typing import Any, Callable, Sequence
 
+from hydro_sdp.core.diagnosis.naming import Naming
+from hydro_sdp.core.diagnosis.reduction import reduction_test
 from hydro_sdp.core.diagnosis.residuals import (
-    BLOCK_SECONDS, block_sums, compare, MIN_GAIN, Run, T_LIMIT, velocity_residuals)
+    BLOCK_SECONDS, block_sums, MIN_GAIN, Run, velocity_residuals)
 from hydro_sdp.core.diagnosis.results import Candidate, Trial
 from hydro_sdp.core.errors import DataError, HydroSdpError
 from hydro_sdp.core.identification.experiment import split_long, thin
@@ -30,11 +32,15 @@ class Context:
         Estimation runs.
     max_delay : int
         Largest delay considered, samples.
+    naming : Naming or None
+        What the SDP analysis of the model's misses found (None: not analysed).
 
     """
 
-    def __init__(self, model: JointModel, runs: Sequence[Run], max_delay: int) -> None:
+    def __init__(self, model: JointModel, runs: Sequence[Run], max_delay: int,
+                 naming: Naming | None = None) -> None:
         self.model = model
+        self.naming = naming if naming is not None else Naming(None)
         self.runs = runs
         self.dt = runs[0].dt
         self.max_delay = max_delay
@@ -71,10 +77,18 @@ class Context:
 
     def score(self, effect: str, candidate: JointModel, parameters: dict[str, Any],
               evidence: str) -> Trial:
-        """Compare ``candidate`` with the model under test; return the scored trial."""
-        gain, t = compare(self.base, velocity_residuals(candidate, self.runs), self.block)
-        significant = t > T_LIMIT and gain > MIN_GAIN
-        return Candidate(effect, True, gain, t, significant, parameters, evidence), candidate
+        """
+        Compare ``candidate`` with the model under test on the estimation runs.
+
+        The share removed and the block bootstrap's verdict (:mod:`.reduction`) on the
+        data the candidate was fitted to: what a detector chooses between its forms
+        by; the search judges the candidate again on held-out runs.
+        """
+        reduction = reduction_test(self.base, velocity_residuals(candidate, self.runs),
+                                   self.block)
+        significant = reduction.significant and reduction.gain > MIN_GAIN
+        return Candidate(effect, True, reduction.gain, reduction.z, significant, parameters,
+                         evidence, p_value=reduction.p_value), candidate
 
     def fit_scalar(self, build: Callable[[float], JointModel], bounds: tuple[float, float],
                    log: bool = False) -> float:

@@ -3,10 +3,10 @@ Runs, simulation error and the velocity residual of the discrepancy workflow.
 
 The velocity residual ``eps_k = dy_k - dy^_k`` (measured against the model's
 one-step increments, docs/methods.md section 8.1) localises a discrepancy in time
-without the drift of the simulation error. Two models are compared on it block by
-block: a sign test over one-second blocks, robust to the residuals' autocorrelation
-and not swayed by a few blocks of end-stop impacts (section 8.3). The validation
-error is the per-record mean of :func:`hydro_sdp.core.identification.evaluation.record_mae`.
+without the drift of the simulation error; detectors fit their effects on its sum of
+squares over whole one-second blocks, and :mod:`.reduction` tests what a candidate
+removes of it. The validation error is the per-record mean of
+:func:`hydro_sdp.core.identification.evaluation.record_mae`.
 
 """
 
@@ -14,7 +14,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cached_property
-import math
 from typing import Sequence
 
 from hydro_sdp.core.arrays import FloatArray
@@ -27,11 +26,9 @@ from hydro_sdp.core.model.records import Record
 from hydro_sdp.core.model.simulation import bounded_cumsum, one_step_increments, speed_profile
 import numpy as np
 
-#: A candidate is significant when its block sign-test statistic exceeds this...
-T_LIMIT = 3.0
-#: ...and it removes at least this share of the squared velocity residual.
+#: A candidate must remove at least this share of the squared velocity residual.
 MIN_GAIN = 0.02
-#: Length of the blocks the sign test compares, s.
+#: Length of the blocks residuals are summed over (and the shortest bootstrap block), s.
 BLOCK_SECONDS = 1.0
 
 
@@ -73,12 +70,12 @@ def _settled_start(record: Record, hold: int, fallback: int) -> int:
     return min(int(starts[long[0]]) + hold, record.v.size - 2)
 
 
-def runs_of(records: Sequence[Record], max_delay: float) -> list[Run]:
+def runs_of(records: Sequence[Record], max_delay: float, settle: float = 1.0) -> list[Run]:
     """
     Wrap records with the sample each is simulated from.
 
     That is the first sample after the command has been held long enough for every
-    delay considered and for a valve lag to settle (1 s at least).
+    delay considered and for a valve lag to settle (``settle`` s at least).
 
     Parameters
     ----------
@@ -86,6 +83,9 @@ def runs_of(records: Sequence[Record], max_delay: float) -> list[Run]:
         Measured records.
     max_delay : float
         Largest delay considered, s.
+    settle : float
+        Shortest hold, s (0: every delayed command known is enough: the held-out runs
+        a candidate is judged on, where a short run's first seconds count).
 
     Returns
     -------
@@ -96,7 +96,7 @@ def runs_of(records: Sequence[Record], max_delay: float) -> list[Run]:
     runs = []
     for record in records:
         dt = check_record(record)
-        hold = int(round(max(1.0, max_delay) / dt))
+        hold = int(round(max(settle, max_delay) / dt))
         fallback = min(int(round(max_delay / dt)) + 1, len(record) - 2)
         runs.append(Run(record, dt, _settled_start(record, hold, fallback)))
     return runs
@@ -174,38 +174,3 @@ def block_sums(residuals: Sequence[FloatArray], size: int) -> FloatArray:
         if whole:
             sums.append(squared[:whole * size].reshape(whole, size).sum(axis=1))
     return np.concatenate(sums) if sums else np.zeros(0)
-
-
-def compare(base: Sequence[FloatArray], candidate: Sequence[FloatArray],
-            size: int) -> tuple[float, float]:
-    """
-    Share of the squared residual removed, and its block sign-test statistic.
-
-    The statistic counts the blocks a candidate makes better against those it makes
-    worse, ``(better - worse) / sqrt(better + worse)`` (about normal under the null
-    of no change; blocks it leaves alone do not count), so a few blocks of large
-    residual (end-stop impacts) weigh no more than any other.
-
-    Parameters
-    ----------
-    base, candidate : sequence of FloatArray
-        Velocity residuals of the two models, run by run.
-    size : int
-        Samples per block.
-
-    Returns
-    -------
-    tuple[float, float]
-        ``(gain, z)``.
-
-    """
-    before, after = block_sums(base, size), block_sums(candidate, size)
-    if before.size < 3 or not before.sum() > 0.0:
-        return 0.0, 0.0
-    difference = before - after
-    # Blocks whose residual changes by less than rounding are ties.
-    tie = 1e-9 * float(np.mean(before))
-    better = int(np.count_nonzero(difference > tie))
-    worse = int(np.count_nonzero(difference < -tie))
-    z = (better - worse) / math.sqrt(better + worse) if better + worse else 0.0
-    return float(1.0 - after.sum() / before.sum()), float(z)

@@ -6,6 +6,7 @@ from dataclasses import dataclass, field
 from typing import Any, Literal, Sequence
 
 from hydro_sdp.core.arrays import FloatArray, IntArray
+from hydro_sdp.core.identification.sdp import StateDependence
 from hydro_sdp.core.model.joint_model import JointModel
 import numpy as np
 
@@ -27,19 +28,31 @@ class Candidate:
     applicable : bool
         Whether the effect can be added to this model at all.
     gain : float
-        Share of the squared velocity residual the effect removes (estimation data).
+        Share of the squared velocity residual the effect removes on the held-out
+        runs (on the estimation runs until it is judged).
     t : float
-        Block sign-test statistic of that reduction (blocks better minus blocks worse
-        over the square root of their sum).
+        Standard score of that reduction under the block bootstrap's null.
     significant : bool
-        Whether ``t`` and ``gain`` pass the thresholds.
+        Whether the reduction is significant (``p_value`` <= 0.01).
     parameters : dict
         Fitted parameters of the effect.
     evidence : str
         What in the data shows it.
     signature_match : bool
         Whether the data show the effect's own signature, which no other word
-        explains (a significant candidate with it is tried first).
+        explains (an accepted candidate with it is tried first).
+    p_value : float
+        Block-bootstrap p-value of the reduction.
+    held_out : float
+        Share of the windowed simulation error on the held-out runs it removes.
+    window_before, window_after : float
+        That error of the model under test and with the effect, degrees.
+    accepted : bool
+        Whether it passes the decision (size and significance).
+    state : str
+        The state of the SDP analysis that names the word.
+    named_by_data : bool
+        Whether the SDP analysis names that state (docs/methods.md section 8.2).
 
     """
 
@@ -51,6 +64,13 @@ class Candidate:
     parameters: dict[str, Any] = field(default_factory=dict)
     evidence: str = ''
     signature_match: bool = False
+    p_value: float = 1.0
+    held_out: float = 0.0
+    window_before: float = 0.0
+    window_after: float = 0.0
+    accepted: bool = False
+    state: str = ''
+    named_by_data: bool = False
 
 
 #: A detector's answer: the candidate, and the augmented model when there is one.
@@ -72,6 +92,8 @@ class LedgerStep:
         Validation simulation MAE before adding it, degrees.
     mae_after : float
         The same after.
+    window_before, window_after : float
+        The windowed simulation error the decision weighed, before and after, degrees.
 
     """
 
@@ -79,6 +101,8 @@ class LedgerStep:
     parameters: dict[str, Any]
     mae_before: float
     mae_after: float
+    window_before: float = 0.0
+    window_after: float = 0.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -183,6 +207,32 @@ class Gap:
 
 
 @dataclass(frozen=True, eq=False)
+class StateEvidence:
+    """
+    The SDP estimate that named an effect: what the model misses along its state.
+
+    Parameters
+    ----------
+    effect : str
+        The word named.
+    state : str
+        Its state.
+    share : float
+        Share of the squared residual the state's dependence removes (held out).
+    before, after : tuple[StateDependence, ...]
+        The ratio (per direction) and the residual along the state, for the model
+        given and for the model with the effect.
+
+    """
+
+    effect: str
+    state: str
+    share: float
+    before: tuple[StateDependence, ...]
+    after: tuple[StateDependence, ...]
+
+
+@dataclass(frozen=True, eq=False)
 class Diagnosis:
     """
     What the workflow found.
@@ -208,6 +258,13 @@ class Diagnosis:
     signature : Signature or None
         The residual signature of the first effect named, on the first estimation
         record; None when nothing was named.
+    evidence : StateEvidence or None
+        The SDP estimate along the state that named the first effect, before and after
+        (None when nothing was named or the state was not analysed).
+    validation : str
+        Which records the decision and the MAE were judged on.
+    shares : dict[str, float]
+        The first round's share of each state analysed (docs/methods.md section 8.2).
 
     """
 
@@ -220,3 +277,6 @@ class Diagnosis:
     mae_after: float
     gap: Gap
     signature: Signature | None
+    evidence: StateEvidence | None = None
+    validation: str = ''
+    shares: dict[str, float] = field(default_factory=dict)

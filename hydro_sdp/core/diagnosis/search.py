@@ -1,26 +1,34 @@
 """
 The search loop of the discrepancy workflow (docs/methods.md section 8.4).
 
-Every registered detector adds its effect to the model and fits it; a candidate
-is *significant* when its residuals are smaller than the model's block by block
-(block sign test, z > 3) and by a useful margin (2 %); the largest significant
-improvement names the effect. It is kept only if the simulation error on the
-validation records shrinks, and the search repeats on the augmented model until
-nothing significant is left: ``none``.
+Each round analyses what the model under test misses against every state (the SDP
+analysis, :mod:`.naming`), fits every registered detector's effect to the estimation
+records, and judges each candidate on held-out records (:mod:`.decision`: a clear
+fall of the windowed simulation error, and a reduction of the squared velocity
+residual that a block bootstrap finds significant). The first accepted candidate in
+the ranking is added, the ledger records the validation MAE before and after, and the
+search repeats on the augmented model until no candidate is accepted: ``none``.
 
 """
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Callable, Sequence
 
 from hydro_sdp.core.diagnosis.context import Context
+from hydro_sdp.core.diagnosis.decision import judge, rank
 from hydro_sdp.core.diagnosis.detectors import detector, DETECTORS
-from hydro_sdp.core.diagnosis.residuals import mae, Run, runs_of
+from hydro_sdp.core.diagnosis.held_out import WindowErrors
+from hydro_sdp.core.diagnosis.naming import name_states, Naming
+from hydro_sdp.core.diagnosis.reduction import bootstrap_block
+from hydro_sdp.core.diagnosis.residuals import (
+    BLOCK_SECONDS, mae, Run, runs_of, velocity_residuals)
 from hydro_sdp.core.diagnosis.results import (
-    Candidate, Diagnosis, Gap, LedgerStep, Signature, Trial)
+    Candidate, Diagnosis, Gap, LedgerStep, Signature, StateEvidence)
 from hydro_sdp.core.errors import DataError, HydroSdpError
 from hydro_sdp.core.identification.evaluation import simulated_record
+from hydro_sdp.core.identification.sdp import analyse
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.records import Record
 import numpy as np
@@ -47,25 +55,97 @@ def _signature(word: str, model: JointModel, augmented: JointModel,
     return Signature.joined(parts)
 
 
-def _round(context: Context, progress: Callable[[str], None] | None) -> list[Trial]:
+def hold_out(records: Sequence[Record]) -> tuple[list[Record], list[Record], str]:
     """
-    Try every detector on the model under test, ranked: significant first, by gain.
+    Hold out whole recordings to judge the candidates on: every third, from three on.
 
-    A significant candidate whose signature the data show (motion ending at one angle
-    whenever it is driven there: a stop; a speed that changes along the stroke alike in
-    both directions: the linkage) goes before the others.
+    Pieces of one recording (records sharing a ``source``) stay on one side. With
+    fewer than three recordings every record is both fitted and judged on.
+
+    Parameters
+    ----------
+    records : sequence of Record
+        The records given.
+
+    Returns
+    -------
+    tuple
+        ``(estimation, held_out, note)``.
+
     """
-    results: list[Trial] = []
+    keys = [record.source or f'#{index}' for index, record in enumerate(records)]
+    sources = list(dict.fromkeys(keys))
+    if len(sources) < 3:
+        return list(records), list(records), ('in-sample: fewer than three recordings and no '
+                                              'validation records')
+    held = {sources[i] for i in range(2, len(sources), 3)}
+    estimation = [r for r, key in zip(records, keys) if key not in held]
+    checks = [r for r, key in zip(records, keys) if key in held]
+    return estimation, checks, (f'held out: {len(held)} of {len(sources)} recordings '
+                                '(every third)')
+
+
+def _round(context: Context, checks: Sequence[Run], progress: Callable[[str], None] | None,
+           every: bool = True) -> list[tuple[Candidate, JointModel | None]]:
+    """
+    Fit the detectors on the estimation runs, judge each on the held-out runs, rank.
+
+    Every detector in the first round (the report shows them all); after it, those of
+    the states the data name, the stops (they have their own signature) and the
+    effects the model has that are fitted again (a lag fitted while play was missing).
+    """
+    base = velocity_residuals(context.model, checks)
+    block = bootstrap_block(base, max(2, int(round(BLOCK_SECONDS / checks[0].dt))))
+    errors = WindowErrors(checks)
+    judged: list[tuple[Candidate, JointModel | None]] = []
     for each in DETECTORS:
         if progress is not None:
             progress(each.word)
+        again = getattr(each, 'refits', False) and context.model.effect(each.word) is not None
+        if not (every or again or each.word == 'angle_limits' or
+                context.naming.named(each.state)):
+            judged.append((Candidate(each.word, False, evidence=f'not tried: the SDP analysis '
+                                     f'finds no dependence on {each.state}'), None))
+            continue
         try:
-            results.append(each.fit(context))
+            trial = each.fit(context)
+            if not every and trial[1] is not None:
+                trial = (trial[0], _refit_added(context, trial[1], each.word))
         except (HydroSdpError, np.linalg.LinAlgError, ValueError) as error:
-            results.append((Candidate(each.word, False, evidence=f'could not be fitted: '
-                                      f'{error}'), None))
-    return sorted(results, key=lambda item: (not item[0].significant,
-                                             not item[0].signature_match, -item[0].gain))
+            trial = (Candidate(each.word, False, evidence=f'could not be fitted: {error}'),
+                     None)
+        if 'records' in trial[0].parameters:
+            # Factors of the records themselves hold for no other record: judged on those;
+            # the records' scales differing beyond their noise is what names the word.
+            own = velocity_residuals(context.model, context.runs)
+            judged.append((replace(judge(trial, context.model, context.runs, own, block,
+                                         context.naming, each.state,
+                                         WindowErrors(context.runs)), named_by_data=True),
+                           trial[1]))
+            continue
+        judged.append((judge(trial, context.model, checks, base, block, context.naming,
+                             each.state, errors), trial[1]))
+    models = {id(candidate): model for candidate, model in judged}
+    ranked = rank([candidate for candidate, _ in judged], context.naming)
+    return [(candidate, models[id(candidate)]) for candidate in ranked]
+
+
+def _refit_added(context: Context, augmented: JointModel, word: str) -> JointModel:
+    """
+    Fit again, with the new effect, the effects added before that are fitted again.
+
+    An effect added first takes on what the ones still missing leave (a lag grows to
+    mimic the play after reversals); with the play added it shrinks back.
+    """
+    for each in DETECTORS:
+        if each.word == word or not getattr(each, 'refits', False) or \
+                augmented.effect(each.word) is None:
+            continue
+        refit = each.fit(Context(augmented, context.runs, context.max_delay, context.naming))[1]
+        if refit is not None and \
+                context.squared_residual(refit) < context.squared_residual(augmented):
+            augmented = refit
+    return augmented
 
 
 def _gap(model: JointModel, augmented: JointModel, run: Run) -> Gap:
@@ -76,12 +156,27 @@ def _gap(model: JointModel, augmented: JointModel, run: Run) -> Gap:
     return Gap(record.t[start:], record.y[start:], before[start:], after[start:])
 
 
+def _evidence(effect: str, naming: Naming, records: Sequence[Record],
+              augmented: JointModel) -> StateEvidence | None:
+    """Return the SDP estimate along the named state, for the model and the augmented one."""
+    state = detector(effect).state
+    before = tuple(naming.entries(state))
+    if not before:
+        return None
+    try:
+        after = analyse(records, model=augmented, states=(state,), replicates=0)
+    except (HydroSdpError, np.linalg.LinAlgError, ValueError):
+        return None
+    entries = tuple(e for e in after.dependence(state) if e.parameter in ('ratio', 'residual'))
+    return StateEvidence(effect, state, naming.shares.get(state, 0.0), before, entries)
+
+
 def diagnose(records: Sequence[Record], model: JointModel, *,
              validation: Sequence[Record] | None = None, max_iterations: int = 4,
              max_delay: float = 0.5,
              progress: Callable[[str], None] | None = None) -> Diagnosis:
     """
-    Name what the model misses, add it, and repeat until nothing significant is left.
+    Name what the model misses, add it, and repeat until no candidate is accepted.
 
     Parameters
     ----------
@@ -90,7 +185,9 @@ def diagnose(records: Sequence[Record], model: JointModel, *,
     model : JointModel
         The model to hold against them.
     validation : sequence of Record or None
-        Held-out records for the MAE before and after (default: the estimation records).
+        Held-out records the candidates are judged on and the MAE before and after is
+        reported for (default: every third recording is held out, from three
+        recordings on; else the estimation records themselves).
     max_iterations : int
         Most effects added.
     max_delay : float
@@ -103,37 +200,49 @@ def diagnose(records: Sequence[Record], model: JointModel, *,
     Diagnosis
         The named effect, the ledger, the candidates, the augmented model and the
         evidence for the report (the gap on the first validation record, the
-        signature of the first effect on the first estimation record).
+        signature of the first effect on the first estimation record, the SDP
+        estimate along its state).
 
     """
     if not records:
         raise DataError('no records to diagnose')
-    runs = runs_of(records, max_delay)
-    checks = runs_of(validation, max_delay) if validation else runs
+    if validation:
+        estimation, held, note = list(records), list(validation), (
+            f'given: {len(validation)} validation record{"s" if len(validation) > 1 else ""}')
+    else:
+        estimation, held, note = hold_out(records)
+    runs = runs_of(estimation, max_delay)
+    checks = runs_of(held, max_delay, settle=0.0)
     dt = runs[0].dt
     horizon = max(2, int(round(max_delay / dt)))
     before = mae(model, checks)
     current, current_mae = model, before
     ledger: list[LedgerStep] = []
     rounds: list[tuple[Candidate, ...]] = []
-    for _ in range(max_iterations):
-        ranked = _round(Context(current, runs, horizon), progress)
+    namings: list[Naming] = []
+    first_model = model
+    for iteration in range(max_iterations):
+        naming = name_states(estimation, current, seed=iteration)
+        namings.append(naming)
+        ranked = _round(Context(current, runs, horizon, naming), checks, progress,
+                        every=iteration == 0)
         rounds.append(tuple(candidate for candidate, _ in ranked))
-        chosen = None
-        for candidate, augmented in ranked:
-            if not candidate.significant or augmented is None:
-                break
-            after = mae(augmented, checks)
-            if after < current_mae:
-                chosen = (candidate, augmented, after)
-                break
+        chosen = next(((c, m) for c, m in ranked if c.accepted and m is not None), None)
         if chosen is None:
             break
-        candidate, current, after = chosen
-        ledger.append(LedgerStep(candidate.effect, candidate.parameters, current_mae, after))
+        candidate, current = chosen
+        if not ledger:
+            first_model = current
+        after = mae(current, checks)
+        ledger.append(LedgerStep(candidate.effect, candidate.parameters, current_mae, after,
+                                 candidate.window_before, candidate.window_after))
         current_mae = after
-    signature = _signature(ledger[0].effect, model, current, runs) if ledger else None
-    return Diagnosis(effect=ledger[0].effect if ledger else 'none', model=current,
-                     ledger=tuple(ledger), candidates=rounds[0] if rounds else (),
-                     rounds=tuple(rounds), mae_before=before, mae_after=current_mae,
-                     gap=_gap(model, current, checks[0]), signature=signature)
+    first = ledger[0].effect if ledger else 'none'
+    signature = _signature(first, model, current, runs) if ledger else None
+    evidence = _evidence(first, namings[0], estimation, first_model) if ledger else None
+    return Diagnosis(effect=first, model=current, ledger=tuple(ledger),
+                     candidates=rounds[0] if rounds else (), rounds=tuple(rounds),
+                     mae_before=before, mae_after=current_mae,
+                     gap=_gap(model, current, checks[0]), signature=signature,
+                     evidence=evidence, validation=note,
+                     shares=dict(namings[0].shares) if namings else {})

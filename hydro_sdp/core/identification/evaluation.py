@@ -108,7 +108,7 @@ def sdp_dz_benchmark(model: JointModel) -> JointModel | None:
 LAG_MEMORY = 5.0
 
 
-def _start(model: JointModel, dt: float, record: Record) -> int:
+def first_compared(model: JointModel, dt: float, record: Record) -> int:
     """
     Return the first sample compared: where the model's state no longer depends on the past.
 
@@ -165,7 +165,7 @@ def simulated_record(model: JointModel, record: Record, dt: float | None = None,
 
     """
     dt = check_record(record, min_samples=2) if dt is None else dt
-    start = _start(model, dt, record)
+    start = first_compared(model, dt, record)
     play = model.effect(Backlash.name)
     half = 0.5 * play.play if isinstance(play, Backlash) else 0.0
     offsets = (0.0, -half, half) if half > 0.0 else (0.0,)
@@ -224,7 +224,7 @@ def best_linear_gain(record: Record, model: JointModel, dt: float) -> tuple[floa
     """
     linear = JointModel(model.joint, LinearMap(1.0), model.delay)
     tau = model.delay_samples(dt)
-    start = _start(model, dt, record)
+    start = first_compared(model, dt, record)
     delayed = np.r_[np.full(tau, record.v[0]), record.v[:-tau]][start:]
     integrated = dt * np.cumsum(np.r_[0.0, delayed[1:]])
     rise = record.y[start:] - record.y[start]
@@ -262,7 +262,7 @@ def evaluate(records: Sequence[Record], model: JointModel) -> list[RecordScore]:
     scores = []
     for record in records:
         dt = check_record(record, min_samples=2)
-        start = _start(model, dt, record)
+        start = first_compared(model, dt, record)
         gain, linear = best_linear_gain(record, model, dt)
         scores.append(RecordScore(
             source=record.source, samples=len(record) - start,

@@ -17,6 +17,7 @@ from typing import Any, ClassVar, Mapping, Union
 
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import ModelFileError
+from hydro_sdp.core.model.pump_and_load import FlowSharing, LoadDependence
 from hydro_sdp.core.validation import require_float, require_float_list
 import numpy as np
 
@@ -211,131 +212,34 @@ class StrokeGeometry:
         return factor
 
     def factor(self, angles: FloatArray, speeds: FloatArray) -> FloatArray:
-        """Return :meth:`factor_at` for arrays of angles and speeds."""
-        return np.array([self.factor_at(a, w) for a, w in
-                         zip(np.asarray(angles, dtype=np.float64).tolist(),
-                             np.asarray(speeds, dtype=np.float64).tolist())])
+        """
+        Return :meth:`factor_at` for arrays of angles and speeds.
 
-
-@dataclass(frozen=True)
-class FlowSharing:
-    """
-    Speed cut when other joints draw on the same pump (a shared pump-flow limit).
-
-    Demands are normalised: the joint's own is ``w / full_positive`` or
-    ``-w / full_negative`` (1 at its top speed in that direction, where one
-    joint alone takes the whole pump), the other joints' ``sum_j (s_j+ / other_positive + s_j- /
-    other_negative)`` with ``s_j+`` and ``s_j-`` the measured speed of other joint
-    ``j`` in its positive and negative direction (deg/s, from the record's
-    ``others``, smoothed over 0.1 s; a joint lowered by gravity draws less flow
-    than one lifted). The speed becomes
-    ``w min(1, limit / (own demand + other joints' demand))``: when the demands
-    add up to more than the pump's ``limit``, every joint gets its share. The
-    full speeds are set to the model's top speeds at the commands recorded, so
-    that ``limit`` reads in full demands of this joint.
-
-    Parameters
-    ----------
-    limit : float
-        Pump flow in full demands of this joint (> 0; >= 1 leaves the joint alone
-        as fast as its map says).
-    full_positive, full_negative : float
-        Speed of this joint in each direction that counts as one full demand, deg/s (> 0).
-    other_positive, other_negative : float
-        Speed of the other joints in their positive and negative directions that
-        counts as one full demand, deg/s (> 0).
-
-    """
-
-    name: ClassVar[str] = 'flow_sharing'
-    limit: float
-    full_positive: float
-    full_negative: float
-    other_positive: float
-    other_negative: float
-
-    def __post_init__(self) -> None:
-        for label in ('limit', 'full_positive', 'full_negative', 'other_positive',
-                      'other_negative'):
-            value = getattr(self, label)
-            if not (np.isfinite(value) and value > 0.0):
-                raise ModelFileError(f"key 'effects.flow_sharing.{label}': must be > 0, "
-                                     f'got {value}')
-
-
-@dataclass(frozen=True)
-class LoadDependence:
-    """
-    Speed scaled by the load, each direction on its own (payload, digging force).
-
-    With a measured load ``L`` (the record's ``load``, e.g. the signed load
-    pressure of the cylinder in bar) the speed ``w`` becomes
-    ``w max(0.05, 1 + k (L - reference)) sqrt(1 + max(0, g (L - onset)))``, with
-    ``k``, ``g`` and ``onset`` those of the direction of ``w``. The first factor is
-    a speed change per load unit; the second is the overrunning load of a
-    load-sensing valve: its pressure compensator holds the meter-in flow, so the
-    load leaves the speed alone until it pulls the actuator along, and beyond
-    ``onset`` the meter-out edge meters it, ``Q = Cd A(x) sqrt(2 dp / rho)`` with
-    ``dp`` growing with the load: the same factor at every opening. A record
-    without a load signal takes the factors fitted to it by name (``records``,
-    with ``record_positive`` and ``record_negative``); other records keep factor 1.
-
-    Parameters
-    ----------
-    positive, negative : float
-        Relative speed change per load unit in each direction, 1/load unit.
-    reference : float
-        Load at which the map holds, load units.
-    records : tuple[str, ...]
-        Keys of records (:func:`~.exogenous_signals.record_key`) with fitted factors.
-    record_positive, record_negative : tuple[float, ...]
-        Speed factor of each of those records per direction (> 0).
-    overrun_positive, overrun_negative : float
-        ``g`` in each direction, 1/load unit: the squared speed factor grows by
-        ``|g|`` per load unit beyond the onset (``g < 0``: as the load falls
-        below it); 0 leaves the direction alone.
-    onset_positive, onset_negative : float
-        Load at which the load begins to overrun in each direction, load units.
-
-    """
-
-    name: ClassVar[str] = 'load_dependence'
-    positive: float = 0.0
-    negative: float = 0.0
-    reference: float = 0.0
-    records: tuple[str, ...] = ()
-    record_positive: tuple[float, ...] = ()
-    record_negative: tuple[float, ...] = ()
-    overrun_positive: float = 0.0
-    overrun_negative: float = 0.0
-    onset_positive: float = 0.0
-    onset_negative: float = 0.0
-
-    def __post_init__(self) -> None:
-        key = "key 'effects.load_dependence"
-        records = tuple(str(r) for r in self.records)
-        up = tuple(float(x) for x in self.record_positive)
-        down = tuple(float(x) for x in self.record_negative)
-        if not len(up) == len(down) == len(records) or len(set(records)) != len(records):
-            raise ModelFileError(f"{key}': records, record_positive and record_negative need "
-                                 'one value per record, records named once')
-        if not all(np.isfinite(x) and x > 0.0 for x in up + down):
-            raise ModelFileError(f"{key}': record factors must be > 0")
-        if not np.all(np.isfinite((self.positive, self.negative, self.reference,
-                                   self.overrun_positive, self.overrun_negative,
-                                   self.onset_positive, self.onset_negative))):
-            raise ModelFileError(f"{key}': positive, negative, reference, overrun_* and "
-                                 'onset_* must be finite')
-        object.__setattr__(self, 'records', records)
-        object.__setattr__(self, 'record_positive', up)
-        object.__setattr__(self, 'record_negative', down)
-
-    def record_factors(self, key: str) -> tuple[float, float]:
-        """Return the factors of the record called ``key`` (1, 1 when it has none)."""
-        if key in self.records:
-            index = self.records.index(key)
-            return self.record_positive[index], self.record_negative[index]
-        return 1.0, 1.0
+        The same operations in the same order on whole arrays, so the numbers are
+        those of :meth:`factor_at`.
+        """
+        angle = np.asarray(angles, dtype=np.float64)
+        speed = np.asarray(speeds, dtype=np.float64)
+        knots = np.asarray(self.knots)
+        inside = np.clip(np.searchsorted(knots, angle, side='right') - 1, 0, knots.size - 2)
+        index = np.where(angle <= knots[0], 0,
+                         np.where(angle >= knots[-1], knots.size - 2, inside))
+        span = knots[index + 1] - knots[index]
+        weight = np.where(angle <= knots[0], 0.0, np.where(angle >= knots[-1], 1.0,
+                                                           (angle - knots[index]) / span))
+        factors = np.asarray(self.factors)
+        factor = factors[index] + weight * (factors[index + 1] - factors[index])
+        direction = np.sign(speed)
+        if self.asymmetry:
+            table = np.asarray(self.asymmetry)
+            part = table[index] + weight * (table[index + 1] - table[index])
+            factor = factor * (1.0 + direction * part)
+        if self.cushion > 0.0:
+            distance = np.where(direction > 0.0, knots[-1] - angle, angle - knots[0])
+            share = np.minimum(np.maximum(distance / self.cushion, 0.0), 1.0)
+            cushioned = factor * (self.cushion_factor + (1.0 - self.cushion_factor) * share)
+            factor = np.where(direction != 0.0, cushioned, factor)
+        return factor
 
 
 Effect = Union[ValveLag, Backlash, AngleDependentVelocity, DirectionDependentDelay,

@@ -20,8 +20,8 @@ from pathlib import PurePath
 
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import DataError
-from hydro_sdp.core.model.effects import FlowSharing, LoadDependence
 from hydro_sdp.core.model.joint_model import JointModel
+from hydro_sdp.core.model.pump_and_load import FlowSharing, LoadDependence
 from hydro_sdp.core.model.records import Record
 import numpy as np
 
@@ -202,9 +202,11 @@ def exogenous_factor(model: JointModel, speed: FloatArray,
     if isinstance(load, LoadDependence):
         if exogenous.load is not None:
             up = load_factor(exogenous.load, load.positive, load.reference,
-                             load.overrun_positive, load.onset_positive)
+                             load.overrun_positive, load.onset_positive) * \
+                load.smooth_factor(exogenous.load, True)
             down = load_factor(exogenous.load, load.negative, load.reference,
-                               load.overrun_negative, load.onset_negative)
+                               load.overrun_negative, load.onset_negative) * \
+                load.smooth_factor(exogenous.load, False)
         else:
             up_factor, down_factor = load.record_factors(exogenous.key)
             up, down = np.full(speed.size, up_factor), np.full(speed.size, down_factor)

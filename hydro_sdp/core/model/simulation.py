@@ -104,20 +104,29 @@ def simulate(model: JointModel, v: FloatArray, dt: float, y0: float,
     speed = speed_profile(model, v, dt, v_before=v_before, exogenous=exogenous)
     if not 0 <= start < v.size:
         raise DataError(f'start must be a sample index below {v.size}, got {start}')
+    y = integrate_speed(model, speed[start:], dt, y0, backlash_offset)
+    return np.r_[np.full(start, y[0]), y] if start else y
+
+
+def integrate_speed(model: JointModel, speed: FloatArray, dt: float, y0: float,
+                    backlash_offset: float) -> FloatArray:
+    """Return the angles from ``y0`` under ``speed`` (its first value is of no interval)."""
     low, high = _limits(model)
     gravity, geometry = _angle_effects(model)
-    if gravity is not None or geometry is not None:
-        y = _integrate_angle_dependent(speed[start:], dt, y0, low, high, gravity, geometry)
-    else:
-        y = bounded_cumsum(y0, dt * speed[start + 1:], low, high)
     play = model.effect(Backlash.name)
-    if isinstance(play, Backlash) and play.play > 0.0:
-        half = 0.5 * play.play
-        # The sensor lags the actuator by e in [-b, b]: e_k = clamp(e_{k-1} - dy_k).
-        initial = min(max(backlash_offset, -half), half)
+    half = 0.5 * play.play if isinstance(play, Backlash) else 0.0
+    # The sensor reads the actuator plus the play's offset e in [-b, b]: the actuator
+    # starts e away from the angle read, and it is the actuator that meets the stops.
+    initial = min(max(backlash_offset, -half), half)
+    if gravity is not None or geometry is not None:
+        y = _integrate_angle_dependent(speed, dt, y0 - initial, low, high, gravity, geometry)
+    else:
+        y = bounded_cumsum(y0 - initial, dt * speed[1:], low, high)
+    if half > 0.0:
+        # e_k = clamp(e_{k-1} - dy_k): the sensor lags the actuator's motion.
         offset = bounded_cumsum(initial, -np.diff(y), -half, half)
-        y = np.clip(y - initial + offset, low, high)
-    return np.r_[np.full(start, y[0]), y] if start else y
+        y = np.clip(y + offset, low, high)
+    return y
 
 
 def speed_profile(model: JointModel, v: FloatArray, dt: float, *,

@@ -4,10 +4,12 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Sequence
 
-from hydro_sdp.core.diagnosis import diagnose, Diagnosis
+from hydro_sdp.core.diagnosis import diagnose, Diagnosis, runs_of
+from hydro_sdp.core.diagnosis.context import Context
+from hydro_sdp.core.diagnosis.detectors import detector
 from hydro_sdp.core.identification.identify import identify
 from hydro_sdp.core.model.effects import FlowSharing, LoadDependence
-from hydro_sdp.core.model.exogenous_signals import load_factor
+from hydro_sdp.core.model.exogenous_signals import Exogenous, exogenous_factor
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.records import Record
 from hydro_sdp.core.synthetic.physics.hydraulics import Actuator
@@ -20,13 +22,15 @@ from hydro_sdp.io.plant_files import load_machine
 from hydro_sdp.report.diagnosis import write_report
 import numpy as np
 import pytest
+from support.diagnosis_grid import hide
+from support.joint_generator import record
 
 DT = 0.01
-DUTIES = (40, 50, 60, 70, 80, 90, 100)
+DUTIES = (55, 75, 100)
 #: The model identified, the records with the boom still and moving, and the diagnosis.
 Sharing = tuple[JointModel, list[Record], list[Record], Diagnosis]
-#: The arm, the model identified without payload, and the runs at both payloads.
-Payloads = tuple[Machine, JointModel, list[Record]]
+#: The arm, the model identified without payload, and the runs without and with 1200 kg.
+Payloads = tuple[Machine, JointModel, list[Record], list[Record]]
 
 
 def levels(machine: Machine, duration: float, moving: Sequence[int], seed: int) -> Record:
@@ -68,20 +72,24 @@ def excavator() -> Machine:
 @pytest.fixture(scope='module')
 def sharing(excavator: Machine) -> Sharing:
     """Identify the arm with the boom still; diagnose it on runs with both moving."""
-    alone = [levels(excavator, 60.0, [0], seed) for seed in (1, 2, 3)]
-    model = identify([Record(r.t, r.v, r.y, r.joint, r.source) for r in alone]).model
-    both = [levels(excavator, 60.0, [0, 1], seed) for seed in (4, 5, 6)]
-    return model, alone, both, diagnose(both, model)
+    alone = [levels(excavator, 40.0, [0], seed) for seed in (1, 2, 3)]
+    plain = [Record(r.t, r.v, r.y, r.joint, r.source) for r in alone]
+    model = identify(plain, kind='sdp').model
+    both = [levels(excavator, 40.0, [0, 1], seed) for seed in (4, 5, 6)]
+    # No validation given: the third recording is held out to judge on.
+    return model, alone, both, diagnose(both, model, max_iterations=1)
 
 
 def test_flow_sharing_is_named_first_and_the_gap_shrinks(
         sharing: Sharing, tmp_path: Path) -> None:
     model, _, both, result = sharing
+    assert result.validation.startswith('held out: 1 of 3')
     written = [str(path) for path in write_report(tmp_path, result)]
     assert str(tmp_path / 'signature.png') in written
     assert str(tmp_path / 'record_scales.png') not in written
     assert result.effect == 'flow_sharing'
-    assert result.candidates[0].effect == 'flow_sharing' and result.candidates[0].significant
+    assert result.candidates[0].effect == 'flow_sharing' and result.candidates[0].accepted
+    assert result.candidates[0].named_by_data and result.shares['others_speed'] > 0.02
     first = result.ledger[0]
     assert first.mae_before == pytest.approx(result.mae_before)
     # The validation gap (per-record MAE) shrinks by at least 30 %.
@@ -98,23 +106,18 @@ def test_flow_sharing_is_named_first_and_the_gap_shrinks(
     assert np.mean(np.abs(signature.after[busy])) < np.mean(np.abs(signature.before[busy]))
 
 
-def test_a_model_with_flow_sharing_does_not_get_it_again(sharing: Sharing) -> None:
-    _, _, both, result = sharing
-    again = diagnose(both, result.model, max_iterations=1)
-    assert again.effect != 'flow_sharing'
-    candidate = next(c for c in again.candidates if c.effect == 'flow_sharing')
-    assert not candidate.applicable
-
-
-def test_flow_sharing_is_not_applicable_without_another_joint_moving(sharing: Sharing) -> None:
-    model, alone, _, _ = sharing
-    result = diagnose(alone, model, max_iterations=1)
-    assert result.effect != 'flow_sharing'
-    candidate = next(c for c in result.candidates if c.effect == 'flow_sharing')
+def test_flow_sharing_is_not_tried_again_nor_without_another_joint_moving(
+        sharing: Sharing) -> None:
+    model, alone, both, result = sharing
+    # A model that has the effect does not get it again.
+    candidate, augmented = detector('flow_sharing').fit(
+        Context(result.model, runs_of(both[:1], 0.5), 50))
+    assert not candidate.applicable and augmented is None
+    # The boom still: nothing to share the pump with; no other joints at all: no signal.
+    candidate, _ = detector('flow_sharing').fit(Context(model, runs_of(alone[:1], 0.5), 50))
     assert not candidate.applicable and 'never move' in candidate.evidence
-    bare = [Record(r.t, r.v, r.y, r.joint, r.source) for r in alone]
-    result = diagnose(bare, model, max_iterations=1)
-    candidate = next(c for c in result.candidates if c.effect == 'flow_sharing')
+    bare = [Record(r.t, r.v, r.y, r.joint, r.source) for r in alone[:1]]
+    candidate, _ = detector('flow_sharing').fit(Context(model, runs_of(bare, 0.5), 50))
     assert not candidate.applicable and 'no other joints' in candidate.evidence
 
 
@@ -128,51 +131,48 @@ def payload_runs(arm: Machine, payload: float, seed: int) -> list[Record]:
 def payloads() -> Payloads:
     """Identify the arm without payload; return runs without and with 1200 kg."""
     arm = load_machine(shipped_config('physics_arm.yaml'))
-    model = identify(payload_runs(arm, 0.0, 1), kind='power_sat').model
-    return arm, model, payload_runs(arm, 0.0, 50) + payload_runs(arm, 1200.0, 80)
+    model = identify(payload_runs(arm, 0.0, 1), kind='sdp').model
+    return arm, model, payload_runs(arm, 0.0, 50), payload_runs(arm, 1200.0, 80)
 
 
-def test_load_dependence_is_named_first_from_per_record_scales(
-        payloads: Payloads, tmp_path: Path) -> None:
-    _, model, runs = payloads
-    result = diagnose(runs, model, max_iterations=1)
+def test_without_a_load_signal_each_record_gets_its_own_scale(tmp_path: Path) -> None:
+    # The generator's joint slowed by a valve without compensation, each record at its own
+    # payload, the load not recorded: the records' speeds at the same command differ.
+    rng = np.random.default_rng(9)
+    truth, nominal = hide('load_dependence', rng, 'volt')
+    loaded = []
+    for index, payload in enumerate((10.0, 120.0, 50.0, 90.0)):
+        # Levels of +-3, 5 and 7 V held 1-2 s, turning back before the stops.
+        levels = rng.choice([3.0, 5.0, 7.0], size=25) * np.tile([1.0, -1.0], 13)[:25]
+        v = np.r_[np.zeros(100), np.repeat(levels, rng.integers(100, 200, size=25))]
+        load = np.full(v.size, payload)
+        loaded.append(record(truth.machine, v[:, None], angles0=[np.mean(
+            truth.mapping['angle_limits'])], load=load, seed=index, source=f'run {index}'))
+    bare = [replace(r, load=None) for r in loaded]
+    model = JointModel.from_mapping(nominal)
+    # Each record's own factors hold for that record alone: judged on the records given.
+    result = diagnose(bare, model, validation=bare, max_iterations=1)
     written = write_report(tmp_path, result)
     assert str(tmp_path / 'record_scales.png') in [str(path) for path in written]
     assert result.effect == 'load_dependence'
     candidate = result.candidates[0]
     assert candidate.effect == 'load_dependence' and 'chi2' in candidate.evidence
     first = result.ledger[0]
-    assert first.mae_after <= 0.7 * first.mae_before
+    assert first.mae_after <= 0.5 * first.mae_before
     effect = result.model.effect('load_dependence')
-    assert isinstance(effect, LoadDependence)
-    # The payload speeds up the arm moving with gravity (positive duty), a few tenths at
-    # the lower duties; the records without payload keep factors near 1.
-    heavy = [up for key, up in zip(effect.records, effect.record_positive)
-             if key.startswith('1200 kg full stroke +4')]
-    light = [up for key, up in zip(effect.records, effect.record_positive)
-             if key.startswith('0 kg full stroke +4')]
-    assert heavy[0] > 1.2 and abs(light[0] - 1.0) < 0.1
-    again = diagnose(runs, result.model, max_iterations=1)
-    assert again.effect != 'load_dependence'
+    assert isinstance(effect, LoadDependence) and len(effect.records) == 4
+    # Lifting (positive) is slower the heavier the record's payload.
+    payloads = [float(np.min(r.load)) for r in loaded]
+    order = np.argsort(payloads)
+    assert effect.record_positive[order[0]] > effect.record_positive[order[-1]] + 0.05
 
 
-def test_one_payload_gives_no_load_dependence(payloads: Payloads) -> None:
-    arm, model, runs = payloads
-    # The same payload twice (other noise): the records' scales agree within their noise.
-    same = runs[:len(DUTIES) * 2] + payload_runs(arm, 0.0, 120)
-    same = [replace(r, source=f'{r.source} {i}') for i, r in enumerate(same)]
-    result = diagnose(same, model, max_iterations=1)
-    candidate = next(c for c in result.candidates if c.effect == 'load_dependence')
-    assert result.effect != 'load_dependence' and not candidate.significant
-    assert 'within noise' in candidate.evidence
-
-
-def pressure_runs(arm: Machine, payload: float, seed: int) -> list[Record]:
-    """Full-stroke runs at one payload with the holding load pressure as the load, bar."""
+def with_pressure(arm: Machine, payload: float, runs: list[Record]) -> list[Record]:
+    """Return the runs at one payload with the holding load pressure as the load, bar."""
     loaded = with_payload(arm, payload)
     actuator = Actuator(loaded.joints[0], loaded.pump)
     out = []
-    for r in payload_runs(arm, payload, seed):
+    for r in runs:
         # Signed: the pressure the load puts on the piston side, less the rod side's share.
         force = [actuator.geometry.load_force(actuator.geometry.extension(a)) for a in r.y]
         out.append(replace(r, load=np.array(force) / actuator.piston / 1e5))
@@ -182,50 +182,44 @@ def pressure_runs(arm: Machine, payload: float, seed: int) -> list[Record]:
 @pytest.fixture(scope='module')
 def pressures(payloads: Payloads) -> tuple[list[Record], Diagnosis]:
     """Return runs without and with 1200 kg carrying their holding pressure, diagnosed."""
-    arm, model, _ = payloads
-    runs = pressure_runs(arm, 0.0, 50) + pressure_runs(arm, 1200.0, 80)
+    arm, model, light, heavy = payloads
+    runs = with_pressure(arm, 0.0, light) + with_pressure(arm, 1200.0, heavy)
     return runs, diagnose(runs, model, max_iterations=1)
 
 
-def test_an_overrunning_load_is_named_first_from_the_holding_pressure(
+def test_an_overrunning_load_is_named_from_the_holding_pressure(
         pressures: tuple[list[Record], Diagnosis]) -> None:
     runs, result = pressures
     assert result.effect == 'load_dependence'
     candidate = result.candidates[0]
-    assert candidate.effect == 'load_dependence' and candidate.significant
-    assert 'overrunning' in candidate.evidence
+    assert candidate.effect == 'load_dependence' and candidate.accepted
+    assert candidate.named_by_data and result.evidence.state == 'load'
     first = result.ledger[0]
     assert first.mae_after <= 0.7 * first.mae_before
     effect = result.model.effect('load_dependence')
-    assert isinstance(effect, LoadDependence)
-    assert effect.positive == effect.negative == 0.0 and not effect.records
+    assert isinstance(effect, LoadDependence) and not effect.records
 
     def factor(load: float, positive: bool) -> float:
-        if positive:
-            return float(load_factor(np.array([load]), 0.0, 0.0, effect.overrun_positive,
-                                     effect.onset_positive)[0])
-        return float(load_factor(np.array([load]), 0.0, 0.0, effect.overrun_negative,
-                                 effect.onset_negative)[0])
-    # The plant's ratios of the loaded to the unloaded speed at one angle: x4.5 extending
-    # with the load pulling at 80-130 bar, x1.7 retracting with it pushing at 80-150 bar,
-    # x1 wherever the load resists or is light (compensated flow).
-    assert 3.8 < factor(-100.0, True) < 5.0
-    assert 1.5 < factor(110.0, False) < 1.9
-    for load in (0.0, 50.0, 120.0):
-        assert factor(load, True) == pytest.approx(1.0)
-    for load in (-100.0, 0.0):
-        assert factor(load, False) == pytest.approx(1.0)
-    again = diagnose(runs, result.model, max_iterations=1)
-    assert again.effect == 'none'
-    candidate = next(c for c in again.candidates if c.effect == 'load_dependence')
-    assert not candidate.significant
+        speed = np.array([1.0 if positive else -1.0])
+        model = result.model
+        return float(exogenous_factor(model, speed, Exogenous(load=np.array([load])))[0])
+    # The plant's ratios of the loaded to the unloaded speed at one angle: about x4.5
+    # extending with the load pulling at 80-130 bar, x1.7 retracting with it pushing at
+    # 80-150 bar, x1 wherever the load resists or is light (compensated flow). Whichever
+    # form the data chose (the smooth factor or the overrunning root), it reads so.
+    assert 3.0 < factor(-100.0, True) < 5.5
+    assert 1.3 < factor(110.0, False) < 2.1
+    for load in (0.0, 50.0):
+        assert factor(load, True) == pytest.approx(1.0, abs=0.15)
+    assert factor(0.0, False) == pytest.approx(1.0, abs=0.15)
 
 
 def test_one_payload_with_its_pressure_gives_no_load_dependence(payloads: Payloads) -> None:
-    arm, model, _ = payloads
+    arm, model, light, _ = payloads
     # The same payload twice (other noise): the load pressure moves a few bar with the angle.
-    same = pressure_runs(arm, 0.0, 50) + pressure_runs(arm, 0.0, 120)
+    other = payload_runs(arm, 0.0, 120)
+    same = with_pressure(arm, 0.0, light) + with_pressure(arm, 0.0, other)
     same = [replace(r, source=f'{r.source} {i}') for i, r in enumerate(same)]
     result = diagnose(same, model, max_iterations=1)
     candidate = next(c for c in result.candidates if c.effect == 'load_dependence')
-    assert result.effect != 'load_dependence' and not candidate.significant
+    assert result.effect != 'load_dependence' and not candidate.accepted

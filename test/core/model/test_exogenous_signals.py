@@ -10,7 +10,7 @@ from hydro_sdp.core.diagnosis.context import Context
 from hydro_sdp.core.diagnosis.detectors import detector, VOCABULARY
 from hydro_sdp.core.diagnosis.detectors.base import feature_signature
 from hydro_sdp.core.diagnosis.detectors.overrun import fit_overrun
-from hydro_sdp.core.diagnosis.detectors.pump_and_load import block_scale
+from hydro_sdp.core.diagnosis.detectors.record_scales import block_scale
 from hydro_sdp.core.diagnosis.residuals import runs_of
 from hydro_sdp.core.errors import DataError, ModelFileError, TopicNotFoundError
 from hydro_sdp.core.model.effects import FlowSharing, LoadDependence
@@ -279,14 +279,17 @@ def test_load_dependence_is_fitted_on_a_measured_load() -> None:
     from hydro_sdp.core.diagnosis import diagnose
     hidden = LoadDependence(positive=0.004, negative=-0.002, reference=50.0)
     records = loaded_records(hidden, (50.0, 150.0, 50.0, 150.0))
-    result = diagnose(records, linear_model(), max_iterations=1)
+    result = diagnose(records[:3], linear_model(), validation=records[3:], max_iterations=1)
     assert result.effect == 'load_dependence'
     assert result.ledger[0].mae_after <= 0.3 * result.ledger[0].mae_before
     found = load_effect(result.model)
-    # Speed x1.4 up and x0.8 down at 150 bar against the reference: recovered.
-    assert 1.0 + found.positive * (150.0 - found.reference) == pytest.approx(1.4, abs=0.03)
-    assert 1.0 + found.negative * (150.0 - found.reference) == pytest.approx(0.8, abs=0.03)
-    assert 1.0 + found.positive * (50.0 - found.reference) == pytest.approx(1.0, abs=0.03)
+    # Speed x1.4 up and x0.8 down at 150 bar against the reference: the smooth factor of
+    # the load per direction recovers both.
+    up, down = (found.smooth_factor(np.array([50.0, 150.0]), positive) for positive in
+                (True, False))
+    assert up[1] / up[0] == pytest.approx(1.4, abs=0.03)
+    assert down[1] / down[0] == pytest.approx(0.8, abs=0.03)
+    assert up[0] == pytest.approx(1.0, abs=0.03)
     # With the load at one value everywhere the effect cannot be told apart.
     same = loaded_records(hidden, (50.0, 50.0))
     candidate = next(c for c in diagnose(same, linear_model(), max_iterations=1).candidates

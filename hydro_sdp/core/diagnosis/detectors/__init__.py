@@ -15,10 +15,10 @@ from hydro_sdp.core.diagnosis.detectors.base import Detector, feature_signature
 from hydro_sdp.core.diagnosis.detectors.delays import (
     DirectionDependentDelayDetector, TimeDelayDetector)
 from hydro_sdp.core.diagnosis.detectors.dynamics import BacklashDetector, ValveLagDetector
+from hydro_sdp.core.diagnosis.detectors.load import LoadDependenceDetector
 from hydro_sdp.core.diagnosis.detectors.map_shape import (
     AsymmetryDetector, DeadZoneDetector, VelocitySaturationDetector)
-from hydro_sdp.core.diagnosis.detectors.pump_and_load import (
-    FlowSharingDetector, LoadDependenceDetector)
+from hydro_sdp.core.diagnosis.detectors.pump import FlowSharingDetector
 from hydro_sdp.core.diagnosis.detectors.stroke_shape import StrokeGeometryDetector
 from hydro_sdp.core.errors import ConfigurationError
 

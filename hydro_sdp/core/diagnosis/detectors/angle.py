@@ -13,6 +13,7 @@ from hydro_sdp.core.diagnosis.results import Candidate, Signature, Trial
 from hydro_sdp.core.model.effects import AngleDependentVelocity
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.simulation import speed_profile
+from hydro_sdp.core.model.timing import delayed_at
 import numpy as np
 from scipy.optimize import least_squares
 
@@ -33,8 +34,11 @@ def held_at_stops(context: Context) -> tuple[float | None, float | None, int]:
 
     A stop shows as motion that ends at one angle each time the command drives the
     joint towards it: samples from which the model moves the joint at least ten noise
-    levels within 0.2 s while the measured angle moves less than a fifth of that,
-    near the extreme angle of the data on that side.
+    levels within 0.2 s while the measured angle moves less than a fifth of that, near
+    the extreme angle of the data on that side, while the delayed command drives the
+    joint that way beyond its dead-zone: at least as far from rest as the smallest
+    command seen moving the joint that way elsewhere (a joint resting inside its
+    dead-zone, or a model still moving on after the command turned, is not at a stop).
 
     Parameters
     ----------
@@ -50,7 +54,8 @@ def held_at_stops(context: Context) -> tuple[float | None, float | None, int]:
     """
     # Over a fifth of a second, so that slow motion stands out of the noise.
     window = max(2, int(round(0.2 / context.dt)))
-    angles, steps, moves = [], [], []
+    tau = context.model.longest_delay_samples(context.dt)
+    angles, steps, moves, drives = [], [], [], []
     for run in context.runs:
         record = run.record
         speed = speed_profile(context.model, record.v, run.dt, v_before=float(record.v[0]))
@@ -60,17 +65,30 @@ def held_at_stops(context: Context) -> tuple[float | None, float | None, int]:
             angles.append(y[:-window])
             steps.append(y[window:] - y[:-window])
             moves.append(travel[window:] - travel[:-window])
+            # The command that drives the window: held through it, else no drive.
+            first = delayed_at(record.v, np.arange(run.start + 1, len(record) - window + 1),
+                               tau)
+            last = delayed_at(record.v, np.arange(run.start + window, len(record)), tau)
+            drives.append(np.where(first == last, first - context.rest, 0.0))
     if not angles:
         return None, None, 0
     y, dy, move = np.concatenate(angles), np.concatenate(steps), np.concatenate(moves)
+    drive = np.concatenate(drives)
     noise = max(float(np.median([noise_of(r.record.y) for r in context.runs])), 1e-6)
     band = max(0.5, 10.0 * noise)
     still = (np.abs(move) > 10.0 * noise) & (np.abs(dy) < 0.2 * np.abs(move))
     needed = int(round(MIN_CONTACT / context.dt))
+    low_end, high_end = float(np.min(y)), float(np.max(y))
+    inner = (y > low_end + band) & (y < high_end - band)
     stops: list[float | None] = []
     contact = 0
-    for sign, extreme in ((-1.0, float(np.min(y))), (1.0, float(np.max(y)))):
-        held = still & (np.sign(move) == sign) & (np.abs(y - extreme) < band)
+    for sign, extreme in ((-1.0, low_end), (1.0, high_end)):
+        # The smallest drive seen moving the joint that way away from the ends.
+        moving = inner & (np.sign(drive) == sign) & (np.sign(dy) == sign) & \
+            (np.abs(dy) > 10.0 * noise)
+        edge = float(np.min(np.abs(drive[moving]))) if np.any(moving) else math.inf
+        held = still & (np.sign(move) == sign) & (np.abs(y - extreme) < band) & \
+            (np.sign(drive) == sign) & (np.abs(drive) >= edge)
         if np.count_nonzero(held) >= needed:
             stops.append(float(np.median(y[held])))
             contact += int(np.count_nonzero(held))
@@ -117,6 +135,7 @@ class AngleLimitsDetector(Detector):
     description = 'the joint stops at end stops the model lacks'
     remedy = 'the stops seen in the data'
     feature = 'angle'
+    state = 'angle'
 
     def fit(self, context: Context) -> Trial:
         """Give the model the stops the joint is held at while driven, and score it."""
@@ -125,18 +144,21 @@ class AngleLimitsDetector(Detector):
             return Candidate(self.word, True, evidence='the joint is never held still while '
                              'driven'), None
         current = context.model.angle_limits
-        # A side without contact keeps the model's stop, or lies beyond every angle seen.
+        # A side without contact keeps the model's stop, or lies beyond every angle seen
+        # by the whole range seen (no stop was seen there: none to put near the data).
         angles = np.concatenate([r.record.y for r in context.runs])
-        spare = current or (float(np.min(angles)) - 1.0, float(np.max(angles)) + 1.0)
+        seen = max(float(np.ptp(angles)), 1.0)
+        spare = current or (float(np.min(angles)) - seen, float(np.max(angles)) + seen)
         stops = (spare[0] if low is None else min(low, spare[1] - 1e-6),
                  spare[1] if high is None else max(high, spare[0] + 1e-6))
         if current is not None and np.allclose(current, stops, atol=0.1):
             return Candidate(self.word, True), None
         candidate = replace(context.model, angle_limits=stops)
+        held = ' and '.join(f'{angle:.3g} deg' for angle in (low, high) if angle is not None)
         trial, augmented = context.score(
             self.word, candidate, {'angle_limits': list(stops)},
-            f'the joint is held still at {stops[0]:.3g} and {stops[1]:.3g} deg although the '
-            f'command drives it on ({contact * context.dt:.3g} s of contact)')
+            f'the joint is held still at {held} while the command drives it on beyond its '
+            f'dead-zone ({contact * context.dt:.3g} s of contact)')
         # Motion that ends at one angle whenever it is driven there is a stop, whatever
         # else could shrink the residual there; stops moved (backlash shifts where the
         # sensor stops) compete on gain like any other word.
@@ -154,6 +176,7 @@ class AngleDependentVelocityDetector(EffectDetector):
     description = 'the speed depends on the angle (geometry, gravity)'
     remedy = 'effect, regression on the angle'
     feature = 'angle'
+    state = 'angle'
 
     def fit_effect(self, context: Context) -> Trial:
         """Fit amplitude and phase by regression, polish on the residuals, and score."""

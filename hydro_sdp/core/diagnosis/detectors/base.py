@@ -50,6 +50,9 @@ class Detector(ABC):
     remedy: ClassVar[str]
     #: What the residual signature is drawn against.
     feature: ClassVar[Feature]
+    #: The state of the SDP analysis whose dependence names the word
+    #: (:mod:`hydro_sdp.core.diagnosis.naming`).
+    state: ClassVar[str]
 
     @abstractmethod
     def fit(self, context: Context) -> Trial:

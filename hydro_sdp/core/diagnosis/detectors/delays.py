@@ -21,6 +21,7 @@ class TimeDelayDetector(Detector):
     description = 'the delay is wrong'
     remedy = 'the delay re-estimated'
     feature = 'events'
+    state = 'since_change'
 
     def fit(self, context: Context) -> Trial:
         """Take the delay that predicts the records best; score the model with it."""
@@ -60,6 +61,7 @@ class DirectionDependentDelayDetector(Detector):
     description = 'the delay differs between directions'
     remedy = 'effect, delays by grid search'
     feature = 'events'
+    state = 'since_change'
 
     def fit(self, context: Context) -> Trial:
         """Search each direction's delay in turn over every delay considered; score the pair."""

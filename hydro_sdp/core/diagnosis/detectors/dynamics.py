@@ -21,6 +21,7 @@ class ValveLagDetector(EffectDetector):
     description = 'the speed approaches each new level with a lag'
     remedy = 'effect, time constant fitted'
     feature = 'events'
+    state = 'since_change'
     refits = True
 
     def fit_effect(self, context: Context) -> Trial:
@@ -40,6 +41,7 @@ class BacklashDetector(EffectDetector):
     description = 'after a reversal the joint loses motion'
     remedy = 'effect, play fitted'
     feature = 'reversals'
+    state = 'reversals'
 
     def fit_effect(self, context: Context) -> Trial:
         """Fit the play between 0 and 10 degrees, and score it."""

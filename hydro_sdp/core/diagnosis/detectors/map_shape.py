@@ -23,6 +23,7 @@ class MapShapeDetector(Detector):
     """
 
     feature = 'command'
+    state = 'command'
     #: The map feature the effect adds (a field of :class:`~.refit.Features`).
     adds: ClassVar[Literal['dead_zone', 'saturation', 'asymmetric']]
 

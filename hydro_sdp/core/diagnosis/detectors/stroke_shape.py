@@ -258,6 +258,7 @@ class StrokeGeometryDetector(EffectDetector):
         'cushions)'
     remedy = 'effect, a piecewise-linear angle factor shared by both directions'
     feature = 'angle'
+    state = 'angle'
 
     def fit_effect(self, context: Context) -> Trial:
         """Fit the factor where the data show it alike for both directions, and score it."""

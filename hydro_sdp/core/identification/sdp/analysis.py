@@ -23,7 +23,7 @@ most alone (docs/methods.md section 14.6).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import Callable, Sequence
 
 from hydro_sdp.core.arrays import FloatArray, IntArray
@@ -113,6 +113,8 @@ class _Setting:
     max_groups: int | None
     seed: int
     segment: IntArray
+    screen: float = 0.0
+    alone: dict[str, float] = field(default_factory=dict)
 
     def backfit(self, z: FloatArray, terms: list[Term], seed: int) -> Backfit:
         """Back-fit ``terms`` to ``z`` with this setting."""
@@ -183,7 +185,9 @@ def _two_stages(target: _Target, rows: Rows, names: Sequence[str], parameter: st
     held-out squared residual comes first, with its own share and test; every
     other state is weighed by what it adds to it (the same gains along both,
     back-fitted together), so a state merely correlated with the first in the
-    data does not take its place.
+    data does not take its place. With a ``screen``, a state whose gains remove
+    less than that share alone keeps its alone fit, untested (it adds no more given
+    the first).
     """
     gain_names = [name for name, _ in target.gains]
 
@@ -194,6 +198,7 @@ def _two_stages(target: _Target, rows: Rows, names: Sequence[str], parameter: st
     for name in names:
         step(name)
         alone[name] = target.alone(rows.state(name), setting, setting.seed, test=False)
+        setting.alone[f'{prefix}{name}'] = sum(alone[name].term(g).share for g in gain_names)
     first = max(names, key=lambda name: sum(alone[name].term(g).share for g in gain_names))
     step(first)
     fits[f'{prefix}{first}'] = target.alone(rows.state(first), setting, setting.seed, True)
@@ -202,6 +207,10 @@ def _two_stages(target: _Target, rows: Rows, names: Sequence[str], parameter: st
         if name == first:
             continue
         step(name)
+        if sum(alone[name].term(g).share for g in gain_names) < setting.screen:
+            fits[f'{prefix}{name}'] = alone[name]
+            entries += _entries(alone[name], name, parameter, gain_names, None)
+            continue
         fit = target.given(rows.state(first), rows.state(name), setting,
                            setting.seed + 10 * (index + 1))
         fits[f'{prefix}{name}'] = fit
@@ -212,7 +221,8 @@ def _two_stages(target: _Target, rows: Rows, names: Sequence[str], parameter: st
 def analyse(records: Sequence[Record], *, model: JointModel | None = None,
             states: Sequence[str] = STATES, delay: int | None = None, max_delay: float = 0.5,
             rest: float | None = None, kind: TvpKind = 'rw', replicates: int = 199,
-            max_groups: int | None = MAX_GROUPS, seed: int = 0,
+            max_groups: int | None = MAX_GROUPS, seed: int = 0, max_rows: int | None = None,
+            screen: float = 0.0,
             progress: Callable[[str], None] | None = None) -> SdpAnalysis:
     """
     Estimate how a joint's parameters depend on each candidate state.
@@ -242,6 +252,11 @@ def analyse(records: Sequence[Record], *, model: JointModel | None = None,
         Most groups per state.
     seed : int
         Seed of the bootstrap.
+    max_rows : int or None
+        Most rows analysed: beyond, every k-th row of the records (None: all).
+    screen : float
+        Share a state's gains must remove alone to be weighed given the first state
+        and tested (0: every state is).
     progress : callable or None
         Called with the name of each back-fit as it starts (a state, ``residual
         <state>`` or ``a1``): ``2 n`` of them per target for ``n`` states, and ``a1``.
@@ -266,8 +281,10 @@ def analyse(records: Sequence[Record], *, model: JointModel | None = None,
         rest = rest_of(records) if rest is None else rest
         tau = delay or data_delay(records, dt, max_delay, rest)
     rows = rows_of(records, tau, rest, model, dt)
+    if max_rows is not None and rows.samples > max_rows:
+        rows = rows.every(-(-rows.samples // max_rows))
     usable, skipped = _usable(rows, names)
-    setting = _Setting(kind, replicates, max_groups, seed, rows.record)
+    setting = _Setting(kind, replicates, max_groups, seed, rows.record, screen)
     fits: dict[str, Backfit] = {}
     residuals: list[StateDependence] = []
     a1_entries: list[StateDependence] = []
@@ -306,7 +323,7 @@ def analyse(records: Sequence[Record], *, model: JointModel | None = None,
                                 'residual ')
     return SdpAnalysis('arx' if model is None else 'ratio', rows.samples, tau, dt, rest,
                        ordered(entries), ordered(residuals), a1, tuple(a1_entries), fits,
-                       tuple(skipped))
+                       tuple(skipped), dict(setting.alone))
 
 
 def _usable(rows: Rows, names: Sequence[str]) -> tuple[list[str], list[tuple[str, str]]]:

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 import math
 from typing import Literal
 
@@ -145,6 +145,9 @@ class SdpAnalysis:
         The back-fit of each state (keys: state, or ``residual <state>``).
     skipped : tuple[tuple[str, str], ...]
         States not analysed, with the reason.
+    alone : dict[str, float]
+        Held-out share of each state's gains fitted alone (keys: state, or ``residual
+        <state>``), before any is weighed given the first.
 
     """
 
@@ -159,6 +162,7 @@ class SdpAnalysis:
     a1_states: tuple[StateDependence, ...]
     fits: dict[str, Backfit]
     skipped: tuple[tuple[str, str], ...] = ()
+    alone: dict[str, float] = field(default_factory=dict)
 
     @property
     def analysed(self) -> tuple[str, ...]:

@@ -14,7 +14,11 @@ depend on, by name:
 * ``others_speed``: the other joints' absolute speeds summed (deg/s, the
   trailing mean of :func:`~hydro_sdp.core.model.exogenous_signals.smoothed_speeds`),
   from the JointState's other joints;
-* ``load``: the measured load in force over the increment (its own units).
+* ``load``: the measured load in force over the increment (its own units);
+* ``reversals``: the travel since the motion last reversed (deg) before the
+  increment: the model's travel since its motion reversed when a model is given
+  (what backlash hides from the sensor after each reversal), else the measured
+  travel since the drive last changed sign.
 
 """
 
@@ -32,10 +36,11 @@ from hydro_sdp.core.model.simulation import one_step_increments
 import numpy as np
 
 #: The candidate states, in the order they are analysed.
-STATES: tuple[str, ...] = ('command', 'angle', 'since_change', 'others_speed', 'load')
+STATES: tuple[str, ...] = ('command', 'angle', 'since_change', 'others_speed', 'load',
+                           'reversals')
 #: Units of each state, for figures and reports.
 UNITS = {'command': 'input units', 'angle': 'deg', 'since_change': 's',
-         'others_speed': 'deg/s', 'load': 'load units'}
+         'others_speed': 'deg/s', 'load': 'load units', 'reversals': 'deg'}
 
 
 @dataclass(frozen=True, eq=False)
@@ -63,6 +68,8 @@ class Rows:
         Index of the record each row comes from.
     predicted : FloatArray or None
         The model's one-step increment, deg (None without a model).
+    reversals : FloatArray or None
+        Travel since the motion last reversed, deg.
 
     """
 
@@ -75,11 +82,24 @@ class Rows:
     load: FloatArray | None
     record: IntArray
     predicted: FloatArray | None = None
+    reversals: FloatArray | None = None
 
     @property
     def samples(self) -> int:
         """Return the number of rows."""
         return int(self.y.size)
+
+    def every(self, stride: int) -> Rows:
+        """Return every ``stride``-th row (each record's rows stay in time order)."""
+        if stride <= 1:
+            return self
+        pick = slice(None, None, stride)
+
+        def kept(values: FloatArray | None) -> FloatArray | None:
+            return None if values is None else values[pick]
+        return Rows(self.y[pick], self.previous[pick], self.command[pick], self.drive[pick],
+                    self.since_change[pick], kept(self.others_speed), kept(self.load),
+                    self.record[pick], kept(self.predicted), kept(self.reversals))
 
     @property
     def increment(self) -> FloatArray:
@@ -120,6 +140,10 @@ class Rows:
             if self.load is None:
                 raise DataError('load: the records carry no load signal (--load-topic)')
             return self.load
+        if name == 'reversals':
+            if self.reversals is None:
+                raise DataError('reversals: not computed for these rows')
+            return self.reversals
         raise ConfigurationError(f"unknown state {name!r}; choose from {', '.join(STATES)}")
 
 
@@ -144,6 +168,34 @@ def _since_change(t: FloatArray, delayed: FloatArray) -> FloatArray:
     # A change between samples j-1 and j shows in the increment ending at t_j: count from t_{j-1}.
     origin = t[np.maximum(last - 1, 0)]
     return t - origin
+
+
+def travel_since_reversal(direction: FloatArray, travel: FloatArray) -> FloatArray:
+    """
+    Return the travel since the direction last reversed, before each step.
+
+    Parameters
+    ----------
+    direction : FloatArray
+        Sign of the motion at each step (0: no direction, the last one holds).
+    travel : FloatArray
+        Length of each step (>= 0).
+
+    Returns
+    -------
+    FloatArray
+        The summed ``travel`` of the steps since the direction last changed, before
+        each step (from the first step while it never changed).
+
+    """
+    direction = np.sign(np.asarray(direction, dtype=np.float64))
+    index = np.arange(direction.size)
+    last = np.maximum.accumulate(np.where(direction != 0.0, index, 0))
+    held = direction[last]
+    start = np.r_[True, held[1:] != held[:-1]]
+    origin = np.maximum.accumulate(np.where(start, index, 0))
+    before = np.r_[0.0, np.cumsum(np.asarray(travel, dtype=np.float64))[:-1]]
+    return before - before[origin]
 
 
 def rows_of(records: Sequence[Record], delay: int, rest: float,
@@ -173,7 +225,7 @@ def rows_of(records: Sequence[Record], delay: int, rest: float,
     if delay < 1:
         raise DataError(f'delay must be at least one sample, got {delay}')
     parts: dict[str, list[FloatArray]] = {key: [] for key in (
-        'y', 'previous', 'command', 'since', 'others', 'load', 'predicted')}
+        'y', 'previous', 'command', 'since', 'others', 'load', 'predicted', 'reversals')}
     owner: list[IntArray] = []
     have_others = all(r.others is not None and r.others.shape[1] > 0 for r in records)
     have_load = all(r.load is not None for r in records)
@@ -200,6 +252,10 @@ def rows_of(records: Sequence[Record], delay: int, rest: float,
                                              v_before=float(record.v[0]),
                                              exogenous=exogenous_of(record, period))
             parts['predicted'].append(increments)
+            parts['reversals'].append(travel_since_reversal(increments, np.abs(increments)))
+        else:
+            parts['reversals'].append(travel_since_reversal(
+                delayed - rest, np.abs(record.y[k] - record.y[k - 1])))
         owner.append(np.full(k.size, i))
     if not owner:
         raise DataError(f'every record is shorter than the delay ({delay} samples) + 2')
@@ -209,4 +265,5 @@ def rows_of(records: Sequence[Record], delay: int, rest: float,
                 np.concatenate(parts['others']) if have_others else None,
                 np.concatenate(parts['load']) if have_load else None,
                 np.concatenate(owner),
-                np.concatenate(parts['predicted']) if model is not None else None)
+                np.concatenate(parts['predicted']) if model is not None else None,
+                np.concatenate(parts['reversals']))

@@ -20,6 +20,13 @@ the meter-out edge, which lowers the relief-limited speed. The head-end cushion
 is ``(piston / annulus)^2`` times the rod-end one, which brakes both ends to the
 same cylinder speed at relief.
 
+A valve without pressure compensation sees what the pump pressure ``p_s`` leaves
+above the load: the same two orifices and force balance give
+``p_s A_in - p_tank A_out - F = rho/2 v^2 (A_in^3/(Cd A_i)^2 + A_out^3/(Cd A_o)^2)``
+at any supply (:meth:`Actuator.supplied`; at relief it is the relief-limited speed
+above), so the machine (:mod:`.machine`) finds the supply at which the pump's flow
+meets what the valves pass.
+
 """
 
 from __future__ import annotations
@@ -66,6 +73,8 @@ class Actuator:
         self.margin_speed = math.sqrt(2.0 * pump.margin * BAR / pump.oil_density)
         self.relief = pump.relief_pressure * BAR
         self.tank = pump.tank_pressure * BAR
+        self.margin = pump.margin * BAR
+        self.compensated = joint.valve.compensated
 
     def _sides(self, area: float, extension: float) -> tuple[float, float, float, float, float]:
         """Inlet and outlet chamber areas, resisting force, meter-in and meter-out areas."""
@@ -121,6 +130,63 @@ class Actuator:
         elif force + self.tank * outlet + k_out * speed * speed < 0.0:
             speed = math.sqrt(-(force + self.tank * outlet) / k_out)
         return (speed if area > 0.0 else -speed), pumped
+
+    def supplied(self, area: float, extension: float, supply: float) -> tuple[float, float]:
+        """
+        Cylinder speed and flow through a meter-in edge without compensation.
+
+        Parameters
+        ----------
+        area : float
+            Signed effective meter-in area ``Cd A``, m^2 (positive extends).
+        extension : float
+            Cylinder extension, m.
+        supply : float
+            Pump pressure, Pa.
+
+        Returns
+        -------
+        tuple[float, float]
+            Speed, m/s (signed), and the flow drawn from the pump, m^3/s (0 when the
+            load holds the pressure off: a load check valve stops backflow).
+
+        """
+        if area == 0.0 or (area > 0.0 and extension >= self.stroke) or (
+                area < 0.0 and extension <= 0.0):
+            return 0.0, 0.0
+        inlet, outlet, force, a_in, a_out = self._sides(area, extension)
+        k_out = self.half_rho * outlet ** 3 / (a_out * a_out)
+        drive = min(supply, self.relief) * inlet - self.tank * outlet - force
+        if drive <= 0.0:
+            return 0.0, 0.0
+        speed = math.sqrt(drive / (self.half_rho * inlet ** 3 / (a_in * a_in) + k_out))
+        if force + self.tank * outlet + k_out * speed * speed < 0.0:
+            # An overrunning load pulls the inlet below 0 bar: the outlet edge sets the speed.
+            speed = min(speed, math.sqrt(-(force + self.tank * outlet) / k_out))
+        return (speed if area > 0.0 else -speed), speed * inlet
+
+    def inlet_pressure(self, area: float, extension: float, speed: float) -> float:
+        """
+        Pressure the inlet chamber needs to move at ``speed``, Pa (force balance).
+
+        Parameters
+        ----------
+        area : float
+            Signed effective meter-in area, m^2.
+        extension : float
+            Cylinder extension, m.
+        speed : float
+            Cylinder speed, m/s.
+
+        Returns
+        -------
+        float
+            ``(F + p_out A_out) / A_in``, at least 0.
+
+        """
+        inlet, outlet, force, _, a_out = self._sides(area, extension)
+        outflow = self.tank + self.half_rho * (outlet * speed / a_out) ** 2
+        return max((force + outlet * outflow) / inlet, 0.0)
 
     def pressures(self, area: float, extension: float, speed: float) -> tuple[float, float]:
         """

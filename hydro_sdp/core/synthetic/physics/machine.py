@@ -26,13 +26,12 @@ from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import DataError
 from hydro_sdp.core.model.timing import check_sample_period
 from hydro_sdp.core.synthetic.physics.hydraulics import Actuator
+from hydro_sdp.core.synthetic.physics.parameters import Pump
 from hydro_sdp.core.synthetic.physics.plant import Machine
+from hydro_sdp.core.synthetic.physics.supply import speeds
 from hydro_sdp.core.synthetic.physics.valve import metering_area, Spool, spool_travel
 import numpy as np
 from scipy.signal import bilinear, lfilter, lfilter_zi
-
-# l/min to m^3/s.
-_LPM = 1e-3 / 60.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -99,18 +98,13 @@ def _initial(machine: Machine, actuators: Sequence[Actuator],
     return extensions, commands
 
 
-def _advance(actuators: Sequence[Actuator], pump_flow: float, areas: Sequence[float],
+def _advance(actuators: Sequence[Actuator], pump: Pump, areas: Sequence[float],
              extensions: list[float], dt: float) -> list[float]:
-    """Move every cylinder over one sample; return the speeds after flow sharing (m/s)."""
-    demands = [act.demand(area, s) for act, area, s in zip(actuators, areas, extensions)]
-    total = sum(flow for _, flow in demands)
-    share = pump_flow / total if total > pump_flow else 1.0
-    speeds = []
-    for i, (act, (speed, _)) in enumerate(zip(actuators, demands)):
-        speed *= share
+    """Move every cylinder over one sample; return the speeds the pump allows (m/s)."""
+    moved = speeds(actuators, pump, areas, extensions)
+    for i, (act, speed) in enumerate(zip(actuators, moved)):
         extensions[i] = min(max(extensions[i] + dt * speed, 0.0), act.stroke)
-        speeds.append(speed)
-    return speeds
+    return moved
 
 
 def simulate_plant(machine: Machine, commands: FloatArray, dt: float, *,
@@ -162,10 +156,9 @@ def simulate_plant(machine: Machine, commands: FloatArray, dt: float, *,
         path[0] = extensions
     # Samples with every spool inside its overlap move nothing: skip them.
     busy = np.flatnonzero(np.any(areas[1:] != 0.0, axis=1)) + 1
-    pump_flow = machine.pump.flow * _LPM
     table = areas.tolist()
     for k in busy.tolist():
-        speed[k] = _advance(actuators, pump_flow, table[k], extensions, dt)
+        speed[k] = _advance(actuators, machine.pump, table[k], extensions, dt)
         path[k] = extensions
     # Between busy samples the cylinders stay where they were: carry the last value.
     index = np.where(np.isnan(path[:, 0]), 0, np.arange(n))
@@ -226,7 +219,6 @@ class PlantSimulator:
         self.extensions, before = _initial(machine, self._actuators, angles0, command_before)
         self._spools = [Spool(joint.valve, self.dt, before[i])
                         for i, joint in enumerate(machine.joints)]
-        self._pump_flow = machine.pump.flow * _LPM
         self._filters = [_stop_filter(joint.stop_frequency, joint.stop_damping, self.dt)
                          for joint in machine.joints]
         self._sigma = [joint.noise if noise else 0.0 for joint in machine.joints]
@@ -235,6 +227,9 @@ class PlantSimulator:
         self._state = [list(lfilter_zi(b, a) * x) for (b, a), x in zip(self._filters, kinematic)]
         self._angles = self._measure(kinematic)
         self.speeds = [0.0] * len(self._actuators)
+        #: Piston-side and rod-side pressure of each joint over the last sample, bar.
+        self.pressures = [act.pressures(0.0, s, 0.0)
+                          for act, s in zip(self._actuators, self.extensions)]
         self.samples = 0
 
     def _measure(self, kinematic: Sequence[float]) -> list[float]:
@@ -283,8 +278,14 @@ class PlantSimulator:
         areas = [float(metering_area(spool.valve, np.array([x]))[0])
                  for spool, x in zip(self._spools, travel)]
         previous = [act.geometry.angle(s) for act, s in zip(self._actuators, self.extensions)]
+        before = list(self.extensions)
+        moved = [0.0] * len(areas)
         if any(area != 0.0 for area in areas):
-            _advance(self._actuators, self._pump_flow, areas, self.extensions, self.dt)
+            moved = _advance(self._actuators, self.machine.pump, areas, self.extensions,
+                             self.dt)
+        # What the chambers' pressure sensors read over the sample (as simulate_plant's).
+        self.pressures = [act.pressures(area, extension, speed) for act, area, extension, speed
+                          in zip(self._actuators, areas, before, moved)]
         kinematic = [act.geometry.angle(s) for act, s in zip(self._actuators, self.extensions)]
         self.speeds = [(x - p) / self.dt for x, p in zip(kinematic, previous)]
         self._angles = self._measure(kinematic)

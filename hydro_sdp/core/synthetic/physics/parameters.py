@@ -48,7 +48,7 @@ def section(data: Mapping[str, Any], key: str, where: str,
 @dataclass(frozen=True)
 class Pump:
     """
-    Load-sensing pump with flow sharing, shared by all joints.
+    Load-sensing pump with flow sharing and a power (torque) limit, shared by all joints.
 
     Parameters
     ----------
@@ -64,6 +64,10 @@ class Pump:
         Return line pressure, bar.
     oil_density : float
         Oil density, kg/m^3.
+    power : float
+        Largest hydraulic power, kW (0: no limit): the torque limiter of a pump on an
+        engine turns its displacement back so that flow times pressure stays below
+        it, so at pressure ``p`` the pump gives at most ``power / p``.
 
     """
 
@@ -72,8 +76,29 @@ class Pump:
     relief_pressure: float
     tank_pressure: float = 2.0
     oil_density: float = 860.0
+    power: float = 0.0
 
-    keys = ('flow', 'margin', 'relief_pressure', 'tank_pressure', 'oil_density')
+    keys = ('flow', 'margin', 'relief_pressure', 'tank_pressure', 'oil_density', 'power')
+
+    def available(self, pressure: float) -> float:
+        """
+        Return the flow the pump gives at a pressure, m^3/s.
+
+        Parameters
+        ----------
+        pressure : float
+            Pump pressure, Pa.
+
+        Returns
+        -------
+        float
+            ``min(flow, power / pressure)`` in SI units.
+
+        """
+        largest = self.flow * 1e-3 / 60.0
+        if self.power > 0.0 and pressure > 0.0:
+            return min(largest, self.power * 1e3 / pressure)
+        return largest
 
     @classmethod
     def from_mapping(cls, data: Mapping[str, Any]) -> Pump:
@@ -84,7 +109,8 @@ class Pump:
                                           strict_low=True),
                    tank_pressure=number(data, 'tank_pressure', 'pump', low=0.0, default=2.0),
                    oil_density=number(data, 'oil_density', 'pump', low=0.0, strict_low=True,
-                                      default=860.0))
+                                      default=860.0),
+                   power=number(data, 'power', 'pump', low=0.0, default=0.0))
         if pump.relief_pressure <= pump.margin + pump.tank_pressure:
             raise ModelFileError("key 'pump.relief_pressure': must exceed margin + tank_pressure")
         return pump
@@ -120,6 +146,12 @@ class Valve:
         Meter-out area over meter-in area at the same spool travel.
     retract_ratio : float
         Areas of the retracting side's notches over those of ``opening``.
+    compensated : bool
+        Whether a pressure compensator holds the pump's margin across the meter-in
+        edge (default). Without one the drop across the edge is what the pump
+        pressure leaves above the load: a joint under a lighter load than another's
+        takes more flow, and when the pump cannot hold its margin (flow or power
+        limit) the flow follows the pressure left.
 
     """
 
@@ -132,9 +164,10 @@ class Valve:
     opening: tuple[tuple[float, float], ...]
     outlet_ratio: float = 1.0
     retract_ratio: float = 1.0
+    compensated: bool = True
 
     keys = ('neutral', 'limits', 'overlap', 'dead_time', 'time_constant',
-            'discharge_coefficient', 'opening', 'outlet_ratio', 'retract_ratio')
+            'discharge_coefficient', 'opening', 'outlet_ratio', 'retract_ratio', 'compensated')
 
     @classmethod
     def from_mapping(cls, data: Mapping[str, Any], where: str) -> Valve:
@@ -156,7 +189,17 @@ class Valve:
                    outlet_ratio=number(data, 'outlet_ratio', where, low=0.0,
                                        strict_low=True, default=1.0),
                    retract_ratio=number(data, 'retract_ratio', where, low=0.0,
-                                        strict_low=True, default=1.0))
+                                        strict_low=True, default=1.0),
+                   compensated=_flag(data, 'compensated', where, default=True))
+
+
+def _flag(data: Mapping[str, Any], key: str, where: str, *, default: bool) -> bool:
+    """Read ``data[key]`` as true or false; errors name ``where.key``."""
+    value = data.get(key, default)
+    if not isinstance(value, bool):
+        raise ModelFileError(f'key {where + "." + key!r}: expected true or false, got '
+                             f'{value!r}')
+    return value
 
 
 def _opening(data: Mapping[str, Any], name: str, overlap: float

@@ -18,6 +18,7 @@ from ``dt`` on, so that :func:`hydro_sdp.bags.write_bag` can store them.
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Sequence
 
 from hydro_sdp.core.errors import ConfigurationError
@@ -191,7 +192,8 @@ def step_and_return(machine: Machine, dt: float, duties: Sequence[float], *, joi
 
 def random_levels(machine: Machine, dt: float, duration: float, *, joint: int = 0,
                   duties: tuple[float, float] = (35.0, 100.0),
-                  holds: tuple[float, float] = (0.5, 3.0), seed: int = 0) -> Record:
+                  holds: tuple[float, float] = (0.5, 3.0), seed: int = 0,
+                  pressure: bool = False) -> Record:
     """
     Random duties held for random times, turning back before the stops.
 
@@ -211,6 +213,9 @@ def random_levels(machine: Machine, dt: float, duration: float, *, joint: int = 
         Range of hold times, s.
     seed : int
         Seed of the levels, the holds and the sensor noise.
+    pressure : bool
+        Whether the record's ``load`` is the joint's piston-side pressure, bar, as a
+        sensor on that chamber reads it (the load signal a machine logs).
 
     Returns
     -------
@@ -225,6 +230,7 @@ def random_levels(machine: Machine, dt: float, duration: float, *, joint: int = 
     sim = PlantSimulator(machine, dt, angles0=[_mid(j) for j in machine.joints],
                          command_before=neutral, seed=seed)
     commands, angles = [list(neutral)], [sim.angles]
+    pressures = [sim.pressures[joint][0]]
     total = int(round(duration / dt))
     while len(commands) < total:
         # Head away from the nearer stop more often than not.
@@ -232,6 +238,8 @@ def random_levels(machine: Machine, dt: float, duration: float, *, joint: int = 
         sign = 1.0 if rng.random() > upward else -1.0
         level = list(neutral)
         level[joint] = duty_command(machine, joint, sign * rng.uniform(*duties))
-        samples = min(int(round(rng.uniform(*holds) / dt)), total - len(commands))
-        _hold(sim, commands, angles, level, samples)
-    return _record(machine, joint, np.array(commands), np.array(angles), dt, 'random levels')
+        for _ in range(min(int(round(rng.uniform(*holds) / dt)), total - len(commands))):
+            _hold(sim, commands, angles, level, 1)
+            pressures.append(sim.pressures[joint][0])
+    record = _record(machine, joint, np.array(commands), np.array(angles), dt, 'random levels')
+    return replace(record, load=np.array(pressures)) if pressure else record

@@ -1,0 +1,141 @@
+"""
+The decision: which candidate is named, weighing the size of what it explains.
+
+Every candidate is judged on the held-out runs (the validation records, or those the
+search held out; the estimation records when there are none):
+
+* its **size**: the simulation error over windows of a few seconds started from the
+  measured angle (:mod:`.held_out`) must fall by at least :data:`MARGIN` of the model's,
+  and the candidate must remove at least :data:`~.residuals.MIN_GAIN` of the squared
+  velocity residual;
+* its **significance**: the reduction of the squared velocity residual under a block
+  bootstrap that keeps the residuals' autocorrelation and the reduction's magnitude
+  (:mod:`.reduction`), ``p <= 0.01``.
+
+A candidate that passes both is *accepted*; one that removes at least :data:`MOST` of
+the squared velocity residual and lowers the windowed error is accepted whatever its
+test says (the answer is never ``none`` while a candidate removes most of the
+residual). Accepted candidates are ranked: those whose signature the data show which
+no other word explains (a stop held while driven beyond the dead-zone, a factor of the
+angle shared by both directions where the data name the angle) first, then those of the
+states the SDP analysis names (:mod:`.naming`), each group by the share of the windowed
+error it removes (docs/methods.md section 8.4).
+
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import Sequence
+
+from hydro_sdp.core.arrays import FloatArray
+from hydro_sdp.core.diagnosis.held_out import WindowErrors
+from hydro_sdp.core.diagnosis.naming import Naming
+from hydro_sdp.core.diagnosis.reduction import reduction_test
+from hydro_sdp.core.diagnosis.residuals import MIN_GAIN, Run, velocity_residuals
+from hydro_sdp.core.diagnosis.results import Candidate, Trial
+from hydro_sdp.core.model.joint_model import JointModel
+
+#: The windowed simulation error on held-out data must fall by at least this share.
+MARGIN = 0.1
+#: A candidate removing at least this share of the held-out squared velocity residual is
+#: never dismissed (when it also lowers the windowed error).
+MOST = 0.5
+
+
+def judge(trial: Trial, model: JointModel, checks: Sequence[Run], base: Sequence[FloatArray],
+          block: int, naming: Naming, state: str, errors: WindowErrors) -> Candidate:
+    """
+    Judge one candidate on the held-out runs.
+
+    Parameters
+    ----------
+    trial : Trial
+        The candidate and its augmented model (None: nothing to judge).
+    model : JointModel
+        The model under test.
+    checks : sequence of Run
+        Held-out runs.
+    base : sequence of FloatArray
+        The model's velocity residuals on them.
+    block : int
+        Block length of the bootstrap, samples.
+    naming : Naming
+        What the SDP analysis names.
+    state : str
+        The state of the candidate's word.
+    errors : WindowErrors
+        The simulation errors on the held-out runs (the model's made once a round).
+
+    Returns
+    -------
+    Candidate
+        The candidate with its held-out gain, test, windowed errors and verdict.
+
+    """
+    candidate, augmented = trial
+    named = naming.named(state) and _direction_agrees(candidate.effect, naming)
+    if candidate.effect == 'stroke_geometry' and not named:
+        # A factor shared by both directions tells the linkage from gravity, not the
+        # angle from another state that moves with it (records at different loads that
+        # cover different angles): without the data naming the angle it ranks by size.
+        candidate = replace(candidate, signature_match=False)
+    if augmented is None or not candidate.applicable:
+        return replace(candidate, state=state, named_by_data=named, significant=False,
+                       accepted=False)
+    reduction = reduction_test(base, velocity_residuals(augmented, checks), block)
+    before, after = errors.compare([model, augmented])
+    held = 1.0 - after / before if before > 0.0 else 0.0
+    size = held >= MARGIN and reduction.gain >= MIN_GAIN
+    accepted = (reduction.significant and size) or (reduction.gain >= MOST and held > 0.0)
+    evidence = candidate.evidence
+    if not accepted:
+        # What the fit found is not a finding until the decision says so.
+        if reduction.gain <= 0.0:
+            why = (f'no better on held-out data: it adds {-100 * reduction.gain:.3g} % to '
+                   'the residual')
+        elif reduction.significant:
+            why = (f'too small to name: it removes {100 * held:.3g} % of the held-out '
+                   f'error (a name needs {100 * MARGIN:g} %) and '
+                   f'{100 * reduction.gain:.3g} % of the residual')
+        else:
+            why = (f'not significant: it removes {100 * reduction.gain:.3g} % of the '
+                   f'held-out residual, z {reduction.z:.2g}, p {reduction.p_value:.2g}')
+        evidence = f'{why}; the fit would say that {evidence}' if evidence else why
+    return replace(candidate, gain=reduction.gain, t=reduction.z, p_value=reduction.p_value,
+                   significant=reduction.significant, held_out=held, window_before=before,
+                   window_after=after, accepted=accepted, state=state, named_by_data=named,
+                   evidence=evidence)
+
+
+def _direction_agrees(word: str, naming: Naming) -> bool:
+    """Along the angle, a shared factor is ``stroke_geometry`` and a mirrored one gravity."""
+    if word == 'stroke_geometry':
+        return naming.shared
+    if word == 'angle_dependent_velocity':
+        return not naming.shared
+    return True
+
+
+def rank(candidates: Sequence[Candidate], naming: Naming) -> list[Candidate]:
+    """
+    Return the candidates in the order they are tried: accepted first, as the module says.
+
+    Parameters
+    ----------
+    candidates : sequence of Candidate
+        Judged candidates.
+    naming : Naming
+        What the SDP analysis names.
+
+    Returns
+    -------
+    list[Candidate]
+        Accepted candidates first (signature, then the states named, then size); the
+        others after, by size.
+
+    """
+    def key(candidate: Candidate) -> tuple[bool, bool, bool, float, float]:
+        return (not candidate.accepted, not candidate.signature_match,
+                not candidate.named_by_data, -candidate.held_out, -candidate.gain)
+    return sorted(candidates, key=key)

@@ -1,0 +1,123 @@
+"""
+The shape of ``load_dependence`` with a measured load: a smooth factor per direction.
+
+The SDP analysis draws the ratio of the measured to the model's increment against
+the load, per direction of motion, without assuming a form (:mod:`..naming`): a
+valve without pressure compensation slows the joint as its load pressure rises
+(``sqrt(p_s - p_L)``), a pump whose power binds gives less flow the higher its
+pressure, an overrunning load speeds it up. The effect takes that shape with a few
+parameters: its value at :data:`KNOTS` knots spread over the loads seen (quantiles),
+linear in between and flat beyond (:class:`~hydro_sdp.core.model.effects.LoadDependence`
+``knots``, ``factors_positive``, ``factors_negative``). Two readings of it are
+offered: the SDP estimate at the knots, and the knot values fitted by penalised least
+squares to the one-step increments (``dy = dy^ f(L)``, linear in the values); the
+detector keeps whichever leaves the smaller residual.
+
+"""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+from hydro_sdp.core.arrays import FloatArray
+from hydro_sdp.core.diagnosis.naming import Naming
+from hydro_sdp.core.identification.stroke_fit import hats, penalised_lstsq
+import numpy as np
+
+#: Knots of the factor.
+KNOTS = 5
+#: The factor is kept within these bounds (a load never stops or races the joint beyond).
+FACTOR_RANGE = (0.05, 20.0)
+#: Fewest samples a direction needs for its factor to be fitted (else 1).
+MIN_SAMPLES = 50
+
+#: The factor per direction at the knots: (positive, negative).
+Table = tuple[FloatArray, FloatArray]
+
+
+def load_knots(load: FloatArray) -> FloatArray:
+    """
+    Return knots over the loads seen: at the quantiles 0, 1/4, 1/2, 3/4 and 1.
+
+    Parameters
+    ----------
+    load : FloatArray
+        Loads of the samples where the model moves, load units.
+
+    Returns
+    -------
+    FloatArray
+        Strictly increasing knots (two at least when the load varies; fewer otherwise).
+
+    """
+    knots = np.unique(np.quantile(load, np.linspace(0.0, 1.0, KNOTS)))
+    if knots.size >= 2:
+        # Knots closer than a thousandth of the range would make the basis degenerate.
+        keep = np.r_[True, np.diff(knots) > 1e-3 * float(np.ptp(knots))]
+        knots = knots[keep]
+    return knots
+
+
+def fitted_table(measured: FloatArray, predicted: FloatArray, load: FloatArray,
+                 knots: FloatArray) -> Table:
+    """
+    Fit the factor's knot values per direction to the one-step increments.
+
+    Parameters
+    ----------
+    measured, predicted : FloatArray
+        Measured and model increments, degrees.
+    load : FloatArray
+        Load at each sample.
+    knots : FloatArray
+        Knots.
+
+    Returns
+    -------
+    Table
+        The factors at the knots, positive and negative direction (1 where a direction
+        has too few samples).
+
+    """
+    out = []
+    for side in (predicted > 0.0, predicted < 0.0):
+        if np.count_nonzero(side) < MIN_SAMPLES:
+            out.append(np.ones(knots.size))
+            continue
+        design = hats(load[side], knots) * predicted[side][:, None]
+        solution, _ = penalised_lstsq([design], [True], measured[side])
+        out.append(np.clip(solution, *FACTOR_RANGE))
+    return out[0], out[1]
+
+
+def sdp_table(naming: Naming, knots: FloatArray) -> Table | None:
+    """
+    Read the factor at the knots off the SDP analysis's ratio along the load.
+
+    Parameters
+    ----------
+    naming : Naming
+        The SDP analysis of the model under test.
+    knots : FloatArray
+        Knots.
+
+    Returns
+    -------
+    Table or None
+        The ratio's estimate per direction at the knots (1 for a direction not
+        analysed); None when the load was not analysed.
+
+    """
+    found = [naming.ratio('load', direction) for direction in ('positive', 'negative')]
+    if all(entry is None for entry in found):
+        return None
+    sides: Sequence[FloatArray] = [np.ones(knots.size) if entry is None else
+                                   np.clip(entry.at(knots), *FACTOR_RANGE) for entry in found]
+    return sides[0], sides[1]
+
+
+def describe(knots: FloatArray, table: Table, unit: str = 'load units') -> str:
+    """Return the factor in a few words: its value at the lowest and highest knot."""
+    parts = [f'x{side[0]:.2f} at {knots[0]:.3g} to x{side[-1]:.2f} at {knots[-1]:.3g} {unit} '
+             f'({name})' for side, name in zip(table, ('positive', 'negative'))]
+    return ', '.join(parts)

@@ -1,0 +1,96 @@
+"""
+What the pump gives the valves: flow sharing, the power limit, valves without compensation.
+
+A load-sensing pump sets its pressure to the highest inlet pressure the moving joints
+need plus its margin (at most the relief). It gives at most its ``flow``, and with a
+``power`` limit at most ``power / pressure`` (:meth:`~.parameters.Pump.available`).
+
+* Every valve compensated and the pump able to give what they ask: each joint gets its
+  compensated flow (:meth:`~.hydraulics.Actuator.demand`).
+* Every valve compensated and the pump short: every joint's speed is scaled by the same
+  share (flow sharing, LUDV-like), the pump's flow taken at its load-sensing pressure: a
+  heavier load raises that pressure, and where the power binds, lowers the flow.
+* A valve without compensation passes what the pump pressure leaves above its load
+  (:meth:`~.hydraulics.Actuator.supplied`); a compensated one its compensated flow, or
+  that when the pressure left is below the margin. When the pump cannot give what they
+  pass at its load-sensing pressure, the pressure falls to where the flow the valves
+  pass equals what the pump gives there (the flow passed grows with the pressure, the
+  pump's falls with it: one crossing, found by bisection).
+
+"""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+from hydro_sdp.core.synthetic.physics.hydraulics import Actuator
+from hydro_sdp.core.synthetic.physics.parameters import Pump
+
+#: Bisection steps on the pump pressure (a relative precision of 2^-50).
+STEPS = 50
+
+
+def _passed(actuators: Sequence[Actuator], areas: Sequence[float], extensions: Sequence[float],
+            demands: Sequence[tuple[float, float]], supply: float) -> list[tuple[float, float]]:
+    """Speed and flow of every joint at a pump pressure."""
+    out = []
+    for act, area, extension, demand in zip(actuators, areas, extensions, demands):
+        passed = act.supplied(area, extension, supply)
+        if act.compensated and abs(demand[0]) <= abs(passed[0]):
+            passed = demand
+        out.append(passed)
+    return out
+
+
+def speeds(actuators: Sequence[Actuator], pump: Pump, areas: Sequence[float],
+           extensions: Sequence[float]) -> list[float]:
+    """
+    Return every cylinder's speed, m/s, with the pump shared as the module says.
+
+    Parameters
+    ----------
+    actuators : sequence of Actuator
+        The joints.
+    pump : Pump
+        The pump.
+    areas : sequence of float
+        Signed effective meter-in area of each valve, m^2.
+    extensions : sequence of float
+        Cylinder extensions, m.
+
+    Returns
+    -------
+    list[float]
+        Speeds, m/s (signed).
+
+    """
+    demands = [act.demand(area, s) for act, area, s in zip(actuators, areas, extensions)]
+    total = sum(flow for _, flow in demands)
+    compensated = all(act.compensated for act in actuators)
+    if compensated and pump.power <= 0.0:
+        largest = pump.available(0.0)
+        share = largest / total if total > largest else 1.0
+        return [speed * share for speed, _ in demands]
+    moving = [i for i, (speed, _) in enumerate(demands) if speed != 0.0]
+    if not moving and compensated:
+        return [0.0] * len(actuators)
+    act0 = actuators[0]
+    needed = [actuators[i].inlet_pressure(areas[i], extensions[i], abs(demands[i][0]))
+              for i in moving]
+    sensed = min(max(needed, default=0.0) + act0.margin, act0.relief)
+    if compensated:
+        available = pump.available(sensed)
+        share = available / total if total > available else 1.0
+        return [speed * share for speed, _ in demands]
+    flows = _passed(actuators, areas, extensions, demands, sensed)
+    if sum(flow for _, flow in flows) <= pump.available(sensed):
+        return [speed for speed, _ in flows]
+    low, high = 0.0, sensed
+    for _ in range(STEPS):
+        middle = 0.5 * (low + high)
+        passed = sum(flow for _, flow in _passed(actuators, areas, extensions, demands, middle))
+        if passed > pump.available(middle):
+            high = middle
+        else:
+            low = middle
+    return [speed for speed, _ in _passed(actuators, areas, extensions, demands, low)]

@@ -1,0 +1,79 @@
+"""
+What the diagnosis grid named: one result per case, and the confusion table.
+
+See :mod:`support.diagnosis_grid`.
+
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Sequence
+
+
+@dataclass(frozen=True)
+class GridResult:
+    """
+    What the workflow named for one case.
+
+    Parameters
+    ----------
+    word, program, units : str
+        The case.
+    named : str
+        The first word named.
+    mae_before, mae_after : float
+        Validation MAE of the nominal and of the final model, degrees.
+
+    """
+
+    word: str
+    program: str
+    units: str
+    named: str
+    mae_before: float
+    mae_after: float
+
+    @property
+    def right(self) -> bool:
+        """Whether the right word came first and (when one is missing) the gap halved."""
+        if self.word == 'none':
+            return self.named == 'none'
+        return self.named == self.word and self.mae_after <= 0.5 * self.mae_before
+
+
+def confusion_table(results: Sequence[GridResult],
+                    order: Sequence[str] = ()) -> list[str]:
+    """
+    Return the confusion table as Markdown rows: hidden word against first word named.
+
+    Parameters
+    ----------
+    results : sequence of GridResult
+        Grid results.
+    order : sequence of str
+        Order of the hidden words (others after, as they first appear).
+
+    Returns
+    -------
+    list[str]
+        Header, one row per hidden word (with the share right, gap halved), a total.
+
+    """
+    seen = list(dict.fromkeys([*order, *(r.word for r in results)]))
+    hidden = [w for w in seen if any(r.word == w for r in results)]
+    named = list(dict.fromkeys([*hidden, *sorted({r.named for r in results} - set(hidden))]))
+    short = {w: w.replace('direction_dependent_delay', 'dir_delay')
+             .replace('angle_dependent_velocity', 'angle_vel')
+             .replace('velocity_saturation', 'saturation') for w in named}
+    rows = ['| hidden \\ named | ' + ' | '.join(short[w] for w in named) + ' | right |',
+            '|---' * (len(named) + 2) + '|']
+    for word in hidden:
+        mine = [r for r in results if r.word == word]
+        counts = [sum(r.named == w for r in mine) for w in named]
+        right = sum(r.right for r in mine)
+        rows.append(f'| {short.get(word, word)} | ' + ' | '.join(str(c) for c in counts)
+                    + f' | {right}/{len(mine)} |')
+    right = sum(r.right for r in results)
+    rows.append(f'| all | {" | ".join("" for _ in named)} | {right}/{len(results)} |')
+    return rows
