@@ -21,8 +21,10 @@ $(STAMP): requirements.txt requirements-test.txt setup.py setup.cfg package.xml
 demo: $(STAMP)
 	$(BIN)/hydro-sdp demo --out $(DEMO_OUT)
 
+# Two test workers share two cores: one BLAS thread each (two would mostly wait, as the
+# console script knows).
 test: $(STAMP)
-	$(BIN)/python -m pytest
+	OPENBLAS_NUM_THREADS=1 $(BIN)/python -m pytest
 
 bench: $(STAMP)
 	@for script in bench/bench_*.py; do echo "== $$script"; $(BIN)/python $$script || exit 1; done

@@ -213,7 +213,8 @@ def test_bad_or_read_only_values_are_refused_and_change_nothing(ros):
     assert identifier.recalibration.policy.cooldown == 9.0
 
 
-NOISE_LEVELS = (0.01, 0.02, 0.05)
+#: The quietest and the noisiest sensor of the README (0.02 lies between and proves no more).
+NOISE_LEVELS = (0.01, 0.05)
 
 
 @pytest.mark.slow

@@ -1,10 +1,10 @@
 """
 ROS domains for tests that start node processes.
 
-Two test workers (``pytest -n 2``) run process tests at the same time; each draws its
-domains from its own range, so that their nodes never find each other. Within a worker,
-the domains are drawn in turn from a random start, so that a test never meets the
-leftovers of the test before it.
+The suite runs on two workers (pytest-xdist, ``-n auto``); each draws its domains from its
+own range, so that the nodes of two process tests running at once never find each other.
+Within a worker the domains are drawn in turn from a random start, so that a test never
+meets the leftovers of the test before it.
 """
 
 import itertools
