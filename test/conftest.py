@@ -28,8 +28,3 @@ def rng():
 def j2():
     """Load the shipped BROKK J2 model."""
     return load_model(default_model_path())
-
-
-def pytest_collection_modifyitems(items):
-    """Start the longest file first (the guide's examples, run in order on one worker)."""
-    items.sort(key=lambda item: item.path.name != 'test_docs_examples.py')

@@ -148,9 +148,13 @@ def _import_time(statement):
 def test_identify_starts_without_scipy_signal_and_stats_and_stays_light():
     # scipy.signal (and scipy.stats with it) took 1.2 s of a 2 s identify; the lag filters
     # are a few lines of numpy now. The bound is a ratio to importing numpy, measured here
-    # (the best of three of each), so a busy machine slows both alike.
-    numpy = min(_import_time('import numpy')[0] for _ in range(3))
-    runs = [_import_time(IDENTIFY_IMPORTS) for _ in range(3)]
+    # in turns (the best of four of each), so a busy machine slows both alike. Quiet, the
+    # ratio is about 6.5; with the other test worker busy it reaches 11; scipy.signal and
+    # scipy.stats back would make it 20 or more.
+    numpy, runs = [], []
+    for _ in range(4):
+        numpy.append(_import_time('import numpy')[0])
+        runs.append(_import_time(IDENTIFY_IMPORTS))
     _, modules = runs[0]
     assert not {'scipy.signal', 'scipy.stats', 'matplotlib', 'rosbags', 'rclpy'} & modules
-    assert min(seconds for seconds, _ in runs) < 10.0 * numpy
+    assert min(seconds for seconds, _ in runs) < 15.0 * min(numpy)
