@@ -285,7 +285,7 @@ def split_at_gaps(record: Record, *, max_gap: float = 3.0,
     steps = np.diff(record.t)
     # The nominal period, as every later check of the pieces uses: a spacing a hair above
     # max_gap nominal periods but below max_gap median spacings is cut here, not refused there.
-    period = period_of_stamps(record.t)
+    period = record.sample_period
     cuts = np.flatnonzero(steps > max_gap * period) + 1
     if cuts.size == 0:
         return Pieces((record,), ())
