@@ -133,6 +133,20 @@ def clamp_start(y: FloatArray, v: FloatArray, begin: int, end: int, *, delay: in
     return None
 
 
+def driven_stop(level: float, rest: float,
+                stops: tuple[float | None, float | None]) -> tuple[float, float] | None:
+    """
+    Return the stop a held command drives the joint towards, and the direction (+1 or -1).
+
+    None when the command is the rest command (it drives nowhere) or that stop is unknown.
+    """
+    if not level != rest:
+        return None
+    side = int(level > rest)
+    stop = stops[side]
+    return None if stop is None else (stop, 1.0 if side else -1.0)
+
+
 def pushes_into_stop(y: FloatArray, level: float, rest: float,
                      stops: tuple[float | None, float | None]) -> bool:
     """
@@ -160,13 +174,10 @@ def pushes_into_stop(y: FloatArray, level: float, rest: float,
         True when the step is held against an end stop from its start.
 
     """
-    if y.size == 0 or not level != rest:
+    target = driven_stop(level, rest, stops)
+    if y.size == 0 or target is None:
         return False
-    side = int(level > rest)
-    stop = stops[side]
-    if stop is None:
-        return False
-    direction = 1.0 if side else -1.0
+    stop, direction = target
     tolerance = stop_tolerance(stops)
     return bool(direction * (stop - y[0]) <= tolerance
                 and np.all(direction * (y - stop) <= tolerance))
@@ -214,12 +225,9 @@ def arrival_at_stop(y: FloatArray, level: float, rest: float,
         Index into ``y`` of the first sample at the stop (after the first), or None.
 
     """
-    if y.size < 2 or not level != rest:
+    target = driven_stop(level, rest, stops)
+    if y.size < 2 or target is None:
         return None
-    side = int(level > rest)
-    stop = stops[side]
-    if stop is None:
-        return None
-    direction = 1.0 if side else -1.0
+    stop, direction = target
     at = np.flatnonzero(direction * (np.asarray(y[1:]) - stop) >= -reach)
     return int(at[0]) + 1 if at.size else None
