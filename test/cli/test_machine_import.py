@@ -16,14 +16,12 @@ from hydro_sdp.bags import write_bag
 from hydro_sdp.cli.main import main
 from hydro_sdp.core.identification.identify import identify
 from hydro_sdp.core.model.records import Record
-from hydro_sdp.core.synthetic.physics.linkage import Geometry
-from hydro_sdp.core.synthetic.physics.machine import PlantSimulator
-from hydro_sdp.core.synthetic.physics.runs import duty_command
 from hydro_sdp.io.documents import shipped_config
 from hydro_sdp.io.model_files import save_model
 from hydro_sdp.io.plant_files import load_machine
 import numpy as np
 import pytest
+from support.plant_levels import plant_levels
 
 DT = 0.01
 SIGNALS = """\
@@ -41,29 +39,6 @@ def run_json(*argv):
         code = main([str(a) for a in argv] + ['--json'])
     assert code == 0
     return json.loads(stdout.getvalue())
-
-
-def levels(machine, duration, moving, seed):
-    """Random duties held 0.5-3 s on the joints in ``moving``; both joints' commands and angles."""
-    rng = np.random.default_rng(seed)
-    neutral = [joint.valve.neutral for joint in machine.joints]
-    limits = [Geometry(joint).angle_limits for joint in machine.joints]
-    sim = PlantSimulator(machine, DT, angles0=[0.5 * (low + high) for low, high in limits],
-                         command_before=neutral, seed=seed)
-    # At rest for a sample before the first command: the log holds what came before it.
-    commands, angles = [list(neutral)] * 2, [sim.angles, sim.step(neutral)]
-    current, left = list(neutral), [0] * len(neutral)
-    while len(commands) < int(round(duration / DT)):
-        for j in moving:
-            if left[j] <= 0:
-                low, high = limits[j]
-                sign = 1.0 if rng.random() > (angles[-1][j] - low) / (high - low) else -1.0
-                current[j] = duty_command(machine, j, sign * rng.uniform(35.0, 100.0))
-                left[j] = int(round(rng.uniform(0.5, 3.0) / DT))
-            left[j] -= 1
-        commands.append(list(current))
-        angles.append(sim.step(current))
-    return np.array(commands), np.array(angles)
 
 
 def write_logger_file(path, commands, angles, seed):
@@ -92,15 +67,16 @@ def machine_runs(tmp_path_factory):
     excavator = replace(arm, joints=(arm.joints[0], boom.joints[0]))
     folder = tmp_path_factory.mktemp('machine')
     alone = []
+    # Every run rests a sample before its first command: the log holds what came before it.
     for seed in (1, 2, 3):
-        c, a = levels(excavator, 30.0, [0], seed)
+        c, a = plant_levels(excavator, DT, 30.0, [0], seed, resting=2)
         alone.append(Record(DT * np.arange(1, len(c) + 1), c[:, 0], a[:, 0], 'arm',
                             f'alone {seed}'))
     model = identify(alone).model
     save_model(model, folder / 'arm.yaml')
     direct, logged = [], []
     for seed in (4, 5):
-        c, a = levels(excavator, 30.0, [0, 1], seed)
+        c, a = plant_levels(excavator, DT, 30.0, [0, 1], seed, resting=2)
         t = DT * np.arange(1, len(c) + 1)
         records = [Record(t, c[:, j], a[:, j], name) for j, name in enumerate(('arm', 'boom'))]
         direct.append(str(write_bag(folder / 'direct' / f'run{seed}', records)))

@@ -13,10 +13,8 @@ from hydro_sdp.core.model.exogenous_signals import Exogenous, exogenous_factor
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.records import Record
 from hydro_sdp.core.synthetic.physics.hydraulics import Actuator
-from hydro_sdp.core.synthetic.physics.linkage import Geometry
-from hydro_sdp.core.synthetic.physics.machine import PlantSimulator
 from hydro_sdp.core.synthetic.physics.plant import Machine, with_payload
-from hydro_sdp.core.synthetic.physics.runs import duty_command, full_stroke_runs
+from hydro_sdp.core.synthetic.physics.runs import full_stroke_runs
 from hydro_sdp.io.documents import shipped_config
 from hydro_sdp.io.plant_files import load_machine
 from hydro_sdp.report.diagnosis import write_report
@@ -24,6 +22,7 @@ import numpy as np
 import pytest
 from support.diagnosis_grid import hide
 from support.joint_generator import record
+from support.plant_levels import plant_levels
 
 DT = 0.01
 DUTIES = (55, 75, 100)
@@ -39,24 +38,7 @@ def levels(machine: Machine, duration: float, moving: Sequence[int], seed: int) 
 
     Returns the first joint's record with the second joint's angle as ``others``.
     """
-    rng = np.random.default_rng(seed)
-    neutral = [joint.valve.neutral for joint in machine.joints]
-    limits = [Geometry(joint).angle_limits for joint in machine.joints]
-    sim = PlantSimulator(machine, DT, angles0=[0.5 * (low + high) for low, high in limits],
-                         command_before=neutral, seed=seed)
-    commands, angles = [list(neutral)], [sim.angles]
-    current, left = list(neutral), [0] * len(neutral)
-    while len(commands) < int(round(duration / DT)):
-        for j in moving:
-            if left[j] <= 0:
-                low, high = limits[j]
-                sign = 1.0 if rng.random() > (angles[-1][j] - low) / (high - low) else -1.0
-                current[j] = duty_command(machine, j, sign * rng.uniform(35.0, 100.0))
-                left[j] = int(round(rng.uniform(0.5, 3.0) / DT))
-            left[j] -= 1
-        commands.append(list(current))
-        angles.append(sim.step(current))
-    c, a = np.array(commands), np.array(angles)
+    c, a = plant_levels(machine, DT, duration, moving, seed)
     return Record(DT * np.arange(1, len(c) + 1), c[:, 0], a[:, 0], machine.names[0],
                   f'levels {seed}', others=a[:, 1:], other_joints=machine.names[1:])
 

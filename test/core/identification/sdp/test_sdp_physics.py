@@ -14,6 +14,7 @@ from hydro_sdp.io.documents import shipped_config
 from hydro_sdp.io.plant_files import load_machine
 import numpy as np
 import pytest
+from support.plant_levels import plant_levels
 
 DT = 0.01
 #: Time since 1970 the records are stamped from, s.
@@ -72,24 +73,7 @@ def test_steps_on_the_physics_plant_show_an_integrator_and_a_command_dependent_g
 
 def levels(machine: Machine, duration: float, moving: Sequence[int], seed: int) -> Record:
     """Drive the joints in ``moving`` with random duties held 0.5-3 s, turning before stops."""
-    rng = np.random.default_rng(seed)
-    neutral = [joint.valve.neutral for joint in machine.joints]
-    limits = [Geometry(joint).angle_limits for joint in machine.joints]
-    sim = PlantSimulator(machine, DT, angles0=[0.5 * (low + high) for low, high in limits],
-                         command_before=neutral, seed=seed)
-    commands, angles = [list(neutral)], [sim.angles]
-    current, left = list(neutral), [0] * len(neutral)
-    while len(commands) < int(round(duration / DT)):
-        for j in moving:
-            if left[j] <= 0:
-                low, high = limits[j]
-                sign = 1.0 if rng.random() > (angles[-1][j] - low) / (high - low) else -1.0
-                current[j] = duty_command(machine, j, sign * rng.uniform(35.0, 100.0))
-                left[j] = int(round(rng.uniform(0.5, 3.0) / DT))
-            left[j] -= 1
-        commands.append(list(current))
-        angles.append(sim.step(current))
-    c, a = np.array(commands), np.array(angles)
+    c, a = plant_levels(machine, DT, duration, moving, seed)
     return Record(EPOCH + DT * np.arange(1, len(c) + 1), c[:, 0], a[:, 0], machine.names[0],
                   f'levels {seed}', origin=EPOCH, others=a[:, 1:],
                   other_joints=machine.names[1:])
