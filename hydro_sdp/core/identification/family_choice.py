@@ -17,7 +17,7 @@ from __future__ import annotations
 from collections import defaultdict
 from dataclasses import dataclass
 import math
-from typing import get_args, Literal, Sequence
+from typing import Callable, get_args, Literal, Sequence
 
 from hydro_sdp.core.errors import DataError, HydroSdpError
 from hydro_sdp.core.identification.delay import level_speeds, LevelSpeed
@@ -136,6 +136,50 @@ class KindScore:
     note: str = ''
 
 
+class FoldErrors:
+    """
+    Each family's held-out simulation errors, fold by fold, and why any failed.
+
+    A failure of the fit every family starts from (:meth:`fail`) ends the
+    comparison of all of them; a family's own failure ends that family's.
+
+    Parameters
+    ----------
+    kinds : sequence of str
+        The families compared.
+
+    """
+
+    def __init__(self, kinds: Sequence[FittedKind]) -> None:
+        self.kinds = tuple(kinds)
+        self.errors: dict[str, list[float]] = {kind: [] for kind in kinds}
+        self.notes: dict[str, str] = {}
+
+    def fail(self, error: HydroSdpError) -> None:
+        """Note that the fit every family starts from failed: none can be scored."""
+        self.notes.update({kind: str(error) for kind in self.kinds})
+
+    def add_fold(self, held_out: FitData, fit_map: Callable[[FittedKind], StaticMap]) -> None:
+        """Add the error on ``held_out`` of each family still scored, fitted by ``fit_map``."""
+        for kind in self.kinds:
+            if kind in self.notes:
+                continue
+            try:
+                self.errors[kind].append(held_out.simulation_mae(fit_map(kind).rate))
+            except HydroSdpError as error:
+                self.notes[kind] = str(error)
+
+    def scores(self) -> list[KindScore]:
+        """Return each family's mean error over the folds (NaN, with the note, if it failed)."""
+        return [KindScore(kind, float(np.mean(self.errors[kind]))
+                          if kind not in self.notes and self.errors[kind] else math.nan,
+                          self.notes.get(kind, '')) for kind in self.kinds]
+
+    def fold_errors(self) -> dict[str, list[float]]:
+        """Return the errors fold by fold of the families that were fitted on every fold."""
+        return {kind: self.errors[kind] for kind in self.kinds if kind not in self.notes}
+
+
 def fit_family(kind: FittedKind, data: FitData, points: Sequence[LevelSpeed], rest: float,
                method: FitMethod, sdp_map: SdpMap | None, starts: int = 4) -> MapFit[StaticMap]:
     """
@@ -208,36 +252,25 @@ def compare_kinds(experiments: Sequence[Experiment], delay: int, dt: float, rest
         One score per family: the mean over folds of the held-out MAE.
 
     """
-    parts = folds(experiments, rest)
-    errors: dict[str, list[float]] = {kind: [] for kind in kinds}
-    notes: dict[str, str] = {}
-    for train, test in parts:
+    tally = FoldErrors(kinds)
+    for train, test in folds(experiments, rest):
         data = FitData(train, delay, dt, lag)
         held_out = FitData(test, delay, dt, lag)
         try:
             points = level_speeds(train, delay, dt, rest=rest)
-            sdp_map: SdpMap | None = fit_sdp(data, points, rest, method=method,
-                                             starts=2).static_map
+            sdp_map = fit_sdp(data, points, rest, method=method, starts=2).static_map
         except HydroSdpError as error:
-            notes.update({kind: str(error) for kind in kinds})
+            tally.fail(error)
             break
-        for kind in kinds:
-            if kind in notes:
-                continue
-            try:
-                if kind == 'sdp':
-                    static_map: StaticMap = sdp_map  # type: ignore[assignment]
-                else:
-                    start = sdp_map if dead_zone is None or sdp_map is None else SdpMap(
-                        dead_zone, sdp_map.saturation_velocity, sdp_map.curvature)
-                    static_map = fit_family(kind, data, points, rest, method, start,
-                                            starts=2).static_map
-                errors[kind].append(held_out.simulation_mae(static_map.rate))
-            except HydroSdpError as error:
-                notes[kind] = str(error)
-    return [KindScore(kind, float(np.mean(errors[kind]))
-                      if kind not in notes and errors[kind] else math.nan, notes.get(kind, ''))
-            for kind in kinds]
+
+        def fit_map(kind: FittedKind) -> StaticMap:
+            if kind == 'sdp':
+                return sdp_map
+            start = sdp_map if dead_zone is None else SdpMap(
+                dead_zone, sdp_map.saturation_velocity, sdp_map.curvature)
+            return fit_family(kind, data, points, rest, method, start, starts=2).static_map
+        tally.add_fold(held_out, fit_map)
+    return tally.scores()
 
 
 def choose_kind(scores: Sequence[KindScore]) -> FittedKind:

@@ -28,11 +28,13 @@ from typing import Sequence
 from hydro_sdp.core.errors import HydroSdpError
 from hydro_sdp.core.identification.delay import LevelSpeed
 from hydro_sdp.core.identification.experiment import Experiment, split_long
-from hydro_sdp.core.identification.family_choice import choose_kind, FittedKind, KindScore
+from hydro_sdp.core.identification.family_choice import (
+    choose_kind, FittedKind, FoldErrors, KindScore)
 from hydro_sdp.core.identification.map_fit import FitData
 from hydro_sdp.core.identification.routine.increment_fit import (
     fit_increments, fit_sdp_increments)
 from hydro_sdp.core.identification.routine.increments import increments_of
+from hydro_sdp.core.model.static_maps import StaticMap
 import numpy as np
 
 #: Length of the held-out pieces, s, and the number of folds they are dealt to.
@@ -111,8 +113,7 @@ def compare_routine_kinds(pieces: Sequence[Experiment], delay: int, dt: float, r
         reason when it could not be fitted), and its value on each fold.
 
     """
-    errors: dict[str, list[float]] = {kind: [] for kind in kinds}
-    notes: dict[str, str] = {}
+    tally = FoldErrors(kinds)
     folds = min(FOLDS, len(pieces))
     for fold in range(folds):
         test = list(pieces[fold::folds])
@@ -126,20 +127,13 @@ def compare_routine_kinds(pieces: Sequence[Experiment], delay: int, dt: float, r
             continue
         held_out = FitData(inside, delay, dt)
         try:
-            start = fit_sdp_increments(data, dt, points, rest)
+            start = fit_sdp_increments(data, dt, points, rest).static_map
         except HydroSdpError as error:
-            notes.update({kind: str(error) for kind in kinds})
+            tally.fail(error)
             break
-        for kind in kinds:
-            if kind in notes:
-                continue
-            try:
-                fit = start if kind == 'sdp' else fit_increments(
-                    kind, data, dt, points, rest, start.static_map)
-                errors[kind].append(held_out.simulation_mae(fit.static_map.rate))
-            except HydroSdpError as error:
-                notes[kind] = str(error)
-    scores = tuple(KindScore(kind, float(np.mean(errors[kind]))
-                             if kind not in notes and errors[kind] else math.nan,
-                             notes.get(kind, '')) for kind in kinds)
-    return RoutineScores(scores, {kind: errors[kind] for kind in kinds if kind not in notes})
+
+        def fit_map(kind: FittedKind) -> StaticMap:
+            return start if kind == 'sdp' else fit_increments(
+                kind, data, dt, points, rest, start).static_map
+        tally.add_fold(held_out, fit_map)
+    return RoutineScores(tuple(tally.scores()), tally.fold_errors())
