@@ -16,6 +16,7 @@ one run on this machine:
 import argparse
 import math
 from pathlib import Path
+import sys
 import tempfile
 import time
 
@@ -26,22 +27,9 @@ from hydro_sdp.core.synthetic.programs import random_program
 from hydro_sdp.io.model_files import default_model_path, load_model
 import numpy as np
 
-
-def python_loop(alpha, tau, v, y0, y_min, y_max):
-    """Simulate eqs. (3)-(5) of West et al. one sample at a time in plain Python."""
-    a1, a2, a3, a4, a5, a6 = alpha
-    y = [min(max(y0, y_min), y_max)]
-    commands = v.tolist()
-    for k in range(1, len(commands)):
-        u = commands[k - tau] if k >= tau else 0.0
-        if u < a3:
-            q = a1 * (1.0 - math.exp(a2 * (u - a3)))
-        elif u > a6:
-            q = a4 * (1.0 - math.exp(-a5 * (u - a6)))
-        else:
-            q = 0.0
-        y.append(min(max(y[-1] + q, y_min), y_max))
-    return y
+# The plain loop is the test suite's reference of the paper's recursion.
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / 'test'))
+from support.paper_recursion import paper_recursion  # noqa: E402, I100
 
 
 def best_of(repeats, function):
@@ -90,8 +78,8 @@ def main():
     v = np.repeat(rng.uniform(-6.0, 6.0, samples // 150 + 1), 150)[:samples]
     print(f'simulation of {samples:,} samples (J2 sdp model, end stops, 100 Hz)')
     fast, y = best_of(3, lambda: simulate(model, v, 0.01, 25.0))
-    slow, reference = best_of(1, lambda: python_loop(model.alpha(0.01), 15, v, 25.0,
-                                                     *model.angle_limits))
+    slow, reference = best_of(1, lambda: paper_recursion(model.alpha(0.01), 15, v, 25.0,
+                                                         *model.angle_limits))
     stepper = JointSimulator(model, 0.01, 25.0)
     stepped, _ = best_of(1, lambda: [stepper.step(x) for x in v[:50_000].tolist()])
     error = float(np.max(np.abs(y - np.asarray(reference))))
@@ -103,8 +91,8 @@ def main():
           f'{100 * at_stops:.0f} % of samples at an end stop')
     evaluation = random_program(model, 0.01, samples * 0.01, seed=2, y0=25.0)
     fast_eval, _ = best_of(3, lambda: simulate(model, evaluation, 0.01, 25.0))
-    slow_eval, _ = best_of(1, lambda: python_loop(model.alpha(0.01), 15, evaluation, 25.0,
-                                                  *model.angle_limits))
+    slow_eval, _ = best_of(1, lambda: paper_recursion(model.alpha(0.01), 15, evaluation,
+                                                      25.0, *model.angle_limits))
     print(f'  random program (evaluation runs): {samples / fast_eval:,.0f} against '
           f'{samples / slow_eval:,.0f} samples/s, {slow_eval / fast_eval:.1f}x')
 

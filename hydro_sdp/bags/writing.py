@@ -44,6 +44,11 @@ class Stamped:
     values: FloatArray
 
 
+def _check_storage(storage: str) -> None:
+    if storage not in STORAGES:
+        raise ValueError(f"storage must be one of {', '.join(STORAGES)}, got {storage!r}")
+
+
 def write_topics(path: str | os.PathLike[str], stamps: IntArray, names: Sequence[str],
                  positions: FloatArray, floats: Mapping[str, Stamped], *,
                  storage: str = 'sqlite3') -> Path:
@@ -78,8 +83,7 @@ def write_topics(path: str | os.PathLike[str], stamps: IntArray, names: Sequence
     from rosbags.rosbag2 import StoragePlugin, Writer
     from rosbags.typesys import get_typestore, Stores
 
-    if storage not in STORAGES:
-        raise ValueError(f"storage must be one of {', '.join(STORAGES)}, got {storage!r}")
+    _check_storage(storage)
     stamps = np.asarray(stamps, dtype=np.int64)
     every = [stamps] + [np.asarray(series.stamps, dtype=np.int64) for series in floats.values()]
     if any(np.any(times < 0) for times in every):
@@ -158,8 +162,7 @@ def write_bag(path: str | os.PathLike[str], records: Sequence[Record], *,
         The bag folder.
 
     """
-    if storage not in STORAGES:
-        raise ValueError(f"storage must be one of {', '.join(STORAGES)}, got {storage!r}")
+    _check_storage(storage)
     if not records:
         raise DataError('no records to write')
     t = records[0].t

@@ -6,14 +6,10 @@ imported with --signals; diagnose names flow_sharing on the imported bags as on 
 written directly.
 """
 
-from contextlib import redirect_stdout
 from dataclasses import replace
-import io
-import json
 
 from asammdf import MDF, Signal
 from hydro_sdp.bags import write_bag
-from hydro_sdp.cli.main import main
 from hydro_sdp.core.identification.identify import identify
 from hydro_sdp.core.model.records import Record
 from hydro_sdp.io.documents import shipped_config
@@ -21,6 +17,7 @@ from hydro_sdp.io.model_files import save_model
 from hydro_sdp.io.plant_files import load_machine
 import numpy as np
 import pytest
+from support.cli_runs import run_json
 from support.plant_levels import plant_levels
 
 DT = 0.01
@@ -31,14 +28,6 @@ joints:
 signals:
   arm/pump_pressure: Pump_P
 """
-
-
-def run_json(*argv):
-    stdout = io.StringIO()
-    with redirect_stdout(stdout):
-        code = main([str(a) for a in argv] + ['--json'])
-    assert code == 0
-    return json.loads(stdout.getvalue())
 
 
 def write_logger_file(path, commands, angles, seed):

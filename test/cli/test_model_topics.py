@@ -1,8 +1,6 @@
 """The model file remembers the command topic it was identified from; the commands use it."""
 
-from contextlib import redirect_stdout
 from dataclasses import replace
-import io
 import json
 
 from hydro_sdp.bags import inspect_bag, read_record, write_bag
@@ -13,16 +11,9 @@ from hydro_sdp.core.synthetic.joint_experiments import experiment_record
 from hydro_sdp.io.model_files import load_model, save_model
 import numpy as np
 import pytest
+from support.cli_runs import json_result
 
 TOPIC = '/boom/pwm'
-
-
-def run_json(*argv):
-    """Run a command with --json; return the exit code and the parsed object (or None)."""
-    stdout = io.StringIO()
-    with redirect_stdout(stdout):
-        code = main([str(a) for a in argv] + ['--json'])
-    return code, (json.loads(stdout.getvalue()) if code == 0 else None)
 
 
 def test_the_model_file_keeps_the_command_topic_next_to_the_joint(j2, tmp_path):
@@ -127,7 +118,7 @@ def test_write_bag_writes_the_command_topic_given(boom, bags):
 def identified(bags, tmp_path_factory):
     """Identify from the steps bag on /boom/pwm; return the model file."""
     out = tmp_path_factory.mktemp('identified') / 'boom.yaml'
-    code, payload = run_json('identify', bags[0], '--command-topic', TOPIC, '--out', out)
+    code, payload = json_result('identify', bags[0], '--command-topic', TOPIC, '--out', out)
     assert code == 0
     assert payload['command_topic'] == TOPIC
     return out
@@ -138,29 +129,29 @@ def test_identify_writes_the_topic_and_evaluate_and_diagnose_read_it(
     model = load_model(identified)
     assert model.joint == 'boom' and model.command_topic == TOPIC
     # evaluate as the README prints it (no --command-topic): the same scores as when given.
-    code, remembered = run_json('evaluate', bags[1], '--model', identified)
+    code, remembered = json_result('evaluate', bags[1], '--model', identified)
     assert code == 0
-    code, given = run_json('evaluate', bags[1], '--model', identified,
-                           '--command-topic', TOPIC)
+    code, given = json_result('evaluate', bags[1], '--model', identified,
+                              '--command-topic', TOPIC)
     assert code == 0
     assert remembered['mae'] == given['mae'] and remembered['mae']['model'] < 0.5
     # Without the key the bag has no valve_command topic: exit 2, as before.
     bare = save_model(replace(model, command_topic=None), tmp_path / 'bare.yaml')
-    assert run_json('evaluate', bags[1], '--model', bare)[0] == 2
+    assert json_result('evaluate', bags[1], '--model', bare)[0] == 2
     # diagnose likewise; the model it writes keeps the topic.
     out = tmp_path / 'diagnosed.yaml'
-    code, diagnosed = run_json('diagnose', bags[0], '--validation', bags[1], '--model',
-                               identified, '--iterations', '1', '--out', out)
+    code, diagnosed = json_result('diagnose', bags[0], '--validation', bags[1], '--model',
+                                  identified, '--iterations', '1', '--out', out)
     assert code == 0 and diagnosed['mae_before'] < 0.5
     assert load_model(out).command_topic == TOPIC
-    assert run_json('diagnose', bags[0], '--model', bare)[0] == 2
+    assert json_result('diagnose', bags[0], '--model', bare)[0] == 2
 
 
 def test_a_topic_given_on_the_command_line_wins(identified, bags, tmp_path):
     # The model remembers a topic the bag lacks, the user names the right one.
     model = replace(load_model(identified), command_topic='/boom/other')
     other = save_model(model, tmp_path / 'other.yaml')
-    code, payload = run_json('evaluate', bags[1], '--model', other, '--command-topic', TOPIC)
+    code, payload = json_result('evaluate', bags[1], '--model', other, '--command-topic', TOPIC)
     assert code == 0 and payload['mae']['model'] < 0.5
 
 
@@ -172,9 +163,9 @@ def test_calibrate_writes_the_topic_and_identifies_at_the_rest_given(boom, tmp_p
     bags = [str(write_bag(tmp_path / name, [r], command_topics={'boom': TOPIC}))
             for name, r in zip(('steps', 'random'), shifted)]
     out = tmp_path / 'boom'
-    code, payload = run_json('calibrate', bags[0], '--validation', bags[1],
-                             '--command-topic', TOPIC, '--rest', '50', '--input-limits',
-                             '40', '60', '--out', out)
+    code, payload = json_result('calibrate', bags[0], '--validation', bags[1],
+                                '--command-topic', TOPIC, '--rest', '50', '--input-limits',
+                                '40', '60', '--out', out)
     assert code == 0
     assert payload['rest'] == 50.0
     model = load_model(out / 'model.yaml')
@@ -183,4 +174,4 @@ def test_calibrate_writes_the_topic_and_identifies_at_the_rest_given(boom, tmp_p
     assert abs(float(model.rate(50.0))) < 0.05
     assert float(model.rate(40.0)) < -1.0 < 1.0 < float(model.rate(60.0))
     # The README route: evaluate the written model on a bag without --command-topic.
-    assert run_json('evaluate', bags[1], '--model', out / 'model.yaml')[0] == 0
+    assert json_result('evaluate', bags[1], '--model', out / 'model.yaml')[0] == 0

@@ -8,13 +8,9 @@ timer). identify, evaluate, diagnose and calibrate must give the same answers on
 both, beyond noise; and nothing the plant does not have is added.
 """
 
-from contextlib import redirect_stdout
-import io
-import json
 
 from hydro_sdp.bags import read_bag, write_bag
 from hydro_sdp.cli.common import read_records
-from hydro_sdp.cli.main import main
 from hydro_sdp.core.diagnosis import diagnose
 from hydro_sdp.core.identification.evaluation import evaluate
 from hydro_sdp.core.identification.identify import identify
@@ -24,19 +20,12 @@ from hydro_sdp.core.synthetic.programs import random_program, step_program
 from hydro_sdp.io.model_files import load_model
 import numpy as np
 import pytest
+from support.cli_runs import run_json
 from support.recorded_stamps import (
     asynchronous_commands, EPOCH, program_of_samples, write_recorded_bag)
 
 DT = 0.01
 NOISE = 0.02
-
-
-def run_json(*argv):
-    stdout = io.StringIO()
-    with redirect_stdout(stdout):
-        code = main([str(a) for a in argv] + ['--json'])
-    assert code == 0
-    return json.loads(stdout.getvalue())
 
 
 def runs(j2):

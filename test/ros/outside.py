@@ -5,11 +5,11 @@ from pathlib import Path
 import shutil
 import subprocess
 import sys
-import time
 
 from conftest import REPO
 import pytest
 import rclpy
+from support.client_spin import spin_until
 from support.domains import fresh_domain
 
 MODELS = [str(REPO / 'config' / 'lucie_boom.yaml'), str(REPO / 'config' / 'lucie_dipper.yaml')]
@@ -61,12 +61,7 @@ class Processes:
 
     def spin_until(self, predicate, timeout=10.0):
         """Spin the client until ``predicate()`` holds or ``timeout`` s pass; return it."""
-        deadline = time.monotonic() + timeout
-        while not predicate():
-            if time.monotonic() > deadline:
-                return False
-            self.executor.spin_once(timeout_sec=0.01)
-        return True
+        return spin_until(self.executor, predicate, timeout, step=0.01)
 
     def spin_for(self, seconds):
         """Spin the client for ``seconds``."""

@@ -10,32 +10,21 @@ routine route and recover J2's dead-zone within 0.1 V and its delay of 0.15 s, a
 controller designed from that model must run the true joint.
 """
 
-from contextlib import redirect_stderr, redirect_stdout
-import io
 import json
 import math
 
-from hydro_sdp.cli.main import main
 from hydro_sdp.io.model_files import default_model_path, load_model
 from hydro_sdp.ros import qos
 from outside import Processes
 import pytest
 from std_msgs.msg import Float64
+from support.cli_runs import run_cli
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
 
 #: The operator's set-points, deg (moves of +20, -26, +52), each held HOLD s.
 SETPOINTS = (20.0, -6.0, 46.0)
 HOLD = 4.5
-
-
-def run_cli(*arguments):
-    """Run the command line in this process; return the exit code and stdout."""
-    out, err = io.StringIO(), io.StringIO()
-    with redirect_stdout(out), redirect_stderr(err):
-        code = main([str(a) for a in arguments])
-    assert code == 0, err.getvalue()
-    return out.getvalue()
 
 
 @pytest.fixture(scope='module')

@@ -57,6 +57,25 @@ def _steps(sizes: list[float]) -> FloatArray:
     return np.concatenate(parts)
 
 
+def _random_level(joint: Joint, rng: np.random.Generator, y: float,
+                  magnitudes: tuple[float, float], margin: float) -> tuple[float, int, float]:
+    """
+    Draw a level, more likely towards the farther stop, held 0.5-2.5 s.
+
+    The hold is cut short where the joint would come within ``margin`` deg of a
+    stop. Return the level, the samples it is held and the angle after them.
+    """
+    assert joint.stops is not None
+    low, high = joint.stops
+    up = rng.random() > (y - low) / (high - low)
+    level = (1.0 if up else -1.0) * float(rng.uniform(*magnitudes))
+    speed = joint.speed_map.speed(level)
+    room = (high - margin - y) if speed > 0 else (y - low - margin)
+    hold = min(float(rng.uniform(0.5, 2.5)), max(room, 0.0) / max(abs(speed), 1e-6))
+    m = max(1, int(round(hold / DT)))
+    return level, m, y + speed * m * DT
+
+
 def _rare_program(joint: Joint, seed: int, seconds: float) -> FloatArray:
     """Random levels that turn back 12 deg before the stops, and once drive into the top one."""
     rng = np.random.default_rng(seed)
@@ -66,7 +85,7 @@ def _rare_program(joint: Joint, seed: int, seconds: float) -> FloatArray:
     hit = float(rng.uniform(0.35, 0.6)) * seconds
     done = False
     assert joint.stops is not None
-    low, high = joint.stops
+    high = joint.stops[1]
     while k < n:
         if not done and k * DT > hit:
             # Into the top stop, and held against it about two seconds.
@@ -75,14 +94,9 @@ def _rare_program(joint: Joint, seed: int, seconds: float) -> FloatArray:
             v[k:k + hold] = 6.0
             k, y, done = k + hold, high, True
             continue
-        up = rng.random() > (y - low) / (high - low)
-        level = (1.0 if up else -1.0) * float(rng.uniform(1.5, 7.0))
-        speed = joint.speed_map.speed(level)
-        room = (high - 12.0 - y) if speed > 0 else (y - low - 12.0)
-        hold = min(float(rng.uniform(0.5, 2.5)), max(room, 0.0) / max(abs(speed), 1e-6))
-        m = max(1, int(round(hold / DT)))
+        level, m, y = _random_level(joint, rng, y, (1.5, 7.0), margin=12.0)
         v[k:k + m] = level
-        k, y = k + m, y + speed * m * DT
+        k += m
     return v
 
 
@@ -110,17 +124,10 @@ def _levels(joint: Joint, seed: int, seconds: float, largest: float) -> FloatArr
     n = int(round(seconds / DT))
     v = np.zeros(n)
     k, y = 0, 0.0
-    assert joint.stops is not None
-    low, high = joint.stops
     while k < n:
-        up = rng.random() > (y - low) / (high - low)
-        level = (1.0 if up else -1.0) * float(rng.uniform(0.2, largest))
-        speed = joint.speed_map.speed(level)
-        room = (high - 10.0 - y) if speed > 0 else (y - low - 10.0)
-        hold = min(float(rng.uniform(0.5, 2.5)), max(room, 0.0) / max(abs(speed), 1e-6))
-        m = max(1, int(round(hold / DT)))
+        level, m, y = _random_level(joint, rng, y, (0.2, largest), margin=10.0)
         v[k:k + m] = level
-        k, y = k + m, y + speed * m * DT
+        k += m
     return v
 
 

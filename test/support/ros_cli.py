@@ -16,9 +16,9 @@ import os
 from pathlib import Path
 import signal
 import subprocess
-import time
 from typing import Any
 
+from support.client_spin import spin_until
 from support.domains import fresh_domain
 import yaml
 
@@ -87,12 +87,7 @@ class Scene:
 
     def spin_until(self, predicate: Any, timeout: float = WAIT) -> bool:
         """Spin the client until ``predicate()`` holds or ``timeout`` s pass; return it."""
-        deadline = time.monotonic() + timeout
-        while not predicate():
-            if time.monotonic() > deadline:
-                return False
-            self.executor.spin_once(timeout_sec=0.02)
-        return True
+        return spin_until(self.executor, predicate, timeout, step=0.02)
 
     def spin_for(self, seconds: float) -> None:
         """Spin the client for ``seconds``."""

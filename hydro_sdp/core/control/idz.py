@@ -51,8 +51,68 @@ def idz_mode(value: object) -> IdzMode:
     raise ConfigurationError(f"IDZ mode must be one of {', '.join(IDZ_MODES)}, got {value!r}")
 
 
+def smooth_weight(u: float, beta: float) -> float:
+    """Return the positive branch's weight in the ``smooth`` mode (Zhou, Wen & Zhang 2006)."""
+    # The weights e^{u/eps} / (e^{u/eps} + e^{-u/eps}).
+    return 0.5 * (1.0 + math.tanh(u / beta))
+
+
+class TwoBranchInverse:
+    """
+    The anti-chatter modes (docs/methods.md section 5.2) over an inverse's two branches.
+
+    An inverse gives :meth:`branch_command`: each branch for ``u`` of either sign,
+    the positive one floored at the lower edge, the negative one capped at the
+    upper; :meth:`command` picks the branch by mode.
+    """
+
+    beta: float
+    mode: IdzMode
+    rest: float
+
+    def branch_command(self, u: float, side: int) -> float:
+        """Return the command of the positive (``side > 0``) or negative branch for ``u``."""
+        raise NotImplementedError
+
+    def blended_command(self, u: float) -> float:
+        """Return the ``smooth`` mode's blend of the two branches for ``u`` (``beta > 0``)."""
+        weight = smooth_weight(u, self.beta)
+        return weight * self.branch_command(u, 1) + (1.0 - weight) * self.branch_command(u, -1)
+
+    def command(self, u: float, branch: int = 0) -> tuple[float, int]:
+        """
+        Valve command for the desired increment ``u``.
+
+        Parameters
+        ----------
+        u : float
+            Desired increment, degrees per control sample.
+        branch : int
+            Branch used last time (-1, 0 or +1); only the hysteresis mode uses it.
+
+        Returns
+        -------
+        tuple[float, int]
+            The command and the branch now in use.
+
+        """
+        beta = self.beta
+        if self.mode == 'smooth' and beta > 0.0:
+            return self.blended_command(u), 0
+        if u > beta:
+            branch = 1
+        elif u < -beta:
+            branch = -1
+        elif self.mode != 'hysteresis':
+            # The paper's eq. (7) (and smooth without a band): rest inside |u| <= beta.
+            branch = 0
+        if branch == 0:
+            return self.rest, 0
+        return self.branch_command(u, branch), branch
+
+
 @dataclass(frozen=True)
-class InverseDeadZone:
+class InverseDeadZone(TwoBranchInverse):
     """
     Inverse of a dead-zone chord model.
 
@@ -102,49 +162,16 @@ class InverseDeadZone:
     def _positive(self, u: float) -> float:
         return u / self.slopes[1] + self.dead_zone[1]
 
-    def command(self, u: float, branch: int = 0) -> tuple[float, int]:
-        """
-        Valve command for the desired increment ``u``.
+    def branch_command(self, u: float, side: int) -> float:
+        """Return the inverse of one chord for ``u``, floored (capped) at the other edge."""
+        if side > 0:
+            return max(self._positive(u), self.dead_zone[0])
+        return min(self._negative(u), self.dead_zone[1])
 
-        Parameters
-        ----------
-        u : float
-            Desired increment, angle per control sample.
-        branch : int
-            Branch used last time (-1, 0 or +1); only the hysteresis mode uses it.
-
-        Returns
-        -------
-        tuple[float, int]
-            The command and the branch now in use.
-
-        """
-        beta = self.beta
-        if self.mode == 'smooth':
-            if beta == 0.0:
-                return self.command_zero_band(u)
-            # Zhou, Wen & Zhang (2006): weights e^{u/eps} / (e^{u/eps} + e^{-u/eps}).
-            weight = 0.5 * (1.0 + math.tanh(u / beta))
-            return weight * self._positive(u) + (1.0 - weight) * self._negative(u), 0
-        if self.mode == 'hysteresis':
-            if u > beta:
-                branch = 1
-            elif u < -beta:
-                branch = -1
-            if branch > 0:
-                return max(self._positive(u), self.dead_zone[0]), branch
-            if branch < 0:
-                return min(self._negative(u), self.dead_zone[1]), branch
-            return self.rest, 0
-        return self.command_zero_band(u)
-
-    def command_zero_band(self, u: float) -> tuple[float, int]:
-        """Apply the paper's eq. (7): ``rest`` inside ``|u| <= beta``, the inverse outside."""
-        if u > self.beta:
-            return self._positive(u), 1
-        if u < -self.beta:
-            return self._negative(u), -1
-        return self.rest, 0
+    def blended_command(self, u: float) -> float:
+        """Return the blend of the two chords' inverses, neither floored (unlike the table's)."""
+        weight = smooth_weight(u, self.beta)
+        return weight * self._positive(u) + (1.0 - weight) * self._negative(u)
 
     def increment(self, v: float) -> float:
         """

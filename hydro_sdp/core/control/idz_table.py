@@ -29,14 +29,14 @@ from dataclasses import dataclass, field
 import math
 from typing import Sequence
 
-from hydro_sdp.core.control.idz import idz_mode, IdzMode, InverseDeadZone
+from hydro_sdp.core.control.idz import idz_mode, IdzMode, InverseDeadZone, TwoBranchInverse
 from hydro_sdp.core.errors import ConfigurationError
 from hydro_sdp.core.model.static_maps import CHORD_SPEED_FRACTION
 import numpy as np
 
 
 @dataclass(frozen=True)
-class TableInverseDeadZone:
+class TableInverseDeadZone(TwoBranchInverse):
     """
     Inverse of a monotone speed map given as a table.
 
@@ -159,42 +159,9 @@ class TableInverseDeadZone:
             return float(np.interp(u, us, vs))
         return min(vs[-1] + u * (vs[-1] - vs[-2]) / (us[-1] - us[-2]), self.dead_zone[1])
 
-    def command(self, u: float, branch: int = 0) -> tuple[float, int]:
-        """
-        Valve command for the desired increment ``u``.
-
-        Parameters
-        ----------
-        u : float
-            Desired increment, degrees per control sample.
-        branch : int
-            Branch used last time (-1, 0 or +1); only the hysteresis mode uses it.
-
-        Returns
-        -------
-        tuple[float, int]
-            The command and the branch now in use.
-
-        """
-        beta = self.beta
-        if self.mode == 'smooth' and beta > 0.0:
-            weight = 0.5 * (1.0 + math.tanh(u / beta))
-            return weight * self._positive(u) + (1.0 - weight) * self._negative(u), 0
-        if self.mode == 'hysteresis':
-            if u > beta:
-                branch = 1
-            elif u < -beta:
-                branch = -1
-            if branch > 0:
-                return self._positive(u), branch
-            if branch < 0:
-                return self._negative(u), branch
-            return self.rest, 0
-        if u > beta:
-            return self._positive(u), 1
-        if u < -beta:
-            return self._negative(u), -1
-        return self.rest, 0
+    def branch_command(self, u: float, side: int) -> float:
+        """Return the command of the positive (``side > 0``) or negative branch for ``u``."""
+        return self._positive(u) if side > 0 else self._negative(u)
 
     def increment(self, v: float) -> float:
         """

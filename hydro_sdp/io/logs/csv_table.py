@@ -18,7 +18,7 @@ import io
 
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import ConfigurationError, DataError
-from hydro_sdp.io.logs.table import Channel
+from hydro_sdp.io.logs.table import Channel, first_time_fault
 import numpy as np
 
 #: Delimiters that are awkward to type in a shell, by name.
@@ -218,12 +218,10 @@ class CsvTable:
 
     def _check_time(self, column: _Column) -> None:
         t = self.t
-        steps = np.diff(t)
-        bad = np.flatnonzero(steps <= 0.0)
-        if bad.size:
-            k = int(bad[0])
-            kind = 'repeats' if steps[k] == 0.0 else 'goes backwards from'
-            more = f' ({bad.size} such rows in all)' if bad.size > 1 else ''
+        fault = first_time_fault(t)
+        if fault is not None:
+            k = fault.index
+            more = f' ({fault.count} such rows in all)' if fault.count > 1 else ''
             raise DataError(f'{self.source}: row {self.data[k + 1][0]}, column {column.label}: '
-                            f'time {t[k + 1]:.9g} s {kind} {t[k]:.9g} s on row '
+                            f'time {t[k + 1]:.9g} s {fault.kind} {t[k]:.9g} s on row '
                             f'{self.data[k][0]}{more}')

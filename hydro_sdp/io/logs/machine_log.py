@@ -12,7 +12,7 @@ before the first sample); only differences of time matter.
 
 from __future__ import annotations
 
-from contextlib import contextmanager
+from contextlib import closing, contextmanager
 from dataclasses import dataclass
 import os
 from pathlib import Path
@@ -98,17 +98,11 @@ def open_table(path: str | os.PathLike[str], time: str | None, *, time_role: str
     """
     kind = log_kind(path)
     if kind == 'mdf':
-        mdf = MdfTable(path, time, time_role=time_role)
-        try:
+        with closing(MdfTable(path, time, time_role=time_role)) as mdf:
             yield mdf
-        finally:
-            mdf.close()
     elif kind == 'mat':
-        mat = MatTable(path, time, time_role=time_role)
-        try:
+        with closing(MatTable(path, time, time_role=time_role)) as mat:
             yield mat
-        finally:
-            mat.close()
     else:
         text = read_text(path, DataError, kind='a CSV file', byte_order_mark=True)
         yield CsvTable(text, time, delimiter=delimiter, source=str(path), header_row=header_row,

@@ -105,15 +105,47 @@ def check_channel(source: str, channel: Channel) -> Channel:
         if bad.size:
             raise DataError(f'{source}: {channel.label}: {bad.size} {what}s are NaN or infinite '
                             f'(first at sample {bad[0]})')
-    steps = np.diff(channel.t)
-    wrong = np.flatnonzero(steps <= 0.0)
-    if wrong.size:
-        k = int(wrong[0])
-        kind = 'repeats' if steps[k] == 0.0 else 'goes backwards from'
-        more = f' ({wrong.size} times in all)' if wrong.size > 1 else ''
+    fault = first_time_fault(channel.t)
+    if fault is not None:
+        k = fault.index
+        more = f' ({fault.count} times in all)' if fault.count > 1 else ''
         raise DataError(f'{source}: {channel.label}: time {channel.t[k + 1]:.12g} s at sample '
-                        f'{k + 1} {kind} {channel.t[k]:.12g} s{more}')
+                        f'{k + 1} {fault.kind} {channel.t[k]:.12g} s{more}')
     return channel
+
+
+@dataclass(frozen=True)
+class TimeFault:
+    """Where logged times first fail to increase: ``t[index + 1] <= t[index]``."""
+
+    index: int
+    kind: str
+    count: int
+
+
+def first_time_fault(t: FloatArray) -> TimeFault | None:
+    """
+    Find the first time that does not exceed the one before it.
+
+    Parameters
+    ----------
+    t : FloatArray
+        Logged times, s.
+
+    Returns
+    -------
+    TimeFault or None
+        Its index ``k`` (``t[k + 1] <= t[k]``), how it fails (``repeats`` or
+        ``goes backwards from``) and how many times fail in all; None if ``t``
+        increases strictly.
+
+    """
+    steps = np.diff(t)
+    wrong = np.flatnonzero(steps <= 0.0)
+    if not wrong.size:
+        return None
+    k = int(wrong[0])
+    return TimeFault(k, 'repeats' if steps[k] == 0.0 else 'goes backwards from', int(wrong.size))
 
 
 def nanoseconds(t: FloatArray, origin: float) -> IntArray:

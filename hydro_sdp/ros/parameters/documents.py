@@ -118,27 +118,49 @@ def _cell(text: str) -> str:
                     for index, part in enumerate(parts)) or '-'
 
 
+def unit_range_text(spec: ParameterSpec) -> str:
+    """Return the unit and the range or choices, comma-separated, or ''."""
+    return ', '.join(part for part in (spec.unit, range_text(spec)) if part)
+
+
+#: A column of a Markdown parameter table: its heading and its cell for a parameter.
+Column = tuple[str, Callable[[ParameterSpec], str]]
+
+#: The columns of docs/interfaces.md section 3.
+REFERENCE_COLUMNS: tuple[Column, ...] = (
+    ('parameter', lambda spec: f'`{spec.name}`'),
+    ('type', type_text),
+    ('default', lambda spec: _cell(default_text(spec))),
+    ('unit / range', lambda spec: _cell(unit_range_text(spec))),
+    ('run time', lambda spec: 'read-only' if spec.read_only else 'settable'),
+    ('meaning', lambda spec: _cell(spec.description)))
+
+#: The columns of the user guide.
+GUIDE_COLUMNS: tuple[Column, ...] = (
+    ('parameter', lambda spec: f'`{spec.name}`'),
+    ('default', lambda spec: _cell(default_text(spec))),
+    ('unit, range', lambda spec: _cell(unit_range_text(spec))),
+    ('set at run time', lambda spec: 'no' if spec.read_only else 'yes'),
+    ('what it sets', lambda spec: _cell(spec.description)))
+
+
+def markdown_table(table: ParameterTable, columns: tuple[Column, ...]) -> str:
+    """Return one node's parameters as a Markdown table, a row a parameter."""
+    lines = ['| ' + ' | '.join(heading for heading, _ in columns) + ' |',
+             '|' + '---|' * len(columns)]
+    lines += ['| ' + ' | '.join(cell(spec) for _, cell in columns) + ' |'
+              for spec in table.specs]
+    return '\n'.join(lines) + '\n'
+
+
 def reference_table(table: ParameterTable) -> str:
     """Return the Markdown table of docs/interfaces.md section 3 for one node."""
-    lines = ['| parameter | type | default | unit / range | run time | meaning |',
-             '|---|---|---|---|---|---|']
-    for spec in table.specs:
-        unit_range = ', '.join(part for part in (spec.unit, range_text(spec)) if part)
-        lines.append(f'| `{spec.name}` | {type_text(spec)} | {_cell(default_text(spec))} | '
-                     f"{_cell(unit_range)} | {'read-only' if spec.read_only else 'settable'} | "
-                     f'{_cell(spec.description)} |')
-    return '\n'.join(lines) + '\n'
+    return markdown_table(table, REFERENCE_COLUMNS)
 
 
 def guide_table(table: ParameterTable) -> str:
     """Return the Markdown table of the user guide for one node."""
-    lines = ['| parameter | default | unit, range | set at run time | what it sets |',
-             '|---|---|---|---|---|']
-    for spec in table.specs:
-        unit_range = ', '.join(part for part in (spec.unit, range_text(spec)) if part)
-        lines.append(f'| `{spec.name}` | {_cell(default_text(spec))} | {_cell(unit_range)} | '
-                     f"{'no' if spec.read_only else 'yes'} | {_cell(spec.description)} |")
-    return '\n'.join(lines) + '\n'
+    return markdown_table(table, GUIDE_COLUMNS)
 
 
 def params_file() -> str:

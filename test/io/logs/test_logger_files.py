@@ -5,10 +5,6 @@ MDF4 files are written by asammdf, MATLAB v5 by scipy and v7.3 (HDF5) by h5py; i
 on an import equals identify on the same data written as a bag.
 """
 
-from contextlib import redirect_stdout
-import io
-import json
-
 from asammdf import MDF, Signal
 import h5py
 from hydro_sdp.bags import read_bag, read_record, write_bag
@@ -19,16 +15,9 @@ from hydro_sdp.io.logs import read_machine_log, single_joint_spec
 import numpy as np
 import pytest
 from scipy.io import savemat
+from support.cli_runs import json_result
 
 COLUMNS = ['--joint', 'j2', '--angle', 'J2_ang', '--command', 'J2_cmd']
-
-
-def run(*argv):
-    """Run a command; return its exit code and, on success, its --json object."""
-    stdout = io.StringIO()
-    with redirect_stdout(stdout):
-        code = main([str(a) for a in argv] + ['--json'])
-    return code, (json.loads(stdout.getvalue()) if code == 0 else None)
 
 
 def logged(record):
@@ -109,8 +98,8 @@ def test_identify_on_an_import_equals_identify_on_the_bag(steps, direct, tmp_pat
         source = write_mat73(tmp_path / 'run.mat', {'t': t}, ('log', channels))
         options = ['--time', 't']
     angle, command = ('J2_ang', 'J2_cmd') if kind == 'mdf' else ('log.J2_ang', 'log.J2_cmd')
-    code, payload = run('import', source, '--out', tmp_path / 'bags', '--joint', 'j2',
-                        '--angle', angle, '--command', command, *options)
+    code, payload = json_result('import', source, '--out', tmp_path / 'bags', '--joint', 'j2',
+                                '--angle', angle, '--command', command, *options)
     assert code == 0
     assert payload['samples'] == [len(steps)] and payload['joints'] == ['j2']
     back = read_record(payload['bags'][0])
@@ -131,8 +120,8 @@ def test_channels_at_other_rates_hold_their_last_value(tmp_path):
         (pressure_t, {'Arm_P': pressure})])
     (tmp_path / 'machine.yaml').write_text(
         'joints:\n  arm: {angle: Arm_ang, command: Arm_duty}\nsignals:\n  arm/pressure: Arm_P\n')
-    code, payload = run('import', source, '--out', tmp_path / 'bags', '--signals',
-                        tmp_path / 'machine.yaml')
+    code, payload = json_result('import', source, '--out', tmp_path / 'bags', '--signals',
+                                tmp_path / 'machine.yaml')
     assert code == 0 and payload['signals'] == ['/arm/pressure']
     record = read_bag(payload['bags'][0]).record('arm', load_topic='/arm/pressure')
     # Independently: the command is the last one logged strictly before each sample (the
@@ -188,8 +177,8 @@ def test_a_whole_machine_in_one_bag(tmp_path):
     table = machine_table()
     savemat(tmp_path / 'run1.mat', {name: values[:, None] for name, values in table.items()})
     (tmp_path / 'machine.yaml').write_text(MACHINE)
-    code, payload = run('import', tmp_path / 'run1.mat', '--out', tmp_path / 'bags',
-                        '--signals', tmp_path / 'machine.yaml')
+    code, payload = json_result('import', tmp_path / 'run1.mat', '--out', tmp_path / 'bags',
+                                '--signals', tmp_path / 'machine.yaml')
     assert code == 0
     assert set(payload) >= {'bags', 'samples', 'joints', 'signals'}
     assert payload['joints'] == ['boom', 'arm'] and payload['signals'] == ['/boom/head_pressure']
