@@ -42,7 +42,7 @@ class LinearMap:
         """Angular velocity (deg/s) for steady commands ``v`` (:meth:`StaticMap.rate`)."""
         return self.gain * np.asarray(v, dtype=np.float64)
 
-    def to_mapping(self) -> dict[str, object]:
+    def to_mapping(self) -> dict[str, float | list[float]]:
         """Return the model-file keys of this map."""
         return {'gain': self.gain}
 

@@ -71,7 +71,7 @@ class PolyMap:
         positive = np.polynomial.polynomial.polyval(u, self.gain_positive)
         return u * np.where(u < 0.0, negative, positive)
 
-    def to_mapping(self) -> dict[str, object]:
+    def to_mapping(self) -> dict[str, float | list[float]]:
         """Return the model-file keys of this map."""
         return {'gain_negative': list(self.gain_negative),
                 'gain_positive': list(self.gain_positive),

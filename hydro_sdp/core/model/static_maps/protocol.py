@@ -52,7 +52,7 @@ class StaticMap(Protocol):
 
         """
 
-    def to_mapping(self) -> dict[str, object]:
+    def to_mapping(self) -> dict[str, float | list[float]]:
         """Return the model-file keys of this map."""
 
     @classmethod

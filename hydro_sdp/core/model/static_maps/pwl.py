@@ -59,7 +59,7 @@ class PwlMap:
         """Angular velocity (deg/s) for steady commands ``v`` (:meth:`StaticMap.rate`)."""
         return np.interp(np.asarray(v, dtype=np.float64), self.knots, self.speeds)
 
-    def to_mapping(self) -> dict[str, object]:
+    def to_mapping(self) -> dict[str, float | list[float]]:
         """Return the model-file keys of this map."""
         return {'knots': list(self.knots), 'speeds': list(self.speeds)}
 

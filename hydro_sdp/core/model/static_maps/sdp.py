@@ -99,7 +99,7 @@ class SdpMap:
         return replace(self, dead_zone=(self.dead_zone[0] + shift[0],
                                         self.dead_zone[1] + shift[1]))
 
-    def to_mapping(self) -> dict[str, object]:
+    def to_mapping(self) -> dict[str, float | list[float]]:
         """Return the model-file keys of this map."""
         return {
             'dead_zone': list(self.dead_zone),
