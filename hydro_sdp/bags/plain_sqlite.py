@@ -49,7 +49,7 @@ class PlainBag:
     files: list[dict[str, TopicRows]]
 
 
-def _qos(value: Any) -> str | None:
+def _qos(value: object) -> str | None:
     """Return comparable QoS text ('' for none), or None when it is not plain text."""
     if not value:
         return ''
@@ -57,6 +57,7 @@ def _qos(value: Any) -> str | None:
 
 
 def _metadata(folder: Path) -> dict[str, Any] | None:
+    # Walked on trust: read_plain turns any key or type that is not there into None.
     loader = getattr(yaml, 'CSafeLoader', yaml.SafeLoader)
     info = yaml.load((folder / 'metadata.yaml').read_text(), Loader=loader)
     info = info['rosbag2_bagfile_information']

@@ -19,15 +19,19 @@ from __future__ import annotations
 import gc
 from pathlib import Path
 import sqlite3
-from typing import Any, Sequence
+from typing import Sequence, TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from rosbags.interfaces import Connection
+    from rosbags.rosbag2 import Reader
 
 #: Rows of one topic: receive times (ns) and raw CDR messages, in reading order.
 TopicRows = tuple[list[int], list[bytes]]
 
 
-def matches(wanted: Any, stored: Any) -> bool:
+def matches(wanted: Connection, stored: Connection) -> bool:
     """
     Whether a storage file's connection feeds a wanted connection (rosbags' rule).
 
@@ -58,7 +62,7 @@ def open_immutable(path: Path) -> sqlite3.Connection:
     return sqlite3.connect(f'{path.resolve().as_uri()}?immutable=1', uri=True)
 
 
-def _storages(reader: Any) -> list[tuple[Path, list[Any]]] | None:
+def _storages(reader: Reader) -> list[tuple[Path, list[Connection]]] | None:
     """Return each sqlite3 storage file of an open reader with its connections, or None."""
     if reader.compression_mode:
         return None
@@ -115,7 +119,7 @@ def topic_rows(connection: sqlite3.Connection, topic_ids: Sequence[int]) -> Topi
     return stamps, raws
 
 
-def read_rows(reader: Any, wanted: Sequence[Any]) -> list[dict[str, TopicRows]] | None:
+def read_rows(reader: Reader, wanted: Sequence[Connection]) -> list[dict[str, TopicRows]] | None:
     """
     Read the messages of the wanted connections of an open sqlite3 bag, a query per topic.
 

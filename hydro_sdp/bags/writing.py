@@ -14,7 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 import os
 from pathlib import Path
-from typing import Any, Mapping, Sequence
+from typing import Mapping, Sequence, TYPE_CHECKING
 
 from hydro_sdp.bags.cdr import encode_float64, encode_joint_states
 from hydro_sdp.bags.storage import FLOAT64, JOINT_STATE, STORAGES
@@ -24,6 +24,9 @@ from hydro_sdp.core.model.records import Record
 from hydro_sdp.core.model.timing import command_stamps_for
 from hydro_sdp.io.atomic import atomic_directory
 import numpy as np
+
+if TYPE_CHECKING:
+    from rosbags.typesys.store import Typestore
 
 
 @dataclass(frozen=True, eq=False)
@@ -202,7 +205,7 @@ def write_bag(path: str | os.PathLike[str], records: Sequence[Record], *,
     return write_topics(path, stamps + start, names, positions, floats, storage=storage)
 
 
-def _joint_state_template(typestore: Any, names: Sequence[str]) -> bytes:
+def _joint_state_template(typestore: Typestore, names: Sequence[str]) -> bytes:
     types = typestore.types
     message = types[JOINT_STATE](
         header=types['std_msgs/msg/Header'](

@@ -6,12 +6,12 @@ import argparse
 from dataclasses import replace
 import math
 from pathlib import Path
-from typing import Any, TYPE_CHECKING
+from typing import TYPE_CHECKING
 
 from hydro_sdp.bags import STORAGE_SUFFIXES
 from hydro_sdp.cli.common import (
-    add_bag_options, finite_float, json_number, Outcome, positive_float, read_bag_records,
-    row_number, table)
+    add_bag_options, finite_float, json_number, Outcome, Payload, positive_float,
+    read_bag_records, row_number, table)
 from hydro_sdp.cli.design import complex_pole
 from hydro_sdp.cli.progress import ProgressBar
 from hydro_sdp.core.errors import ConfigurationError
@@ -24,6 +24,10 @@ import yaml
 
 if TYPE_CHECKING:
     from hydro_sdp.core.calibration import CalibrationResult
+    from hydro_sdp.ros.parameters.spec import ParameterValue
+
+    #: A ROS 2 parameter file: node pattern, ``ros__parameters``, name and value.
+    ParameterFile = dict[str, dict[str, dict[str, ParameterValue]]]
 
 HELP = 'identify, diagnose, design and check a joint in one go, with a report'
 DESCRIPTION = """\
@@ -193,7 +197,7 @@ def check_out(out: Path, force: bool) -> None:
         raise ConfigurationError(f'{out} exists and is not empty; use --force to replace it')
 
 
-def ros_parameters(result: CalibrationResult, folder: Path) -> dict[str, Any]:
+def ros_parameters(result: CalibrationResult, folder: Path) -> ParameterFile:
     """
     Return the ROS 2 parameter file for this joint's nodes.
 
@@ -213,8 +217,8 @@ def ros_parameters(result: CalibrationResult, folder: Path) -> dict[str, Any]:
     """
     model_file = str(folder / 'model.yaml')
     dt = result.identification.sample_period
-    plant: dict[str, Any] = {'model_file': model_file}
-    identifier: dict[str, Any] = {'model_file': model_file}
+    plant: dict[str, ParameterValue] = {'model_file': model_file}
+    identifier: dict[str, ParameterValue] = {'model_file': model_file}
     if not math.isclose(dt, 0.01):
         plant['sample_period'] = identifier['sample_period'] = dt
     noise = result.identification.segmentation.noise_std
@@ -222,7 +226,7 @@ def ros_parameters(result: CalibrationResult, folder: Path) -> dict[str, Any]:
         identifier['noise_std'] = float(f'{noise:.3g}')
     if not math.isclose(result.spec.control_period, 0.05):
         identifier['control_period'] = result.spec.control_period
-    parameters = {
+    parameters: ParameterFile = {
         '/**/pip_controller': {'ros__parameters': {
             'model_file': model_file, 'controller_file': str(folder / 'controller.yaml')}},
         '/**/hydro_plant': {'ros__parameters': plant}}
@@ -231,7 +235,7 @@ def ros_parameters(result: CalibrationResult, folder: Path) -> dict[str, Any]:
     return parameters
 
 
-def describe(result: CalibrationResult, folder: Path) -> dict[str, Any]:
+def describe(result: CalibrationResult, folder: Path) -> Payload:
     """Return the ``--json`` object of a calibration written to ``folder``."""
     check = result.check
     warnings = list(result.warnings)

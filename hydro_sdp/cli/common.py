@@ -13,9 +13,16 @@ from __future__ import annotations
 import argparse
 from dataclasses import dataclass, field
 import math
-from typing import Any
+from typing import Any, Union
 
 import numpy as np
+
+#: What ``json`` writes: null, booleans, numbers, text, and lists and objects of them.
+Json = Union[None, bool, int, float, str, list['Json'], dict[str, 'Json']]
+#: A command's ``--json`` object as the command builds it: any value :func:`to_json`
+#: turns into JSON (numpy numbers and arrays, tuples and paths too), keys the command
+#: may read back for its text report.
+Payload = dict[str, Any]
 
 
 @dataclass
@@ -25,14 +32,14 @@ class Outcome:
 
     Parameters
     ----------
-    payload : dict
+    payload : Payload
         The ``--json`` object.
     lines : list of str
         Human-readable report, one entry per line.
 
     """
 
-    payload: dict[str, Any]
+    payload: Payload
     lines: list[str] = field(default_factory=list)
 
 
@@ -79,7 +86,7 @@ def finite_float(text: str) -> float:
     return value
 
 
-def to_json(value: Any) -> Any:
+def to_json(value: object) -> Json:
     """Convert numpy scalars, arrays, tuples and paths into JSON-ready values."""
     if isinstance(value, dict):
         return {str(key): to_json(item) for key, item in value.items()}

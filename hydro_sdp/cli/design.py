@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import argparse
 
-from hydro_sdp.cli.common import finite_float, non_negative_float, Outcome, positive_float, table
+from hydro_sdp.cli.common import (
+    finite_float, non_negative_float, Outcome, Payload, positive_float, table)
 from hydro_sdp.core.control.controller_spec import ControllerSpec, design_from_model, format_pole
 from hydro_sdp.core.control.idz import IDZ_MODES
 from hydro_sdp.core.control.idz_design import chord_idz, IDZ_FORMS
@@ -97,7 +98,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.set_defaults(run=run)
 
 
-def describe(spec: ControllerSpec) -> dict:
+def describe(spec: ControllerSpec) -> Payload:
     """Return the ``--json`` keys of a controller."""
     idz = spec.idz
     return {

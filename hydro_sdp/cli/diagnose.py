@@ -6,9 +6,10 @@ import argparse
 from dataclasses import replace
 from pathlib import Path
 import textwrap
-from typing import Any, TYPE_CHECKING
+from typing import TYPE_CHECKING
 
-from hydro_sdp.cli.common import add_bag_options, json_number, Outcome, read_records, table
+from hydro_sdp.cli.common import (
+    add_bag_options, json_number, Outcome, Payload, read_records, table)
 from hydro_sdp.cli.progress import ProgressBar
 from hydro_sdp.io.model_files import load_model, save_model
 
@@ -89,7 +90,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.set_defaults(run=run)
 
 
-def describe(result: Diagnosis) -> dict[str, Any]:
+def describe(result: Diagnosis) -> Payload:
     """Return the ``--json`` object of a diagnosis."""
     return {
         'effect': result.effect,
@@ -169,7 +170,7 @@ def run(args: argparse.Namespace) -> Outcome:
     return Outcome(payload, lines)
 
 
-def _short(value: Any) -> str:
+def _short(value: object) -> str:
     if isinstance(value, float):
         return f'{value:.4g}'
     if isinstance(value, list):

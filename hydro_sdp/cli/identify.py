@@ -6,10 +6,10 @@ import argparse
 from dataclasses import replace
 import math
 from pathlib import Path
-from typing import Any, Iterator, TYPE_CHECKING
+from typing import Iterator, TYPE_CHECKING
 
 from hydro_sdp.cli.common import (
-    add_bag_options, finite_float, json_number, Outcome, pieces_note, positive_float,
+    add_bag_options, finite_float, json_number, Outcome, Payload, pieces_note, positive_float,
     read_records_and_topic, table)
 from hydro_sdp.cli.progress import ProgressBar
 from hydro_sdp.core.model.joint_model import JointModel
@@ -93,7 +93,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.set_defaults(run=run)
 
 
-def describe(result: Identification) -> dict:
+def describe(result: Identification) -> Payload:
     """Return the ``--json`` object of an identification."""
     segmentation = result.segmentation
     payload = result.model.to_mapping()
@@ -273,7 +273,7 @@ def _command_range(result: Identification) -> tuple[float, float]:
     return min(levels) - 0.1 * span, max(levels) + 0.1 * span
 
 
-def _parameter_rows(model: JointModel) -> Iterator[tuple[str, Any, str]]:
+def _parameter_rows(model: JointModel) -> Iterator[tuple[str, float, str]]:
     mapping = model.static_map.to_mapping()
     for key, value in mapping.items():
         if isinstance(value, list):

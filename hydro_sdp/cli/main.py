@@ -24,7 +24,8 @@ import signal
 import sys
 import threading
 import traceback
-from typing import Any
+from types import FrameType
+from typing import Any, Callable
 
 from hydro_sdp import __version__
 
@@ -117,7 +118,7 @@ class _Interrupts:
 
     def __init__(self) -> None:
         self.seen = False
-        self._previous: Any = None
+        self._previous: Callable[[int, FrameType | None], object] | int | None = None
 
     def __enter__(self) -> _Interrupts:
         if threading.current_thread() is threading.main_thread() and \

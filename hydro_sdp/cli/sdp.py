@@ -5,10 +5,11 @@ from __future__ import annotations
 import argparse
 import math
 from pathlib import Path
-from typing import Any, TYPE_CHECKING
+from typing import Iterable, TYPE_CHECKING
 
 from hydro_sdp.cli.common import (
-    add_bag_options, json_number, Outcome, pieces_note, positive_float, read_records, table)
+    add_bag_options, json_number, Outcome, Payload, pieces_note, positive_float, read_records,
+    table)
 from hydro_sdp.cli.progress import ProgressBar
 
 if TYPE_CHECKING:
@@ -104,7 +105,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.set_defaults(run=run)
 
 
-def _entry(entry: StateDependence) -> dict[str, Any]:
+def _entry(entry: StateDependence) -> dict[str, object]:
     grid, estimate, se = entry.grid()
     return {'state': entry.state, 'direction': entry.direction, 'parameter': entry.parameter,
             'share': entry.share, 'nvr': entry.nvr, 'significant': bool(entry.significant),
@@ -113,7 +114,7 @@ def _entry(entry: StateDependence) -> dict[str, Any]:
             'given': entry.given}
 
 
-def describe(analysis: SdpAnalysis) -> dict[str, Any]:
+def describe(analysis: SdpAnalysis) -> Payload:
     """Return the ``--json`` object of an analysis (docs/interfaces.md)."""
     a1 = analysis.a1
     return {
@@ -180,7 +181,7 @@ def _plots(analysis: SdpAnalysis, folder: Path) -> list[str]:
 
 
 def _lines(analysis: SdpAnalysis, skipped: list[tuple[str, str]],
-           payload: dict[str, Any]) -> list[str]:
+           payload: Payload) -> list[str]:
     what = ('SDP-ARX model y_k = -a1 y_{k-1} + b (v_{k-tau} - rest)' if analysis.target == 'arx'
             else 'measured / model increment (ratio) and increment residual')
     lines = [f'{what}: {analysis.samples} samples, delay {analysis.delay} samples '
@@ -205,7 +206,7 @@ def _lines(analysis: SdpAnalysis, skipped: list[tuple[str, str]],
     return lines
 
 
-def _table(entries: Any, what: str) -> list[str]:
+def _table(entries: Iterable[StateDependence], what: str) -> list[str]:
     rows = [[e.state, e.direction, f'{100 * e.share:.1f}', f'{e.nvr:.3g}',
              '-' if not math.isfinite(e.p_value) else f'{e.p_value:.3f}',
              'yes' if e.significant else 'no',

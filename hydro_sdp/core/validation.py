@@ -11,18 +11,20 @@ from __future__ import annotations
 
 from collections.abc import Collection, Mapping
 import math
-from typing import Any
 
 from hydro_sdp.core.errors import ConfigurationError, ModelFileError
 
+#: A mapping read from a YAML or JSON file: string keys, values not yet checked.
+Document = Mapping[str, object]
 
-def require_float(value: Any, key: str) -> float:
+
+def require_float(value: object, key: str) -> float:
     """
     Return ``value`` as a finite float, or raise naming ``key``.
 
     Parameters
     ----------
-    value : Any
+    value : object
         Value read from the file.
     key : str
         Dotted key name used in the error message.
@@ -42,13 +44,13 @@ def require_float(value: Any, key: str) -> float:
     return number
 
 
-def require_pair(value: Any, key: str) -> tuple[float, float]:
+def require_pair(value: object, key: str) -> tuple[float, float]:
     """
     Return ``value`` as a pair of finite floats, or raise naming ``key``.
 
     Parameters
     ----------
-    value : Any
+    value : object
         Value read from the file; a two-element list.
     key : str
         Key name used in the error message.
@@ -65,13 +67,13 @@ def require_pair(value: Any, key: str) -> tuple[float, float]:
     return (require_float(value[0], f'{key}[0]'), require_float(value[1], f'{key}[1]'))
 
 
-def require_ordered_pair(value: Any, key: str, *, strict: bool = True) -> tuple[float, float]:
+def require_ordered_pair(value: object, key: str, *, strict: bool = True) -> tuple[float, float]:
     """
     Return a pair whose first element is below (or at most, if not strict) the second.
 
     Parameters
     ----------
-    value : Any
+    value : object
         Value read from the file.
     key : str
         Key name used in the error message.
@@ -92,13 +94,13 @@ def require_ordered_pair(value: Any, key: str, *, strict: bool = True) -> tuple[
     return low, high
 
 
-def require_float_list(value: Any, key: str) -> tuple[float, ...]:
+def require_float_list(value: object, key: str) -> tuple[float, ...]:
     """
     Return ``value`` as a tuple of finite floats, or raise naming ``key``.
 
     Parameters
     ----------
-    value : Any
+    value : object
         Value read from the file; a list of numbers.
     key : str
         Key name used in the error message.
@@ -114,14 +116,14 @@ def require_float_list(value: Any, key: str) -> tuple[float, ...]:
     return tuple(require_float(item, f'{key}[{i}]') for i, item in enumerate(value))
 
 
-def read_document(data: Any, what: str, file_format: str, known: Collection[str],
-                  required: Collection[str] = ()) -> Mapping[str, Any]:
+def read_document(data: object, what: str, file_format: str, known: Collection[str],
+                  required: Collection[str] = ()) -> Document:
     """
     Return a parsed file as a mapping with known keys, the required ones and the right format.
 
     Parameters
     ----------
-    data : Any
+    data : object
         The parsed YAML document.
     what : str
         What the file is, for the message, e.g. ``'a model file'``.
@@ -135,7 +137,7 @@ def read_document(data: Any, what: str, file_format: str, known: Collection[str]
 
     Returns
     -------
-    Mapping[str, Any]
+    Document
         The document, now known to be a mapping of the file's keys.
 
     """
@@ -148,15 +150,15 @@ def read_document(data: Any, what: str, file_format: str, known: Collection[str]
     return data
 
 
-def require_mapping(value: Any, where: str, known: Collection[str],
+def require_mapping(value: object, where: str, known: Collection[str],
                     required: Collection[str] = (), *,
-                    expected: str = 'a mapping of keys') -> Mapping[str, Any]:
+                    expected: str = 'a mapping of keys') -> Document:
     """
     Return a nested ``value`` as a mapping with known keys and the required ones.
 
     Parameters
     ----------
-    value : Any
+    value : object
         Value read from the file.
     where : str
         Dotted key name of ``value``, e.g. ``'links[0]'``.
@@ -167,7 +169,7 @@ def require_mapping(value: Any, where: str, known: Collection[str],
 
     Returns
     -------
-    Mapping[str, Any]
+    Document
         ``value``.
 
     """
@@ -177,7 +179,7 @@ def require_mapping(value: Any, where: str, known: Collection[str],
     return value
 
 
-def _check_keys(data: Mapping[Any, Any], known: Collection[str], required: Collection[str],
+def _check_keys(data: Collection[object], known: Collection[str], required: Collection[str],
                 where: str = '') -> None:
     """Refuse a key not in ``known``, then a missing ``required`` one; ``where`` names ``data``."""
     for key in data:
@@ -188,19 +190,19 @@ def _check_keys(data: Mapping[Any, Any], known: Collection[str], required: Colle
             raise ModelFileError(f'missing required key {_key_name(key, where)}')
 
 
-def _key_name(key: Any, where: str) -> str:
+def _key_name(key: object, where: str) -> str:
     # Top-level keys are quoted, nested ones are written as a dotted path.
     return f'{where}.{key}' if where else repr(key)
 
 
-def require_positive_fields(settings: Any, names: Collection[str], *,
+def require_positive_fields(settings: object, names: Collection[str], *,
                             zero_allowed: bool = False) -> None:
     """
     Refuse a field of ``settings`` that is not a finite number above 0 (or at least 0).
 
     Parameters
     ----------
-    settings : Any
+    settings : object
         The settings object, e.g. a frozen dataclass in its ``__post_init__``.
     names : collection of str
         The fields to check, in the order they are reported.
@@ -220,7 +222,7 @@ def require_positive_fields(settings: Any, names: Collection[str], *,
             raise ConfigurationError(f'{name} must be {rule}, got {value}')
 
 
-def _describe(value: Any) -> str:
+def _describe(value: object) -> str:
     text = repr(value)
     if len(text) > 40:
         text = text[:37] + '...'

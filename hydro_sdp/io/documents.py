@@ -4,13 +4,16 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
-from typing import Any, Callable, Mapping
+from typing import Callable, Mapping, TypeVar
 
 from hydro_sdp.core.errors import HydroSdpError, ModelFileError
 import yaml
 
 #: Where the package's shipped files live in the source tree.
 SOURCE_CONFIG = Path(__file__).resolve().parent.parent.parent / 'config'
+
+#: What a document's builder makes (a model, a controller, a machine).
+Built = TypeVar('Built')
 
 
 def read_text(path: str | os.PathLike[str], error: type[HydroSdpError] = ModelFileError, *,
@@ -54,7 +57,7 @@ def read_text(path: str | os.PathLike[str], error: type[HydroSdpError] = ModelFi
         raise error(f'{source}: cannot read: {failure}') from None
 
 
-def load_yaml(path: str | os.PathLike[str]) -> Any:
+def load_yaml(path: str | os.PathLike[str]) -> object:
     """
     Read a YAML document with safe loading.
 
@@ -65,8 +68,9 @@ def load_yaml(path: str | os.PathLike[str]) -> Any:
 
     Returns
     -------
-    Any
-        The parsed document.
+    object
+        The parsed document, for a validator to check (mappings, lists, strings,
+        numbers, booleans or None).
 
     Raises
     ------
@@ -86,7 +90,7 @@ def load_yaml(path: str | os.PathLike[str]) -> Any:
         raise ModelFileError(f'{source}: not valid YAML{where}') from None
 
 
-def load_document(path: str | os.PathLike[str], build: Callable[[Any], Any]) -> Any:
+def load_document(path: str | os.PathLike[str], build: Callable[[object], Built]) -> Built:
     """Read a YAML file and build an object from it; the builder's errors name the file."""
     data = load_yaml(path)
     try:
@@ -95,7 +99,7 @@ def load_document(path: str | os.PathLike[str], build: Callable[[Any], Any]) -> 
         raise ModelFileError(f'{path}: {error}') from None
 
 
-def yaml_text(data: Mapping[str, Any]) -> str:
+def yaml_text(data: Mapping[str, object]) -> str:
     """YAML text of a model or controller file: keys in their order, lists inline."""
     return yaml.safe_dump(data, sort_keys=False, default_flow_style=None)
 

@@ -27,12 +27,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 import os
 from pathlib import Path
-from typing import Any, Mapping
 
 from hydro_sdp.core.control.kinematics import line_trajectory, TwoLinkArm
 from hydro_sdp.core.control.trajectory import JointTrajectory
 from hydro_sdp.core.errors import DataError, ModelFileError
-from hydro_sdp.core.validation import read_document, require_float, require_mapping, require_pair
+from hydro_sdp.core.validation import (
+    Document, read_document, require_float, require_mapping, require_pair)
 from hydro_sdp.io.documents import load_yaml, shipped_config
 import numpy as np
 
@@ -146,7 +146,7 @@ def _from_csv(source: Path) -> JointTrajectory:
     return JointTrajectory(tuple(header[1:]), np.array(times), np.array(positions))
 
 
-def _from_yaml(source: Path, data: Any,
+def _from_yaml(source: Path, data: object,
                kinematics: str | os.PathLike[str] | None) -> TrajectoryFile:
     data = read_document(data, 'a trajectory file', TRAJECTORY_FORMAT,
                          known=('format', 'joint_names', 'points', 'kinematics', 'line'))
@@ -179,14 +179,14 @@ def _from_yaml(source: Path, data: Any,
                                           np.array(velocities) if velocities else None))
 
 
-def _numbers(value: Any, key: str, count: int) -> list[float]:
+def _numbers(value: object, key: str, count: int) -> list[float]:
     if not isinstance(value, list) or len(value) != count:
         raise ModelFileError(f'key {key!r}: expected a list of {count} numbers '
                              '(one per joint)')
     return [require_float(item, f'{key}[{i}]') for i, item in enumerate(value)]
 
 
-def _line(source: Path, data: Mapping[str, Any],
+def _line(source: Path, data: Document,
           kinematics: str | os.PathLike[str] | None) -> TrajectoryFile:
     line = require_mapping(data['line'], 'line',
                            ('start', 'end', 'speed', 'duration', 'point_period', 'elbow'),

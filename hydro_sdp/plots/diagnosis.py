@@ -200,6 +200,8 @@ def plot_record_scales(candidate: Candidate) -> Figure | None:
     for offset, name, colour in ((-0.1, 'positive', MEASURED), (0.1, 'negative', MODEL)):
         scales = candidate.parameters[f'scales_{name}']
         errors = candidate.parameters[f'errors_{name}']
+        if not isinstance(scales, list) or not isinstance(errors, list):
+            continue
         shown = [(i, s, e) for i, (s, e) in enumerate(zip(scales, errors))
                  if s is not None and e is not None]
         if shown:

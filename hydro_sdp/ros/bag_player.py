@@ -14,14 +14,16 @@ from __future__ import annotations
 
 from pathlib import Path
 import time
-from typing import Any
+from typing import Unpack
 
 from hydro_sdp.bags import EmptyBagError, FLOAT64, JOINT_STATE, raw_messages
 from hydro_sdp.ros.conversions import fill_stamp
+from hydro_sdp.ros.node_options import NodeOptions
 from hydro_sdp.ros.parameters.node_parameters import NodeParameters
 from hydro_sdp.ros.parameters.player import PLAYER_PARAMETERS
 from hydro_sdp.ros.runner import run_node
 from rclpy.node import Node
+from rclpy.publisher import Publisher
 from rosgraph_msgs.msg import Clock  # type: ignore[import-untyped, unused-ignore]
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64
@@ -37,12 +39,12 @@ class BagPlayerNode(Node):
     ----------
     node_name : str
         ROS node name.
-    **kwargs : Any
+    **kwargs : NodeOptions
         Forwarded to :class:`rclpy.node.Node`.
 
     """
 
-    def __init__(self, *, node_name: str = 'bag_player', **kwargs: Any) -> None:
+    def __init__(self, *, node_name: str = 'bag_player', **kwargs: Unpack[NodeOptions]) -> None:
         super().__init__(node_name, **kwargs)
         self.parameters = NodeParameters(self, PLAYER_PARAMETERS)
         self.parameters.declare()      # refuses a missing bag
@@ -58,7 +60,7 @@ class BagPlayerNode(Node):
             raise EmptyBagError(f'{bag}: no JointState or Float64 messages to play')
         messages.sort(key=lambda m: m[2])
         self._messages = messages
-        self._topic_pubs: dict[str, Any] = {}
+        self._topic_pubs: dict[str, Publisher] = {}
         for topic, msgtype, _, _ in messages:
             if topic not in self._topic_pubs:
                 # Bag topics are absolute; drop the slash so a namespace still applies.

@@ -21,13 +21,15 @@ from __future__ import annotations
 import importlib
 import sys
 import time
-from typing import Any, Callable, Mapping
+from typing import Callable, Mapping, Unpack
 
 from hydro_sdp.bags.live_writer import Sqlite3BagWriter
+from hydro_sdp.ros.node_options import NodeOptions
 from hydro_sdp.ros.parameters.node_parameters import NodeParameters
 from hydro_sdp.ros.parameters.recorder import RECORDER_PARAMETERS
 from hydro_sdp.ros.runner import run_node
 from rclpy.clock import Clock, ClockType
+from rclpy.duration import Duration
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.topic_endpoint_info import TopicEndpointInfo
@@ -37,7 +39,7 @@ from rclpy.topic_endpoint_info import TopicEndpointInfo
 LATE_LIMIT = 1_000_000_000
 
 
-def message_class(msgtype: str) -> Any:
+def message_class(msgtype: str) -> type:
     """
     Import the Python class of a ROS message type.
 
@@ -61,7 +63,7 @@ def message_class(msgtype: str) -> Any:
     return getattr(importlib.import_module(f'{package}.{kind}'), name)
 
 
-def _seconds(duration: Any) -> dict[str, int]:
+def _seconds(duration: Duration) -> dict[str, int]:
     sec, nsec = divmod(int(duration.nanoseconds), 1_000_000_000)
     return {'sec': sec, 'nsec': nsec}
 
@@ -88,12 +90,12 @@ class BagRecorderNode(Node):
     ----------
     node_name : str
         ROS node name.
-    **kwargs : Any
+    **kwargs : NodeOptions
         Forwarded to :class:`rclpy.node.Node`.
 
     """
 
-    def __init__(self, *, node_name: str = 'bag_recorder', **kwargs: Any) -> None:
+    def __init__(self, *, node_name: str = 'bag_recorder', **kwargs: Unpack[NodeOptions]) -> None:
         super().__init__(node_name, **kwargs)
         self.parameters = NodeParameters(self, RECORDER_PARAMETERS)
         self.parameters.declare()      # refuses a missing output, a storage not sqlite3

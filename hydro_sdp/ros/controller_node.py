@@ -56,7 +56,7 @@ applied and applied in the post-set callback.
 from __future__ import annotations
 
 import math
-from typing import Any, Sequence
+from typing import Sequence, Unpack
 
 from hydro_sdp.core.control.health import HealthStatus, joint_health
 from hydro_sdp.core.control.safety import clamp_setpoint, setpoint_range
@@ -69,6 +69,7 @@ from hydro_sdp.ros.conversions import fill_controller_state, position_of
 from hydro_sdp.ros.diagnostics import DiagnosticsReporter
 from hydro_sdp.ros.first_joint import first_joint
 from hydro_sdp.ros.joint_loop import JointLoop
+from hydro_sdp.ros.node_options import NodeOptions
 from hydro_sdp.ros.parameters.controller import CONTROLLER_PARAMETERS
 from hydro_sdp.ros.parameters.node_parameters import NodeParameters, ParameterRequest
 from hydro_sdp.ros.runner import run_node
@@ -89,7 +90,7 @@ class PipControllerNode(LifecycleNode):
     ----------
     node_name : str
         ROS node name.
-    **kwargs : Any
+    **kwargs : NodeOptions
         Forwarded to :class:`rclpy.lifecycle.LifecycleNode` (``context``...).
 
     """
@@ -99,7 +100,8 @@ class PipControllerNode(LifecycleNode):
     setpoint_margin: float
     feedforward: bool
 
-    def __init__(self, *, node_name: str = 'pip_controller', **kwargs: Any) -> None:
+    def __init__(self, *, node_name: str = 'pip_controller',
+                 **kwargs: Unpack[NodeOptions]) -> None:
         LifecycleNode.__init__(self, node_name, **kwargs)
         self.loops: list[JointLoop] = []
         self.active = False

@@ -1,7 +1,6 @@
 """The one-joint names of the multi-joint nodes: attributes of their first joint."""
 
 from operator import attrgetter
-from typing import Any
 
 
 def first_joint(joints: str, path: str, doc: str, *, settable: bool = False) -> property:
@@ -28,10 +27,10 @@ def first_joint(joints: str, path: str, doc: str, *, settable: bool = False) -> 
     """
     read = attrgetter(path)
 
-    def get(node: Any) -> Any:
+    def get(node: object) -> object:
         return read(getattr(node, joints)[0])
 
-    def put(node: Any, value: Any) -> None:
+    def put(node: object, value: object) -> None:
         setattr(getattr(node, joints)[0], path, value)
 
     return property(get, put if settable else None, doc=doc)

@@ -32,7 +32,7 @@ from __future__ import annotations
 from dataclasses import replace
 from functools import partial
 import math
-from typing import Any
+from typing import Unpack
 
 from hydro_sdp.core.control.health import HealthStatus, joint_health
 from hydro_sdp.core.control.idz import InverseDeadZone
@@ -46,6 +46,7 @@ from hydro_sdp.ros import conversions, qos
 from hydro_sdp.ros.diagnostics import DiagnosticsReporter
 from hydro_sdp.ros.first_joint import first_joint
 from hydro_sdp.ros.identifier_joint import double_array, estimate_topics, IdentifiedJoint
+from hydro_sdp.ros.node_options import NodeOptions
 from hydro_sdp.ros.parameters.identifier import IDENTIFIER_PARAMETERS, POLICY_PARAMETERS
 from hydro_sdp.ros.parameters.node_parameters import NodeParameters, ParameterRequest
 from hydro_sdp.ros.runner import run_node
@@ -66,7 +67,7 @@ class IdentifierNode(Node):
     ----------
     node_name : str
         ROS node name.
-    **kwargs : Any
+    **kwargs : NodeOptions
         Forwarded to :class:`rclpy.node.Node` (``context``, ``parameter_overrides``...).
 
     """
@@ -75,7 +76,8 @@ class IdentifierNode(Node):
     publish_period: float
     auto_recalibrate: bool
 
-    def __init__(self, *, node_name: str = 'sdp_identifier', **kwargs: Any) -> None:
+    def __init__(self, *, node_name: str = 'sdp_identifier',
+                 **kwargs: Unpack[NodeOptions]) -> None:
         super().__init__(node_name, **kwargs)
         self.samples = self.commands_received = 0
         self.parameters = NodeParameters(

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 from functools import partial
 import math
-from typing import Any
+from typing import Unpack
 
 from hydro_sdp.core.errors import ConfigurationError
 from hydro_sdp.core.model.simulation import JointSimulator
@@ -32,6 +32,7 @@ from hydro_sdp.core.model.static_maps import shifted_map, StaticMap
 from hydro_sdp.core.synthetic.programs import start_angle
 from hydro_sdp.io.model_files import default_model_path, load_model
 from hydro_sdp.ros import conversions, qos
+from hydro_sdp.ros.node_options import NodeOptions
 from hydro_sdp.ros.parameters.node_parameters import NodeParameters, ParameterRequest
 from hydro_sdp.ros.parameters.plant import PLANT_PARAMETERS
 from hydro_sdp.ros.runner import run_node
@@ -49,12 +50,12 @@ class PlantNode(Node):
     ----------
     node_name : str
         ROS node name.
-    **kwargs : Any
+    **kwargs : NodeOptions
         Forwarded to :class:`rclpy.node.Node` (``context``, ``parameter_overrides``...).
 
     """
 
-    def __init__(self, *, node_name: str = 'hydro_plant', **kwargs: Any) -> None:
+    def __init__(self, *, node_name: str = 'hydro_plant', **kwargs: Unpack[NodeOptions]) -> None:
         super().__init__(node_name, **kwargs)
         self.parameters = NodeParameters(
             self, PLANT_PARAMETERS, check=self._check_request,

@@ -24,7 +24,7 @@ from __future__ import annotations
 import signal
 import sys
 from types import FrameType
-from typing import Any, Callable
+from typing import Callable, Union
 
 from hydro_sdp.core.errors import HydroSdpError
 import rclpy
@@ -35,6 +35,8 @@ from rclpy.signals import install_signal_handlers, SignalHandlerOptions, uninsta
 
 #: Longest wait of the executor before it checks for a stop, s (bounds the exit time).
 WAKE_PERIOD = 0.1
+#: What ``signal.signal`` installs and returns: a handler, SIG_DFL or SIG_IGN, or None.
+SignalHandler = Union[Callable[[int, FrameType | None], object], int, None]
 
 _CONFIGURATION_ERRORS = (HydroSdpError, OSError, ParameterException, NameValidationException)
 
@@ -90,7 +92,7 @@ def run_node(node_cls: Callable[[], Node], args: list[str] | None = None) -> Non
     """
     stop = _Stop()
     # Installed before rclpy.init, whose own handlers call the ones they replace.
-    previous: dict[int, Any] = {
+    previous: dict[int, SignalHandler] = {
         signum: signal.signal(signum, stop) for signum in (signal.SIGINT, signal.SIGTERM)}
     node: Node | None = None
     executor: SingleThreadedExecutor | None = None

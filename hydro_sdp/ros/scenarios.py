@@ -10,10 +10,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 import math
-from typing import Any, Mapping, Sequence
+from typing import Mapping, Sequence
 
 from hydro_sdp.ros.controller_node import PipControllerNode
 from hydro_sdp.ros.identifier_node import IdentifierNode
+from hydro_sdp.ros.parameters.spec import ParameterValue
 from hydro_sdp.ros.plant_node import PlantNode
 from hydro_sdp.ros.testing import Lockstep, RosHarness
 import numpy as np
@@ -65,7 +66,7 @@ def wear_and_recalibration(*, holds: int = 20, steps: int = 400, drift_at: int =
                            shift: Sequence[float] = (0.3, -0.3), seed: int = 1,
                            levels: Sequence[float] = (20.0, 35.0, 15.0, 30.0),
                            noise_std: float = 0.01,
-                           identifier: Mapping[str, Any] | None = None) -> WearRun:
+                           identifier: Mapping[str, ParameterValue] | None = None) -> WearRun:
     """
     Track set-points while the plant's dead-zone moves; the identifier recalibrates.
 

@@ -26,19 +26,87 @@ from __future__ import annotations
 import os
 import random
 import time
-from typing import Any, Callable, cast, Iterable
+from typing import Callable, cast, Iterable, Mapping, Protocol, TypeVar, Union
 
+from hydro_sdp.ros.parameters.spec import ParameterValue
+from rcl_interfaces.msg import Parameter as ParameterMessage, SetParametersResult
 from rcl_interfaces.srv import GetParameters, SetParameters, SetParametersAtomically
 import rclpy
 from rclpy.clock import ROSClock
 from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
+from rclpy.lifecycle import LifecycleNode
 from rclpy.node import Node
 from rclpy.parameter import Parameter, parameter_value_to_python
+from rclpy.publisher import Publisher
 from rclpy.time import Time
 
 # Nodes of one context still match with discovery off; nothing else on the host is seen.
 os.environ.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'OFF')
+
+#: The node class a harness makes, and so the node it returns.
+NodeT = TypeVar('NodeT', bound=Node)
+#: The answer of one of a node's parameter services.
+ParameterAnswer = Union[GetParameters.Response, SetParameters.Response,
+                        SetParametersAtomically.Response]
+
+
+class TrajectoryReceiver(Protocol):
+    """A node that counts the trajectories it took (a controller)."""
+
+    @property
+    def trajectories_received(self) -> int:
+        """Trajectories taken so far."""
+
+
+class Observer(Protocol):
+    """A node that counts the samples and commands it took (an identifier, a recorder)."""
+
+    @property
+    def samples(self) -> int:
+        """Joint-state samples taken so far."""
+
+    @property
+    def commands_received(self) -> int:
+        """Valve commands taken so far."""
+
+
+class SteppedPlant(Protocol):
+    """A plant node the harness steps: its period, its ticks, its commands and subscribers."""
+
+    @property
+    def sample_period(self) -> float:
+        """Plant period, s."""
+
+    @property
+    def ticks(self) -> int:
+        """Periods simulated so far."""
+
+    @property
+    def commands_received(self) -> int:
+        """Valve commands taken so far."""
+
+    def count_subscribers(self, topic_name: str) -> int:
+        """Return the number of subscribers to ``topic_name``."""
+
+
+class LoopController(Protocol):
+    """A controller node in a lockstep loop: its counters and its command publishers."""
+
+    @property
+    def joint(self) -> str:
+        """Return the (first) joint it controls."""
+
+    @property
+    def samples(self) -> int:
+        """Joint-state samples taken so far."""
+
+    @property
+    def outputs(self) -> int:
+        """Valve commands published so far."""
+
+    def count_subscribers(self, topic_name: str) -> int:
+        """Return the number of subscribers to ``topic_name``."""
 
 
 def _set_clock(node: Node, nanoseconds: int) -> None:
@@ -70,29 +138,31 @@ class RosHarness:
         #: Longest wait of one spin; short, since messages within a process arrive fast.
         self.spin_timeout = 0.001
 
-    def add(self, node_cls: type[Node], *, parameters: dict[str, Any] | None = None,
-            sim_time: bool = True, cli_args: list[str] | None = None,
-            **kwargs: Any) -> Any:
+    def add(self, node_cls: Callable[..., NodeT], *,
+            parameters: Mapping[str, ParameterValue] | None = None, sim_time: bool = True,
+            cli_args: list[str] | None = None,
+            **kwargs: object) -> NodeT:
         """
         Create a node in the harness and add it to the executor.
 
         Parameters
         ----------
         node_cls : type
-            A node class that forwards ``**kwargs`` to :class:`rclpy.node.Node`.
+            A node class that forwards ``**kwargs`` to :class:`rclpy.node.Node` (its
+            options, :class:`~hydro_sdp.ros.node_options.NodeOptions`).
         parameters : dict or None
             Parameter overrides by name.
         sim_time : bool
             Whether the node's clock is set by the harness.
         cli_args : list of str or None
             ROS command-line arguments (``--ros-args --params-file ...``).
-        **kwargs : Any
+        **kwargs : object
             More constructor arguments (``node_name``...).
 
         Returns
         -------
         Node
-            The node.
+            The node, of class ``node_cls``.
 
         """
         overrides = [Parameter(name, value=value) for name, value in (parameters or {}).items()]
@@ -147,7 +217,7 @@ class RosHarness:
         while time.monotonic() < deadline:
             self.executor.spin_once(timeout_sec=0.005)
 
-    def transition(self, node: Any, transition: str) -> str:
+    def transition(self, node: LifecycleNode, transition: str) -> str:
         """
         Run a lifecycle transition of ``node`` in this thread; return the state reached.
 
@@ -167,7 +237,7 @@ class RosHarness:
         getattr(node, f'trigger_{transition}')()
         return str(node._state_machine.current_state[1])
 
-    def send(self, publisher: Any, message: Any, received: Callable[[], bool],
+    def send(self, publisher: Publisher, message: object, received: Callable[[], bool],
              timeout: float = 5.0) -> None:
         """Publish ``message`` and spin until ``received()`` holds (the receiver took it)."""
         publisher.publish(message)
@@ -175,7 +245,8 @@ class RosHarness:
             raise TimeoutError(f'{type(message).__name__} on {publisher.topic_name} was not '
                                'received')
 
-    def send_trajectory(self, publisher: Any, controllers: Iterable[Any], names: list[str],
+    def send_trajectory(self, publisher: Publisher, controllers: Iterable[TrajectoryReceiver],
+                        names: list[str],
                         times: list[float], positions_deg: list[list[float]],
                         stamp_ns: int = 0) -> None:
         """
@@ -246,8 +317,9 @@ class Lockstep:
 
     """
 
-    def __init__(self, harness: RosHarness, plant: Any, *, controllers: Iterable[Any] = (),
-                 observers: Iterable[Any] = (), timeout: float = 5.0) -> None:
+    def __init__(self, harness: RosHarness, plant: SteppedPlant, *,
+                 controllers: Iterable[LoopController] = (), observers: Iterable[Observer] = (),
+                 timeout: float = 5.0) -> None:
         self.harness = harness
         self.plant = plant
         self.controllers = list(controllers)
@@ -323,29 +395,29 @@ class ParameterClient:
         if not ready:
             raise TimeoutError(f'{name} offers no parameter services')
 
-    def _call(self, kind: str, request: Any) -> Any:
+    def _call(self, kind: str, request: object) -> ParameterAnswer:
         future = self._clients[kind].call_async(request)
         if not self.harness.spin_until(future.done):
             raise TimeoutError(f'no answer from {kind}')
         return future.result()
 
     @staticmethod
-    def _messages(values: dict[str, Any]) -> list[Any]:
+    def _messages(values: Mapping[str, ParameterValue]) -> list[ParameterMessage]:
         # Keyword names cannot hold dots: ``gains__k_i`` is ``gains.k_i``.
         return [Parameter(name.replace('__', '.'), value=value).to_parameter_msg()
                 for name, value in values.items()]
 
-    def set_atomically(self, **values: Any) -> Any:
+    def set_atomically(self, **values: ParameterValue) -> SetParametersResult:
         """Set parameters in one atomic request; return its ``SetParametersResult``."""
         request = SetParametersAtomically.Request(parameters=self._messages(values))
         return self._call('set_parameters_atomically', request).result
 
-    def set_each(self, **values: Any) -> list[Any]:
+    def set_each(self, **values: ParameterValue) -> list[SetParametersResult]:
         """Set parameters one by one; return a ``SetParametersResult`` for each."""
         request = SetParameters.Request(parameters=self._messages(values))
         return list(self._call('set_parameters', request).results)
 
-    def get(self, *names: str) -> list[tuple[Parameter.Type, Any]]:
+    def get(self, *names: str) -> list[tuple[Parameter.Type, ParameterValue]]:
         """Return the type and value of each of ``names``."""
         answer = self._call('get_parameters', GetParameters.Request(names=list(names)))
         return [(Parameter.Type(value.type), parameter_value_to_python(value))

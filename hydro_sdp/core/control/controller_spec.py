@@ -14,7 +14,7 @@ lag). The spec is what ``hydro-sdp design`` writes (format
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any, Mapping, Sequence
+from typing import Mapping, Sequence
 
 from hydro_sdp.core.control.design_plant import check_plant_lag, model_lag, plant_for_model
 from hydro_sdp.core.control.idz import IdzMode
@@ -29,7 +29,7 @@ from hydro_sdp.core.errors import ConfigurationError, ModelFileError
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.timing import check_sample_period
 from hydro_sdp.core.validation import (
-    read_document, require_float, require_float_list, require_ordered_pair)
+    Document, read_document, require_float, require_float_list, require_ordered_pair)
 import numpy as np
 
 CONTROLLER_FORMAT = 'hydro_sdp/controller/v1'
@@ -58,7 +58,7 @@ class ControllerSpec:
         Limits of ``u``, degrees per control sample.
     v_limits : tuple[float, float] or None
         Valve command range, input units.
-    design : Mapping[str, Any]
+    design : Document
         How the gains were found (``method``: ``lq`` with ``weights``, or ``poles``).
     valve_lag : float or None
         Valve lag the plant was made from, s (:func:`.design_plant.lagged_integrator`);
@@ -73,7 +73,7 @@ class ControllerSpec:
     idz: Idz | None
     u_limits: tuple[float, float] | None
     v_limits: tuple[float, float] | None
-    design: Mapping[str, Any] = field(default_factory=dict)
+    design: Document = field(default_factory=dict)
     valve_lag: float | None = None
 
     def __post_init__(self) -> None:
@@ -107,9 +107,9 @@ class ControllerSpec:
         """Return a fresh run-time controller."""
         return PipIdzController(self.settings())
 
-    def to_mapping(self) -> dict[str, Any]:
+    def to_mapping(self) -> dict[str, object]:
         """Return the controller file's content."""
-        plant: dict[str, Any] = {'a': list(self.plant.a), 'b': list(self.plant.b)}
+        plant: dict[str, object] = {'a': list(self.plant.a), 'b': list(self.plant.b)}
         if self.valve_lag is not None:
             plant['valve_lag'] = self.valve_lag
         return {
@@ -129,13 +129,13 @@ class ControllerSpec:
         }
 
     @classmethod
-    def from_mapping(cls, data: Any) -> ControllerSpec:
+    def from_mapping(cls, data: object) -> ControllerSpec:
         """
         Validate a controller file's content and build the spec.
 
         Parameters
         ----------
-        data : Any
+        data : object
             The parsed YAML document.
 
         Returns
@@ -155,6 +155,9 @@ class ControllerSpec:
                                  "(and 'valve_lag')")
         lag = plant.get('valve_lag')
         idz = idz_from_mapping(data.get('idz'))
+        design = data.get('design') or {}
+        if not isinstance(design, Mapping):
+            raise ModelFileError("key 'design': expected a mapping of how the gains were found")
         try:
             spec = cls(
                 joint=str(data['joint']),
@@ -167,7 +170,7 @@ class ControllerSpec:
                 idz=idz,
                 u_limits=_optional_pair(data.get('u_limits'), 'u_limits'),
                 v_limits=_optional_pair(data.get('v_limits'), 'v_limits'),
-                design=dict(data.get('design') or {}),
+                design=dict(design),
                 valve_lag=None if lag is None else require_float(lag, 'plant.valve_lag'),
             )
         except ConfigurationError as error:
@@ -188,7 +191,7 @@ def format_pole(pole: complex) -> str:
     return f'{real:.6g}{imag:+.6g}j'
 
 
-def _optional_pair(value: Any, key: str) -> tuple[float, float] | None:
+def _optional_pair(value: object, key: str) -> tuple[float, float] | None:
     return None if value is None else require_ordered_pair(value, key)
 
 
@@ -235,8 +238,8 @@ def design_from_model(model: JointModel, *, control_period: float = 0.05,
     lag = model_lag(model)
     if poles is not None:
         gains = pole_assignment(plant, poles)
-        design: dict[str, Any] = {'method': 'poles',
-                                  'requested': [format_pole(p) for p in poles]}
+        design: dict[str, object] = {'method': 'poles',
+                                     'requested': [format_pole(p) for p in poles]}
     else:
         weights = weights if weights is not None else LqWeights()
         gains = lq_design(plant, weights)

@@ -9,7 +9,7 @@ follow from the table and are not written).
 
 from __future__ import annotations
 
-from typing import Any, Mapping
+from typing import Mapping
 
 from hydro_sdp.core.control.idz import IDZ_MODES, InverseDeadZone
 from hydro_sdp.core.control.idz_table import Idz, TableInverseDeadZone
@@ -21,7 +21,7 @@ _CHORD_KEYS = {'mode', 'beta', 'dead_zone', 'slopes', 'rest'}
 _TABLE_KEYS = {'mode', 'beta', 'table', 'rest'}
 
 
-def idz_to_mapping(idz: Idz | None) -> dict[str, Any] | None:
+def idz_to_mapping(idz: Idz | None) -> dict[str, object] | None:
     """Return the ``idz`` value of a controller file (``None`` for no IDZ)."""
     if idz is None:
         return None
@@ -32,13 +32,13 @@ def idz_to_mapping(idz: Idz | None) -> dict[str, Any] | None:
             'slopes': list(idz.slopes), 'rest': idz.rest}
 
 
-def idz_from_mapping(data: Any) -> Idz | None:
+def idz_from_mapping(data: object) -> Idz | None:
     """
     Validate a controller file's ``idz`` value and build the IDZ.
 
     Parameters
     ----------
-    data : Any
+    data : object
         The parsed value: null, a chord mapping or a table mapping.
 
     Returns

@@ -22,7 +22,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 import math
-from typing import Any
 
 from hydro_sdp.core.control.trajectory import JointTrajectory
 from hydro_sdp.core.errors import DataError, ModelFileError
@@ -73,13 +72,13 @@ class TwoLinkArm:
             raise ModelFileError(f'offsets must be finite, got {list(self.offsets)}')
 
     @classmethod
-    def from_mapping(cls, data: Any) -> TwoLinkArm:
+    def from_mapping(cls, data: object) -> TwoLinkArm:
         """
         Validate a mapping read from a kinematics file and build the arm.
 
         Parameters
         ----------
-        data : Any
+        data : object
             The parsed YAML document.
 
         Returns

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from typing import Any, Callable, Sequence
+from typing import Callable, Sequence
 
 from hydro_sdp.core.diagnosis.naming import Naming
 from hydro_sdp.core.diagnosis.reduction import reduction_test
@@ -75,7 +75,7 @@ class Context:
         """Return the squared velocity residual of ``model`` over whole blocks, deg^2."""
         return float(block_sums(velocity_residuals(model, self.runs), self.block).sum())
 
-    def score(self, effect: str, candidate: JointModel, parameters: dict[str, Any],
+    def score(self, effect: str, candidate: JointModel, parameters: dict[str, object],
               evidence: str) -> Trial:
         """
         Compare ``candidate`` with the model under test on the estimation runs.

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from dataclasses import replace
 import math
-from typing import Any, NamedTuple
+from typing import NamedTuple
 
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.diagnosis.context import Context
@@ -190,6 +190,6 @@ def refit_map(context: Context, features: Features, delay: float | None = None) 
     return _polish(context, best, family)
 
 
-def map_parameters(model: JointModel) -> dict[str, Any]:
+def map_parameters(model: JointModel) -> dict[str, object]:
     """Return the model's map as the parameters of a candidate."""
     return dict(model.static_map.to_mapping())

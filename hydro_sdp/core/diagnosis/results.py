@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any, Literal, Sequence
+from typing import Literal, Sequence
 
 from hydro_sdp.core.arrays import FloatArray, IntArray
 from hydro_sdp.core.identification.sdp import StateDependence
@@ -61,7 +61,7 @@ class Candidate:
     gain: float = 0.0
     t: float = 0.0
     significant: bool = False
-    parameters: dict[str, Any] = field(default_factory=dict)
+    parameters: dict[str, object] = field(default_factory=dict)
     evidence: str = ''
     signature_match: bool = False
     p_value: float = 1.0
@@ -98,7 +98,7 @@ class LedgerStep:
     """
 
     effect: str
-    parameters: dict[str, Any]
+    parameters: dict[str, object]
     mae_before: float
     mae_after: float
     window_before: float = 0.0

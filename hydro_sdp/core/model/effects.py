@@ -253,7 +253,7 @@ EFFECT_TYPES: dict[str, type[Effect]] = {
 }
 
 
-def effect_from_mapping(name: str, params: Any) -> Effect:
+def effect_from_mapping(name: str, params: object) -> Effect:
     """
     Build one effect from its model-file entry.
 
@@ -261,7 +261,7 @@ def effect_from_mapping(name: str, params: Any) -> Effect:
     ----------
     name : str
         Vocabulary word, a key of :data:`EFFECT_TYPES`.
-    params : Any
+    params : object
         The mapping of parameters read from the file.
 
     Returns
@@ -281,6 +281,7 @@ def effect_from_mapping(name: str, params: Any) -> Effect:
     if unknown:
         raise ModelFileError(f"key 'effects.{name}': unknown parameter {unknown[0]!r} "
                              f"(parameters: {', '.join(names)})")
+    # Each value is checked against its own field's type below; mypy cannot pair them.
     values: dict[str, Any] = {}
     for field in fields(cls):
         if field.name in params:

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 import math
-from typing import Any, Mapping
+from typing import Mapping
 
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import ConfigurationError, ModelFileError
@@ -20,7 +20,8 @@ from hydro_sdp.core.model.effects import (
     DirectionDependentDelay, Effect, effect_from_mapping, effect_to_mapping, EFFECT_TYPES)
 from hydro_sdp.core.model.static_maps import MAP_KINDS, MapKind, SdpMap, StaticMap
 from hydro_sdp.core.model.timing import check_sample_period, delay_samples
-from hydro_sdp.core.validation import read_document, require_float, require_ordered_pair
+from hydro_sdp.core.validation import (
+    Document, read_document, require_float, require_ordered_pair)
 import numpy as np
 
 MODEL_FORMAT = 'hydro_sdp/model/v1'
@@ -165,17 +166,17 @@ class JointModel:
         """Return a copy without the effect called ``name``."""
         return replace(self, effects=tuple(e for e in self.effects if e.name != name))
 
-    def to_mapping(self) -> dict[str, Any]:
+    def to_mapping(self) -> dict[str, object]:
         """
         Return the model as the plain mapping stored in a model file.
 
         Returns
         -------
-        dict[str, Any]
+        dict[str, object]
             Keys in the order of docs/interfaces.md section 1.
 
         """
-        data: dict[str, Any] = {
+        data: dict[str, object] = {
             'format': MODEL_FORMAT,
             'joint': self.joint,
         }
@@ -194,13 +195,13 @@ class JointModel:
         return data
 
     @classmethod
-    def from_mapping(cls, data: Any) -> JointModel:
+    def from_mapping(cls, data: object) -> JointModel:
         """
         Validate a mapping read from a model file and build the model.
 
         Parameters
         ----------
-        data : Any
+        data : object
             The parsed YAML document.
 
         Returns
@@ -218,7 +219,7 @@ class JointModel:
                              known=_COMMON_KEYS + _ALL_MAP_KEYS + ('effects',),
                              required=('format', 'joint', 'kind', 'delay'))
         kind = data['kind']
-        if kind not in MAP_KINDS:
+        if not isinstance(kind, str) or kind not in MAP_KINDS:
             raise ModelFileError(
                 f"key 'kind': expected one of {', '.join(MAP_KINDS)}, got {kind!r}")
         map_cls = MAP_KINDS[kind]
@@ -234,10 +235,12 @@ class JointModel:
         joint = data['joint']
         if not isinstance(joint, str):
             raise ModelFileError(f"key 'joint': expected a name, got {joint!r}")
-        topics = {key: data.get(key) for key in ('command_topic', 'load_topic')}
-        for key, topic in topics.items():
+        topics: dict[str, str | None] = {}
+        for key in ('command_topic', 'load_topic'):
+            topic = data.get(key)
             if topic is not None and not isinstance(topic, str):
                 raise ModelFileError(f"key '{key}': expected a topic name, got {topic!r}")
+            topics[key] = topic
         return cls(
             joint=joint,
             static_map=map_cls.from_mapping(data),
@@ -251,6 +254,6 @@ class JointModel:
         )
 
 
-def _optional_limits(data: Mapping[str, Any], key: str) -> tuple[float, float] | None:
+def _optional_limits(data: Document, key: str) -> tuple[float, float] | None:
     value = data.get(key)
     return None if value is None else require_ordered_pair(value, key)

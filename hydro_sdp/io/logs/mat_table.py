@@ -10,13 +10,17 @@ must be a numeric vector (a row or a column) as long as the time variable.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 import os
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
 
 from hydro_sdp.core.errors import ConfigurationError, DataError
 from hydro_sdp.io.logs.table import Channel
 import numpy as np
+
+if TYPE_CHECKING:
+    import h5py
 
 #: File name endings read as MATLAB files.
 MAT_SUFFIXES = ('.mat',)
@@ -33,13 +37,20 @@ def _version(path: Path, source: str) -> int:
     return int(major)
 
 
-def _v5_variables(path: Path, source: str) -> dict[str, Any]:
+def _v5_variables(path: Path, source: str) -> dict[str, object]:
     from scipy.io import loadmat
 
     try:
         return dict(loadmat(str(path), simplify_cells=True))
     except (ValueError, TypeError, OSError, NotImplementedError) as error:
         raise DataError(f'{source}: not a readable MATLAB file ({error})') from None
+
+
+def _dataset_values(node: object) -> object:
+    from h5py import Dataset
+
+    # A dataset reads whole with [()]; a group (a structure) is no vector.
+    return node[()] if isinstance(node, Dataset) else None
 
 
 class MatTable:
@@ -66,12 +77,12 @@ class MatTable:
         if time is None:
             raise ConfigurationError(f'{self.source}: a MATLAB file needs its time variable '
                                      f'({time_role})')
-        self._hdf5: Any = None
-        self._variables: dict[str, Any] = {}
+        self._hdf5: h5py.File | None = None
+        self._variables: dict[str, object] = {}
         if _version(source, self.source) == 2:
-            import h5py
+            from h5py import File
             try:
-                self._hdf5 = h5py.File(source, 'r')
+                self._hdf5 = File(source, 'r')
             except OSError as error:
                 raise DataError(f'{self.source}: not a readable MATLAB 7.3 file ({error})') \
                     from None
@@ -89,10 +100,13 @@ class MatTable:
             return sorted(name for name in self._hdf5 if not name.startswith('#'))
         return sorted(name for name in self._variables if not name.startswith('__'))
 
-    def _lookup(self, name: str, role: str) -> Any:
-        node: Any = self._hdf5 if self._hdf5 is not None else self._variables
+    def _lookup(self, name: str, role: str) -> object:
+        node: object = self._hdf5 if self._hdf5 is not None else self._variables
         for part in name.split('.'):
             try:
+                # Structures are dicts (version 5) or h5py groups (7.3): both are mappings.
+                if not isinstance(node, Mapping):
+                    raise KeyError(part)
                 node = node[part]
             except (KeyError, TypeError, IndexError, ValueError):
                 shown = ', '.join(self._names()[:20])
@@ -103,7 +117,7 @@ class MatTable:
     def _vector(self, name: str, role: str) -> np.ndarray:
         node = self._lookup(name, role)
         try:
-            values = np.asarray(node[()] if self._hdf5 is not None else node)
+            values = np.asarray(_dataset_values(node) if self._hdf5 is not None else node)
         except (TypeError, ValueError):
             values = np.asarray(None)
         if values.dtype.kind not in 'biuf':

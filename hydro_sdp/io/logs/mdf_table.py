@@ -17,11 +17,14 @@ from contextlib import contextmanager
 import logging
 import os
 from pathlib import Path
-from typing import Any, Iterator
+from typing import Iterator, TYPE_CHECKING
 
 from hydro_sdp.core.errors import DataError
 from hydro_sdp.io.logs.table import Channel
 import numpy as np
+
+if TYPE_CHECKING:
+    import asammdf
 
 #: File name endings read as MDF.
 MDF_SUFFIXES = ('.mf4', '.mdf')
@@ -64,7 +67,7 @@ class MdfTable:
             raise DataError(f'{self.source}: no such file')
         try:
             with _quiet():
-                self._mdf: Any = MDF(str(path))
+                self._mdf: asammdf.MDF = MDF(str(path))
         except Exception as error:  # noqa: B902 - asammdf raises anything on a bad file
             raise DataError(f'{self.source}: not an MDF file ({error})') from None
         self._time: tuple[int, np.ndarray] | None = None

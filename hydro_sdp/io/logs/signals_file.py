@@ -24,9 +24,10 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 import os
 import re
-from typing import Any, Mapping
+from typing import Mapping
 
 from hydro_sdp.core.errors import ConfigurationError
+from hydro_sdp.core.validation import Document
 from hydro_sdp.io.documents import load_yaml
 
 #: Units of an angle channel.
@@ -87,19 +88,19 @@ class MachineSpec:
     source: str = 'command line'
 
 
-def _name(value: Any, where: str) -> str:
+def _name(value: object, where: str) -> str:
     if isinstance(value, bool) or not isinstance(value, (str, int)) or str(value).strip() == '':
         raise ConfigurationError(f'{where}: expected a channel name, got {value!r}')
     return str(value)
 
 
-def _unit(value: Any, where: str) -> str:
+def _unit(value: object, where: str) -> str:
     if value not in ANGLE_UNITS:
         raise ConfigurationError(f'{where}: angle unit must be deg or rad, got {value!r}')
     return str(value)
 
 
-def _mapping(value: Any, where: str, keys: tuple[str, ...]) -> Mapping[str, Any]:
+def _mapping(value: object, where: str, keys: tuple[str, ...]) -> Document:
     if not isinstance(value, Mapping):
         raise ConfigurationError(f'{where}: expected a mapping, got {type(value).__name__}')
     unknown = [str(key) for key in value if key not in keys]
@@ -109,13 +110,18 @@ def _mapping(value: Any, where: str, keys: tuple[str, ...]) -> Mapping[str, Any]
     return value
 
 
-def spec_from_mapping(data: Any, source: str) -> MachineSpec:
+def _keys_of(value: object) -> tuple[str, ...]:
+    # Anything but a mapping has no keys, and _mapping then refuses it by its type.
+    return tuple(str(key) for key in value) if isinstance(value, Mapping) else ()
+
+
+def spec_from_mapping(data: object, source: str) -> MachineSpec:
     """
     Build a :class:`MachineSpec` from a parsed signals file.
 
     Parameters
     ----------
-    data : Any
+    data : object
         The parsed YAML document.
     source : str
         The file, for messages.
@@ -132,8 +138,7 @@ def spec_from_mapping(data: Any, source: str) -> MachineSpec:
     if not joints_data:
         raise ConfigurationError(f'{source}: joints: at least one joint is needed')
     joints = {}
-    for name, entry in _mapping(joints_data, f'{source}: joints',
-                                tuple(str(k) for k in joints_data)).items():
+    for name, entry in _mapping(joints_data, f'{source}: joints', _keys_of(joints_data)).items():
         where = f'{source}: joints.{name}'
         if not JOINT_NAME.match(str(name)):
             raise ConfigurationError(f'{where}: a joint name is a letter, then letters, digits '
@@ -151,8 +156,9 @@ def spec_from_mapping(data: Any, source: str) -> MachineSpec:
             None if negative is None else _name(negative, f'{where}.command_negative'),
             _unit(entry.get('angle_unit', unit), f'{where}.angle_unit'))
     signals = {}
-    for topic, channel in _mapping(top.get('signals') or {}, f'{source}: signals',
-                                   tuple(str(k) for k in (top.get('signals') or {}))).items():
+    signals_data = top.get('signals') or {}
+    for topic, channel in _mapping(signals_data, f'{source}: signals',
+                                   _keys_of(signals_data)).items():
         where = f'{source}: signals.{topic}'
         if not TOPIC_NAME.match(str(topic)):
             raise ConfigurationError(f'{where}: not a topic name (letters, digits, _ and /)')

@@ -166,6 +166,8 @@ def test_controller_file_round_trip_and_checks(j2, tmp_path):
         ControllerSpec.from_mapping({**data, 'g': [0.1]})
     with pytest.raises(ModelFileError, match="key 'idz.mode'"):
         ControllerSpec.from_mapping({**data, 'idz': {**data['idz'], 'mode': 'fuzzy'}})
+    with pytest.raises(ModelFileError, match="key 'design'"):
+        ControllerSpec.from_mapping({**data, 'design': 'lq'})
 
 
 def test_closed_loop_refuses_mismatched_periods(j2):

@@ -211,6 +211,10 @@ def test_a_whole_machine_in_one_bag(tmp_path):
                  id='unknown_key'),
     pytest.param(MACHINE.replace('command_negative', 'command_neg'), {},
                  "machine.yaml: joints.boom: unknown key 'command_neg'", id='unknown_joint_key'),
+    pytest.param(MACHINE.replace('signals:\n  boom/head_pressure: Boom_head_P', 'signals: 5'), {},
+                 'machine.yaml: signals: expected a mapping, got int', id='signals_not_a_mapping'),
+    pytest.param('time: t\njoints: 5\n', {}, 'machine.yaml: joints: expected a mapping, got int',
+                 id='joints_not_a_mapping'),
     pytest.param(MACHINE, {'Arm_ang': 'short'}, "run.mat: variable 'Arm_ang' (joints.arm.angle):"
                  ' 100 samples, the time variable has 200', id='different_length'),
     pytest.param(MACHINE, {'Boom_head_P': 'nan'}, "run.mat: variable 'Boom_head_P': 1 values "

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 import math
-from typing import Any
 
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.diagnosis.context import Context
@@ -189,7 +188,7 @@ def record_scales(context: Context) -> RecordScales:
 
 
 def first_significant(context: Context, word: str, models: list[JointModel],
-                      parameters: list[dict[str, Any]], evidence: str) -> Trial:
+                      parameters: list[dict[str, object]], evidence: str) -> Trial:
     """Score the models in turn; return the first significant one (else the last)."""
     trial: Trial | None = None
     for model, values in zip(models, parameters):

@@ -12,12 +12,12 @@ regret-regression (``rr``) or by output error (``oe``: ``beta = 0``).
 
 from __future__ import annotations
 
-from typing import Any, Sequence
+from typing import Sequence
 
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.identification.delay import LevelSpeed
 from hydro_sdp.core.identification.map_fit.data import (
-    covariance_errors, FitData, FitMethod, MapFit, TR_SOLVER)
+    covariance_errors, FitData, FitMethod, MapFit, RateFunction, TR_SOLVER)
 from hydro_sdp.core.model.static_maps import power_sat_rate, PowerSatMap, SdpMap
 import numpy as np
 from scipy.optimize import least_squares
@@ -28,7 +28,7 @@ NAMES = ('saturation_velocity[0]', 'curvature[0]', 'exponent[0]', 'dead_zone[0]'
 START_EXPONENTS = (1.0, 2.0, 3.0, 5.0)
 
 
-def power_sat_rate_function(x: FloatArray) -> Any:
+def power_sat_rate_function(x: FloatArray) -> RateFunction:
     """Return the map of ``x = (vn, cn, nn, a3, vp, cp, np, a6)`` (rates in deg/s)."""
     return lambda v: power_sat_rate(v, *(float(value) for value in x[:8]))
 

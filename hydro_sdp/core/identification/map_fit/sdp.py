@@ -13,7 +13,7 @@ simulation error.
 from __future__ import annotations
 
 import math
-from typing import Any, Sequence
+from typing import Sequence
 
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import DataError
@@ -23,7 +23,7 @@ from hydro_sdp.core.identification.map_fit.data import (
 from hydro_sdp.core.model.static_maps import sdp_rate, SdpMap
 import numpy as np
 import numpy.typing as npt
-from scipy.optimize import least_squares, minimize
+from scipy.optimize import least_squares, minimize, OptimizeResult
 
 SDP_NAMES = ('saturation_velocity[0]', 'curvature[0]', 'dead_zone[0]',
              'saturation_velocity[1]', 'curvature[1]', 'dead_zone[1]')
@@ -223,19 +223,19 @@ def fit_sdp(data: FitData, points: Sequence[LevelSpeed], rest: float, *,
     scale = max(float(np.max(np.abs(levels - rest))), 1e-9)
     factors = [1.0, 0.5, 2.0, 4.0, 0.25][:max(starts, 1)]
 
-    def rr_fit(fit_data: FitData, free: FloatArray) -> Any:
+    def rr_fit(fit_data: FitData, free: FloatArray) -> OptimizeResult:
         def residuals(p: FloatArray) -> FloatArray:
             x = _to_natural(p, rest)
             return fit_data.residuals(sdp_rate_function(x), x[6])
         return least_squares(residuals, free, method='lm', x_scale=1.0)
 
-    def oe_fit(fit_data: FitData, x0: FloatArray, iterations: int) -> Any:
+    def oe_fit(fit_data: FitData, x0: FloatArray, iterations: int) -> OptimizeResult:
         return minimize(lambda x: fit_data.mean_experiment_sse(sdp_rate_function(x)), x0,
                         method='Nelder-Mead', bounds=list(zip(lower[:6], upper[:6])),
                         options={'maxiter': iterations, 'maxfev': iterations, 'xatol': 1e-7,
                                  'fatol': 1e-12, 'adaptive': True})
 
-    best: tuple[float, Any] | None = None
+    best: tuple[float, OptimizeResult] | None = None
     evaluations = 0
     for factor in factors:
         x0 = base.copy()

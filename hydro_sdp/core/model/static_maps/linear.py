@@ -3,12 +3,12 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, ClassVar, Mapping
+from typing import ClassVar
 
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import ModelFileError
 from hydro_sdp.core.model.static_maps.protocol import MapKind
-from hydro_sdp.core.validation import require_float
+from hydro_sdp.core.validation import Document, require_float
 import numpy as np
 
 
@@ -42,11 +42,11 @@ class LinearMap:
         """Angular velocity (deg/s) for steady commands ``v`` (:meth:`StaticMap.rate`)."""
         return self.gain * np.asarray(v, dtype=np.float64)
 
-    def to_mapping(self) -> dict[str, Any]:
+    def to_mapping(self) -> dict[str, float | list[float]]:
         """Return the model-file keys of this map."""
         return {'gain': self.gain}
 
     @classmethod
-    def from_mapping(cls, data: Mapping[str, Any]) -> LinearMap:
+    def from_mapping(cls, data: Document) -> LinearMap:
         """Build the map from model-file keys (already checked for presence)."""
         return cls(gain=require_float(data['gain'], 'gain'))

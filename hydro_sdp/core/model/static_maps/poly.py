@@ -3,12 +3,13 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, ClassVar, Mapping
+from typing import ClassVar
 
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import ModelFileError
 from hydro_sdp.core.model.static_maps.protocol import MapKind
-from hydro_sdp.core.validation import require_float, require_float_list, require_ordered_pair
+from hydro_sdp.core.validation import (
+    Document, require_float, require_float_list, require_ordered_pair)
 import numpy as np
 
 
@@ -70,14 +71,14 @@ class PolyMap:
         positive = np.polynomial.polynomial.polyval(u, self.gain_positive)
         return u * np.where(u < 0.0, negative, positive)
 
-    def to_mapping(self) -> dict[str, Any]:
+    def to_mapping(self) -> dict[str, float | list[float]]:
         """Return the model-file keys of this map."""
         return {'gain_negative': list(self.gain_negative),
                 'gain_positive': list(self.gain_positive),
                 'command_range': list(self.command_range), 'rest': self.rest}
 
     @classmethod
-    def from_mapping(cls, data: Mapping[str, Any]) -> PolyMap:
+    def from_mapping(cls, data: Document) -> PolyMap:
         """Build the map from model-file keys (already checked for presence)."""
         return cls(gain_negative=require_float_list(data['gain_negative'], 'gain_negative'),
                    gain_positive=require_float_list(data['gain_positive'], 'gain_positive'),

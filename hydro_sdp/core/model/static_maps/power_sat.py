@@ -13,12 +13,12 @@ as the power ``V (c u)^n`` and saturates at ``V``.
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from typing import Any, ClassVar, Mapping
+from typing import ClassVar
 
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.model.static_maps.protocol import (
     check_dead_zone, check_positive_pair, check_saturation_velocity, MapKind)
-from hydro_sdp.core.validation import require_ordered_pair, require_pair
+from hydro_sdp.core.validation import Document, require_ordered_pair, require_pair
 import numpy as np
 
 
@@ -96,12 +96,12 @@ class PowerSatMap:
         return replace(self, dead_zone=(self.dead_zone[0] + shift[0],
                                         self.dead_zone[1] + shift[1]))
 
-    def to_mapping(self) -> dict[str, Any]:
+    def to_mapping(self) -> dict[str, float | list[float]]:
         """Return the model-file keys of this map."""
         return {key: list(getattr(self, key)) for key in self.keys}
 
     @classmethod
-    def from_mapping(cls, data: Mapping[str, Any]) -> PowerSatMap:
+    def from_mapping(cls, data: Document) -> PowerSatMap:
         """Build the map from model-file keys (already checked for presence)."""
         return cls(
             dead_zone=require_ordered_pair(data['dead_zone'], 'dead_zone', strict=False),

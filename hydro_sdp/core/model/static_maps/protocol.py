@@ -9,10 +9,11 @@ one of :data:`MapKind` and registered in
 
 from __future__ import annotations
 
-from typing import Any, ClassVar, Literal, Mapping, Protocol, runtime_checkable
+from typing import ClassVar, Literal, Protocol, runtime_checkable
 
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import ModelFileError
+from hydro_sdp.core.validation import Document
 
 #: The model file's ``kind``: one static-map family each.
 MapKind = Literal['sdp', 'sdp_dz', 'linear', 'pwl', 'poly', 'power_sat']
@@ -51,11 +52,11 @@ class StaticMap(Protocol):
 
         """
 
-    def to_mapping(self) -> dict[str, Any]:
+    def to_mapping(self) -> dict[str, float | list[float]]:
         """Return the model-file keys of this map."""
 
     @classmethod
-    def from_mapping(cls, data: Mapping[str, Any]) -> StaticMap:
+    def from_mapping(cls, data: Document) -> StaticMap:
         """Build the map from model-file keys (already checked for presence)."""
 
 

@@ -3,12 +3,12 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, ClassVar, Mapping
+from typing import ClassVar
 
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import ModelFileError
 from hydro_sdp.core.model.static_maps.protocol import MapKind
-from hydro_sdp.core.validation import require_float_list
+from hydro_sdp.core.validation import Document, require_float_list
 import numpy as np
 
 
@@ -59,12 +59,12 @@ class PwlMap:
         """Angular velocity (deg/s) for steady commands ``v`` (:meth:`StaticMap.rate`)."""
         return np.interp(np.asarray(v, dtype=np.float64), self.knots, self.speeds)
 
-    def to_mapping(self) -> dict[str, Any]:
+    def to_mapping(self) -> dict[str, float | list[float]]:
         """Return the model-file keys of this map."""
         return {'knots': list(self.knots), 'speeds': list(self.speeds)}
 
     @classmethod
-    def from_mapping(cls, data: Mapping[str, Any]) -> PwlMap:
+    def from_mapping(cls, data: Document) -> PwlMap:
         """Build the map from model-file keys (already checked for presence)."""
         return cls(knots=require_float_list(data['knots'], 'knots'),
                    speeds=require_float_list(data['speeds'], 'speeds'))

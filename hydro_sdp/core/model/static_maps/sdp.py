@@ -12,14 +12,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 import math
-from typing import Any, ClassVar, Literal, Mapping
+from typing import ClassVar, Literal
 
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import ConfigurationError, ModelFileError
 from hydro_sdp.core.model.static_maps.protocol import (
     check_dead_zone, check_positive_pair, check_saturation_velocity, MapKind)
 from hydro_sdp.core.model.static_maps.sdp_dz import SdpDzMap
-from hydro_sdp.core.validation import require_ordered_pair, require_pair
+from hydro_sdp.core.validation import Document, require_ordered_pair, require_pair
 import numpy as np
 
 #: Fraction of the saturation speed where the IDZ chord meets an exponential map.
@@ -99,7 +99,7 @@ class SdpMap:
         return replace(self, dead_zone=(self.dead_zone[0] + shift[0],
                                         self.dead_zone[1] + shift[1]))
 
-    def to_mapping(self) -> dict[str, Any]:
+    def to_mapping(self) -> dict[str, float | list[float]]:
         """Return the model-file keys of this map."""
         return {
             'dead_zone': list(self.dead_zone),
@@ -108,7 +108,7 @@ class SdpMap:
         }
 
     @classmethod
-    def from_mapping(cls, data: Mapping[str, Any]) -> SdpMap:
+    def from_mapping(cls, data: Document) -> SdpMap:
         """Build the map from model-file keys (already checked for presence)."""
         return cls(
             dead_zone=require_ordered_pair(data['dead_zone'], 'dead_zone', strict=False),

@@ -3,11 +3,11 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from typing import Any, ClassVar, Mapping
+from typing import ClassVar
 
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.model.static_maps.protocol import check_dead_zone, check_positive_pair, MapKind
-from hydro_sdp.core.validation import require_ordered_pair, require_pair
+from hydro_sdp.core.validation import Document, require_ordered_pair, require_pair
 import numpy as np
 
 
@@ -46,12 +46,12 @@ class SdpDzMap:
         return replace(self, dead_zone=(self.dead_zone[0] + shift[0],
                                         self.dead_zone[1] + shift[1]))
 
-    def to_mapping(self) -> dict[str, Any]:
+    def to_mapping(self) -> dict[str, float | list[float]]:
         """Return the model-file keys of this map."""
         return {'dead_zone': list(self.dead_zone), 'slope': list(self.slope)}
 
     @classmethod
-    def from_mapping(cls, data: Mapping[str, Any]) -> SdpDzMap:
+    def from_mapping(cls, data: Document) -> SdpDzMap:
         """Build the map from model-file keys (already checked for presence)."""
         return cls(dead_zone=require_ordered_pair(data['dead_zone'], 'dead_zone', strict=False),
                    slope=require_pair(data['slope'], 'slope'))

@@ -13,13 +13,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 import math
-from typing import Any, Mapping
 
 from hydro_sdp.core.errors import ModelFileError
-from hydro_sdp.core.validation import require_float, require_mapping, require_ordered_pair
+from hydro_sdp.core.validation import (
+    Document, require_float, require_mapping, require_ordered_pair)
 
 
-def number(data: Mapping[str, Any], key: str, where: str, *, low: float = -math.inf,
+def number(data: Document, key: str, where: str, *, low: float = -math.inf,
            high: float = math.inf, strict_low: bool = False,
            default: float | None = None) -> float:
     """Read ``data[key]`` as a number within bounds; errors name ``where.key``."""
@@ -36,8 +36,8 @@ def number(data: Mapping[str, Any], key: str, where: str, *, low: float = -math.
     return value
 
 
-def section(data: Mapping[str, Any], key: str, where: str,
-            keys: tuple[str, ...]) -> Mapping[str, Any]:
+def section(data: Document, key: str, where: str,
+            keys: tuple[str, ...]) -> Document:
     """Return the mapping under ``key``, refusing unknown keys inside it."""
     name = f'{where}.{key}' if where else key
     if key not in data:
@@ -101,7 +101,7 @@ class Pump:
         return largest
 
     @classmethod
-    def from_mapping(cls, data: Mapping[str, Any]) -> Pump:
+    def from_mapping(cls, data: Document) -> Pump:
         """Build from the ``pump`` section of a file."""
         pump = cls(flow=number(data, 'flow', 'pump', low=0.0, strict_low=True),
                    margin=number(data, 'margin', 'pump', low=0.0, strict_low=True),
@@ -170,7 +170,7 @@ class Valve:
             'discharge_coefficient', 'opening', 'outlet_ratio', 'retract_ratio', 'compensated')
 
     @classmethod
-    def from_mapping(cls, data: Mapping[str, Any], where: str) -> Valve:
+    def from_mapping(cls, data: Document, where: str) -> Valve:
         """Build from a joint's ``valve`` section."""
         neutral = number(data, 'neutral', where)
         if 'limits' not in data:
@@ -193,7 +193,7 @@ class Valve:
                    compensated=_flag(data, 'compensated', where, default=True))
 
 
-def _flag(data: Mapping[str, Any], key: str, where: str, *, default: bool) -> bool:
+def _flag(data: Document, key: str, where: str, *, default: bool) -> bool:
     """Read ``data[key]`` as true or false; errors name ``where.key``."""
     value = data.get(key, default)
     if not isinstance(value, bool):
@@ -202,7 +202,7 @@ def _flag(data: Mapping[str, Any], key: str, where: str, *, default: bool) -> bo
     return value
 
 
-def _opening(data: Mapping[str, Any], name: str, overlap: float
+def _opening(data: Document, name: str, overlap: float
              ) -> tuple[tuple[float, float], ...]:
     if 'opening' not in data:
         raise ModelFileError(f'missing required key {name!r}')
@@ -270,7 +270,7 @@ class Cylinder:
             'cushion_entry_area', 'friction')
 
     @classmethod
-    def from_mapping(cls, data: Mapping[str, Any], where: str) -> Cylinder:
+    def from_mapping(cls, data: Document, where: str) -> Cylinder:
         """Build from a joint's ``cylinder`` section."""
         bore = number(data, 'bore', where, low=0.0, strict_low=True)
         rod = number(data, 'rod', where, low=0.0, strict_low=True)
@@ -315,7 +315,7 @@ class Linkage:
     keys = ('base_distance', 'rod_distance', 'angle_offset')
 
     @classmethod
-    def from_mapping(cls, data: Mapping[str, Any], where: str) -> Linkage:
+    def from_mapping(cls, data: Document, where: str) -> Linkage:
         """Build from a joint's ``linkage`` section."""
         return cls(base_distance=number(data, 'base_distance', where, low=0.0, strict_low=True),
                    rod_distance=number(data, 'rod_distance', where, low=0.0, strict_low=True),
@@ -353,7 +353,7 @@ class Load:
     keys = ('mass', 'distance', 'payload', 'payload_distance', 'phase')
 
     @classmethod
-    def from_mapping(cls, data: Mapping[str, Any], where: str) -> Load:
+    def from_mapping(cls, data: Document, where: str) -> Load:
         """Build from a joint's ``load`` section."""
         return cls(mass=number(data, 'mass', where, low=0.0),
                    distance=number(data, 'distance', where, low=0.0),

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 import math
-from typing import Any
 
 from hydro_sdp.core.errors import ModelFileError
 from hydro_sdp.core.synthetic.physics.parameters import (
@@ -56,7 +55,7 @@ class Joint:
     keys = ('name', 'valve', 'cylinder', 'linkage', 'load', 'stop', 'noise')
 
     @classmethod
-    def from_mapping(cls, data: Any, where: str) -> Joint:
+    def from_mapping(cls, data: object, where: str) -> Joint:
         """Build from one entry of the ``joints`` list."""
         data = require_mapping(data, where, cls.keys)
         name = data.get('name')
@@ -111,13 +110,13 @@ class Machine:
         return tuple(joint.name for joint in self.joints)
 
     @classmethod
-    def from_mapping(cls, data: Any) -> Machine:
+    def from_mapping(cls, data: object) -> Machine:
         """
         Validate a parsed physics file and build the machine.
 
         Parameters
         ----------
-        data : Any
+        data : object
             The parsed YAML document.
 
         Returns
