@@ -1,12 +1,13 @@
 """
 Benchmark the discrepancy workflow over a grid of cases on the physics plant.
 
-Run with ``python bench/bench_diagnosis_plant_grid.py [seeds]``. Every word the
+Run with ``python bench/bench_diagnosis_plant_grid.py [seeds] [programs]``. Every word the
 plant's physics can produce is hidden in turn (and nothing, ``none``) in models
 identified from runs of the physics plant (``test/support/plant_grid.py`` says how
 each model comes to lack its word, and which words the plant cannot produce and
 why): the arm and the boom, in signed percent, a 0..100 % duty resting at 50 and
-volts, random levels and full strokes, ``seeds`` draws each (default 1). Prints the
+volts, ``programs`` (comma-separated, default ``random,stroke``: random levels and
+full strokes), ``seeds`` draws each (default 1). Prints the
 confusion table (hidden word against the first word named), the cases gone wrong,
 the cases identify left nothing to remove from, and the shares right (the right word
 first and the gap halved; 30 % for ``load_dependence``; ``none`` for every model
@@ -28,11 +29,12 @@ from support.plant_programs import VARIANTS  # noqa: E402
 def main():
     """Run the grid and print the table."""
     seeds = int(sys.argv[1]) if len(sys.argv) > 1 else 1
+    programs = sys.argv[2].split(',') if len(sys.argv) > 2 else list(PROGRAMS)
     results, skipped = [], []
     started = time.perf_counter()
     for seed in range(seeds):
         for joint, units in VARIANTS:
-            for kind in PROGRAMS:
+            for kind in programs:
                 for word in WORDS:
                     case = make_case(word, kind, joint, units, seed)
                     if case is None:
@@ -40,10 +42,10 @@ def main():
                         continue
                     result = run_case(case)
                     results.append(result)
-                    if not result.right:
-                        print(f'  wrong: {word} ({kind}, {joint} {units}, seed {seed}) named '
-                              f'{result.named}, MAE {result.mae_before:.3g} -> '
-                              f'{result.mae_after:.3g} deg', flush=True)
+                    verdict = 'right' if result.right else 'wrong'
+                    print(f'  {verdict}: {word} ({kind}, {joint} {units}, seed {seed}) named '
+                          f'{result.named}, MAE {result.mae_before:.3g} -> '
+                          f'{result.mae_after:.3g} deg', flush=True)
     took = time.perf_counter() - started
     print('\n'.join(confusion_table(results, WORDS)))
     hidden = [r for r in results if r.word != 'none']

@@ -45,8 +45,8 @@ seed draws the valve's dead time (0.12-0.3 s) and spool lag (0.12-0.35 s).
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from functools import lru_cache
-from typing import Any
+from functools import cached_property, lru_cache
+from typing import Any, Sequence
 
 from hydro_sdp.core.diagnosis.search import diagnose
 from hydro_sdp.core.identification.identify import identify
@@ -115,34 +115,86 @@ class PlantCase:
     validation: tuple[Record, ...]
 
 
-def _runs(machine: Machine, program: str, seed: int, part: str,
+#: Duties of the full strokes, percent: identification, estimation, validation.
+DUTIES = {'identify': (45.0, 65.0, 85.0, 100.0), 'estimate': (50.0, 75.0, 100.0),
+          'validate': (60.0, 90.0)}
+#: Fewer and faster strokes, for a quick look (the tests).
+QUICK_DUTIES = {'identify': (50.0, 75.0, 100.0), 'estimate': (55.0, 100.0),
+                'validate': (70.0,)}
+
+
+def _runs(machine: Machine, program: str, seed: int, part: str, *, seconds: float,
           pressure: bool = False) -> list[Record]:
-    """Identification, estimation or validation runs of one program."""
+    """
+    Identification, estimation or validation runs of one program.
+
+    Random levels last ``seconds`` s; below 40 s the strokes are the quick ones.
+    """
     if program == 'stroke':
-        duties = {'identify': (45.0, 65.0, 85.0, 100.0), 'estimate': (50.0, 75.0, 100.0),
-                  'validate': (60.0, 90.0)}[part]
+        duties = (DUTIES if seconds >= 40.0 else QUICK_DUTIES)[part]
         return strokes(machine, duties, 1000 * seed + 100 * len(part), pressure=pressure)
     count = {'identify': 3, 'estimate': 2, 'validate': 1}[part]
-    return [levels(machine, 40.0, 1000 * seed + 100 * len(part) + k, pressure=pressure)
+    return [levels(machine, seconds, 1000 * seed + 100 * len(part) + k, pressure=pressure)
             for k in range(count)]
 
 
-def _identify(machine: Machine, records: list[Record], kind: str) -> JointModel:
+def _identify(machine: Machine, records: Sequence[Record], kind: str) -> JointModel:
     """Identify the first joint, told its valve's neutral and command range."""
     valve = machine.joints[0].valve
     bare = [Record(r.t, r.v, r.y, r.joint, r.source) for r in records]
     return identify(bare, kind=kind, rest=valve.neutral, input_limits=valve.limits).model
 
 
-@dataclass(frozen=True, eq=False)
 class Identified:
-    """A plant, the models identified on one program's runs, and the diagnosis runs."""
+    """
+    A plant of one case's draws, its identification runs, its models and diagnosis runs.
 
-    machine: Machine
-    power_sat: JointModel
-    sdp: JointModel
-    estimation: tuple[Record, ...]
-    validation: tuple[Record, ...]
+    The runs are made and the models identified when first asked for.
+
+    Parameters
+    ----------
+    joint, units, program : str
+        The case.
+    seed : int
+        Seed of the draws and the runs.
+    seconds : float
+        Length of each random-level run, s.
+
+    """
+
+    def __init__(self, joint: str, units: str, program: str, seed: int,
+                 seconds: float) -> None:
+        self.machine = variant(joint, units, _rng(joint, units, program, seed, 0))
+        self.program, self.seed, self.seconds = program, seed, seconds
+
+    def runs(self, part: str) -> list[Record]:
+        """Return the ``identify``, ``estimate`` or ``validate`` runs."""
+        return _runs(self.machine, self.program, self.seed, part, seconds=self.seconds)
+
+    @cached_property
+    def identification(self) -> list[Record]:
+        """Runs the models are identified on."""
+        return self.runs('identify')
+
+    @cached_property
+    def power_sat(self) -> JointModel:
+        """The ``power_sat`` model (the family the auto choice gives full strokes)."""
+        return _identify(self.machine, self.identification, 'power_sat')
+
+    @cached_property
+    def sdp(self) -> JointModel:
+        """The ``sdp`` model (eq. (5): the family whose features the map words are)."""
+        return _identify(self.machine, self.identification, 'sdp')
+
+    @cached_property
+    def estimation(self) -> tuple[Record, ...]:
+        """Runs the diagnosis fits on."""
+        return tuple(self.runs('estimate'))
+
+    @cached_property
+    def validation(self) -> tuple[Record, ...]:
+        """Runs the diagnosis is judged on."""
+        return tuple(self.runs('validate'))
 
 
 def _rng(joint: str, units: str, program: str, seed: int, tag: int) -> np.random.Generator:
@@ -150,15 +202,11 @@ def _rng(joint: str, units: str, program: str, seed: int, tag: int) -> np.random
                                   PROGRAMS.index(program), tag])
 
 
-@lru_cache(maxsize=4)
-def identified(joint: str, units: str, program: str, seed: int) -> Identified:
-    """Return the plant of one case's draws, its two models and its diagnosis runs."""
-    machine = variant(joint, units, _rng(joint, units, program, seed, 0))
-    runs = _runs(machine, program, seed, 'identify')
-    return Identified(machine, _identify(machine, runs, 'power_sat'),
-                      _identify(machine, runs, 'sdp'),
-                      tuple(_runs(machine, program, seed, 'estimate')),
-                      tuple(_runs(machine, program, seed, 'validate')))
+@lru_cache(maxsize=2)
+def identified(joint: str, units: str, program: str, seed: int,
+               seconds: float = 40.0) -> Identified:
+    """Return the :class:`Identified` of one case's draws (the last two kept)."""
+    return Identified(joint, units, program, seed, seconds)
 
 
 def _top_commands(sdp: SdpMap, limits: tuple[float, float]) -> tuple[float, float]:
@@ -213,31 +261,33 @@ def _without(word: str, found: Identified, rng: np.random.Generator) -> JointMod
     return full
 
 
-def _exogenous(word: str, joint: str, units: str, program: str, seed: int
+def _exogenous(word: str, joint: str, units: str, program: str, seed: int, seconds: float
                ) -> tuple[JointModel, list[Record], list[Record]] | None:
-    """The model and the runs of ``flow_sharing`` and ``load_dependence``."""
+    """Return the model and the runs of ``flow_sharing`` and ``load_dependence``."""
     if word == 'flow_sharing':
         # The same draws: the joint of identified(), with the other on its pump.
         shared = variant(joint, units, _rng(joint, units, program, seed, 0), partner=True)
-        return (identified(joint, units, program, seed).power_sat,
-                _runs(shared, program, seed + 500, 'estimate'),
-                _runs(shared, program, seed + 500, 'validate'))
+        return (identified(joint, units, program, seed, seconds).power_sat,
+                _runs(shared, program, seed + 500, 'estimate', seconds=seconds),
+                _runs(shared, program, seed + 500, 'validate', seconds=seconds))
     if joint != 'boom':
         return None  # The arm's compensated valve holds its speed under any payload.
     machine = variant(joint, units, _rng(joint, units, program, seed, 1), power=True)
     light = with_payload(machine, PAYLOADS[0])
-    model = _identify(light, _runs(light, program, seed, 'identify'), 'power_sat')
+    model = _identify(light, _runs(light, program, seed, 'identify', seconds=seconds),
+                      'power_sat')
     estimation: list[Record] = []
     validation: list[Record] = []
     for payload in PAYLOADS:
         loaded = with_payload(machine, payload)
         for part, out in (('estimate', estimation), ('validate', validation)):
             out += [replace(r, source=f'{payload:g} kg {r.source}') for r in _runs(
-                loaded, program, seed + int(payload), part, pressure=True)]
+                loaded, program, seed + int(payload), part, seconds=seconds, pressure=True)]
     return model, estimation, validation
 
 
-def make_case(word: str, program: str, joint: str, units: str, seed: int) -> PlantCase | None:
+def make_case(word: str, program: str, joint: str, units: str, seed: int, *,
+              seconds: float = 40.0) -> PlantCase | None:
     """
     Return one case of the plant grid, or None where identify found nothing to remove.
 
@@ -251,6 +301,9 @@ def make_case(word: str, program: str, joint: str, units: str, seed: int) -> Pla
         A key of :data:`support.plant_programs.VARIANTS`.
     seed : int
         Seed of the draws and the runs.
+    seconds : float
+        Length of each random-level run, s; below 40 s, fewer and faster strokes
+        (:data:`QUICK_DUTIES`).
 
     Returns
     -------
@@ -259,7 +312,7 @@ def make_case(word: str, program: str, joint: str, units: str, seed: int) -> Pla
 
     """
     if word in ('flow_sharing', 'load_dependence'):
-        made = _exogenous(word, joint, units, program, seed)
+        made = _exogenous(word, joint, units, program, seed, seconds)
         if made is None:
             return None
         model, estimation, validation = made
@@ -267,7 +320,7 @@ def make_case(word: str, program: str, joint: str, units: str, seed: int) -> Pla
                          tuple(validation))
     if word == 'angle_limits' and program == 'random':
         return None
-    found = identified(joint, units, program, seed)
+    found = identified(joint, units, program, seed, seconds)
     model = _without(word, found, _rng(joint, units, program, seed, 2 + WORDS.index(word)))
     if model is None:
         return None

@@ -96,7 +96,8 @@ class _Other:
         self.limits = Geometry(machine.joints[1]).angle_limits
         self.command, self.left = machine.joints[1].valve.neutral, 0
 
-    def next(self, angle: float) -> float:
+    def command_at(self, angle: float) -> float:
+        """Return the command over the next sample, at the joint's ``angle``."""
         if self.left <= 0:
             low, high = self.limits
             sign = 1.0 if self.rng.random() > (angle - low) / (high - low) else -1.0
@@ -119,7 +120,7 @@ class _Run:
 
     def step(self, command: float) -> None:
         both = [command] if self.other is None else [
-            command, self.other.next(self.angles[-1][1])]
+            command, self.other.command_at(self.angles[-1][1])]
         self.commands.append(both)
         self.angles.append(self.sim.step(both))
         self.pressures.append(self.sim.pressures[0][0])
