@@ -24,6 +24,8 @@ class GridResult:
         The first word named.
     mae_before, mae_after : float
         Validation MAE of the nominal and of the final model, degrees.
+    shrink : float
+        Largest share of the gap left for the case to count as right (0.5: halved).
 
     """
 
@@ -33,13 +35,14 @@ class GridResult:
     named: str
     mae_before: float
     mae_after: float
+    shrink: float = 0.5
 
     @property
     def right(self) -> bool:
-        """Whether the right word came first and (when one is missing) the gap halved."""
+        """Whether the right word came first and (when one is missing) the gap shrank enough."""
         if self.word == 'none':
             return self.named == 'none'
-        return self.named == self.word and self.mae_after <= 0.5 * self.mae_before
+        return self.named == self.word and self.mae_after <= self.shrink * self.mae_before
 
 
 def confusion_table(results: Sequence[GridResult],

@@ -1,0 +1,29 @@
+"""The discrepancy workflow on the physics plant: a subset of the plant grid."""
+
+from hydro_sdp.core.diagnosis import VOCABULARY
+import pytest
+from support.plant_grid import LEFT_OUT, make_case, run_case, WORDS
+
+
+def test_every_word_is_hidden_or_left_out_with_its_reason():
+    assert set(WORDS) | set(LEFT_OUT) == set(VOCABULARY) | {'none'}
+    assert not set(WORDS) & set(LEFT_OUT)
+    assert all(len(why) > 40 for why in LEFT_OUT.values())
+
+
+#: A subset of the plant grid (bench/bench_diagnosis_plant_grid.py runs it whole): full
+#: strokes of the arm in signed percent, fewer than the bench's, one identification
+#: shared by the cases (identified() keeps it).
+CASES = ['dead_zone', 'none']
+
+
+@pytest.mark.parametrize('word', CASES)
+def test_a_plant_case_is_named_and_its_gap_halves(word):
+    case = make_case(word, 'stroke', 'arm', 'signed_percent', 0, seconds=20.0)
+    assert case is not None
+    result = run_case(case)
+    assert result.named == word, result
+    if word == 'none':
+        assert result.mae_after == result.mae_before
+    else:
+        assert result.mae_after <= 0.5 * result.mae_before

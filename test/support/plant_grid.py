@@ -1,0 +1,336 @@
+"""
+The diagnosis grid on the physics plant, where its physics allow (docs/methods.md 8.7).
+
+Each case is records of the physics plant (:mod:`hydro_sdp.core.synthetic.physics`: spool
+valve, pump, cylinder, linkage, end stops; :mod:`support.plant_programs`) with an effect
+present, and a model that lacks exactly one word. The plant is not an SDP model, so no
+"true" model file exists: every model is identified from plant runs by
+:func:`hydro_sdp.core.identification.identify.identify` (told the valve's neutral and
+command range, as ``hydro-sdp identify --rest`` is), on runs of the same program as the
+diagnosis data at other seeds and duties, and then:
+
+* removed from the model identified on the full behaviour (the effect is there in the
+  identification runs, and identify found it): ``dead_zone`` (the sdp map's edges
+  closed onto the neutral: the valve's spool overlap), ``velocity_saturation`` (the sdp
+  map replaced by its chords to two thirds of its speed at the full command: the pump's
+  flow limit and the notches levelling off), ``asymmetry`` (both sides replaced by one
+  sdp side fitted to their average: piston against annulus area, the retracting
+  notches), ``time_delay`` (the delay moved by 0.1 s or 40 %: the valve's dead time),
+  ``angle_limits`` (the stroke ends, full strokes only: levels turned back before the
+  stops never show them), ``valve_lag`` (the spool's lag) and ``stroke_geometry`` (the
+  linkage, when identify kept a factor: it does so only when held-out runs need it);
+  the map words from an ``sdp`` model (their features are the sdp family's), the others
+  from a ``power_sat`` model (the family identify's auto choice gives the plant's full
+  strokes, ``config/physics_arm_model.yaml``; named to skip the choice);
+* absent or not excited in the identification runs: ``flow_sharing`` (identified with
+  the other joint still; the diagnosis runs have the other joint of the excavator on
+  the same pump moving at random levels) and ``load_dependence`` (the boom of
+  ``config/physics_boom_power.yaml``: its valve without pressure compensation, on a
+  pump whose power binds; identified lifting nothing; diagnosed on runs lifting nothing
+  and 600 kg with the piston-side pressure logged as the load);
+* ``none``: the ``power_sat`` model itself, on the same kind of runs.
+
+Left out, with the reason from the plant's physics (:data:`LEFT_OUT`):
+``direction_dependent_delay`` and ``backlash``. ``angle_dependent_velocity`` (a
+factor of the angle opposite for the two directions: gravity through a valve without
+compensation) is what identify's ``stroke_geometry`` fits as its per-direction part,
+so the plant cannot give a model that lacks it and nothing else.
+
+Varied: the joints (arm, boom), units (signed percent, a 0..100 % duty resting at 50,
+volts), programs (random levels with rests, full strokes stop to stop), seeds; each
+seed draws the valve's dead time (0.12-0.3 s) and spool lag (0.12-0.35 s).
+
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from functools import cached_property, lru_cache
+from typing import Any, Sequence
+
+from hydro_sdp.core.diagnosis.search import diagnose
+from hydro_sdp.core.identification.identify import identify
+from hydro_sdp.core.model.joint_model import JointModel
+from hydro_sdp.core.model.records import Record
+from hydro_sdp.core.model.static_maps import linearise, sdp_rate, SdpMap
+from hydro_sdp.core.synthetic.physics.plant import Machine, with_payload
+import numpy as np
+from scipy.optimize import least_squares
+from support.grid_results import GridResult
+from support.plant_programs import levels, strokes, variant, VARIANTS
+
+#: The words hidden in turn, and ``none``.
+WORDS: tuple[str, ...] = (
+    'dead_zone', 'velocity_saturation', 'asymmetry', 'time_delay', 'angle_limits',
+    'valve_lag', 'stroke_geometry', 'none', 'flow_sharing', 'load_dependence')
+
+#: Words the plant cannot produce, and why (its physics).
+LEFT_OUT: dict[str, str] = {
+    'direction_dependent_delay': 'one spool, one dead time and one lag for both directions '
+                                 '(Valve.dead_time, Valve.time_constant)',
+    'backlash': 'the linkage is a rigid triangle on its pins and the link rides on a linear '
+                'second-order compliance: nothing is lost at a reversal',
+    'angle_dependent_velocity': "identify fits the plant's opposite factor of the angle as "
+                                "stroke_geometry's per-direction part: no model lacks it alone",
+}
+
+#: The two programs.
+PROGRAMS: tuple[str, ...] = ('random', 'stroke')
+
+#: Share of the gap the named word must remove: half, and 30 % for load_dependence
+#: (the load acts through the pressure the pump's power leaves, not through a factor
+#: the model holds: the word fits it to the logged pressure).
+SHRINK = {'load_dependence': 0.7}
+
+#: Payloads of the load_dependence runs, kg (identified at the first).
+PAYLOADS = (0.0, 600.0)
+
+
+@dataclass(frozen=True, eq=False)
+class PlantCase:
+    """
+    One case of the plant grid.
+
+    Parameters
+    ----------
+    word : str
+        The word the model lacks (``none``: nothing).
+    program : str
+        ``random`` or ``stroke``.
+    joint, units : str
+        A key of :data:`support.plant_programs.VARIANTS`.
+    model : JointModel
+        The model under test.
+    estimation, validation : tuple of Record
+        Plant records.
+
+    """
+
+    word: str
+    program: str
+    joint: str
+    units: str
+    model: JointModel
+    estimation: tuple[Record, ...]
+    validation: tuple[Record, ...]
+
+
+#: Duties of the full strokes, percent: identification, estimation, validation.
+DUTIES = {'identify': (45.0, 65.0, 85.0, 100.0), 'estimate': (50.0, 75.0, 100.0),
+          'validate': (60.0, 90.0)}
+#: Fewer and faster strokes, for a quick look (the tests).
+QUICK_DUTIES = {'identify': (50.0, 75.0, 100.0), 'estimate': (55.0, 100.0),
+                'validate': (70.0,)}
+
+
+def _runs(machine: Machine, program: str, seed: int, part: str, *, seconds: float,
+          pressure: bool = False) -> list[Record]:
+    """
+    Identification, estimation or validation runs of one program.
+
+    Random levels last ``seconds`` s; below 40 s the strokes are the quick ones.
+    """
+    if program == 'stroke':
+        duties = (DUTIES if seconds >= 40.0 else QUICK_DUTIES)[part]
+        return strokes(machine, duties, 1000 * seed + 100 * len(part), pressure=pressure)
+    count = {'identify': 3, 'estimate': 2, 'validate': 1}[part]
+    return [levels(machine, seconds, 1000 * seed + 100 * len(part) + k, pressure=pressure)
+            for k in range(count)]
+
+
+def _identify(machine: Machine, records: Sequence[Record], kind: str) -> JointModel:
+    """Identify the first joint, told its valve's neutral and command range."""
+    valve = machine.joints[0].valve
+    bare = [Record(r.t, r.v, r.y, r.joint, r.source) for r in records]
+    return identify(bare, kind=kind, rest=valve.neutral, input_limits=valve.limits).model
+
+
+class Identified:
+    """
+    A plant of one case's draws, its identification runs, its models and diagnosis runs.
+
+    The runs are made and the models identified when first asked for.
+
+    Parameters
+    ----------
+    joint, units, program : str
+        The case.
+    seed : int
+        Seed of the draws and the runs.
+    seconds : float
+        Length of each random-level run, s.
+
+    """
+
+    def __init__(self, joint: str, units: str, program: str, seed: int,
+                 seconds: float) -> None:
+        self.machine = variant(joint, units, _rng(joint, units, program, seed, 0))
+        self.program, self.seed, self.seconds = program, seed, seconds
+
+    def runs(self, part: str) -> list[Record]:
+        """Return the ``identify``, ``estimate`` or ``validate`` runs."""
+        return _runs(self.machine, self.program, self.seed, part, seconds=self.seconds)
+
+    @cached_property
+    def identification(self) -> list[Record]:
+        """Runs the models are identified on."""
+        return self.runs('identify')
+
+    @cached_property
+    def power_sat(self) -> JointModel:
+        """The ``power_sat`` model (the family the auto choice gives full strokes)."""
+        return _identify(self.machine, self.identification, 'power_sat')
+
+    @cached_property
+    def sdp(self) -> JointModel:
+        """The ``sdp`` model (eq. (5): the family whose features the map words are)."""
+        return _identify(self.machine, self.identification, 'sdp')
+
+    @cached_property
+    def estimation(self) -> tuple[Record, ...]:
+        """Runs the diagnosis fits on."""
+        return tuple(self.runs('estimate'))
+
+    @cached_property
+    def validation(self) -> tuple[Record, ...]:
+        """Runs the diagnosis is judged on."""
+        return tuple(self.runs('validate'))
+
+
+def _rng(joint: str, units: str, program: str, seed: int, tag: int) -> np.random.Generator:
+    return np.random.default_rng([seed, list(VARIANTS).index((joint, units)),
+                                  PROGRAMS.index(program), tag])
+
+
+@lru_cache(maxsize=2)
+def identified(joint: str, units: str, program: str, seed: int,
+               seconds: float = 40.0) -> Identified:
+    """Return the :class:`Identified` of one case's draws (the last two kept)."""
+    return Identified(joint, units, program, seed, seconds)
+
+
+def _top_commands(sdp: SdpMap, limits: tuple[float, float]) -> tuple[float, float]:
+    """Commands where the map reaches two thirds of its speed at the full command, each side."""
+    ends = []
+    for edge, limit in zip(sdp.dead_zone, limits):
+        v = np.linspace(edge, limit, 2001)[1:]
+        speeds = np.abs(sdp.rate(v))
+        ends.append(float(v[np.argmax(speeds >= 2.0 / 3.0 * speeds[-1])]))
+    return ends[0], ends[1]
+
+
+def _symmetric(sdp: SdpMap, rest: float, limits: tuple[float, float]) -> SdpMap:
+    """One sdp side fitted to the mean of the two sides' speeds, mirrored about ``rest``."""
+    half = min(rest - limits[0], limits[1] - rest)
+    u = np.linspace(0.0, half, 201)
+    target = 0.5 * (sdp.rate(rest + u) - sdp.rate(rest - u))
+    width = 0.5 * (sdp.dead_zone[1] - sdp.dead_zone[0])
+
+    def miss(p: np.ndarray) -> np.ndarray:
+        speed, curvature, edge = np.exp(p)
+        return sdp_rate(rest + u, -speed, curvature, rest - edge, speed, curvature,
+                        rest + edge) - target
+    top = float(np.max(target))
+    fit = least_squares(miss, np.log([1.2 * top, 3.0 / half, max(width, 1e-3 * half)]))
+    speed, curvature, edge = (float(x) for x in np.exp(fit.x))
+    return SdpMap((rest - edge, rest + edge), (-speed, speed), (curvature, curvature))
+
+
+def _without(word: str, found: Identified, rng: np.random.Generator) -> JointModel | None:
+    """Return the identified model without ``word`` (None: identify did not find it)."""
+    full, sdp = found.power_sat, found.sdp
+    valve = found.machine.joints[0].valve
+    static_map = sdp.static_map
+    assert isinstance(static_map, SdpMap)
+    if word == 'dead_zone':
+        closed = (valve.neutral, valve.neutral)
+        return replace(sdp, static_map=replace(static_map, dead_zone=closed))
+    if word == 'velocity_saturation':
+        return replace(sdp, static_map=linearise(static_map, *_top_commands(
+            static_map, valve.limits)))
+    if word == 'asymmetry':
+        return replace(sdp, static_map=_symmetric(static_map, valve.neutral, valve.limits))
+    if word == 'time_delay':
+        shift = max(0.1, 0.4 * full.delay) * float(rng.choice([-1.0, 1.0]))
+        wrong = full.delay + shift if full.delay + shift >= 0.01 else full.delay + abs(shift)
+        return replace(full, delay=round(wrong, 2))
+    if word == 'angle_limits':
+        return replace(full, angle_limits=None) if full.angle_limits else None
+    if word in ('valve_lag', 'stroke_geometry'):
+        return full.without_effect(word) if full.effect(word) is not None else None
+    return full
+
+
+def _exogenous(word: str, joint: str, units: str, program: str, seed: int, seconds: float
+               ) -> tuple[JointModel, list[Record], list[Record]] | None:
+    """Return the model and the runs of ``flow_sharing`` and ``load_dependence``."""
+    if word == 'flow_sharing':
+        # The same draws: the joint of identified(), with the other on its pump.
+        shared = variant(joint, units, _rng(joint, units, program, seed, 0), partner=True)
+        return (identified(joint, units, program, seed, seconds).power_sat,
+                _runs(shared, program, seed + 500, 'estimate', seconds=seconds),
+                _runs(shared, program, seed + 500, 'validate', seconds=seconds))
+    if joint != 'boom':
+        return None  # The arm's compensated valve holds its speed under any payload.
+    machine = variant(joint, units, _rng(joint, units, program, seed, 1), power=True)
+    light = with_payload(machine, PAYLOADS[0])
+    model = _identify(light, _runs(light, program, seed, 'identify', seconds=seconds),
+                      'power_sat')
+    estimation: list[Record] = []
+    validation: list[Record] = []
+    for payload in PAYLOADS:
+        loaded = with_payload(machine, payload)
+        for part, out in (('estimate', estimation), ('validate', validation)):
+            out += [replace(r, source=f'{payload:g} kg {r.source}') for r in _runs(
+                loaded, program, seed + int(payload), part, seconds=seconds, pressure=True)]
+    return model, estimation, validation
+
+
+def make_case(word: str, program: str, joint: str, units: str, seed: int, *,
+              seconds: float = 40.0) -> PlantCase | None:
+    """
+    Return one case of the plant grid, or None where identify found nothing to remove.
+
+    Parameters
+    ----------
+    word : str
+        One of :data:`WORDS`.
+    program : str
+        One of :data:`PROGRAMS`.
+    joint, units : str
+        A key of :data:`support.plant_programs.VARIANTS`.
+    seed : int
+        Seed of the draws and the runs.
+    seconds : float
+        Length of each random-level run, s; below 40 s, fewer and faster strokes
+        (:data:`QUICK_DUTIES`).
+
+    Returns
+    -------
+    PlantCase or None
+        The case.
+
+    """
+    if word in ('flow_sharing', 'load_dependence'):
+        made = _exogenous(word, joint, units, program, seed, seconds)
+        if made is None:
+            return None
+        model, estimation, validation = made
+        return PlantCase(word, program, joint, units, model, tuple(estimation),
+                         tuple(validation))
+    if word == 'angle_limits' and program == 'random':
+        return None
+    found = identified(joint, units, program, seed, seconds)
+    model = _without(word, found, _rng(joint, units, program, seed, 2 + WORDS.index(word)))
+    if model is None:
+        return None
+    return PlantCase(word, program, joint, units, model, found.estimation, found.validation)
+
+
+def run_case(case: PlantCase, **options: Any) -> GridResult:
+    """Diagnose one case (one word added at most) and return what was named."""
+    result = diagnose(case.estimation, case.model, validation=case.validation,
+                      **{'max_iterations': 1, **options})
+    return GridResult(case.word, case.program, f'{case.joint} {case.units}', result.effect,
+                      result.mae_before, result.mae_after,
+                      shrink=SHRINK.get(case.word, 0.5))
