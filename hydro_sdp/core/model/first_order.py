@@ -79,10 +79,32 @@ def first_order(x: FloatArray, a: float, b: float = 1.0,
     block = size if abs(a) == 1.0 else max(1, int(_EXPONENT / -math.log(abs(a))))
     if size <= block:
         return _block(x, a, b, before)
-    out = np.empty_like(x)
-    state: float | FloatArray = before
-    for first in range(0, size, block):
-        part = _block(x[..., first:first + block], a, b, state)
-        out[..., first:first + block] = part
-        state = part[..., -1]
-    return out
+    # All blocks at once: each block's sum from zero, then the state carried across
+    # blocks (the same operations, in the same order, as block after block).
+    count = -(-size // block)
+    padded = np.zeros(x.shape[:-1] + (count * block,))
+    padded[..., :size] = x
+    blocks = padded.reshape(x.shape[:-1] + (count, block))
+    powers = _powers(a, block)
+    sums = np.divide(blocks, powers)
+    np.cumsum(sums, axis=-1, out=sums)
+    if b != 1.0:
+        sums *= b
+    last = float(powers[-1])
+    if x.ndim == 1:
+        # One series: carry the state in Python floats (the same IEEE arithmetic, without
+        # an array operation per block).
+        states, state = [], float(np.asarray(before, dtype=np.float64))
+        for end in sums[:, -1].tolist():
+            states.append(state)
+            state = (end + state) * last
+        starts = np.array(states)
+    else:
+        starts = np.empty(x.shape[:-1] + (count,))
+        carried = np.broadcast_to(np.asarray(before, dtype=np.float64), x.shape[:-1])
+        for index in range(count):
+            starts[..., index] = carried
+            carried = (sums[..., index, -1] + carried) * last
+    sums += starts[..., None]
+    sums *= powers
+    return sums.reshape(padded.shape)[..., :size]
