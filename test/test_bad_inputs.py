@@ -27,7 +27,7 @@ def test_every_named_test_is_collected():
     names = [row.group(2) for _, row in _rows()]
     files = sorted({name.split('::')[0] for name in names})
     listing = subprocess.run(
-        [sys.executable, '-m', 'pytest', '--collect-only', '-q', '-rs', '-p',
+        [sys.executable, '-m', 'pytest', '--collect-only', '-q', '-rs', '-n0', '-p',
          'no:cacheprovider', *files], cwd=REPO, capture_output=True, text=True,
         check=True).stdout
     collected = [line for line in listing.splitlines() if '::' in line]
