@@ -20,7 +20,7 @@ import time
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / 'test'))
 from support.diagnosis_grid import (  # noqa: E402, I100
     make_case, PROGRAMS, run_case, UNITS, WORDS)
-from support.grid_results import confusion_table  # noqa: E402
+from support.grid_results import confusion_table, shares  # noqa: E402
 
 
 def main():
@@ -43,12 +43,7 @@ def main():
                               f'{result.mae_after:.3g} deg', flush=True)
     took = time.perf_counter() - started
     print('\n'.join(confusion_table(results, WORDS)))
-    hidden = [r for r in results if r.word != 'none']
-    correct = [r for r in results if r.word == 'none']
-    print(f'right word first and gap halved: {sum(r.right for r in hidden)}/{len(hidden)} '
-          f'({100 * sum(r.right for r in hidden) / len(hidden):.1f} %, target >= 95 %)')
-    print(f'correct model named none: {sum(r.right for r in correct)}/{len(correct)} '
-          f'(target: all)')
+    print('\n'.join(shares(results)))
     print(f'{len(results)} cases in {took:.0f} s')
 
 

@@ -21,7 +21,7 @@ import time
 
 # The grid builds its cases with the test suite's helpers.
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / 'test'))
-from support.grid_results import confusion_table  # noqa: E402, I100
+from support.grid_results import confusion_table, shares  # noqa: E402, I100
 from support.plant_grid import LEFT_OUT, make_case, PROGRAMS, run_case, WORDS  # noqa: E402
 from support.plant_programs import VARIANTS  # noqa: E402
 
@@ -48,13 +48,7 @@ def main():
                           f'{result.mae_after:.3g} deg', flush=True)
     took = time.perf_counter() - started
     print('\n'.join(confusion_table(results, WORDS)))
-    hidden = [r for r in results if r.word != 'none']
-    correct = [r for r in results if r.word == 'none']
-    print(f'right word first and gap halved (30 % for load_dependence): '
-          f'{sum(r.right for r in hidden)}/{len(hidden)} '
-          f'({100 * sum(r.right for r in hidden) / max(len(hidden), 1):.1f} %)')
-    print(f'model identified on the same kind of runs named none: '
-          f'{sum(r.right for r in correct)}/{len(correct)}')
+    print('\n'.join(shares(results, 'gap halved (30 % for load_dependence)')))
     print(f'not hidden ({len(skipped)}: identify found nothing to remove, or the plant has '
           f'no such effect there): ' + '; '.join(skipped))
     print('left out: ' + '; '.join(f'{word}: {why}' for word, why in LEFT_OUT.items()))

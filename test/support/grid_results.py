@@ -80,3 +80,29 @@ def confusion_table(results: Sequence[GridResult],
     right = sum(r.right for r in results)
     rows.append(f'| all | {" | ".join("" for _ in named)} | {right}/{len(results)} |')
     return rows
+
+
+def shares(results: Sequence[GridResult], rule: str = 'gap halved') -> list[str]:
+    """
+    Return the two shares a grid is judged by, as lines to print.
+
+    Parameters
+    ----------
+    results : sequence of GridResult
+        Grid results.
+    rule : str
+        How "right" is judged for a hidden word, as the line says it.
+
+    Returns
+    -------
+    list[str]
+        The share of hidden words named right, and of correct models named none.
+
+    """
+    hidden = [r for r in results if r.word != 'none']
+    correct = [r for r in results if r.word == 'none']
+    right = sum(r.right for r in hidden)
+    return [f'right word first and {rule}: {right}/{len(hidden)} '
+            f'({100 * right / max(len(hidden), 1):.1f} %, target >= 95 %)',
+            f'correct model named none: {sum(r.right for r in correct)}/{len(correct)} '
+            '(target: all)']
