@@ -158,3 +158,10 @@ def test_identify_starts_without_scipy_signal_and_stats_and_stays_light():
     _, modules = runs[0]
     assert not {'scipy.signal', 'scipy.stats', 'matplotlib', 'rosbags', 'rclpy'} & modules
     assert min(seconds for seconds, _ in runs) < 15.0 * min(numpy)
+
+
+def test_calibrate_and_diagnose_start_without_scipy_stats():
+    # scipy.stats cost them 0.7 s at start-up for one chi-square tail probability.
+    _, modules = _import_time('import hydro_sdp.cli.calibrate, hydro_sdp.cli.diagnose, '
+                              'hydro_sdp.core.calibration, hydro_sdp.core.diagnosis')
+    assert 'scipy.stats' not in modules

@@ -24,7 +24,8 @@ from hydro_sdp.core.model.simulation import one_step_increments
 from hydro_sdp.core.model.timing import delayed_at
 import numpy as np
 from scipy.optimize import minimize_scalar
-from scipy.stats import chi2
+# chi2's survival function without importing scipy.stats (0.7 s for one function).
+from scipy.special import chdtrc
 
 #: Heterogeneity of the per-record scales is named below this p-value.
 P_LIMIT = 1e-3
@@ -126,7 +127,7 @@ class RecordScales:
     @property
     def p_value(self) -> float:
         """Probability of a chi-square this large if the records' scales were equal."""
-        return float(chi2.sf(self.statistic, self.freedom)) if self.freedom else 1.0
+        return float(chdtrc(self.freedom, self.statistic)) if self.freedom else 1.0
 
     def evidence(self) -> dict[str, list[float | None]]:
         """Return the scales and errors per direction for the report (None where undefined)."""
