@@ -10,10 +10,17 @@ nodes of its own (docs/methods.md section 9.4). Used through
 
 from __future__ import annotations
 
-from typing import Callable, Iterable, Protocol, TYPE_CHECKING
+from typing import Callable, Iterable, Protocol
 
-if TYPE_CHECKING:
-    from hydro_sdp.ros.testing import RosHarness
+
+class SteppingHarness(Protocol):
+    """What Lockstep needs of the harness (:class:`hydro_sdp.ros.testing.RosHarness`)."""
+
+    def set_time(self, nanoseconds: int) -> None:
+        """Set the clock of every simulated-time node."""
+
+    def spin_until(self, predicate: Callable[[], bool], timeout: float = 5.0) -> bool:
+        """Spin until ``predicate()`` holds or ``timeout`` s pass; return whether it held."""
 
 
 class Observer(Protocol):
@@ -77,8 +84,8 @@ class Lockstep:
 
     Parameters
     ----------
-    harness : RosHarness
-        The harness.
+    harness : SteppingHarness
+        The harness (a :class:`~hydro_sdp.ros.testing.RosHarness`).
     plant : PlantNode
         The plant node (its ``sample_period`` is the step).
     controllers : iterable of PipControllerNode
@@ -90,7 +97,7 @@ class Lockstep:
 
     """
 
-    def __init__(self, harness: RosHarness, plant: SteppedPlant, *,
+    def __init__(self, harness: SteppingHarness, plant: SteppedPlant, *,
                  controllers: Iterable[LoopController] = (), observers: Iterable[Observer] = (),
                  timeout: float = 5.0) -> None:
         self.harness = harness
