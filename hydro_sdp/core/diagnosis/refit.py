@@ -215,8 +215,9 @@ def refit_map(context: Context, features: Features, delay: float | None = None) 
     polished on the velocity residuals of whole records, starting from that fit or
     from the model's own map, whichever predicts better (segmentation of records
     that run into end stops may give poor experiments; the records themselves do not).
-    It stays in the model's family; saturation added to a map without it is fitted
-    both as eq. (5) and as ``power_sat``, and the better on the records kept.
+    It stays in the model's family; saturation added to a map without it that has a
+    dead-zone is fitted both as eq. (5) and as ``power_sat``, and the better on the
+    records kept.
 
     Parameters
     ----------
@@ -235,7 +236,9 @@ def refit_map(context: Context, features: Features, delay: float | None = None) 
     """
     model = context.model if delay is None else replace(context.model, delay=delay)
     families = [features]
-    if features.saturation and not features.power and \
+    # A convex start from rest is what a dead-zone does: power_sat is tried only beyond
+    # edges the map already has (the dead_zone word tests a zone on its own).
+    if features.saturation and features.dead_zone and not features.power and \
             not map_features(model.static_map).saturation:
         families.append(features._replace(power=True))
     refits = [_refit_in(context, model, family) for family in families]
