@@ -224,7 +224,7 @@ def _top_commands(static_map: StaticMap, edges: tuple[float, float],
 
 
 def _chords(static_map: PowerSatMap, limits: tuple[float, float]) -> SdpDzMap:
-    """The map's chords from its edges to two thirds of its speed at the full command."""
+    """Return the map's chords from its edges to two thirds of its full-command speed."""
     edges = static_map.dead_zone
     ends = _top_commands(static_map, edges, limits)
     rates = static_map.rate(np.array(ends))
