@@ -19,7 +19,8 @@ residual). Accepted candidates are ranked: those whose signature the data show w
 no other word explains (a stop held while driven beyond the dead-zone, a factor of the
 angle shared by both directions where the data name the angle) first, then those of the
 states the SDP analysis names (:mod:`.naming`), each group by the share of the windowed
-error it removes (docs/methods.md section 8.4).
+error it removes (docs/methods.md section 8.4). A word that holds an accepted simpler
+word as a special case (:data:`NESTED`) comes after it unless it removes clearly more.
 
 """
 
@@ -41,6 +42,10 @@ MARGIN = 0.1
 #: A candidate removing at least this share of the held-out squared velocity residual is
 #: never dismissed (when it also lowers the windowed error).
 MOST = 0.5
+#: Words that hold a simpler word as a special case (different delays for the two
+#: directions hold one delay for both): the richer is named before the simpler only
+#: when its windowed error is lower by :data:`MARGIN` of the simpler's.
+NESTED = {'direction_dependent_delay': 'time_delay'}
 
 
 def judge(trial: Trial, model: JointModel, checks: Sequence[Run], base: Sequence[FloatArray],
@@ -132,10 +137,20 @@ def rank(candidates: Sequence[Candidate], naming: Naming) -> list[Candidate]:
     -------
     list[Candidate]
         Accepted candidates first (signature, then the states named, then size); the
-        others after, by size.
+        others after, by size; a richer word after the simpler word it holds unless it
+        lowers the windowed error by :data:`MARGIN` more.
 
     """
     def key(candidate: Candidate) -> tuple[bool, bool, bool, float, float]:
         return (not candidate.accepted, not candidate.signature_match,
                 not candidate.named_by_data, -candidate.held_out, -candidate.gain)
-    return sorted(candidates, key=key)
+    ranked = sorted(candidates, key=key)
+    for richer, simpler in NESTED.items():
+        place = {candidate.effect: i for i, candidate in enumerate(ranked)}
+        if richer not in place or simpler not in place or place[richer] > place[simpler]:
+            continue
+        rich, simple = ranked[place[richer]], ranked[place[simpler]]
+        if rich.accepted and simple.accepted and \
+                rich.window_after > (1.0 - MARGIN) * simple.window_after:
+            ranked.insert(place[richer], ranked.pop(place[simpler]))
+    return ranked

@@ -3,7 +3,12 @@ Static maps refitted with a chosen set of features (dead-zone, saturation, asymm
 
 The map-shape detectors add one feature to the model's map and refit the whole
 map by regret-regression (docs/methods.md sections 2.1 and 8.2) on the experiments
-of the data.
+of the data. The refit stays in the model's family: a ``power_sat`` map (a valve
+opening convexly through its notches) is refitted as ``power_sat``, an ``sdp`` or
+``sdp_dz`` map as eq. (5) or its chords. Saturation added to a map that has none
+is fitted in both saturating families, eq. (5) and ``power_sat``, and the one that
+predicts the records better is kept: a map without saturation says nothing of
+whether the speed levels off concavely or after a convex start.
 
 """
 
@@ -19,18 +24,27 @@ from hydro_sdp.core.diagnosis.residuals import velocity_residuals
 from hydro_sdp.core.errors import HydroSdpError
 from hydro_sdp.core.identification.delay import level_speeds
 from hydro_sdp.core.identification.map_fit import fit_sdp, FitData
+from hydro_sdp.core.identification.map_fit.power_sat import fit_power_sat
 from hydro_sdp.core.model.joint_model import JointModel
-from hydro_sdp.core.model.static_maps import LinearMap, SdpDzMap, SdpMap, StaticMap
+from hydro_sdp.core.model.static_maps import (
+    LinearMap, PowerSatMap, SdpDzMap, SdpMap, StaticMap)
 import numpy as np
 from scipy.optimize import least_squares
 
 
+#: Exponents of a ``power_sat`` side (the bounds identify fits them in).
+EXPONENTS = (0.5, 8.0)
+#: Maps a refit builds.
+RefitMap = SdpMap | SdpDzMap | PowerSatMap
+
+
 class Features(NamedTuple):
-    """Which features a static map has."""
+    """Which features a static map has, and whether its sides start as a power."""
 
     dead_zone: bool
     saturation: bool
     asymmetric: bool
+    power: bool = False
 
 
 def map_features(static_map: StaticMap) -> Features:
@@ -47,6 +61,13 @@ def map_features(static_map: StaticMap) -> Features:
         cn, cp = static_map.curvature
         symmetric = math.isclose(-vn, vp, rel_tol=1e-6) and math.isclose(cn, cp, rel_tol=1e-6)
         return Features(high > low, True, not symmetric)
+    if isinstance(static_map, PowerSatMap):
+        low, high = static_map.dead_zone
+        vn, vp = static_map.saturation_velocity
+        symmetric = math.isclose(-vn, vp, rel_tol=1e-6) and all(
+            math.isclose(n, p, rel_tol=1e-6)
+            for n, p in (static_map.curvature, static_map.exponent))
+        return Features(high > low, True, not symmetric, True)
     return Features(True, True, True)
 
 
@@ -66,10 +87,11 @@ class MapFamily:
     """
 
     def __init__(self, features: Features, rest: float, scale: float) -> None:
-        self.dead_zone, self.saturation, self.asymmetric = features
+        self.dead_zone, self.saturation, self.asymmetric, power = features
+        self.power = power and self.saturation
         self.rest, self.scale = rest, scale
 
-    def build(self, x: FloatArray) -> SdpMap | SdpDzMap:
+    def build(self, x: FloatArray) -> RefitMap:
         """Return the map for free parameters ``x``."""
         i = 0
         if self.dead_zone:
@@ -90,9 +112,18 @@ class MapFamily:
             return SdpDzMap(dead_zone=(low, high), slope=(a, b))
         if self.asymmetric:
             cn, cp = math.exp(x[i]), math.exp(x[i + 1])
+            i += 2
         else:
             cn = cp = math.exp(x[i])
-        return SdpMap(dead_zone=(low, high), saturation_velocity=(-a, b), curvature=(cn, cp))
+            i += 1
+        if not self.power:
+            return SdpMap(dead_zone=(low, high), saturation_velocity=(-a, b),
+                          curvature=(cn, cp))
+        # The exponent rides on a logistic between identify's bounds.
+        nn, np_ = (EXPONENTS[0] + (EXPONENTS[1] - EXPONENTS[0]) / (1.0 + math.exp(-value))
+                   for value in ((x[i], x[i + 1]) if self.asymmetric else (x[i], x[i])))
+        return PowerSatMap(dead_zone=(low, high), saturation_velocity=(-a, b),
+                           curvature=(cn, cp), exponent=(nn, np_))
 
     def start(self, static_map: StaticMap) -> FloatArray:
         """Free parameters near ``static_map`` (any kind), for a fit to start from."""
@@ -111,7 +142,7 @@ class MapFamily:
         if self.saturation:
             sizes = [1.2 * top[0], 1.2 * top[1]]
             curvature = [2.0 / self.scale] * 2
-            if isinstance(static_map, SdpMap):
+            if isinstance(static_map, (SdpMap, PowerSatMap)):
                 sizes = [-static_map.saturation_velocity[0], static_map.saturation_velocity[1]]
                 curvature = list(static_map.curvature)
         else:
@@ -124,10 +155,17 @@ class MapFamily:
         if curvature is not None:
             x += [math.log(curvature[0]), math.log(curvature[1])] if self.asymmetric else \
                 [math.log(0.5 * (curvature[0] + curvature[1]))]
+        if self.power:
+            # From the map's own exponents, or from eq. (5) (exponent 1).
+            exponents = static_map.exponent if isinstance(static_map, PowerSatMap) else (1.0, 1.0)
+            shares = [min(max((n - EXPONENTS[0]) / (EXPONENTS[1] - EXPONENTS[0]), 1e-6),
+                          1.0 - 1e-6) for n in exponents]
+            logits = [math.log(share / (1.0 - share)) for share in shares]
+            x += logits if self.asymmetric else [0.5 * (logits[0] + logits[1])]
         return np.array(x)
 
 
-def _fit_family(model: JointModel, family: MapFamily, data: FitData) -> SdpMap | SdpDzMap:
+def _fit_family(model: JointModel, family: MapFamily, data: FitData) -> RefitMap:
     x0 = family.start(model.static_map)
 
     def residuals(p: FloatArray) -> FloatArray:
@@ -146,6 +184,29 @@ def _polish(context: Context, model: JointModel, family: MapFamily) -> JointMode
     return replace(model, static_map=family.build(result.x))
 
 
+def _refit_in(context: Context, model: JointModel, features: Features) -> JointModel:
+    """Refit the map of ``model`` in the family of ``features`` and polish it."""
+    samples = model.delay_samples(context.dt)
+    family = MapFamily(features, rest=context.rest, scale=context.scale)
+    starts = [replace(model, static_map=family.build(family.start(model.static_map)))]
+    try:
+        data = context.fit_data(samples)
+        if all(features[:3]):
+            # The full map: identify's fits, started from the data's speeds.
+            points = level_speeds(data.experiments, samples, context.dt, rest=context.rest)
+            sdp = fit_sdp(data, points, context.rest).static_map
+            starts.append(replace(model, static_map=sdp))
+            if family.power:
+                starts.append(replace(model, static_map=fit_power_sat(
+                    data, points, context.rest, sdp).static_map))
+        else:
+            starts.append(replace(model, static_map=_fit_family(model, family, data)))
+    except (HydroSdpError, np.linalg.LinAlgError, ValueError):
+        pass  # The experiments do not support a fit: start from the model's own map.
+    best = min(starts, key=context.squared_residual)
+    return _polish(context, best, family)
+
+
 def refit_map(context: Context, features: Features, delay: float | None = None) -> JointModel:
     """
     Return the model under test with its map refitted to have ``features``.
@@ -154,6 +215,9 @@ def refit_map(context: Context, features: Features, delay: float | None = None) 
     polished on the velocity residuals of whole records, starting from that fit or
     from the model's own map, whichever predicts better (segmentation of records
     that run into end stops may give poor experiments; the records themselves do not).
+    It stays in the model's family; saturation added to a map without it that has a
+    dead-zone is fitted both as eq. (5) and as ``power_sat``, and the better on the
+    records kept.
 
     Parameters
     ----------
@@ -171,23 +235,14 @@ def refit_map(context: Context, features: Features, delay: float | None = None) 
 
     """
     model = context.model if delay is None else replace(context.model, delay=delay)
-    samples = model.delay_samples(context.dt)
-    family = MapFamily(features, rest=context.rest, scale=context.scale)
-    starts = [replace(model, static_map=family.build(family.start(model.static_map)))]
-    try:
-        data = context.fit_data(samples)
-        fitted: SdpMap | SdpDzMap
-        if all(features):
-            # The full eq. (5) map: identify's multi-start fit, started from the data's speeds.
-            points = level_speeds(data.experiments, samples, context.dt, rest=context.rest)
-            fitted = fit_sdp(data, points, context.rest).static_map
-        else:
-            fitted = _fit_family(model, family, data)
-        starts.append(replace(model, static_map=fitted))
-    except (HydroSdpError, np.linalg.LinAlgError, ValueError):
-        pass  # The experiments do not support a fit: start from the model's own map.
-    best = min(starts, key=context.squared_residual)
-    return _polish(context, best, family)
+    families = [features]
+    # A convex start from rest is what a dead-zone does: power_sat is tried only beyond
+    # edges the map already has (the dead_zone word tests a zone on its own).
+    if features.saturation and features.dead_zone and not features.power and \
+            not map_features(model.static_map).saturation:
+        families.append(features._replace(power=True))
+    refits = [_refit_in(context, model, family) for family in families]
+    return min(refits, key=context.squared_residual)
 
 
 def map_parameters(model: JointModel) -> dict[str, object]:

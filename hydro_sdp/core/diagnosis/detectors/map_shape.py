@@ -10,7 +10,7 @@ from hydro_sdp.core.diagnosis.detectors.base import Detector
 from hydro_sdp.core.diagnosis.refit import map_features, map_parameters, refit_map
 from hydro_sdp.core.diagnosis.results import Candidate, Trial
 from hydro_sdp.core.model.joint_model import JointModel
-from hydro_sdp.core.model.static_maps import SdpMap
+from hydro_sdp.core.model.static_maps import PowerSatMap, SdpMap
 
 
 class MapShapeDetector(Detector):
@@ -59,17 +59,17 @@ class DeadZoneDetector(MapShapeDetector):
 
 
 class VelocitySaturationDetector(MapShapeDetector):
-    """The speed levels off: refit the map as an SDP map."""
+    """The speed levels off: refit the map as an SDP or a saturating power-law map."""
 
     word = 'velocity_saturation'
     description = "the speed levels off, the model's keeps growing"
-    remedy = 'an `sdp_dz` or linear map becomes `sdp`'
+    remedy = 'an `sdp_dz` or linear map becomes `sdp` or `power_sat`'
     adds = 'saturation'
 
     def finding(self, candidate: JointModel) -> str:
         """Return the saturation speeds found."""
         static_map = candidate.static_map
-        assert isinstance(static_map, SdpMap)
+        assert isinstance(static_map, (SdpMap, PowerSatMap))
         speeds = static_map.saturation_velocity
         return (f'the speed levels off at {speeds[0]:.3g} and {speeds[1]:.3g} '
                 'deg/s while the model keeps growing with the command')
