@@ -113,15 +113,8 @@ class FitData:
 
     def increments(self, rate: RateFunction) -> list[FloatArray]:
         """Per bucket, ``dt rate(v_{k-tau})`` with padding set to zero."""
-        per_level = np.append(self.dt * rate(self.levels), 0.0)
-        out = [per_level[index] for index in self._padded]
-        if self.pole != 0.0:
-            p = self.pole
-            out = [np.where(mask, first_order(q, p, 1.0 - p, q[:, 0]), 0.0)
-                   for q, (_, _, _, mask, _) in zip(out, self.buckets)]
-        if self.gains:
-            out = [q * gain for q, gain in zip(out, self.gains)]
-        return out
+        per_level = self._per_level(rate)
+        return [self._increments(bucket, per_level) for bucket in range(len(self.buckets))]
 
     def residuals(self, rate: RateFunction, beta: float = 0.0) -> FloatArray:
         """
@@ -140,35 +133,83 @@ class FitData:
             One residual per predicted sample.
 
         """
-        out = np.empty(self.samples)
-        done = 0
-        # A finite-difference Jacobian varies beta in one column of several: keep
-        # beta times the angles (read once, so the pair stays whole across threads).
-        cached = self._weighted
-        if cached[0] != beta:
-            cached = (beta, [beta * b[2] for b in self.buckets])
-            self._weighted = cached
-        for (_, _, observed, _, initial), q, flat, weighted in zip(
-                self.buckets, self.increments(rate), self._flat, cached[1]):
-            count = q.size if flat is None else flat.size
-            # A full bucket's residuals are written where they belong, others gathered.
-            target = out[done:done + count].reshape(q.shape) if flat is None else \
-                np.empty_like(q)
-            if beta == 0.0:
-                np.add(initial[:, None], np.cumsum(q, axis=1), out=target)
-            else:
-                a = 1.0 - beta
-                drive = q * a
-                drive += weighted
-                state = first_order(drive, a, 1.0, initial)
-                # Predicted from the state before: the start for the first sample.
-                np.add(initial[:, None], q[:, :1], out=target[:, :1])
-                np.add(state[:, :-1], q[:, 1:], out=target[:, 1:])
-            np.subtract(observed, target, out=target)
-            if flat is not None:
-                out[done:done + count] = target.ravel()[flat]
-            done += count
+        return self.residuals_of_many([(rate, beta)])[0]
+
+    def residuals_of_many(self, maps: Sequence[tuple[RateFunction, float]]
+                          ) -> list[FloatArray]:
+        """
+        The residuals of several maps, each as :meth:`residuals` gives them, bit for bit.
+
+        Maps of the same ``beta`` (the columns of a finite-difference Jacobian but the
+        one of ``beta``) run through each numpy operation together, one row of a 3-D
+        block each: the same operations on the same numbers, a few calls for all.
+
+        Parameters
+        ----------
+        maps : sequence of (callable, float)
+            Each map's rate function and its ``beta``.
+
+        Returns
+        -------
+        list of FloatArray
+            Per map, one residual per predicted sample.
+
+        """
+        per_level = [self._per_level(rate) for rate, _ in maps]
+        out = [np.empty(self.samples) for _ in maps]
+        groups: dict[bytes, list[int]] = {}
+        for index, (_, beta) in enumerate(maps):
+            # Bits, not values: 0.0 and -0.0 go through different operations.
+            groups.setdefault(np.float64(beta).tobytes(), []).append(index)
+        for members in groups.values():
+            stacked = np.stack([per_level[index] for index in members])
+            done = 0
+            for bucket, flat in enumerate(self._flat):
+                grid = self._bucket_residuals(bucket, stacked, maps[members[0]][1])
+                rows = grid.reshape(len(members), -1)
+                values = rows if flat is None else rows[:, flat]
+                for row, index in enumerate(members):
+                    out[index][done:done + values.shape[1]] = values[row]
+                done += values.shape[1]
         return out
+
+    def _per_level(self, rate: RateFunction) -> FloatArray:
+        """Return ``dt rate`` of every level, then 0 for the padding."""
+        return np.append(self.dt * rate(self.levels), 0.0)
+
+    def _increments(self, bucket: int, per_level: FloatArray) -> FloatArray:
+        """Return a bucket's increments, padding set to zero (one block per row of levels)."""
+        q = per_level[..., self._padded[bucket]]
+        if self.pole != 0.0:
+            p = self.pole
+            q = np.where(self.buckets[bucket][3], first_order(q, p, 1.0 - p, q[..., 0]), 0.0)
+        if self.gains:
+            q = q * self.gains[bucket]
+        return q
+
+    def _bucket_residuals(self, bucket: int, per_level: FloatArray, beta: float) -> FloatArray:
+        """Return a bucket's residuals, one row per experiment (one block per row of levels)."""
+        q = self._increments(bucket, per_level)
+        _, _, observed, _, initial = self.buckets[bucket]
+        target = np.empty_like(q)
+        if beta == 0.0:
+            np.add(initial[:, None], np.cumsum(q, axis=-1), out=target)
+        else:
+            # A finite-difference Jacobian varies beta in one column of several: keep
+            # beta times the angles (read once, so the pair stays whole across threads).
+            cached = self._weighted
+            if cached[0] != beta:
+                cached = (beta, [beta * b[2] for b in self.buckets])
+                self._weighted = cached
+            a = 1.0 - beta
+            drive = q * a
+            drive += cached[1][bucket]
+            state = first_order(drive, a, 1.0, initial)
+            # Predicted from the state before: the start for the first sample.
+            np.add(initial[:, None], q[..., :1], out=target[..., :1])
+            np.add(state[..., :-1], q[..., 1:], out=target[..., 1:])
+        np.subtract(observed, target, out=target)
+        return target
 
     def simulation_mae(self, rate: RateFunction) -> float:
         """Mean absolute simulation error over all predicted samples, degrees."""
@@ -224,14 +265,3 @@ def covariance_errors(jacobian: FloatArray, cost: float, samples: int) -> FloatA
         return np.full(parameters, np.inf)
     return np.sqrt(np.clip(np.diag(covariance), 0.0, None))
 
-
-def numeric_jacobian(function: Callable[[FloatArray], FloatArray], x: FloatArray) -> FloatArray:
-    """Return the forward-difference Jacobian of ``function`` at ``x``."""
-    base = function(x)
-    columns = []
-    for i in range(x.size):
-        step = 1e-6 * max(abs(x[i]), 1e-3)
-        shifted = x.copy()
-        shifted[i] += step
-        columns.append((function(shifted) - base) / step)
-    return np.column_stack(columns)

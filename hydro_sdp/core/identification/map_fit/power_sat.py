@@ -16,6 +16,7 @@ from typing import Sequence
 
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.identification.delay import LevelSpeed
+from hydro_sdp.core.identification.map_fit.columns import BatchedResiduals
 from hydro_sdp.core.identification.map_fit.data import (
     covariance_errors, FitData, FitMethod, MapFit, RateFunction, TR_SOLVER)
 from hydro_sdp.core.model.static_maps import power_sat_rate, PowerSatMap, SdpMap
@@ -130,13 +131,16 @@ def fit_power_sat(data: FitData, points: Sequence[LevelSpeed], rest: float, star
     """
     x0, lower, upper = power_sat_start(points, rest, start)
     if method == 'rr':
-        result = least_squares(lambda x: data.residuals(power_sat_rate_function(x), float(x[8])),
-                               np.r_[x0, 0.5], bounds=(np.r_[lower, 0.0], np.r_[upper, 1.0]),
-                               x_scale='jac', tr_solver=TR_SOLVER)
+        residuals = BatchedResiduals(
+            data, lambda x: (power_sat_rate_function(x), float(x[8])))
+        result = least_squares(residuals, np.r_[x0, 0.5],
+                               bounds=(np.r_[lower, 0.0], np.r_[upper, 1.0]), x_scale='jac',
+                               tr_solver=TR_SOLVER, workers=residuals.map)
         beta = float(result.x[8])
     else:
-        result = least_squares(lambda x: data.residuals(power_sat_rate_function(x)), x0,
-                               bounds=(lower, upper), x_scale='jac', tr_solver=TR_SOLVER)
+        residuals = BatchedResiduals(data, lambda x: (power_sat_rate_function(x), 0.0))
+        result = least_squares(residuals, x0, bounds=(lower, upper), x_scale='jac',
+                               tr_solver=TR_SOLVER, workers=residuals.map)
         beta = 0.0
     x = np.asarray(result.x)
     errors = covariance_errors(np.asarray(result.jac), float(result.cost), data.samples)
