@@ -6,9 +6,10 @@ time and evaluates those points through a map-like ``workers`` callable.
 :class:`BatchedResiduals` is both the residual function and that map: handed
 the points of a Jacobian, it evaluates them all at once
 (:meth:`~.data.FitData.residuals_of_many`, a few numpy calls for all columns
-instead of a few per column), then lets scipy read each through the residual
-function. scipy forms the steps and the differences as it always does, and
-the residuals are the same bit for bit, so the fit is the same too.
+instead of a few per column, each from the point's own evaluation where the
+column leaves an experiment's rates alone), then lets scipy read each through
+the residual function. scipy forms the steps and the differences as it always
+does, and the residuals are the same bit for bit, so the fit is the same too.
 
 """
 
@@ -17,7 +18,7 @@ from __future__ import annotations
 from typing import Callable, Iterable, TypeVar
 
 from hydro_sdp.core.arrays import FloatArray
-from hydro_sdp.core.identification.map_fit.data import FitData, RateFunction
+from hydro_sdp.core.identification.map_fit.data import Evaluation, FitData, RateFunction
 import numpy as np
 
 #: A map family's parameters to its rate function and its ``beta``.
@@ -45,14 +46,16 @@ class BatchedResiduals:
         self.data = data
         self.parametrised = parametrised
         self._ready: dict[bytes, FloatArray] = {}
+        # The last point evaluated alone: scipy takes its Jacobian there.
+        self._last: Evaluation | None = None
 
     def __call__(self, x: FloatArray) -> FloatArray:
         """Return the residuals at ``x`` (evaluated already when :meth:`map` is running)."""
         ready = self._ready.pop(_key(x), None)
         if ready is not None:
             return ready
-        rate, beta = self.parametrised(x)
-        return self.data.residuals(rate, beta)
+        self._last = self.data.evaluate([self.parametrised(x)], self._last)[0]
+        return self._last.residuals
 
     def map(self, function: Callable[[FloatArray], Result], points: Iterable[FloatArray]
             ) -> list[Result]:
@@ -73,8 +76,8 @@ class BatchedResiduals:
 
         """
         points = [np.array(point, dtype=np.float64) for point in points]
-        evaluated = self.data.residuals_of_many([self.parametrised(p) for p in points])
-        self._ready = {_key(point): residuals for point, residuals in zip(points, evaluated)}
+        evaluated = self.data.evaluate([self.parametrised(p) for p in points], self._last)
+        self._ready = {_key(point): e.residuals for point, e in zip(points, evaluated)}
         try:
             return [function(point) for point in points]
         finally:
