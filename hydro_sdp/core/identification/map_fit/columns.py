@@ -31,7 +31,7 @@ class BatchedResiduals:
     The residuals of a parametrised map, and a map-like that evaluates many points at once.
 
     Pass the object as the residual function of ``least_squares`` and its
-    :meth:`map` as ``workers``.
+    :meth:`map_points` as ``workers``.
 
     Parameters
     ----------
@@ -50,15 +50,15 @@ class BatchedResiduals:
         self._last: Evaluation | None = None
 
     def __call__(self, x: FloatArray) -> FloatArray:
-        """Return the residuals at ``x`` (evaluated already when :meth:`map` is running)."""
+        """Return the residuals at ``x`` (evaluated already while :meth:`map_points` runs)."""
         ready = self._ready.pop(_key(x), None)
         if ready is not None:
             return ready
         self._last = self.data.evaluate([self.parametrised(x)], self._last)[0]
         return self._last.residuals
 
-    def map(self, function: Callable[[FloatArray], Result], points: Iterable[FloatArray]
-            ) -> list[Result]:
+    def map_points(self, function: Callable[[FloatArray], Result],
+                   points: Iterable[FloatArray]) -> list[Result]:
         """
         Apply ``function`` to every point, the residuals of all evaluated in one pass.
 

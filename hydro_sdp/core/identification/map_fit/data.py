@@ -148,7 +148,7 @@ class FitData:
     def evaluate(self, maps: Sequence[tuple[RateFunction, float]],
                  base: Evaluation | None = None) -> list[Evaluation]:
         """
-        The residuals of several maps, each as :meth:`residuals` gives them, bit for bit.
+        Return the residuals of several maps, each as :meth:`residuals` gives them, bit for bit.
 
         Maps of the same ``beta`` (the columns of a finite-difference Jacobian but the
         one of ``beta``) run through each numpy operation together, one row of a 3-D
@@ -358,4 +358,3 @@ def covariance_errors(jacobian: FloatArray, cost: float, samples: int) -> FloatA
     except np.linalg.LinAlgError:
         return np.full(parameters, np.inf)
     return np.sqrt(np.clip(np.diag(covariance), 0.0, None))
-

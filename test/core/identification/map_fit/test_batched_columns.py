@@ -1,4 +1,4 @@
-"""A Jacobian's columns evaluated in one pass give the same numbers, and the same fit, bit for bit."""
+"""A Jacobian's columns in one pass give the same numbers, and the same fit, bit for bit."""
 
 from hydro_sdp.core.identification.experiment import Experiment
 from hydro_sdp.core.identification.map_fit import FitData
@@ -84,7 +84,7 @@ def test_least_squares_with_batched_columns_is_the_same_fit(data, method):
     data.evaluate = counted
     try:
         with np.errstate(over='ignore', invalid='ignore'):
-            fast = least_squares(batched, x0, workers=batched.map, **options)
+            fast = least_squares(batched, x0, workers=batched.map_points, **options)
     finally:
         del data.evaluate
     assert fast.x.tobytes() == plain.x.tobytes()
