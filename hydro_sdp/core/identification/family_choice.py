@@ -220,10 +220,74 @@ def fit_family(kind: FittedKind, data: FitData, points: Sequence[LevelSpeed], re
     return fit_power_sat(data, points, rest, sdp_map, method=method)
 
 
+@dataclass(frozen=True, eq=False)
+class Fold:
+    """
+    One fold's experiments arranged for fitting, and the ``sdp`` fit every family starts from.
+
+    Parameters
+    ----------
+    data, held_out : FitData
+        The training and the test part.
+    points : list of LevelSpeed
+        The training part's per-level speeds.
+    sdp_map : SdpMap
+        The ``sdp`` map fitted on the training part.
+
+    """
+
+    data: FitData
+    held_out: FitData
+    points: list[LevelSpeed]
+    sdp_map: SdpMap
+
+
+class FoldFits:
+    """
+    The folds of :func:`folds` with their ``sdp`` fits, made once for every comparison.
+
+    ``identify`` compares the first families, then ``power_sat`` on the same folds:
+    both start from these fits.
+
+    Parameters
+    ----------
+    experiments : sequence of Experiment
+        All experiments.
+    delay : int
+        Delay, samples.
+    dt : float
+        Sample period, s.
+    rest : float
+        Rest command.
+    method : str
+        Fitting method (``rr`` or ``oe``), for every family.
+    lag : float
+        Valve lag time constant, s.
+
+    """
+
+    def __init__(self, experiments: Sequence[Experiment], delay: int, dt: float, rest: float,
+                 method: FitMethod, lag: float = 0.0) -> None:
+        self.rest = rest
+        self.method = method
+        self.folds: list[Fold] = []
+        #: Why a fold's ``sdp`` fit failed (then no family can be scored), if one did.
+        self.error: HydroSdpError | None = None
+        for train, test in folds(experiments, rest):
+            data = FitData(train, delay, dt, lag)
+            try:
+                points = level_speeds(train, delay, dt, rest=rest)
+                sdp_map = fit_sdp(data, points, rest, method=method, starts=2).static_map
+            except HydroSdpError as error:
+                self.error = error
+                break
+            self.folds.append(Fold(data, FitData(test, delay, dt, lag), points, sdp_map))
+
+
 def compare_kinds(experiments: Sequence[Experiment], delay: int, dt: float, rest: float,
                   method: FitMethod, kinds: Sequence[FittedKind] = KINDS,
                   dead_zone: tuple[float, float] | None = None,
-                  lag: float = 0.0) -> list[KindScore]:
+                  lag: float = 0.0, fold_fits: FoldFits | None = None) -> list[KindScore]:
     """
     Held-out simulation error of each map family, over folds that never extrapolate.
 
@@ -245,6 +309,9 @@ def compare_kinds(experiments: Sequence[Experiment], delay: int, dt: float, rest
         Plateau of the ``pwl`` map (default: from the ``sdp`` fit of each fold).
     lag : float
         Valve lag time constant, s.
+    fold_fits : FoldFits or None
+        The folds and their ``sdp`` fits, made for these same arguments (default:
+        made here).
 
     Returns
     -------
@@ -252,24 +319,20 @@ def compare_kinds(experiments: Sequence[Experiment], delay: int, dt: float, rest
         One score per family: the mean over folds of the held-out MAE.
 
     """
+    if fold_fits is None:
+        fold_fits = FoldFits(experiments, delay, dt, rest, method, lag)
     tally = FoldErrors(kinds)
-    for train, test in folds(experiments, rest):
-        data = FitData(train, delay, dt, lag)
-        held_out = FitData(test, delay, dt, lag)
-        try:
-            points = level_speeds(train, delay, dt, rest=rest)
-            sdp_map = fit_sdp(data, points, rest, method=method, starts=2).static_map
-        except HydroSdpError as error:
-            tally.fail(error)
-            break
-
-        def fit_map(kind: FittedKind) -> StaticMap:
+    for fold in fold_fits.folds:
+        def fit_map(kind: FittedKind, fold: Fold = fold) -> StaticMap:
             if kind == 'sdp':
-                return sdp_map
-            start = sdp_map if dead_zone is None else SdpMap(
-                dead_zone, sdp_map.saturation_velocity, sdp_map.curvature)
-            return fit_family(kind, data, points, rest, method, start, starts=2).static_map
-        tally.add_fold(held_out, fit_map)
+                return fold.sdp_map
+            start = fold.sdp_map if dead_zone is None else SdpMap(
+                dead_zone, fold.sdp_map.saturation_velocity, fold.sdp_map.curvature)
+            return fit_family(kind, fold.data, fold.points, rest, method, start,
+                              starts=2).static_map
+        tally.add_fold(fold.held_out, fit_map)
+    if fold_fits.error is not None:
+        tally.fail(fold_fits.error)
     return tally.scores()
 
 

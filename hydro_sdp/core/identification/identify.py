@@ -33,8 +33,8 @@ from hydro_sdp.core.identification.end_stops import stop_reach
 from hydro_sdp.core.identification.experiment import (
     Experiment, split_long, thin, thin_evenly)
 from hydro_sdp.core.identification.family_choice import (
-    choose_kind, compare_kinds, FIRST_KINDS, fit_family, FittedKind, KindChoice, KINDS,
-    KindScore)
+    choose_kind, compare_kinds, FIRST_KINDS, fit_family, FittedKind, FoldFits, KindChoice,
+    KINDS, KindScore)
 from hydro_sdp.core.identification.identified import Identification, IdentifyStage
 from hydro_sdp.core.identification.limits import model_limits
 from hydro_sdp.core.identification.map_fit import FIT_METHODS, fit_sdp, FitData, FitMethod, MapFit
@@ -117,13 +117,14 @@ def _family(kind: KindChoice, pieces: _Pieces, delay: DelayEstimate, dt: float, 
     if kind != 'auto':
         return kind, ()
     step(IdentifyStage.FAMILIES)
+    fold_fits = FoldFits(pieces.trial, delay.samples, dt, rest, method, delay.lag)
     comparison = tuple(compare_kinds(pieces.trial, delay.samples, dt, rest, method,
-                                     FIRST_KINDS, lag=delay.lag))
+                                     FIRST_KINDS, lag=delay.lag, fold_fits=fold_fits))
     chosen = choose_kind(comparison)
     if chosen != 'sdp':
-        # Eq. (5) lost: try its generalisation, convex from the dead-zone.
+        # Eq. (5) lost: try its generalisation, convex from the dead-zone, on the same folds.
         comparison += tuple(compare_kinds(pieces.trial, delay.samples, dt, rest, method,
-                                          ('power_sat',), lag=delay.lag))
+                                          ('power_sat',), lag=delay.lag, fold_fits=fold_fits))
         chosen = choose_kind(comparison)
     return chosen, comparison
 

@@ -87,6 +87,8 @@ class FitData:
         self._padded: list[IntArray] = []
         self._flat: list[IntArray | None] = []
         self._weighted: tuple[float, list[FloatArray]] = (math.nan, [])
+        # Per bucket, each (row, level) read, once: the rows a change of rates reaches.
+        self._reads: list[tuple[IntArray, IntArray]] = []
         for size in np.unique(sizes):
             members = np.flatnonzero(sizes == size)
             width = int(lengths[members].max())
@@ -105,6 +107,9 @@ class FitData:
             # bucket are read at the flat positions of its samples (all of them: None).
             self._padded.append(np.where(mask, index, self.levels.size))
             self._flat.append(None if mask.all() else np.flatnonzero(mask.ravel()))
+            read = np.unique(np.arange(members.size)[:, None] * (self.levels.size + 1)
+                             + self._padded[-1])
+            self._reads.append(np.divmod(read, self.levels.size + 1))
             if gains is not None:
                 gain = np.ones((members.size, width))
                 for row, member in enumerate(members):
@@ -113,15 +118,8 @@ class FitData:
 
     def increments(self, rate: RateFunction) -> list[FloatArray]:
         """Per bucket, ``dt rate(v_{k-tau})`` with padding set to zero."""
-        per_level = np.append(self.dt * rate(self.levels), 0.0)
-        out = [per_level[index] for index in self._padded]
-        if self.pole != 0.0:
-            p = self.pole
-            out = [np.where(mask, first_order(q, p, 1.0 - p, q[:, 0]), 0.0)
-                   for q, (_, _, _, mask, _) in zip(out, self.buckets)]
-        if self.gains:
-            out = [q * gain for q, gain in zip(out, self.gains)]
-        return out
+        per_level = self._per_level(rate)
+        return [self._increments(bucket, per_level) for bucket in range(len(self.buckets))]
 
     def residuals(self, rate: RateFunction, beta: float = 0.0) -> FloatArray:
         """
@@ -140,35 +138,148 @@ class FitData:
             One residual per predicted sample.
 
         """
+        return self.evaluate([(rate, beta)])[0].residuals
+
+    def residuals_of_many(self, maps: Sequence[tuple[RateFunction, float]]
+                          ) -> list[FloatArray]:
+        """Return the residuals of several maps (:meth:`evaluate`), each as :meth:`residuals`."""
+        return [evaluation.residuals for evaluation in self.evaluate(maps)]
+
+    def evaluate(self, maps: Sequence[tuple[RateFunction, float]],
+                 base: Evaluation | None = None) -> list[Evaluation]:
+        """
+        Return the residuals of several maps, each as :meth:`residuals` gives them, bit for bit.
+
+        Maps of the same ``beta`` (the columns of a finite-difference Jacobian but the
+        one of ``beta``) run through each numpy operation together, one row of a 3-D
+        block each: the same operations on the same numbers, a few calls for all.
+        Given a ``base`` of the same ``beta``, an experiment none of whose levels
+        changed rate keeps its residuals from it (a Jacobian's column moves the rates
+        of one direction, or of one knot interval), and only the others are computed.
+
+        Parameters
+        ----------
+        maps : sequence of (callable, float)
+            Each map's rate function and its ``beta``.
+        base : Evaluation or None
+            An earlier evaluation to start from.
+
+        Returns
+        -------
+        list of Evaluation
+            Per map, its residuals.
+
+        """
+        per_level = [self._per_level(rate) for rate, _ in maps]
+        grids: list[list[FloatArray]] = [[] for _ in maps]
+        groups: dict[bytes, list[int]] = {}
+        for index, (_, beta) in enumerate(maps):
+            # Bits, not values: 0.0 and -0.0 go through different operations.
+            groups.setdefault(np.float64(beta).tobytes(), []).append(index)
+        for key, members in groups.items():
+            beta = maps[members[0]][1]
+            stacked = np.stack([per_level[index] for index in members])
+            changed = None if base is None or np.float64(base.beta).tobytes() != key else \
+                stacked.view(np.int64) != base.per_level.view(np.int64)
+            for bucket in range(len(self.buckets)):
+                for index, grid in zip(members, self._bucket_grids(bucket, stacked, beta,
+                                                                   base, changed)):
+                    grids[index].append(grid)
+        return [Evaluation(maps[index][1], per_level[index], tuple(grids[index]),
+                           self._flatten(grids[index])) for index in range(len(maps))]
+
+    def _bucket_grids(self, bucket: int, stacked: FloatArray, beta: float,
+                      base: Evaluation | None, changed: npt.NDArray[np.bool_] | None
+                      ) -> list[FloatArray]:
+        """Return a bucket's residual grid for each row of levels, from ``base`` where it can."""
+        if base is not None and changed is not None:
+            rows = [self._rows_reading(bucket, row) for row in changed]
+            counts = [r.size for r in rows]
+            if sum(counts) < len(rows) * self.buckets[bucket][1].shape[0]:
+                block = self._bucket_residuals(bucket, stacked, beta, (
+                    np.repeat(np.arange(len(rows)), counts), np.concatenate(rows))) \
+                    if sum(counts) else stacked[:0]
+                out, done = [], 0
+                for read in rows:
+                    grid = base.grids[bucket]
+                    if read.size:
+                        grid = grid.copy()
+                        grid[read] = block[done:done + read.size]
+                        done += read.size
+                    out.append(grid)
+                return out
+        return list(self._bucket_residuals(bucket, stacked, beta))
+
+    def _rows_reading(self, bucket: int, changed: npt.NDArray[np.bool_]) -> IntArray:
+        """Return the rows of a bucket that read a level whose rate changed."""
+        rows, levels = self._reads[bucket]
+        hit = np.zeros(self.buckets[bucket][1].shape[0], dtype=bool)
+        hit[rows[changed[levels]]] = True
+        return np.flatnonzero(hit)
+
+    def _flatten(self, grids: Sequence[FloatArray]) -> FloatArray:
+        """Return the residuals of the samples, bucket after bucket, from their grids."""
         out = np.empty(self.samples)
         done = 0
-        # A finite-difference Jacobian varies beta in one column of several: keep
-        # beta times the angles (read once, so the pair stays whole across threads).
-        cached = self._weighted
-        if cached[0] != beta:
-            cached = (beta, [beta * b[2] for b in self.buckets])
-            self._weighted = cached
-        for (_, _, observed, _, initial), q, flat, weighted in zip(
-                self.buckets, self.increments(rate), self._flat, cached[1]):
-            count = q.size if flat is None else flat.size
-            # A full bucket's residuals are written where they belong, others gathered.
-            target = out[done:done + count].reshape(q.shape) if flat is None else \
-                np.empty_like(q)
-            if beta == 0.0:
-                np.add(initial[:, None], np.cumsum(q, axis=1), out=target)
-            else:
-                a = 1.0 - beta
-                drive = q * a
-                drive += weighted
-                state = first_order(drive, a, 1.0, initial)
-                # Predicted from the state before: the start for the first sample.
-                np.add(initial[:, None], q[:, :1], out=target[:, :1])
-                np.add(state[:, :-1], q[:, 1:], out=target[:, 1:])
-            np.subtract(observed, target, out=target)
-            if flat is not None:
-                out[done:done + count] = target.ravel()[flat]
-            done += count
+        for grid, flat in zip(grids, self._flat):
+            values = grid.ravel() if flat is None else grid.ravel()[flat]
+            out[done:done + values.size] = values
+            done += values.size
         return out
+
+    def _per_level(self, rate: RateFunction) -> FloatArray:
+        """Return ``dt rate`` of every level, then 0 for the padding."""
+        return np.append(self.dt * rate(self.levels), 0.0)
+
+    def _increments(self, bucket: int, per_level: FloatArray,
+                    rows: tuple[IntArray, IntArray] | None = None) -> FloatArray:
+        """
+        Return a bucket's increments, padding set to zero.
+
+        Without ``rows``, one block per row of ``per_level``; with ``(maps, rows)``,
+        one row per pair: that row of the bucket, with the rates of that row of levels.
+        """
+        padded, mask = self._padded[bucket], self.buckets[bucket][3]
+        gain = self.gains[bucket] if self.gains else None
+        if rows is None:
+            q = per_level[..., padded]
+        else:
+            q = per_level[rows[0][:, None], padded[rows[1]]]
+            mask = mask[rows[1]]
+            gain = None if gain is None else gain[rows[1]]
+        if self.pole != 0.0:
+            p = self.pole
+            q = np.where(mask, first_order(q, p, 1.0 - p, q[..., 0]), 0.0)
+        if gain is not None:
+            q = q * gain
+        return q
+
+    def _bucket_residuals(self, bucket: int, per_level: FloatArray, beta: float,
+                          rows: tuple[IntArray, IntArray] | None = None) -> FloatArray:
+        """Return a bucket's residuals, one row per experiment (rows as :meth:`_increments`)."""
+        q = self._increments(bucket, per_level, rows)
+        _, _, observed, _, initial = self.buckets[bucket]
+        if rows is not None:
+            observed, initial = observed[rows[1]], initial[rows[1]]
+        target = np.empty_like(q)
+        if beta == 0.0:
+            np.add(initial[:, None], np.cumsum(q, axis=-1), out=target)
+        else:
+            # A finite-difference Jacobian varies beta in one column of several: keep
+            # beta times the angles (read once, so the pair stays whole across threads).
+            cached = self._weighted
+            if cached[0] != beta:
+                cached = (beta, [beta * b[2] for b in self.buckets])
+                self._weighted = cached
+            a = 1.0 - beta
+            drive = q * a
+            drive += cached[1][bucket] if rows is None else cached[1][bucket][rows[1]]
+            state = first_order(drive, a, 1.0, initial)
+            # Predicted from the state before: the start for the first sample.
+            np.add(initial[:, None], q[..., :1], out=target[..., :1])
+            np.add(state[..., :-1], q[..., 1:], out=target[..., 1:])
+        np.subtract(observed, target, out=target)
+        return target
 
     def simulation_mae(self, rate: RateFunction) -> float:
         """Mean absolute simulation error over all predicted samples, degrees."""
@@ -177,6 +288,30 @@ class FitData:
     def mean_experiment_sse(self, rate: RateFunction) -> float:
         """Mean over experiments of the summed squared simulation error (West et al.)."""
         return float(np.sum(self.residuals(rate, 0.0) ** 2) / len(self.experiments))
+
+
+@dataclass(frozen=True, eq=False)
+class Evaluation:
+    """
+    One map's residuals, kept whole so that later evaluations can start from them.
+
+    Parameters
+    ----------
+    beta : float
+        The state-residual gain.
+    per_level : FloatArray
+        ``dt rate`` of every level, then 0 for the padding.
+    grids : tuple of FloatArray
+        Per bucket, the residuals, one row per experiment (never changed once made).
+    residuals : FloatArray
+        One residual per predicted sample.
+
+    """
+
+    beta: float
+    per_level: FloatArray
+    grids: tuple[FloatArray, ...]
+    residuals: FloatArray
 
 
 @dataclass(frozen=True, eq=False)
@@ -223,15 +358,3 @@ def covariance_errors(jacobian: FloatArray, cost: float, samples: int) -> FloatA
     except np.linalg.LinAlgError:
         return np.full(parameters, np.inf)
     return np.sqrt(np.clip(np.diag(covariance), 0.0, None))
-
-
-def numeric_jacobian(function: Callable[[FloatArray], FloatArray], x: FloatArray) -> FloatArray:
-    """Return the forward-difference Jacobian of ``function`` at ``x``."""
-    base = function(x)
-    columns = []
-    for i in range(x.size):
-        step = 1e-6 * max(abs(x[i]), 1e-3)
-        shifted = x.copy()
-        shifted[i] += step
-        columns.append((function(shifted) - base) / step)
-    return np.column_stack(columns)

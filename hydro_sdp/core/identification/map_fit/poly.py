@@ -13,6 +13,7 @@ from typing import Sequence
 
 from hydro_sdp.core.errors import DataError
 from hydro_sdp.core.identification.delay import LevelSpeed
+from hydro_sdp.core.identification.map_fit.columns import BatchedResiduals
 from hydro_sdp.core.identification.map_fit.data import FitData, FitMethod, MapFit, TR_SOLVER
 from hydro_sdp.core.model.static_maps import PolyMap
 import numpy as np
@@ -72,13 +73,14 @@ def fit_poly(points: Sequence[LevelSpeed], rest: float, *, degree: int = 3,
 
     start = np.r_[coefficients[0], coefficients[1]]
     if method == 'rr':
-        result = least_squares(lambda x: data.residuals(build(x).rate, float(x[-1])),
-                               np.r_[start, 0.5], bounds=(
+        residuals = BatchedResiduals(data, lambda x: (build(x).rate, float(x[-1])))
+        result = least_squares(residuals, np.r_[start, 0.5], bounds=(
                                    np.r_[np.full(start.size, -np.inf), 0.0],
                                    np.r_[np.full(start.size, np.inf), 1.0]), x_scale='jac',
-                               tr_solver=TR_SOLVER)
+                               tr_solver=TR_SOLVER, workers=residuals.map_points)
         beta = float(result.x[-1])
     else:
-        result = least_squares(lambda x: data.residuals(build(x).rate), start, method='lm')
+        residuals = BatchedResiduals(data, lambda x: (build(x).rate, 0.0))
+        result = least_squares(residuals, start, method='lm', workers=residuals.map_points)
         beta = 0.0
     return MapFit(build(result.x), method, beta, float(result.cost), {}, int(result.nfev))

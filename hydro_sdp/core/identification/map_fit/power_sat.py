@@ -12,10 +12,12 @@ regret-regression (``rr``) or by output error (``oe``: ``beta = 0``).
 
 from __future__ import annotations
 
+import functools
 from typing import Sequence
 
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.identification.delay import LevelSpeed
+from hydro_sdp.core.identification.map_fit.columns import BatchedResiduals
 from hydro_sdp.core.identification.map_fit.data import (
     covariance_errors, FitData, FitMethod, MapFit, RateFunction, TR_SOLVER)
 from hydro_sdp.core.model.static_maps import power_sat_rate, PowerSatMap, SdpMap
@@ -68,7 +70,8 @@ def power_sat_start(points: Sequence[LevelSpeed], rest: float, start: SdpMap
     Return the starting parameters and their bounds from the per-level speeds.
 
     The best of :data:`START_EXPONENTS`, each fitted to the points from the edges
-    of ``start``.
+    of ``start``. ``identify`` refits the map under each stroke factor from the
+    same points and edges: the few last answers are kept.
 
     Parameters
     ----------
@@ -85,11 +88,21 @@ def power_sat_start(points: Sequence[LevelSpeed], rest: float, start: SdpMap
         ``(x0, lower, upper)`` of ``(vn, cn, nn, a3, vp, cp, np, a6)``.
 
     """
-    levels = np.array([p.level for p in points])
-    speeds = np.array([p.speed for p in points])
-    weights = 1.0 / np.maximum([p.standard_error for p in points], 1e-3 * np.max(np.abs(speeds)))
+    # Keyed by the bits of the numbers: -0.0 is not 0.0, and a NaN is itself.
+    table = np.array([[p.level, p.speed, p.standard_error] for p in points], dtype=np.float64)
+    given = np.array([rest, start.dead_zone[0], start.dead_zone[1]], dtype=np.float64)
+    x0, lower, upper = _start(table.tobytes(), given.tobytes())
+    return np.array(x0), np.array(lower), np.array(upper)
+
+
+@functools.lru_cache(maxsize=8)
+def _start(table: bytes, given: bytes) -> tuple[tuple[float, ...], ...]:
+    """Return :func:`power_sat_start` of the points' and the edges' bits, as tuples."""
+    points = np.frombuffer(table).reshape(-1, 3)
+    levels, speeds = points[:, 0].copy(), points[:, 1].copy()
+    weights = 1.0 / np.maximum(points[:, 2], 1e-3 * np.max(np.abs(speeds)))
+    rest, low, high = np.frombuffer(given).tolist()
     lower, upper = _bounds(levels, speeds, rest)
-    low, high = start.dead_zone
     best: tuple[float, FloatArray] | None = None
     for exponent in START_EXPONENTS:
         x0 = np.array([lower[0], 0.0, exponent, low, upper[4], 0.0, exponent, high])
@@ -101,7 +114,7 @@ def power_sat_start(points: Sequence[LevelSpeed], rest: float, start: SdpMap
         if best is None or result.cost < best[0]:
             best = (float(result.cost), np.asarray(result.x))
     assert best is not None
-    return best[1], lower, upper
+    return tuple(best[1].tolist()), tuple(lower.tolist()), tuple(upper.tolist())
 
 
 def fit_power_sat(data: FitData, points: Sequence[LevelSpeed], rest: float, start: SdpMap, *,
@@ -130,13 +143,16 @@ def fit_power_sat(data: FitData, points: Sequence[LevelSpeed], rest: float, star
     """
     x0, lower, upper = power_sat_start(points, rest, start)
     if method == 'rr':
-        result = least_squares(lambda x: data.residuals(power_sat_rate_function(x), float(x[8])),
-                               np.r_[x0, 0.5], bounds=(np.r_[lower, 0.0], np.r_[upper, 1.0]),
-                               x_scale='jac', tr_solver=TR_SOLVER)
+        residuals = BatchedResiduals(
+            data, lambda x: (power_sat_rate_function(x), float(x[8])))
+        result = least_squares(residuals, np.r_[x0, 0.5],
+                               bounds=(np.r_[lower, 0.0], np.r_[upper, 1.0]), x_scale='jac',
+                               tr_solver=TR_SOLVER, workers=residuals.map_points)
         beta = float(result.x[8])
     else:
-        result = least_squares(lambda x: data.residuals(power_sat_rate_function(x)), x0,
-                               bounds=(lower, upper), x_scale='jac', tr_solver=TR_SOLVER)
+        residuals = BatchedResiduals(data, lambda x: (power_sat_rate_function(x), 0.0))
+        result = least_squares(residuals, x0, bounds=(lower, upper), x_scale='jac',
+                               tr_solver=TR_SOLVER, workers=residuals.map_points)
         beta = 0.0
     x = np.asarray(result.x)
     errors = covariance_errors(np.asarray(result.jac), float(result.cost), data.samples)

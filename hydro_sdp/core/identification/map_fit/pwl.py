@@ -16,8 +16,9 @@ from typing import Sequence
 
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.identification.delay import LevelSpeed
+from hydro_sdp.core.identification.map_fit.columns import BatchedResiduals
 from hydro_sdp.core.identification.map_fit.data import (
-    covariance_errors, FitData, FitMethod, MapFit, TR_SOLVER)
+    covariance_errors, FitData, FitMethod, MapFit, RateFunction, TR_SOLVER)
 from hydro_sdp.core.model.static_maps import PwlMap
 import numpy as np
 from scipy.optimize import least_squares
@@ -174,10 +175,14 @@ def fit_pwl(data: FitData, points: Sequence[LevelSpeed], rest: float,
     lower = np.r_[np.zeros(parameters), 0.0]
     upper = np.r_[np.full(parameters, np.inf), max(top, 1e-12)]
     x0[-1] = min(x0[-1], top)
-    result = least_squares(
-        lambda x: data.residuals(lambda v: np.interp(v, knots, layout.speeds(x)),
-                                 x[-1] if method == 'rr' else 0.0),
-        np.clip(x0, lower, upper), bounds=(lower, upper), x_scale='jac', tr_solver=TR_SOLVER)
+
+    def parametrised(x: FloatArray) -> tuple[RateFunction, float]:
+        return (lambda v: np.interp(v, knots, layout.speeds(x))), \
+            x[-1] if method == 'rr' else 0.0
+    residuals = BatchedResiduals(data, parametrised)
+    result = least_squares(residuals, np.clip(x0, lower, upper), bounds=(lower, upper),
+                           x_scale='jac', tr_solver=TR_SOLVER,
+                           workers=residuals.map_points)
     speeds = layout.speeds(result.x)
     static_map = PwlMap(knots=tuple(knots.tolist()), speeds=tuple(speeds.tolist()))
     errors = covariance_errors(result.jac, result.cost, data.samples)

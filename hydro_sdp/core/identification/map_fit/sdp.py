@@ -18,8 +18,9 @@ from typing import Sequence
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import DataError
 from hydro_sdp.core.identification.delay import LevelSpeed
+from hydro_sdp.core.identification.map_fit.columns import BatchedResiduals, forward_jacobian
 from hydro_sdp.core.identification.map_fit.data import (
-    covariance_errors, FIT_METHODS, FitData, FitMethod, MapFit, numeric_jacobian, RateFunction)
+    covariance_errors, FIT_METHODS, FitData, FitMethod, MapFit, RateFunction)
 from hydro_sdp.core.model.static_maps import sdp_rate, SdpMap
 import numpy as np
 import numpy.typing as npt
@@ -223,11 +224,14 @@ def fit_sdp(data: FitData, points: Sequence[LevelSpeed], rest: float, *,
     scale = max(float(np.max(np.abs(levels - rest))), 1e-9)
     factors = [1.0, 0.5, 2.0, 4.0, 0.25][:max(starts, 1)]
 
+    def natural_map(p: FloatArray) -> tuple[RateFunction, float]:
+        x = _to_natural(p, rest)
+        return sdp_rate_function(x), x[6]
+
     def rr_fit(fit_data: FitData, free: FloatArray) -> OptimizeResult:
-        def residuals(p: FloatArray) -> FloatArray:
-            x = _to_natural(p, rest)
-            return fit_data.residuals(sdp_rate_function(x), x[6])
-        return least_squares(residuals, free, method='lm', x_scale=1.0)
+        residuals = BatchedResiduals(fit_data, natural_map)
+        return least_squares(residuals, free, method='lm', x_scale=1.0,
+                             workers=residuals.map_points)
 
     def oe_fit(fit_data: FitData, x0: FloatArray, iterations: int) -> OptimizeResult:
         return minimize(lambda x: fit_data.mean_experiment_sse(sdp_rate_function(x)), x0,
@@ -268,7 +272,7 @@ def fit_sdp(data: FitData, points: Sequence[LevelSpeed], rest: float, *,
     else:
         x = np.r_[result.x, 0.0]
         cost = 0.5 * float(np.sum(data.residuals(sdp_rate_function(x)) ** 2))
-        jacobian = numeric_jacobian(lambda p: data.residuals(sdp_rate_function(p)), x[:6])
+        jacobian = forward_jacobian(data, lambda p: (sdp_rate_function(p), 0.0), x[:6])
         errors = covariance_errors(jacobian, cost, data.samples)
     names = SDP_NAMES + (('beta',) if method == 'rr' else ())
     return MapFit(sdp_from_rate_vector(x), method, float(x[6]), cost,
