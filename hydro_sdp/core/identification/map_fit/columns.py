@@ -15,15 +15,20 @@ does, and the residuals are the same bit for bit, so the fit is the same too.
 
 from __future__ import annotations
 
+import inspect
 from typing import Callable, Iterable, TypeVar
 
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.identification.map_fit.data import Evaluation, FitData, RateFunction
 import numpy as np
+from scipy.optimize import least_squares
 
 #: A map family's parameters to its rate function and its ``beta``.
 ParametrisedMap = Callable[[FloatArray], tuple[RateFunction, float]]
 Result = TypeVar('Result')
+#: scipy 1.16 and later evaluate a Jacobian's points through ``workers``; an older scipy
+#: (a distribution's package, as rosdep installs it) fits the same, one column at a time.
+TAKES_WORKERS = 'workers' in inspect.signature(least_squares).parameters
 
 
 class BatchedResiduals:
@@ -31,7 +36,7 @@ class BatchedResiduals:
     The residuals of a parametrised map, and a map-like that evaluates many points at once.
 
     Pass the object as the residual function of ``least_squares`` and its
-    :meth:`map_points` as ``workers``.
+    :attr:`options` (``workers=map_points``) as keyword arguments.
 
     Parameters
     ----------
@@ -56,6 +61,11 @@ class BatchedResiduals:
             return ready
         self._last = self.data.evaluate([self.parametrised(x)], self._last)[0]
         return self._last.residuals
+
+    @property
+    def options(self) -> dict[str, Callable[..., object]]:
+        """Keyword arguments for ``least_squares``: ``workers`` where scipy takes it."""
+        return {'workers': self.map_points} if TAKES_WORKERS else {}
 
     def map_points(self, function: Callable[[FloatArray], Result],
                    points: Iterable[FloatArray]) -> list[Result]:

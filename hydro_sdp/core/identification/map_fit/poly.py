@@ -77,10 +77,10 @@ def fit_poly(points: Sequence[LevelSpeed], rest: float, *, degree: int = 3,
         result = least_squares(residuals, np.r_[start, 0.5], bounds=(
                                    np.r_[np.full(start.size, -np.inf), 0.0],
                                    np.r_[np.full(start.size, np.inf), 1.0]), x_scale='jac',
-                               tr_solver=TR_SOLVER, workers=residuals.map_points)
+                               tr_solver=TR_SOLVER, **residuals.options)
         beta = float(result.x[-1])
     else:
         residuals = BatchedResiduals(data, lambda x: (build(x).rate, 0.0))
-        result = least_squares(residuals, start, method='lm', workers=residuals.map_points)
+        result = least_squares(residuals, start, method='lm', **residuals.options)
         beta = 0.0
     return MapFit(build(result.x), method, beta, float(result.cost), {}, int(result.nfev))

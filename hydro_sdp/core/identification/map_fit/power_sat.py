@@ -147,12 +147,12 @@ def fit_power_sat(data: FitData, points: Sequence[LevelSpeed], rest: float, star
             data, lambda x: (power_sat_rate_function(x), float(x[8])))
         result = least_squares(residuals, np.r_[x0, 0.5],
                                bounds=(np.r_[lower, 0.0], np.r_[upper, 1.0]), x_scale='jac',
-                               tr_solver=TR_SOLVER, workers=residuals.map_points)
+                               tr_solver=TR_SOLVER, **residuals.options)
         beta = float(result.x[8])
     else:
         residuals = BatchedResiduals(data, lambda x: (power_sat_rate_function(x), 0.0))
         result = least_squares(residuals, x0, bounds=(lower, upper), x_scale='jac',
-                               tr_solver=TR_SOLVER, workers=residuals.map_points)
+                               tr_solver=TR_SOLVER, **residuals.options)
         beta = 0.0
     x = np.asarray(result.x)
     errors = covariance_errors(np.asarray(result.jac), float(result.cost), data.samples)

@@ -182,7 +182,7 @@ def fit_pwl(data: FitData, points: Sequence[LevelSpeed], rest: float,
     residuals = BatchedResiduals(data, parametrised)
     result = least_squares(residuals, np.clip(x0, lower, upper), bounds=(lower, upper),
                            x_scale='jac', tr_solver=TR_SOLVER,
-                           workers=residuals.map_points)
+                           **residuals.options)
     speeds = layout.speeds(result.x)
     static_map = PwlMap(knots=tuple(knots.tolist()), speeds=tuple(speeds.tolist()))
     errors = covariance_errors(result.jac, result.cost, data.samples)

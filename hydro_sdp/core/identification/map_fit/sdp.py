@@ -231,7 +231,7 @@ def fit_sdp(data: FitData, points: Sequence[LevelSpeed], rest: float, *,
     def rr_fit(fit_data: FitData, free: FloatArray) -> OptimizeResult:
         residuals = BatchedResiduals(fit_data, natural_map)
         return least_squares(residuals, free, method='lm', x_scale=1.0,
-                             workers=residuals.map_points)
+                             **residuals.options)
 
     def oe_fit(fit_data: FitData, x0: FloatArray, iterations: int) -> OptimizeResult:
         return minimize(lambda x: fit_data.mean_experiment_sse(sdp_rate_function(x)), x0,

@@ -126,3 +126,13 @@ def test_forward_jacobian_moves_one_parameter_at_a_time(data):
         shifted[i] += step
         column = (data.residuals(*_parametrised(shifted)) - base) / step
         assert jacobian[:, i].tobytes() == column.tobytes()
+
+
+def test_an_older_scipy_fits_one_column_at_a_time(data, monkeypatch):
+    # The pinned scipy takes ``workers``; one without it (a distribution's older package)
+    # is given no such argument, and fits as the plain run above does.
+    from hydro_sdp.core.identification.map_fit import columns
+    batched = BatchedResiduals(data, _parametrised)
+    assert columns.TAKES_WORKERS and batched.options == {'workers': batched.map_points}
+    monkeypatch.setattr(columns, 'TAKES_WORKERS', False)
+    assert batched.options == {}
