@@ -28,7 +28,7 @@ from hydro_sdp.ros.node_options import NodeOptions
 from hydro_sdp.ros.parameters.node_parameters import NodeParameters
 from hydro_sdp.ros.parameters.recorder import RECORDER_PARAMETERS
 from hydro_sdp.ros.runner import run_node
-from rclpy.clock import Clock, ClockType
+from rclpy.clock import Clock, ClockType, ROSClock
 from rclpy.duration import Duration
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
@@ -186,12 +186,15 @@ class BagRecorderNode(Node):
     def _on_message(self, topic: str, raw: bytes, info: Mapping[str, int]) -> None:
         if self.closed:
             return
-        now = self.get_clock().now().nanoseconds
+        clock = self.get_clock()
+        now = clock.now().nanoseconds
         # Stamped when the middleware received the message, not when this callback ran:
         # on a busy machine the callback runs tens of ms late, and a command stamped that
-        # late moves every step it starts against the samples of the joint it drove.
+        # late moves every step it starts against the samples of the joint it drove. On
+        # simulated time the clock does not run while the callback waits: nothing to undo.
         late = time.time_ns() - int(info.get('received_timestamp', 0) or 0)
-        stamp = now - late if 0 <= late < LATE_LIMIT else now
+        simulated = isinstance(clock, ROSClock) and clock.ros_time_is_active
+        stamp = now - late if 0 <= late < LATE_LIMIT and not simulated else now
         # Arrival stamps of one topic can come out of order by a few ms across the
         # middleware's transports; a topic's stamps stay in the order its messages came.
         stamp = max(stamp, self._last_stamp.get(topic, stamp - 1) + 1)

@@ -1,6 +1,7 @@
 """The ROS nodes in-process: lockstep equals offline, safety, parameters, recalibration, bags."""
 
 import math
+import sqlite3
 import time
 
 from conftest import REPO
@@ -11,6 +12,7 @@ from hydro_sdp.core.errors import ConfigurationError
 from hydro_sdp.core.identification.online import OnlineSdpIdentifier, OnlineSettings
 from hydro_sdp.core.synthetic.programs import random_program
 from hydro_sdp.io.model_files import default_model_path, load_model
+from hydro_sdp.ros import bag_recorder
 from hydro_sdp.ros.bag_player import BagPlayerNode
 from hydro_sdp.ros.bag_recorder import BagRecorderNode
 from hydro_sdp.ros.controller_node import PipControllerNode
@@ -258,6 +260,25 @@ def test_replayed_bag_feeds_the_identifier_as_identify_reads_it(ros, tmp_path):
     # sample: the command in force over each interval, the angle at its end.
     np.testing.assert_array_equal(record.v, program[:steps])
     np.testing.assert_allclose(record.y, angles, rtol=0, atol=1e-12)
+
+
+def test_on_simulated_time_a_late_callback_keeps_the_clock_stamp(ros, tmp_path, monkeypatch):
+    # The wall-clock lateness of a callback is undone only where the clock runs with the
+    # wall: on simulated time the clock stood still meanwhile (a command stamped 5 ms
+    # early would land before the sample it follows).
+    recorder = ros.add(BagRecorderNode, parameters={'output': str(tmp_path / 'bag'),
+                                                    'topics': ['j2/valve_command']})
+    publisher = ros.helper('late').create_publisher(Float64, 'j2/valve_command', 10)
+    assert ros.spin_until(lambda: publisher.get_subscription_count() >= 1)
+    wall = time.time_ns
+    monkeypatch.setattr(bag_recorder.time, 'time_ns', lambda: wall() + 5_000_000)
+    ros.set_time(7_005_000_000)
+    publisher.publish(Float64(data=1.5))
+    assert ros.spin_until(lambda: recorder.messages == 1)
+    recorder.close()
+    with sqlite3.connect(next((tmp_path / 'bag').glob('*.db3'))) as database:
+        assert database.execute('SELECT timestamp FROM messages').fetchall() == [
+            (7_005_000_000,)]
 
 
 def test_recorder_and_player_refuse_missing_settings(ros):
