@@ -42,7 +42,7 @@ _CONFIGURATION_ERRORS = (HydroSdpError, OSError, ParameterException, NameValidat
 
 
 class _Stop:
-    """The stop signals received: SIGINT raises KeyboardInterrupt once, SIGTERM only records."""
+    """The stop signals: SIGINT raises KeyboardInterrupt while the node is built, else records."""
 
     def __init__(self) -> None:
         self.signals: list[int] = []
@@ -104,6 +104,11 @@ def run_node(node_cls: Callable[[], Node], args: list[str] | None = None) -> Non
         rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
         if not stop:
             node = node_cls()
+            # Once the node is built, a signal only records the stop and rclpy's handler
+            # shuts the context down: the loop below ends within WAKE_PERIOD. A
+            # KeyboardInterrupt raised in the middle of the executor's wait, with entities
+            # held for it, could leave rclpy to destroy them in use (a crash on Ctrl-C).
+            stop.interrupts = False
             install_signal_handlers(SignalHandlerOptions.ALL)
             executor = SingleThreadedExecutor()
             executor.add_node(node)
