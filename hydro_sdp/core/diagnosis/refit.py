@@ -22,7 +22,7 @@ from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.diagnosis.context import Context
 from hydro_sdp.core.diagnosis.residuals import velocity_residuals
 from hydro_sdp.core.errors import HydroSdpError
-from hydro_sdp.core.identification.delay import level_speeds
+from hydro_sdp.core.identification.delay import level_speeds, LevelSpeed
 from hydro_sdp.core.identification.map_fit import fit_sdp, FitData
 from hydro_sdp.core.identification.map_fit.power_sat import fit_power_sat
 from hydro_sdp.core.model.joint_model import JointModel
@@ -102,28 +102,26 @@ class MapFamily:
         else:
             low = high = self.rest
         x = np.clip(x, -50.0, 50.0)
-        if self.asymmetric:
-            a, b = math.exp(x[i]), math.exp(x[i + 1])
-            i += 2
-        else:
-            a = b = math.exp(x[i])
-            i += 1
+        (a, b), i = self._sides(x, i)
+        a, b = math.exp(a), math.exp(b)
         if not self.saturation:
             return SdpDzMap(dead_zone=(low, high), slope=(a, b))
-        if self.asymmetric:
-            cn, cp = math.exp(x[i]), math.exp(x[i + 1])
-            i += 2
-        else:
-            cn = cp = math.exp(x[i])
-            i += 1
+        (cn, cp), i = self._sides(x, i)
+        cn, cp = math.exp(cn), math.exp(cp)
         if not self.power:
             return SdpMap(dead_zone=(low, high), saturation_velocity=(-a, b),
                           curvature=(cn, cp))
         # The exponent rides on a logistic between identify's bounds.
         nn, np_ = (EXPONENTS[0] + (EXPONENTS[1] - EXPONENTS[0]) / (1.0 + math.exp(-value))
-                   for value in ((x[i], x[i + 1]) if self.asymmetric else (x[i], x[i])))
+                   for value in self._sides(x, i)[0])
         return PowerSatMap(dead_zone=(low, high), saturation_velocity=(-a, b),
                            curvature=(cn, cp), exponent=(nn, np_))
+
+    def _sides(self, x: FloatArray, i: int) -> tuple[tuple[float, float], int]:
+        """Return the negative and positive side's parameter at ``x[i]``, and the next index."""
+        if self.asymmetric:
+            return (float(x[i]), float(x[i + 1])), i + 2
+        return (float(x[i]), float(x[i])), i + 1
 
     def start(self, static_map: StaticMap) -> FloatArray:
         """Free parameters near ``static_map`` (any kind), for a fit to start from."""
@@ -184,25 +182,47 @@ def _polish(context: Context, model: JointModel, family: MapFamily) -> JointMode
     return replace(model, static_map=family.build(result.x))
 
 
-def _refit_in(context: Context, model: JointModel, features: Features) -> JointModel:
-    """Refit the map of ``model`` in the family of ``features`` and polish it."""
-    samples = model.delay_samples(context.dt)
-    family = MapFamily(features, rest=context.rest, scale=context.scale)
-    starts = [replace(model, static_map=family.build(family.start(model.static_map)))]
+class _Fits(NamedTuple):
+    """What every family's refit starts from: the experiments and, for a full map, eq. (5)."""
+
+    data: FitData
+    #: The data's level speeds and identify's eq. (5) fit (a full map's refit only).
+    full: tuple[list[LevelSpeed], SdpMap] | None
+
+
+def _fits(context: Context, samples: int, full: bool) -> _Fits | None:
+    """Return the experiments at ``samples`` and, when ``full``, identify's eq. (5) fit."""
     try:
         data = context.fit_data(samples)
-        if all(features[:3]):
-            # The full map: identify's fits, started from the data's speeds.
-            points = level_speeds(data.experiments, samples, context.dt, rest=context.rest)
-            sdp = fit_sdp(data, points, context.rest).static_map
-            starts.append(replace(model, static_map=sdp))
-            if family.power:
-                starts.append(replace(model, static_map=fit_power_sat(
-                    data, points, context.rest, sdp).static_map))
-        else:
-            starts.append(replace(model, static_map=_fit_family(model, family, data)))
     except (HydroSdpError, np.linalg.LinAlgError, ValueError):
-        pass  # The experiments do not support a fit: start from the model's own map.
+        return None  # No experiments: every family starts from the model's own map.
+    if not full:
+        return _Fits(data, None)
+    try:
+        # The full map: identify's fits, started from the data's speeds.
+        points = level_speeds(data.experiments, samples, context.dt, rest=context.rest)
+        return _Fits(data, (points, fit_sdp(data, points, context.rest).static_map))
+    except (HydroSdpError, np.linalg.LinAlgError, ValueError):
+        return _Fits(data, None)
+
+
+def _refit_in(context: Context, model: JointModel, features: Features,
+              fits: _Fits | None) -> JointModel:
+    """Refit the map of ``model`` in the family of ``features`` and polish it."""
+    family = MapFamily(features, rest=context.rest, scale=context.scale)
+    starts = [replace(model, static_map=family.build(family.start(model.static_map)))]
+    if fits is not None:
+        try:
+            if not all(features[:3]):
+                starts.append(replace(model, static_map=_fit_family(model, family, fits.data)))
+            elif fits.full is not None:
+                points, sdp = fits.full
+                starts.append(replace(model, static_map=sdp))
+                if family.power:
+                    starts.append(replace(model, static_map=fit_power_sat(
+                        fits.data, points, context.rest, sdp).static_map))
+        except (HydroSdpError, np.linalg.LinAlgError, ValueError):
+            pass  # The experiments do not support a fit: start from the model's own map.
     best = min(starts, key=context.squared_residual)
     return _polish(context, best, family)
 
@@ -241,7 +261,9 @@ def refit_map(context: Context, features: Features, delay: float | None = None) 
     if features.saturation and features.dead_zone and not features.power and \
             not map_features(model.static_map).saturation:
         families.append(features._replace(power=True))
-    refits = [_refit_in(context, model, family) for family in families]
+    # The experiments and eq. (5) are fitted once for every family tried.
+    fits = _fits(context, model.delay_samples(context.dt), all(features[:3]))
+    refits = [_refit_in(context, model, family, fits) for family in families]
     return min(refits, key=context.squared_residual)
 
 
