@@ -125,18 +125,20 @@ def mae(model: JointModel, runs: Sequence[Run]) -> float:
     return float(np.mean([record_mae(model, run.record, run.dt, run.exogenous) for run in runs]))
 
 
+def run_increments(model: JointModel, run: Run) -> FloatArray:
+    """Return the one-step increments ``y^_k - y_{k-1}`` the model predicts over a run, deg."""
+    record = run.record
+    return one_step_increments(model, record.v, record.y, run.dt, start=run.start,
+                               v_before=float(record.v[0]), exogenous=run.exogenous)
+
+
 def velocity_residuals(model: JointModel, runs: Sequence[Run]) -> list[FloatArray]:
     """Return ``dy - dy^`` per run: measured increments against one-step predictions, deg."""
     out: list[FloatArray] = []
     for run in runs:
-        record = run.record
-        if _plays_at_stops(model):
-            predicted = _play_at_stops(model, run)
-        else:
-            predicted = one_step_increments(model, record.v, record.y, run.dt,
-                                            start=run.start, v_before=float(record.v[0]),
-                                            exogenous=run.exogenous)
-        out.append(np.diff(record.y[run.start:]) - predicted)
+        predicted = _play_at_stops(model, run) if _plays_at_stops(model) else \
+            run_increments(model, run)
+        out.append(np.diff(run.record.y[run.start:]) - predicted)
     return out
 
 

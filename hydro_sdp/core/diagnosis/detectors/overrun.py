@@ -15,8 +15,8 @@ from __future__ import annotations
 
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.diagnosis.context import Context
+from hydro_sdp.core.diagnosis.residuals import run_increments
 from hydro_sdp.core.model.effects import LoadDependence
-from hydro_sdp.core.model.simulation import one_step_increments
 import numpy as np
 from scipy.optimize import least_squares
 
@@ -45,9 +45,7 @@ def one_step_samples(context: Context,
     for run in context.runs:
         if run.record.load is None:
             continue
-        predicted = one_step_increments(base, run.record.v, run.record.y, run.dt,
-                                        start=run.start, v_before=float(run.record.v[0]),
-                                        exogenous=run.exogenous)
+        predicted = run_increments(base, run)
         angle = run.record.y[run.start:-1]
         inner = (angle > low) & (angle < high)
         out.append((np.diff(run.record.y[run.start:])[inner], predicted[inner],

@@ -16,11 +16,10 @@ import math
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.diagnosis.context import Context
 from hydro_sdp.core.diagnosis.detectors.overrun import inner_range
-from hydro_sdp.core.diagnosis.residuals import mae, Run
+from hydro_sdp.core.diagnosis.residuals import mae, Run, run_increments
 from hydro_sdp.core.diagnosis.results import Trial
 from hydro_sdp.core.model.effects import LoadDependence
 from hydro_sdp.core.model.joint_model import JointModel
-from hydro_sdp.core.model.simulation import one_step_increments
 from hydro_sdp.core.model.timing import delayed_at
 import numpy as np
 from scipy.optimize import minimize_scalar
@@ -33,14 +32,6 @@ P_LIMIT = 1e-3
 MIN_SPREAD = 0.03
 #: Share of the angle range at either end left out of the per-record scales.
 END_SHARE = 0.1
-
-
-def predicted_increments(context: Context) -> list[FloatArray]:
-    """One-step increments of the model under test, per run, deg."""
-    return [one_step_increments(context.model, run.record.v, run.record.y, run.dt,
-                                start=run.start, v_before=float(run.record.v[0]),
-                                exogenous=run.exogenous)
-            for run in context.runs]
 
 
 def block_scale(measured: FloatArray, predicted: FloatArray, block: int) -> tuple[float, float]:
@@ -146,7 +137,7 @@ class RecordScales:
 
 def record_scales(context: Context) -> RecordScales:
     """Return every record's speed scale per direction and the test of their agreement."""
-    predicted = predicted_increments(context)
+    predicted = [run_increments(context.model, run) for run in context.runs]
     scales: dict[str, list[float]] = {'positive': [], 'negative': []}
     errors: dict[str, list[float]] = {'positive': [], 'negative': []}
     loads: dict[str, list[float]] = {'positive': [], 'negative': []}
