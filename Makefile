@@ -21,8 +21,8 @@ $(STAMP): requirements.txt requirements-test.txt setup.py setup.cfg package.xml
 demo: $(STAMP)
 	$(BIN)/hydro-sdp demo --out $(DEMO_OUT)
 
-# Two test workers share two cores: one BLAS thread each (two would mostly wait, as the
-# console script knows).
+# The test workers (one more than there are cores, test/conftest.py) share the cores:
+# one BLAS thread each (more would mostly wait, as the console script knows).
 test: $(STAMP)
 	OPENBLAS_NUM_THREADS=1 $(BIN)/python -m pytest
 
