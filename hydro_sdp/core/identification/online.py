@@ -218,6 +218,8 @@ class OnlineSdpIdentifier:
         self._P0 = np.diag([0.01 * speed, 1.0 / s ** 2, 0.5 * s ** 2,
                             0.01 * speed, 1.0 / s ** 2, 0.5 * s ** 2])
         self.P = self._P0.copy()
+        # A writable view of P's diagonal, for the random walk's time update in place.
+        self._diagonal = np.einsum('ii->i', self.P)
         # Mean normalised innovation squared: about 1 while the model holds.
         self.nis = 1.0
         # Two-sided CUSUM of the normalised innovations, for commands below and above the
@@ -263,7 +265,7 @@ class OnlineSdpIdentifier:
         dt = self.dt
         return SdpEstimate(a3, a6, a1 / dt, a4 / dt, a2, a5, s3, s6, s1 / dt, s4 / dt, s2, s5)
 
-    def _map_and_gradient(self, u: float) -> tuple[float, FloatArray]:
+    def _map_and_gradient(self, u: float, theta: list[float]) -> tuple[float, FloatArray]:
         """
         Return eq. (5) at ``u`` and the gradient of its soft-edged form.
 
@@ -272,7 +274,7 @@ class OnlineSdpIdentifier:
 
         """
         # theta is eq. (5) in per-sample form: (a1, a2, a3) below, (a4, a5, a6) above.
-        a1, a2, a3, a4, a5, a6 = self.theta.tolist()
+        a1, a2, a3, a4, a5, a6 = theta
         q = a1 * -math.expm1(a2 * min(u - a3, 0.0)) + a4 * -math.expm1(-a5 * max(u - a6, 0.0))
         # Smooth min/max replace the kinks at the edges in the gradient.
         kappa = self.settings.kappa
@@ -325,11 +327,12 @@ class OnlineSdpIdentifier:
             return False
         # Time update of the random walk, in place: its diagonal grows.
         P = self.P
-        P.flat[::7] += self._ratios * self.r
-        q, psi = self._map_and_gradient(u)
+        self._diagonal += self._ratios * self.r
+        theta = self.theta.tolist()
+        q, psi = self._map_and_gradient(u, theta)
         innovation = (y - previous) - q
         Ppsi = P @ psi
-        spread = float(psi @ Ppsi)
+        spread = float(psi.dot(Ppsi))
         S = self.r + spread
         # A joint that changed (wear, a new valve) shows as innovations persistently larger
         # than the filter expects: then the covariance is reset so that it re-learns fast,
@@ -338,7 +341,7 @@ class OnlineSdpIdentifier:
         normalised = min(z * z, 100.0)
         self.nis += (normalised - self.nis) / self.settings.change_memory
         cusum = self._cusum
-        side = 0 if u < 0.5 * float(self.theta[2] + self.theta[5]) else 2
+        side = 0 if u < 0.5 * (theta[2] + theta[5]) else 2
         drift = self.settings.cusum_drift
         z = min(max(z, -10.0), 10.0)
         cusum[side] = max(0.0, cusum[side] + z - drift)
@@ -354,22 +357,22 @@ class OnlineSdpIdentifier:
             # of what they know, and the other side keeps everything.
             weights = np.array([0.01, 0.01, 1.0])
             forget = np.r_[weights * lower, weights * upper]
-            P = P + self._P0 @ np.diag(forget)
+            P += self._P0 @ np.diag(forget)
             Ppsi = P @ psi
-            spread = float(psi @ Ppsi)
+            spread = float(psi.dot(Ppsi))
             S = self.r + spread
             self.nis = 1.0
             cusum[:] = [0.0, 0.0, 0.0, 0.0]
             self._since_reset = 0
             self.resets += 1
         elif self.updates > 100 and innovation * innovation > self.settings.outlier ** 2 * S:
-            self.P = P
             return False
         gain = Ppsi / S
-        theta = self.theta + gain * innovation
-        self.theta = np.minimum(np.maximum(theta, self._lower, out=theta), self._upper, out=theta)
-        P -= gain[:, None] * Ppsi
-        self.P = P
+        P -= np.multiply.outer(gain, Ppsi)
+        gain *= innovation
+        estimate = self.theta + gain
+        self.theta = np.minimum(np.maximum(estimate, self._lower, out=estimate), self._upper,
+                                out=estimate)
         # Track the noise level slowly, never below a quarter of the start value.
         self.r = max(self._r_min, 0.999 * self.r + 0.001 * (innovation * innovation - spread))
         self.updates += 1
