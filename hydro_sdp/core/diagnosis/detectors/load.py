@@ -147,7 +147,7 @@ class LoadDependenceDetector(EffectDetector):
             self.word, base.with_effect(effect),
             {'limit_positive': effect.limit_positive, 'limit_negative': effect.limit_negative,
              'limit_offset_positive': up_offset, 'limit_offset_negative': down_offset},
-            f'the pump\'s power caps the speed as the load rises: at most {caps}')
+            f"the pump's power caps the speed as the load rises: at most {caps}")
 
     def _fit_records(self, context: Context, found: RecordScales) -> Trial:
         """Give each record its own scale per direction, polish, score."""

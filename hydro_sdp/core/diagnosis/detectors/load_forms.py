@@ -27,18 +27,15 @@ from hydro_sdp.core.model.effects import LoadDependence
 from hydro_sdp.core.model.joint_model import JointModel
 import numpy as np
 
-#: The fields of each direction.
-SIDES = {True: ('positive', 'overrun_positive', 'onset_positive', 'factors_positive',
-                'limit_positive', 'limit_offset_positive'),
-         False: ('negative', 'overrun_negative', 'onset_negative', 'factors_negative',
-                 'limit_negative', 'limit_offset_negative')}
-
 
 def one_side(effect: LoadDependence, positive: bool) -> LoadDependence:
     """Return ``effect`` with the other direction left alone (factor 1)."""
-    changes: dict[str, object] = {name: 0.0 for name in SIDES[not positive]}
-    changes[SIDES[not positive][3]] = (1.0,) * len(effect.knots)
-    return replace(effect, **changes)
+    ones = (1.0,) * len(effect.knots)
+    if positive:
+        return replace(effect, negative=0.0, overrun_negative=0.0, onset_negative=0.0,
+                       factors_negative=ones, limit_negative=0.0, limit_offset_negative=0.0)
+    return replace(effect, positive=0.0, overrun_positive=0.0, onset_positive=0.0,
+                   factors_positive=ones, limit_positive=0.0, limit_offset_positive=0.0)
 
 
 def joined(up: LoadDependence | None, down: LoadDependence | None) -> LoadDependence | None:
@@ -53,11 +50,11 @@ def joined(up: LoadDependence | None, down: LoadDependence | None) -> LoadDepend
     if down is None:
         return one_side(up, True)
     knots = up.knots or down.knots
-    changes: dict[str, object] = {name: getattr(down, name) for name in SIDES[False]}
-    changes['knots'] = knots
-    changes['factors_positive'] = up.factors_positive or (1.0,) * len(knots)
-    changes['factors_negative'] = down.factors_negative or (1.0,) * len(knots)
-    return replace(up, **changes)
+    return replace(up, negative=down.negative, overrun_negative=down.overrun_negative,
+                   onset_negative=down.onset_negative, limit_negative=down.limit_negative,
+                   limit_offset_negative=down.limit_offset_negative, knots=knots,
+                   factors_positive=up.factors_positive or (1.0,) * len(knots),
+                   factors_negative=down.factors_negative or (1.0,) * len(knots))
 
 
 def best_sides(base: JointModel, forms: Sequence[LoadDependence],
