@@ -203,10 +203,12 @@ def exogenous_factor(model: JointModel, speed: FloatArray,
         if exogenous.load is not None:
             up = load_factor(exogenous.load, load.positive, load.reference,
                              load.overrun_positive, load.onset_positive) * \
-                load.smooth_factor(exogenous.load, True)
+                load.smooth_factor(exogenous.load, True) * \
+                load.power_cap(exogenous.load, speed, True)
             down = load_factor(exogenous.load, load.negative, load.reference,
                                load.overrun_negative, load.onset_negative) * \
-                load.smooth_factor(exogenous.load, False)
+                load.smooth_factor(exogenous.load, False) * \
+                load.power_cap(exogenous.load, speed, False)
         else:
             up_factor, down_factor = load.record_factors(exogenous.key)
             up, down = np.full(speed.size, up_factor), np.full(speed.size, down_factor)

@@ -82,7 +82,14 @@ class LoadDependence:
     factors_positive or factors_negative)`` held flat beyond the end knots (1 when
     there are no knots): the shape the data show, as the SDP analysis of the speed
     against the load draws it (a valve without pressure compensation, a pump whose
-    power binds). A record without a load signal takes the factors fitted to it by
+    power binds). A fourth factor caps the speed where the pump's power binds:
+    ``min(1, limit / ((L + offset) |w|))``, with ``limit`` and ``offset`` those of the
+    direction of ``w`` (no cap where ``limit`` is 0 or ``L + offset <= 0``): a
+    pump whose torque limiter holds flow x pressure at its power ``P`` gives at most
+    ``Q = P / p``, its pressure ``p`` the load pressure plus its load-sensing margin,
+    so the speed the pump allows falls as ``1 / (L + margin)`` and caps fast commands
+    while slow ones, whose flow stays below it, keep their speed (a factor of the load
+    alone would slow both alike). A record without a load signal takes the factors fitted to it by
     name (``records``, with ``record_positive`` and ``record_negative``); other
     records keep factor 1.
 
@@ -107,6 +114,11 @@ class LoadDependence:
         empty for none.
     factors_positive, factors_negative : tuple[float, ...]
         The smooth factor at each knot in each direction (> 0).
+    limit_positive, limit_negative : float
+        The pump's power cap in each direction, deg/s x load unit (>= 0; 0: none).
+    limit_offset_positive, limit_offset_negative : float
+        Load added to the measured one where the cap acts (the pump's margin above the
+        load pressure), load units.
 
     """
 
@@ -124,6 +136,10 @@ class LoadDependence:
     knots: tuple[float, ...] = ()
     factors_positive: tuple[float, ...] = ()
     factors_negative: tuple[float, ...] = ()
+    limit_positive: float = 0.0
+    limit_negative: float = 0.0
+    limit_offset_positive: float = 0.0
+    limit_offset_negative: float = 0.0
 
     def __post_init__(self) -> None:
         key = "key 'effects.load_dependence"
@@ -141,6 +157,11 @@ class LoadDependence:
             raise ModelFileError(f"{key}': positive, negative, reference, overrun_* and "
                                  'onset_* must be finite')
         object.__setattr__(self, 'records', records)
+        limits = (self.limit_positive, self.limit_negative, self.limit_offset_positive,
+                  self.limit_offset_negative)
+        if not np.all(np.isfinite(limits)) or min(limits[:2]) < 0.0:
+            raise ModelFileError(f"{key}': limit_* must be finite and >= 0, limit_offset_* "
+                                 'finite')
         object.__setattr__(self, 'record_positive', up)
         object.__setattr__(self, 'record_negative', down)
         knots = tuple(float(x) for x in self.knots)
@@ -166,6 +187,16 @@ class LoadDependence:
             return np.ones(load.shape)
         factors = self.factors_positive if positive else self.factors_negative
         return np.interp(load, self.knots, factors)
+
+    def power_cap(self, load: FloatArray, speed: FloatArray, positive: bool) -> FloatArray:
+        """Return the cap's factor of one direction at the loads and speeds (1: no cap)."""
+        limit = self.limit_positive if positive else self.limit_negative
+        load = np.asarray(load, dtype=np.float64)
+        if limit <= 0.0:
+            return np.ones(load.shape)
+        pressure = load + (self.limit_offset_positive if positive else self.limit_offset_negative)
+        allowed = np.where(pressure > 0.0, limit / np.maximum(pressure, 1e-12), np.inf)
+        return np.minimum(1.0, allowed / np.maximum(np.abs(speed), 1e-12))
 
     def record_factors(self, key: str) -> tuple[float, float]:
         """Return the factors of the record called ``key`` (1, 1 when it has none)."""

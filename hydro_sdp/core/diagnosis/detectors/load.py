@@ -17,9 +17,11 @@ import math
 
 from hydro_sdp.core.diagnosis.context import Context
 from hydro_sdp.core.diagnosis.detectors.base import EffectDetector
+from hydro_sdp.core.diagnosis.detectors.load_forms import best_sides
 from hydro_sdp.core.diagnosis.detectors.load_shape import (
     describe, fitted_table, load_knots, sdp_table)
 from hydro_sdp.core.diagnosis.detectors.overrun import fit_overrun, one_step_samples
+from hydro_sdp.core.diagnosis.detectors.power_cap import fit_power_cap
 from hydro_sdp.core.diagnosis.detectors.record_scales import (
     END_SHARE, first_significant, MIN_SPREAD, P_LIMIT, polish_record, record_scales,
     RecordScales)
@@ -55,7 +57,7 @@ class LoadDependenceDetector(EffectDetector):
         return self._fit_records(context, found)
 
     def _fit_load(self, context: Context) -> Trial:
-        """Fit the smooth factor and the overrunning form; keep the one that removes more."""
+        """Fit the smooth factor, the overrunning form and the power cap; keep the best sides."""
         samples = one_step_samples(context, END_SHARE)
         if not samples:
             return Candidate(self.word, True, evidence='no samples away from the ends of '
@@ -85,8 +87,28 @@ class LoadDependenceDetector(EffectDetector):
                 f'the speed follows the load {how} (SDP share {100 * share:.3g} %): '
                 f'{describe(knots, (up, down))}'))
         trials.append(self._fit_overrun(context, base, measured, predicted, load))
-        return max(trials, key=lambda trial: (trial[1] is not None, trial[0].significant,
-                                              trial[0].gain))
+        trials.append(self._fit_cap(context, base, measured, predicted, load))
+        return self._sides(context, base, trials)
+
+    def _sides(self, context: Context, base: JointModel, trials: list[Trial]) -> Trial:
+        """Give each direction the form that simulates the estimation runs best."""
+        fitted = [(candidate, model.effect(self.word)) for candidate, model in trials
+                  if model is not None]
+        forms = [effect for _, effect in fitted if isinstance(effect, LoadDependence)]
+        if not forms:
+            return max(trials, key=lambda trial: trial[0].gain)
+        effect, (up, down) = best_sides(base, forms, context.runs)
+        if effect is None:
+            return Candidate(self.word, True, evidence='no form of the load lowers the '
+                             'simulation error of the estimation runs'), None
+        parameters = {name: value for name, value in vars(effect).items()
+                      if name not in ('records', 'record_positive', 'record_negative') and
+                      value not in (0.0, ())}
+        why = '; '.join(f'{name}: {fitted[index][0].evidence}' for name, index in
+                        (('positive', up), ('negative', down)) if index >= 0)
+        return context.score(self.word, base.with_effect(effect), parameters,
+                             f'each direction in the form that simulates the estimation runs '
+                             f'best ({why})')
 
     def _fit_overrun(self, context: Context, base: JointModel, measured: np.ndarray,
                      predicted: np.ndarray, load: np.ndarray) -> Trial:
@@ -105,6 +127,27 @@ class LoadDependenceDetector(EffectDetector):
             'an overrunning load speeds the joint up: the squared speed grows by '
             f'{up:+.3g} (positive) and {down:+.3g} (negative) per load unit beyond '
             f'{up_onset:.3g} and {down_onset:.3g}')
+
+    def _fit_cap(self, context: Context, base: JointModel, measured: np.ndarray,
+                 predicted: np.ndarray, load: np.ndarray) -> Trial:
+        """Fit the pump's power cap per direction (:mod:`.power_cap`)."""
+        (up, up_offset), (down, down_offset) = [
+            fit_power_cap(measured[side], predicted[side], load[side])
+            for side in (predicted > 0.0, predicted < 0.0)]
+        if not (up or down):
+            return Candidate(self.word, True, evidence='no power cap holds the joint back'), None
+        dt = context.runs[0].dt
+        effect = LoadDependence(limit_positive=up / dt, limit_negative=down / dt,
+                                limit_offset_positive=up_offset,
+                                limit_offset_negative=down_offset)
+        caps = ', '.join(f'{limit / dt:.4g} / (L {offset:+.3g}) deg/s ({name})'
+                         for limit, offset, name in ((up, up_offset, 'positive'),
+                                                     (down, down_offset, 'negative')) if limit)
+        return context.score(
+            self.word, base.with_effect(effect),
+            {'limit_positive': effect.limit_positive, 'limit_negative': effect.limit_negative,
+             'limit_offset_positive': up_offset, 'limit_offset_negative': down_offset},
+            f"the pump's power caps the speed as the load rises: at most {caps}")
 
     def _fit_records(self, context: Context, found: RecordScales) -> Trial:
         """Give each record its own scale per direction, polish, score."""

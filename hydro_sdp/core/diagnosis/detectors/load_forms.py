@@ -1,0 +1,98 @@
+"""
+The forms of ``load_dependence`` with a measured load, chosen direction by direction.
+
+The detector fits several forms (:mod:`.load`): a smooth factor of the load fitted to
+the increments or read off the SDP analysis, the overrunning load of a compensated
+valve, the pump's power cap. Each holds both directions, but the physics of one
+direction says nothing of the other's (lifting against the load on a pump whose power
+binds, lowering metered by the outlet edge): each direction takes the form that
+simulates the estimation runs best, or none.
+
+The forms differ in what they hold (a factor of the load slows every command alike, a
+power cap only the fast ones): the one-step residual, which the valve's transients
+dominate, favours the form with the most knots; the simulation error over windows from
+the measured angle (:mod:`..held_out`), where a cut integrates over a move, tells which
+one the joint follows.
+
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import Sequence
+
+from hydro_sdp.core.diagnosis.held_out import WindowErrors
+from hydro_sdp.core.diagnosis.residuals import Run
+from hydro_sdp.core.model.effects import LoadDependence
+from hydro_sdp.core.model.joint_model import JointModel
+import numpy as np
+
+
+def one_side(effect: LoadDependence, positive: bool) -> LoadDependence:
+    """Return ``effect`` with the other direction left alone (factor 1)."""
+    ones = (1.0,) * len(effect.knots)
+    if positive:
+        return replace(effect, negative=0.0, overrun_negative=0.0, onset_negative=0.0,
+                       factors_negative=ones, limit_negative=0.0, limit_offset_negative=0.0)
+    return replace(effect, positive=0.0, overrun_positive=0.0, onset_positive=0.0,
+                   factors_positive=ones, limit_positive=0.0, limit_offset_positive=0.0)
+
+
+def joined(up: LoadDependence | None, down: LoadDependence | None) -> LoadDependence | None:
+    """
+    Return the positive direction of ``up`` with the negative of ``down`` (None: neither).
+
+    The factors' knots are those of whichever holds them (both forms fitted at the same
+    knots, the loads the joint moved at).
+    """
+    if up is None:
+        return None if down is None else one_side(down, False)
+    if down is None:
+        return one_side(up, True)
+    knots = up.knots or down.knots
+    return replace(up, negative=down.negative, overrun_negative=down.overrun_negative,
+                   onset_negative=down.onset_negative, limit_negative=down.limit_negative,
+                   limit_offset_negative=down.limit_offset_negative, knots=knots,
+                   factors_positive=up.factors_positive or (1.0,) * len(knots),
+                   factors_negative=down.factors_negative or (1.0,) * len(knots))
+
+
+def best_sides(base: JointModel, forms: Sequence[LoadDependence],
+               runs: Sequence[Run]) -> tuple[LoadDependence | None, tuple[int, int]]:
+    """
+    Choose each direction's form by the windowed simulation error on ``runs``.
+
+    The positive direction first, the negative left alone; then the negative with the
+    positive chosen. A direction keeps no form unless one lowers the error.
+
+    Parameters
+    ----------
+    base : JointModel
+        The model without ``load_dependence``.
+    forms : sequence of LoadDependence
+        The fitted forms.
+    runs : sequence of Run
+        The estimation runs.
+
+    Returns
+    -------
+    tuple
+        The effect joined from the chosen directions (None: no form helps either), and
+        the index in ``forms`` of each direction's form (-1: none).
+
+    """
+    errors = WindowErrors(runs)
+    chosen: list[int] = []
+    up: LoadDependence | None = None
+    for positive in (True, False):
+        trials = [one_side(form, positive) for form in forms]
+        made = [joined(up, trial) if not positive else trial for trial in trials]
+        models = [base if up is None else base.with_effect(one_side(up, True))]
+        models += [base.with_effect(effect) for effect in made if effect is not None]
+        scores = errors.compare(models)
+        best = int(np.argmin(scores))
+        chosen.append(best - 1)
+        if positive and best > 0:
+            up = forms[best - 1]
+    effect = joined(up, forms[chosen[1]] if chosen[1] >= 0 else None)
+    return effect, (chosen[0], chosen[1])
