@@ -63,7 +63,7 @@ def steps_bag(tmp_path_factory, j2):
 
 @pytest.fixture(scope='module')
 def identify_runs(steps_bag, tmp_path_factory):
-    """identify without plots, then with them, in one interpreter; and the figure folder."""
+    """Run identify without plots, then with them, in one interpreter; return the figures too."""
     folder = tmp_path_factory.mktemp('identify_probe')
     figures = folder / 'figures'
     plain, plotted = _probe(['identify', str(steps_bag), '--json'],
