@@ -4,6 +4,7 @@ import json
 import os
 import subprocess
 import sys
+from typing import NamedTuple
 
 from conftest import REPO
 from hydro_sdp.bags import write_bag
@@ -11,25 +12,46 @@ from hydro_sdp.cli.main import build_parser, COMMANDS, main
 from hydro_sdp.core.synthetic.joint_experiments import experiment_record
 import pytest
 
-# Runs one command in a fresh interpreter and prints the top-level packages it loaded.
+# Runs commands in turn in one fresh interpreter; after each prints its exit code, its
+# stdout and every module loaded so far. Modules only accumulate, so what a command loads
+# is among those listed after it, and a module absent after the last was loaded by none.
 PROBE = """
-import json, sys
+from contextlib import redirect_stdout
+import io, json, sys
 from hydro_sdp.cli.main import main
-try:
-    code = main(sys.argv[1:])
-except SystemExit as stop:      # --help
-    code = stop.code
-print(json.dumps({'code': code, 'loaded': sorted({name.split('.')[0] for name in sys.modules})}))
+for argv in json.loads(sys.argv[1]):
+    out = io.StringIO()
+    with redirect_stdout(out):
+        try:
+            code = main(argv)
+        except SystemExit as stop:      # --help
+            code = stop.code
+    print(json.dumps({'code': code, 'out': out.getvalue(), 'loaded': sorted(sys.modules)}))
 """
 HEAVY = ('matplotlib', 'scipy', 'rosbags', 'rclpy')
 
 
-def _loaded(*argv, cwd):
-    done = subprocess.run([sys.executable, '-c', PROBE, *argv], capture_output=True, text=True,
-                          cwd=cwd, env=dict(os.environ, PYTHONPATH=str(REPO), MPLBACKEND='Agg'),
+class Run(NamedTuple):
+    """One command of a probe: its exit code, its stdout and the modules loaded so far."""
+
+    code: int
+    out: str
+    modules: set[str]
+
+    @property
+    def loaded(self) -> set[str]:
+        """Return the top-level packages loaded so far."""
+        return {name.split('.')[0] for name in self.modules}
+
+
+def _probe(*argvs, cwd):
+    """Run the command lines ``argvs`` in turn in one fresh interpreter."""
+    done = subprocess.run([sys.executable, '-c', PROBE, json.dumps([list(a) for a in argvs])],
+                          capture_output=True, text=True, cwd=cwd,
+                          env=dict(os.environ, PYTHONPATH=str(REPO), MPLBACKEND='Agg'),
                           check=True, timeout=300)
-    result = json.loads(done.stdout.strip().splitlines()[-1])
-    return result['code'], set(result['loaded'])
+    lines = done.stdout.strip().splitlines()[-len(argvs):]
+    return [Run(r['code'], r['out'], set(r['loaded'])) for r in map(json.loads, lines)]
 
 
 @pytest.fixture(scope='module')
@@ -39,29 +61,42 @@ def steps_bag(tmp_path_factory, j2):
     return write_bag(folder / 'steps', [record])
 
 
-def test_identify_without_plots_does_not_load_matplotlib(steps_bag, tmp_path):
-    code, loaded = _loaded('identify', str(steps_bag), '--json', cwd=tmp_path)
-    assert code == 0
-    assert 'matplotlib' not in loaded
-    assert 'scipy' in loaded        # the probe sees what identify does load
-    assert 'rosbags' not in loaded  # a plain sqlite3 bag folder is read without it
+@pytest.fixture(scope='module')
+def identify_runs(steps_bag, tmp_path_factory):
+    """Run identify without plots, then with them, in one interpreter; return the figures too."""
+    folder = tmp_path_factory.mktemp('identify_probe')
+    figures = folder / 'figures'
+    plain, plotted = _probe(['identify', str(steps_bag), '--json'],
+                            ['identify', str(steps_bag), '--json', '--plot-dir', str(figures)],
+                            cwd=folder)
+    return plain, plotted, figures
 
 
-def test_identify_with_plots_loads_matplotlib_and_draws(steps_bag, tmp_path):
-    code, loaded = _loaded('identify', str(steps_bag), '--json', '--plot-dir',
-                           str(tmp_path / 'figures'), cwd=tmp_path)
-    assert code == 0
-    assert 'matplotlib' in loaded
-    assert sorted(p.name for p in (tmp_path / 'figures').iterdir()) == [
+def test_identify_without_plots_does_not_load_matplotlib(identify_runs):
+    plain, _, _ = identify_runs
+    assert plain.code == 0
+    assert 'matplotlib' not in plain.loaded
+    assert 'scipy' in plain.loaded        # the probe sees what identify does load
+    assert 'rosbags' not in plain.loaded  # a plain sqlite3 bag folder is read without it
+
+
+def test_identify_with_plots_loads_matplotlib_and_draws(identify_runs):
+    _, plotted, figures = identify_runs
+    assert plotted.code == 0
+    assert 'matplotlib' in plotted.loaded
+    assert sorted(p.name for p in figures.iterdir()) == [
         'gains.png', 'step_responses.png', 'velocity_map.png']
 
 
-@pytest.mark.parametrize('argv', [['--help'], ['--version'], ['demo', '--help'],
-                                  ['calibrate', '--help'], ['evaluate', '--help']])
-def test_help_loads_no_scipy_matplotlib_or_rosbags(argv, tmp_path):
-    code, loaded = _loaded(*argv, cwd=tmp_path)
-    assert code == 0
-    assert not loaded & set(HEAVY), sorted(loaded & set(HEAVY))
+HELP = (['--help'], ['--version'], ['demo', '--help'], ['calibrate', '--help'],
+        ['evaluate', '--help'])
+
+
+def test_help_loads_no_scipy_matplotlib_or_rosbags(tmp_path):
+    runs = _probe(*HELP, cwd=tmp_path)
+    for argv, run in zip(HELP, runs):
+        assert run.code == 0, argv
+        assert not run.loaded & set(HEAVY), (argv, sorted(run.loaded & set(HEAVY)))
 
 
 def test_the_light_parser_lists_every_command_as_the_full_one():
@@ -94,18 +129,12 @@ def test_blas_runs_one_thread_unless_told(given, expected, tmp_path):
     assert done.stderr.strip().splitlines()[-1] == expected
 
 
-def test_a_command_loads_no_other_command_module(steps_bag, tmp_path):
-    probe = ('import sys\nfrom hydro_sdp.cli.main import main\n'
-             f'main(["identify", {str(steps_bag)!r}, "--json"])\n'
-             'print(sorted(m for m in sys.modules if m.startswith("hydro_sdp.cli.")), '
-             'file=sys.stderr)')
-    done = subprocess.run([sys.executable, '-c', probe], capture_output=True, text=True,
-                          cwd=tmp_path, env=dict(os.environ, PYTHONPATH=str(REPO)),
-                          check=True, timeout=300)
-    loaded = done.stderr.strip().splitlines()[-1]
-    assert json.loads(done.stdout)['kind'] == 'sdp'
-    assert loaded == str(['hydro_sdp.cli.common', 'hydro_sdp.cli.identify',
-                          'hydro_sdp.cli.main', 'hydro_sdp.cli.progress'])
+def test_a_command_loads_no_other_command_module(identify_runs):
+    plain, _, _ = identify_runs
+    assert json.loads(plain.out)['kind'] == 'sdp'
+    assert sorted(m for m in plain.modules if m.startswith('hydro_sdp.cli.')) == [
+        'hydro_sdp.cli.common', 'hydro_sdp.cli.identify', 'hydro_sdp.cli.main',
+        'hydro_sdp.cli.progress']
 
 
 @pytest.mark.parametrize('argv', [['--help', 'identify'], ['--help']])
