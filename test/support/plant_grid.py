@@ -27,10 +27,11 @@ diagnosis data at other seeds and duties, and then:
   missing from nothing;
 * absent or not excited in the identification runs: ``flow_sharing`` (identified with
   the other joint still; the diagnosis runs have the other joint of the excavator on
-  the same pump moving at random levels) and ``load_dependence`` (the boom of
-  ``config/physics_boom_power.yaml``: its valve without pressure compensation, on a
-  pump whose power binds; identified lifting nothing; diagnosed on runs lifting nothing
-  and 600 kg with the piston-side pressure logged as the load);
+  the same pump moving at random levels and resting at its neutral between them) and
+  ``load_dependence`` (the boom of ``config/physics_boom_power.yaml``: its valve without
+  pressure compensation, on a pump whose power binds; identified lifting nothing;
+  diagnosed on runs lifting nothing and 600 kg with the piston-side pressure logged as
+  the load);
 * ``none``: the ``power_sat`` model itself, on the same kind of runs.
 
 Left out, with the reason from the plant's physics (:data:`LEFT_OUT`):

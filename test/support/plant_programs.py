@@ -13,6 +13,12 @@ runs its program (its angle is the record's ``others``), and so that the first
 joint's piston-side pressure can be logged as the record's ``load`` (bar), as a
 pressure sensor on that chamber reads it.
 
+The second joint rests at its neutral for a share of its holds (:data:`PARTNER_REST`),
+drawn as the first joint's rests of :func:`levels` are: an operator moves the other
+joint some of the time, not all of it. A partner that never rests slows every stroke
+of the first joint alike, and flow sharing is then indistinguishable from a slower
+valve: no data could name it.
+
 """
 
 from __future__ import annotations
@@ -42,6 +48,9 @@ VARIANTS: dict[tuple[str, str], tuple[str, tuple[float, tuple[float, float]] | N
 
 #: The joint that shares the pump with each joint when ``flow_sharing`` is hidden.
 PARTNER = {'arm': 'physics_boom.yaml', 'boom': 'physics_arm.yaml'}
+#: Share of the second joint's holds spent at its neutral (the operator moves it some of
+#: the time; one that never rests would make the shared pump look like a slower valve).
+PARTNER_REST = 0.4
 
 
 def _with_valve(joint: Joint, valve: tuple[float, tuple[float, float]] | None,
@@ -89,19 +98,26 @@ def variant(joint: str, units: str, rng: np.random.Generator, *, power: bool = F
 
 
 class _Other:
-    """Random duties of the second joint, held 0.5-3 s, turning back before its stops."""
+    """
+    Random duties of the second joint and rests at its neutral, held 0.5-3 s.
+
+    A share :data:`PARTNER_REST` of the holds rests; the others head away from the
+    nearer stop more often than not, as :func:`levels` does for the first joint.
+    """
 
     def __init__(self, machine: Machine, rng: np.random.Generator) -> None:
         self.machine, self.rng = machine, rng
         self.limits = Geometry(machine.joints[1]).angle_limits
-        self.command, self.left = machine.joints[1].valve.neutral, 0
+        self.neutral = machine.joints[1].valve.neutral
+        self.command, self.left = self.neutral, 0
 
     def command_at(self, angle: float) -> float:
         """Return the command over the next sample, at the joint's ``angle``."""
         if self.left <= 0:
             low, high = self.limits
             sign = 1.0 if self.rng.random() > (angle - low) / (high - low) else -1.0
-            self.command = duty_command(self.machine, 1, sign * self.rng.uniform(35.0, 100.0))
+            self.command = self.neutral if self.rng.random() < PARTNER_REST else duty_command(
+                self.machine, 1, sign * self.rng.uniform(35.0, 100.0))
             self.left = int(round(self.rng.uniform(0.5, 3.0) / DT))
         self.left -= 1
         return self.command
