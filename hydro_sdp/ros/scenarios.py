@@ -97,10 +97,14 @@ def wear_and_recalibration(*, holds: int = 20, steps: int = 400, drift_at: int =
     """
     rows = []
     with RosHarness() as ros:
-        plant = ros.add(PlantNode, parameters={'noise_std': noise_std, 'seed': seed})
+        # Only the controller answers parameter requests: the identifier recalibrates it
+        # through them. The plant is worn through its own set_parameters.
+        plant = ros.add(PlantNode, parameters={'noise_std': noise_std, 'seed': seed},
+                        services=False)
         controller = ros.add(PipControllerNode)
         identifier_node = ros.add(IdentifierNode, parameters={
-            'auto_recalibrate': True, 'noise_std': noise_std, **(identifier or {})})
+            'auto_recalibrate': True, 'noise_std': noise_std, **(identifier or {})},
+            services=False)
         helper = ros.helper('scenario_setpoints')
         publisher = helper.create_publisher(Float64, 'j2/setpoint', 10)
         loop = Lockstep(ros, plant, controllers=[controller], observers=[identifier_node])

@@ -93,7 +93,7 @@ class RosHarness:
 
     def add(self, node_cls: Callable[..., NodeT], *,
             parameters: Mapping[str, ParameterValue] | None = None, sim_time: bool = True,
-            cli_args: list[str] | None = None,
+            cli_args: list[str] | None = None, services: bool = True,
             **kwargs: object) -> NodeT:
         """
         Create a node in the harness and add it to the executor.
@@ -109,6 +109,11 @@ class RosHarness:
             Whether the node's clock is set by the harness.
         cli_args : list of str or None
             ROS command-line arguments (``--ros-args --params-file ...``).
+        services : bool
+            Whether the node answers parameter and type description requests. A node that
+            no client asks (a plant stepped in process, a test's helper) leaves them out:
+            the executor waits on every service of every node at each spin, and these are
+            a quarter of a lockstep step's work.
         **kwargs : object
             More constructor arguments (``node_name``...).
 
@@ -121,6 +126,9 @@ class RosHarness:
         overrides = [Parameter(name, value=value) for name, value in (parameters or {}).items()]
         if sim_time:
             overrides.append(Parameter('use_sim_time', value=True))
+        if not services:
+            overrides.append(Parameter('start_type_description_service', value=False))
+            kwargs['start_parameter_services'] = False
         node = node_cls(context=self.context, parameter_overrides=overrides,
                         cli_args=cli_args, **kwargs)
         if sim_time:
@@ -131,7 +139,7 @@ class RosHarness:
 
     def helper(self, name: str = 'test_helper') -> Node:
         """Return a plain node (simulated time) for a test's own publishers and subscribers."""
-        return self.add(Node, node_name=name)
+        return self.add(Node, node_name=name, services=False)
 
     def set_time(self, nanoseconds: int) -> None:
         """Set the clock of every simulated-time node (timers that are due fire on spin)."""
