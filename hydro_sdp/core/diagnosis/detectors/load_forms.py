@@ -22,7 +22,7 @@ from dataclasses import replace
 from typing import Sequence
 
 from hydro_sdp.core.diagnosis.held_out import WindowErrors
-from hydro_sdp.core.diagnosis.residuals import Run
+from hydro_sdp.core.diagnosis.residuals import MIN_GAIN, Run
 from hydro_sdp.core.model.effects import LoadDependence
 from hydro_sdp.core.model.joint_model import JointModel
 import numpy as np
@@ -63,7 +63,12 @@ def best_sides(base: JointModel, forms: Sequence[LoadDependence],
     Choose each direction's form by the windowed simulation error on ``runs``.
 
     The positive direction first, the negative left alone; then the negative with the
-    positive chosen. A direction keeps no form unless one lowers the error.
+    positive chosen. A direction keeps no form unless one lowers the error. The first
+    form given is the data's own shape (a factor at the loads the joint moved at); a form
+    of assumed physics takes its place only when it lowers the error by at least
+    :data:`~hydro_sdp.core.diagnosis.residuals.MIN_GAIN` of the first's (the least gain
+    the diagnosis counts): with a few loads, any form of two parameters runs through the
+    same points, and the data's shape assumes least about the loads between them.
 
     Parameters
     ----------
@@ -91,6 +96,8 @@ def best_sides(base: JointModel, forms: Sequence[LoadDependence],
         models += [base.with_effect(effect) for effect in made if effect is not None]
         scores = errors.compare(models)
         best = int(np.argmin(scores))
+        if best > 1 and scores[best] > (1.0 - MIN_GAIN) * scores[1]:
+            best = 1 if scores[1] < scores[0] else 0
         chosen.append(best - 1)
         if positive and best > 0:
             up = forms[best - 1]
