@@ -28,6 +28,25 @@ def pytest_xdist_auto_num_workers(config):
     return len(os.sched_getaffinity(0)) + 1
 
 
+def pytest_collection_modifyitems(items):
+    """
+    Start the longest modules first, so that the test workers end together.
+
+    xdist hands out whole modules (``--dist loadfile``) in the collection's order
+    (``--no-loadscope-reorder``); a module that starts last and runs long would run alone
+    at the end. A ``slow`` mark may say how many seconds its module takes
+    (``pytest.mark.slow(120)``); a plain one counts 10, a module without one nothing.
+    The order within a module is kept.
+    """
+    def seconds(item):
+        mark = item.get_closest_marker('slow')
+        return 0.0 if mark is None else float(mark.args[0]) if mark.args else 10.0
+    cost = {}
+    for item in items:
+        cost[item.path] = max(cost.get(item.path, 0.0), seconds(item))
+    items.sort(key=lambda item: -cost[item.path])
+
+
 @pytest.fixture
 def rng():
     """Return a seeded random generator, one per test."""

@@ -34,7 +34,8 @@ from support.doc_blocks import Block, blocks, commands
 from support.your_machine import write_your_machine
 import yaml
 
-pytestmark = [pytest.mark.slow]
+# The longest module of the suite, one chain of pages: started first.
+pytestmark = [pytest.mark.slow(120)]
 
 #: The pages, in the order a newcomer reads them (each may use what those before it made).
 PAGES = ['README.md'] + [f'docs/guide/{name}.md' for name in (

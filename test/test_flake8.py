@@ -18,6 +18,7 @@ sys.exit(rc)
 
 
 @pytest.mark.linter
+@pytest.mark.slow(30)
 def test_flake8():
     pytest.importorskip('ament_flake8.main')
     paths = [str(REPO / name) for name in ('hydro_sdp', 'test', 'bench', 'setup.py')]

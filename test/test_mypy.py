@@ -5,6 +5,7 @@ import pytest
 
 
 @pytest.mark.linter
+@pytest.mark.slow(30)
 def test_mypy():
     api = pytest.importorskip('mypy.api')
     stdout, stderr, status = api.run(['--config-file', str(REPO / 'mypy.ini'),

@@ -20,6 +20,8 @@ import pytest
 from support.cli_runs import run_json
 from support.plant_levels import plant_levels
 
+pytestmark = [pytest.mark.slow]
+
 DT = 0.01
 SIGNALS = """\
 joints:

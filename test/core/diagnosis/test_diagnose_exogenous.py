@@ -24,6 +24,8 @@ from support.diagnosis_grid import hide
 from support.joint_generator import record
 from support.plant_levels import plant_levels
 
+pytestmark = [pytest.mark.slow]
+
 DT = 0.01
 DUTIES = (55, 75, 100)
 #: The model identified, the records with the boom still and moving, and the diagnosis.

@@ -21,6 +21,8 @@ from hydro_sdp.io.model_files import save_model
 import numpy as np
 import pytest
 
+pytestmark = [pytest.mark.slow]
+
 # Table 1 of West et al. (2018), signed: alpha_1 and alpha_4 in Table 1's scale (methods 2.3).
 TABLE_1 = (-2.2161, 1.3570, -1.3266, 2.9315, 1.7865, 1.3149)
 

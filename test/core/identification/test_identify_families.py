@@ -11,6 +11,8 @@ from hydro_sdp.core.model.static_maps import PolyMap, PowerSatMap, SdpMap
 import numpy as np
 import pytest
 
+pytestmark = [pytest.mark.slow]
+
 CONVEX = PowerSatMap((-37.5, 37.5), (-40.0, 32.0), (0.03, 0.035), (3.0, 2.5))
 
 

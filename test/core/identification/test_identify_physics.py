@@ -21,6 +21,8 @@ from hydro_sdp.io.plant_files import load_machine
 import numpy as np
 import pytest
 
+pytestmark = [pytest.mark.slow]
+
 DUTIES = (40, 50, 60, 70, 80, 90, 100)
 FIT_DUTIES = (40, 60, 80, 100)
 HELD_OUT = (50, 70, 90)

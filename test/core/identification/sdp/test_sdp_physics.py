@@ -16,6 +16,8 @@ import numpy as np
 import pytest
 from support.plant_levels import plant_levels
 
+pytestmark = [pytest.mark.slow]
+
 DT = 0.01
 #: Time since 1970 the records are stamped from, s.
 EPOCH = 1.76e9
