@@ -43,7 +43,23 @@ def _check_interrupted(code, stderr):
         assert stderr.splitlines()[-1].startswith('error: interrupted'), stderr
 
 
-def test_sigint_inside_a_deferred_block_arrives_when_it_ends():
+@pytest.fixture
+def ctrl_c_to_this_process():
+    """
+    Python's own Ctrl-C handling in this test process while a test sends SIGINT to itself.
+
+    These tests are about what the code does under Python's default handler; a test
+    worker has run other modules before (middleware threads, nodes in process), so the
+    handler is set and SIGINT unblocked in this thread, and the handler put back after.
+    """
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+    yield
+    if previous is not None:
+        signal.signal(signal.SIGINT, previous)
+
+
+def test_sigint_inside_a_deferred_block_arrives_when_it_ends(ctrl_c_to_this_process):
     steps = []
     with pytest.raises(KeyboardInterrupt):
         with interrupts_deferred():
@@ -111,7 +127,8 @@ def test_sigint_during_demo(tmp_path, delay):
     assert _leftovers(tmp_path) == []
 
 
-def test_a_ctrl_c_that_an_extension_turns_into_another_error_still_exits_130(monkeypatch, capsys):
+def test_a_ctrl_c_that_an_extension_turns_into_another_error_still_exits_130(
+        ctrl_c_to_this_process, monkeypatch, capsys):
     # rclpy's pybind11 code can turn the KeyboardInterrupt of a Ctrl-C into a RuntimeError
     # (the demo's nodes); the command still ends as interrupted, not as an internal failure.
     from hydro_sdp.cli import reindex
