@@ -64,6 +64,31 @@ class FlowSharing:
                                      f'got {value}')
 
 
+def power_allowed(load: FloatArray, limit: float, offset: float) -> FloatArray:
+    """
+    Return the speed a power-limited pump allows at each load: ``limit / (load + offset)``.
+
+    No cap (infinity) where ``load + offset <= 0``.
+
+    Parameters
+    ----------
+    load : FloatArray
+        Measured load, load units.
+    limit : float
+        The cap, speed x load unit.
+    offset : float
+        Load added to the measured one (the pump's margin above the load pressure).
+
+    Returns
+    -------
+    FloatArray
+        The speed allowed (the unit of ``limit`` over load units).
+
+    """
+    pressure = load + offset
+    return np.where(pressure > 0.0, limit / np.maximum(pressure, 1e-12), np.inf)
+
+
 @dataclass(frozen=True)
 class LoadDependence:
     """
@@ -194,8 +219,8 @@ class LoadDependence:
         load = np.asarray(load, dtype=np.float64)
         if limit <= 0.0:
             return np.ones(load.shape)
-        pressure = load + (self.limit_offset_positive if positive else self.limit_offset_negative)
-        allowed = np.where(pressure > 0.0, limit / np.maximum(pressure, 1e-12), np.inf)
+        offset = self.limit_offset_positive if positive else self.limit_offset_negative
+        allowed = power_allowed(load, limit, offset)
         return np.minimum(1.0, allowed / np.maximum(np.abs(speed), 1e-12))
 
     def record_factors(self, key: str) -> tuple[float, float]:

@@ -14,6 +14,7 @@ slow ones the pump never held back.
 from __future__ import annotations
 
 from hydro_sdp.core.arrays import FloatArray
+from hydro_sdp.core.model.pump_and_load import power_allowed
 import numpy as np
 from scipy.optimize import least_squares
 
@@ -26,9 +27,8 @@ MIN_GAIN = 0.01
 def capped(predicted: FloatArray, load: FloatArray, limit: float,
            offset: float) -> FloatArray:
     """Return the increments ``predicted`` capped at ``limit / (load + offset)`` in size."""
-    pressure = load + offset
-    allowed = np.where(pressure > 0.0, limit / np.maximum(pressure, 1e-12), np.inf)
-    return np.sign(predicted) * np.minimum(np.abs(predicted), allowed)
+    return np.sign(predicted) * np.minimum(np.abs(predicted),
+                                           power_allowed(load, limit, offset))
 
 
 def fit_power_cap(measured: FloatArray, predicted: FloatArray,
