@@ -1,4 +1,4 @@
-"""ament_pep257 docstring checks over the package."""
+"""ament_pep257 docstring checks over the package, its tests and benchmarks."""
 
 from conftest import REPO
 import pytest
@@ -7,5 +7,5 @@ import pytest
 @pytest.mark.linter
 def test_pep257():
     main = pytest.importorskip('ament_pep257.main')
-    rc = main.main(argv=[str(REPO / 'hydro_sdp'), str(REPO / 'bench')])
+    rc = main.main(argv=[str(REPO / name) for name in ('hydro_sdp', 'test', 'bench', 'setup.py')])
     assert rc == 0, 'found docstring style errors'

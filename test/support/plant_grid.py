@@ -177,27 +177,27 @@ class Identified:
 
     @cached_property
     def identification(self) -> list[Record]:
-        """Runs the models are identified on."""
+        """Return the runs the models are identified on."""
         return self.runs('identify')
 
     @cached_property
     def power_sat(self) -> JointModel:
-        """The ``power_sat`` model (the family the auto choice gives full strokes)."""
+        """Return the ``power_sat`` model (the family the auto choice gives full strokes)."""
         return _identify(self.machine, self.identification, 'power_sat')
 
     @cached_property
     def sdp(self) -> JointModel:
-        """The ``sdp`` model (eq. (5): the family whose features the map words are)."""
+        """Return the ``sdp`` model (eq. (5): the family whose features the map words are)."""
         return _identify(self.machine, self.identification, 'sdp')
 
     @cached_property
     def estimation(self) -> tuple[Record, ...]:
-        """Runs the diagnosis fits on."""
+        """Return the runs the diagnosis fits on."""
         return tuple(self.runs('estimate'))
 
     @cached_property
     def validation(self) -> tuple[Record, ...]:
-        """Runs the diagnosis is judged on."""
+        """Return the runs the diagnosis is judged on."""
         return tuple(self.runs('validate'))
 
 
