@@ -20,6 +20,8 @@ from typing import Any
 
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import ConfigurationError
+from hydro_sdp.core.identification.packed_covariance import (
+    add_to_diagonal, diagonal, downdated, packed, Six, times, unpacked)
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.static_maps import SdpMap
 from hydro_sdp.core.model.timing import check_sample_period, DelayLine
@@ -213,13 +215,13 @@ class OnlineSdpIdentifier:
         self.settings = settings
         self.delay = model.delay_samples(self.dt)
         s = settings.input_scale
-        self.theta = np.array(model.alpha(self.dt), dtype=np.float64)
+        # theta and the upper triangle of P as Python floats: the per-sample arithmetic on
+        # six numbers is cheaper written out than as numpy calls (docs/methods.md 7.2).
+        self._theta = [float(a) for a in model.alpha(self.dt)]
         speed = (self.dt / 0.01) ** 2
-        self._P0 = np.diag([0.01 * speed, 1.0 / s ** 2, 0.5 * s ** 2,
-                            0.01 * speed, 1.0 / s ** 2, 0.5 * s ** 2])
-        self.P = self._P0.copy()
-        # A writable view of P's diagonal, for the random walk's time update in place.
-        self._diagonal = np.einsum('ii->i', self.P)
+        self._start_variances = (0.01 * speed, 1.0 / s ** 2, 0.5 * s ** 2,
+                                 0.01 * speed, 1.0 / s ** 2, 0.5 * s ** 2)
+        self._p = packed(np.diag(self._start_variances))
         # Mean normalised innovation squared: about 1 while the model holds.
         self.nis = 1.0
         # Two-sided CUSUM of the normalised innovations, for commands below and above the
@@ -227,16 +229,14 @@ class OnlineSdpIdentifier:
         self._cusum = [0.0, 0.0, 0.0, 0.0]
         self.resets = 0
         self._since_reset = 0
-        self._ratios = np.array(NOISE_VARIANCE_RATIOS) * np.array(
-            [speed, 1.0 / s ** 2, s ** 2, speed, 1.0 / s ** 2, s ** 2])
+        scales = (speed, 1.0 / s ** 2, s ** 2, speed, 1.0 / s ** 2, s ** 2)
+        self._ratios = tuple(ratio * scale for ratio, scale in zip(NOISE_VARIANCE_RATIOS, scales))
         self.r = 2.0 * settings.noise_std ** 2
         self._r_min = 0.25 * self.r
-        a1, a4 = self.theta[0], self.theta[3]
+        a1, a4 = self._theta[0], self._theta[3]
         low, high = model.static_map.dead_zone
-        self._lower = np.array([5.0 * a1, 0.1 / s, -4.0 * s * max(1.0, abs(low)),
-                                0.0, 0.1 / s, low])
-        self._upper = np.array([0.0, 10.0 / s, high, 5.0 * a4, 10.0 / s,
-                                4.0 * s * max(1.0, abs(high))])
+        self._lower = (5.0 * a1, 0.1 / s, -4.0 * s * max(1.0, abs(low)), 0.0, 0.1 / s, low)
+        self._upper = (0.0, 10.0 / s, high, 5.0 * a4, 10.0 / s, 4.0 * s * max(1.0, abs(high)))
         # v_{k-tau} and v_{k-tau-1}: the gate needs the command before the delayed one too.
         self._commands = DelayLine(self.delay + 1, before=math.nan)
         self._pushed = 0
@@ -246,13 +246,23 @@ class OnlineSdpIdentifier:
         self.updates = 0
 
     @property
+    def theta(self) -> FloatArray:
+        """Return the estimate ``(a1 .. a6)`` of eq. (5), per-sample units (a new array)."""
+        return np.array(self._theta)
+
+    @property
+    def P(self) -> FloatArray:  # noqa: N802 - the covariance's name in methods.md 7.2
+        """Return the covariance of ``theta`` (a new 6 x 6 array)."""
+        return unpacked(self._p)
+
+    @property
     def standard_errors(self) -> FloatArray:
         """Return the standard deviations of ``theta``."""
-        return np.sqrt(np.maximum(np.diag(self.P), 0.0))
+        return np.sqrt(np.maximum(diagonal(self._p), 0.0))
 
     def static_map(self) -> SdpMap:
         """Return the current estimate as a rate-based map."""
-        return SdpMap.from_alpha(tuple(self.theta), self.dt)
+        return SdpMap.from_alpha(tuple(self._theta), self.dt)
 
     def estimate(self) -> JointModel:
         """Return the model with the current estimate of its map."""
@@ -260,12 +270,12 @@ class OnlineSdpIdentifier:
 
     def named_estimate(self) -> SdpEstimate:
         """Return the current estimate and its standard deviations by name."""
-        a1, a2, a3, a4, a5, a6 = (float(a) for a in self.theta)
+        a1, a2, a3, a4, a5, a6 = self._theta
         s1, s2, s3, s4, s5, s6 = (float(s) for s in self.standard_errors)
         dt = self.dt
         return SdpEstimate(a3, a6, a1 / dt, a4 / dt, a2, a5, s3, s6, s1 / dt, s4 / dt, s2, s5)
 
-    def _map_and_gradient(self, u: float, theta: list[float]) -> tuple[float, FloatArray]:
+    def _map_and_gradient(self, u: float, theta: list[float]) -> tuple[float, Six]:
         """
         Return eq. (5) at ``u`` and the gradient of its soft-edged form.
 
@@ -284,9 +294,8 @@ class OnlineSdpIdentifier:
         g = math.exp(-a5 * above)
         sigma_below = 1.0 / (1.0 + math.exp(min((u - a3) / kappa, 700.0)))
         sigma_above = 1.0 / (1.0 + math.exp(min(-(u - a6) / kappa, 700.0)))
-        return q, np.array([
-            1.0 - e, -a1 * below * e, a1 * a2 * e * sigma_below,
-            1.0 - g, a4 * above * g, -a4 * a5 * g * sigma_above])
+        return q, (1.0 - e, -a1 * below * e, a1 * a2 * e * sigma_below,
+                   1.0 - g, a4 * above * g, -a4 * a5 * g * sigma_above)
 
     def update(self, v: float, y: float) -> bool:
         """
@@ -326,14 +335,16 @@ class OnlineSdpIdentifier:
                                    max(y, previous) > limits[1] - self.settings.margin):
             return False
         # Time update of the random walk, in place: its diagonal grows.
-        P = self.P
-        self._diagonal += self._ratios * self.r
-        theta = self.theta.tolist()
+        r = self.r
+        ratios = self._ratios
+        p = self._p
+        add_to_diagonal(p, (ratios[0] * r, ratios[1] * r, ratios[2] * r,
+                            ratios[3] * r, ratios[4] * r, ratios[5] * r))
+        theta = self._theta
         q, psi = self._map_and_gradient(u, theta)
         innovation = (y - previous) - q
-        Ppsi = P @ psi
-        spread = float(psi.dot(Ppsi))
-        S = self.r + spread
+        Ppsi, spread = times(p, psi)
+        S = r + spread
         # A joint that changed (wear, a new valve) shows as innovations persistently larger
         # than the filter expects: then the covariance is reset so that it re-learns fast,
         # instead of creeping along its slow random walk (or rejecting the news as outliers).
@@ -352,28 +363,37 @@ class OnlineSdpIdentifier:
         if self.nis > self.settings.change_level:
             lower = upper = True
         if (lower or upper) and self._since_reset > 5 * self.settings.change_memory:
-            # Dead-zone edges are what wear moves: forget the edge of the side that changed;
-            # its speed and curvature, poorly excited while a set-point is held, keep most
-            # of what they know, and the other side keeps everything.
-            weights = np.array([0.01, 0.01, 1.0])
-            forget = np.r_[weights * lower, weights * upper]
-            P += self._P0 @ np.diag(forget)
-            Ppsi = P @ psi
-            spread = float(psi.dot(Ppsi))
-            S = self.r + spread
-            self.nis = 1.0
-            cusum[:] = [0.0, 0.0, 0.0, 0.0]
-            self._since_reset = 0
-            self.resets += 1
+            self._reset_covariance(lower, upper)
+            Ppsi, spread = times(p, psi)
+            S = r + spread
         elif self.updates > 100 and innovation * innovation > self.settings.outlier ** 2 * S:
             return False
-        gain = Ppsi / S
-        P -= np.multiply.outer(gain, Ppsi)
-        gain *= innovation
-        estimate = self.theta + gain
-        self.theta = np.minimum(np.maximum(estimate, self._lower, out=estimate), self._upper,
-                                out=estimate)
+        h0, h1, h2, h3, h4, h5 = Ppsi
+        gain = (h0 / S, h1 / S, h2 / S, h3 / S, h4 / S, h5 / S)
+        self._p = downdated(p, gain, Ppsi)
+        # theta + K eps, projected on the box (a NaN would pass through, as in numpy).
+        estimate = [a + k * innovation for a, k in zip(theta, gain)]
+        self._theta = [low if a < low else high if a > high else a
+                       for a, low, high in zip(estimate, self._lower, self._upper)]
         # Track the noise level slowly, never below a quarter of the start value.
-        self.r = max(self._r_min, 0.999 * self.r + 0.001 * (innovation * innovation - spread))
+        self.r = max(self._r_min, 0.999 * r + 0.001 * (innovation * innovation - spread))
         self.updates += 1
         return True
+
+    def _reset_covariance(self, lower: bool, upper: bool) -> None:
+        """
+        Add part of the start covariance back on the side(s) that changed (section 7.4).
+
+        Dead-zone edges are what wear moves: the edge of a changed side is forgotten; its
+        speed and curvature, poorly excited while a set-point is held, keep most of what
+        they know, and the other side keeps everything.
+        """
+        below = 1.0 if lower else 0.0
+        above = 1.0 if upper else 0.0
+        v = self._start_variances
+        add_to_diagonal(self._p, (v[0] * 0.01 * below, v[1] * 0.01 * below, v[2] * below,
+                                  v[3] * 0.01 * above, v[4] * 0.01 * above, v[5] * above))
+        self.nis = 1.0
+        self._cusum[:] = [0.0, 0.0, 0.0, 0.0]
+        self._since_reset = 0
+        self.resets += 1
