@@ -20,8 +20,9 @@ from typing import Any
 
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import ConfigurationError
-from hydro_sdp.core.identification.packed_covariance import (
-    add_to_diagonal, diagonal, downdated, packed, Six, times, unpacked)
+from hydro_sdp.core.identification.scalar_kalman import (
+    add_to_diagonal, boxed, diagonal, downdated, packed, times, unpacked)
+from hydro_sdp.core.identification.soft_edges import map_and_soft_gradient
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.static_maps import SdpMap
 from hydro_sdp.core.model.timing import check_sample_period, DelayLine
@@ -184,12 +185,6 @@ saturation_positive_std, curvature_negative_std, curvature_positive_std : float
         return self.dead_zone_lower_std, self.dead_zone_upper_std
 
 
-def _softplus(x: float, kappa: float) -> float:
-    # kappa ln(1 + e^{x/kappa}), computed without overflow.
-    z = x / kappa
-    return kappa * (z + math.log1p(math.exp(-z))) if z > 0 else kappa * math.log1p(math.exp(z))
-
-
 class OnlineSdpIdentifier:
     """
     Random-walk Kalman filter on the six coefficients of eq. (5).
@@ -275,28 +270,6 @@ class OnlineSdpIdentifier:
         dt = self.dt
         return SdpEstimate(a3, a6, a1 / dt, a4 / dt, a2, a5, s3, s6, s1 / dt, s4 / dt, s2, s5)
 
-    def _map_and_gradient(self, u: float, theta: list[float]) -> tuple[float, Six]:
-        """
-        Return eq. (5) at ``u`` and the gradient of its soft-edged form.
-
-        Scalar arithmetic in Python floats: per sample, a handful of numpy calls on
-        six numbers would cost more than the arithmetic (docs/methods.md section 7.2).
-
-        """
-        # theta is eq. (5) in per-sample form: (a1, a2, a3) below, (a4, a5, a6) above.
-        a1, a2, a3, a4, a5, a6 = theta
-        q = a1 * -math.expm1(a2 * min(u - a3, 0.0)) + a4 * -math.expm1(-a5 * max(u - a6, 0.0))
-        # Smooth min/max replace the kinks at the edges in the gradient.
-        kappa = self.settings.kappa
-        below = -_softplus(-(u - a3), kappa)            # smooth min(u - a3, 0)
-        above = _softplus(u - a6, kappa)                # smooth max(u - a6, 0)
-        e = math.exp(a2 * below)
-        g = math.exp(-a5 * above)
-        sigma_below = 1.0 / (1.0 + math.exp(min((u - a3) / kappa, 700.0)))
-        sigma_above = 1.0 / (1.0 + math.exp(min(-(u - a6) / kappa, 700.0)))
-        return q, (1.0 - e, -a1 * below * e, a1 * a2 * e * sigma_below,
-                   1.0 - g, a4 * above * g, -a4 * a5 * g * sigma_above)
-
     def update(self, v: float, y: float) -> bool:
         """
         Take one sample: the command in force up to ``t_k`` and the angle at ``t_k``.
@@ -315,68 +288,74 @@ class OnlineSdpIdentifier:
 
         """
         self.samples += 1
+        settings = self.settings
         if not (math.isfinite(v) and math.isfinite(y)):
-            self._quiet = self.settings.hold_off
+            self._quiet = settings.hold_off
             return False
-        self._commands.push(v)
+        commands = self._commands
+        commands.push(v)
         self._pushed += 1
         previous, self._last_angle = self._last_angle, float(y)
-        if previous is None or self._pushed < self.delay + 2:
+        delay = self.delay
+        if previous is None or self._pushed < delay + 2:
             return False
-        u = self._commands.delayed(self.delay)
-        if abs(u - self._commands.delayed(self.delay + 1)) > self.settings.change_gate:
-            self._quiet = self.settings.hold_off
+        u = commands.delayed(delay)
+        if abs(u - commands.delayed(delay + 1)) > settings.change_gate:
+            self._quiet = settings.hold_off
             return False
         if self._quiet > 0:
             self._quiet -= 1
             return False
         limits = self.model.angle_limits
-        if limits is not None and (min(y, previous) < limits[0] + self.settings.margin or
-                                   max(y, previous) > limits[1] - self.settings.margin):
-            return False
+        if limits is not None:
+            low, high = limits[0] + settings.margin, limits[1] - settings.margin
+            if y < low or previous < low or y > high or previous > high:
+                return False
         # Time update of the random walk, in place: its diagonal grows.
         r = self.r
-        ratios = self._ratios
         p = self._p
-        add_to_diagonal(p, (ratios[0] * r, ratios[1] * r, ratios[2] * r,
-                            ratios[3] * r, ratios[4] * r, ratios[5] * r))
+        n0, n1, n2, n3, n4, n5 = self._ratios
+        add_to_diagonal(p, (n0 * r, n1 * r, n2 * r, n3 * r, n4 * r, n5 * r))
         theta = self._theta
-        q, psi = self._map_and_gradient(u, theta)
+        q, psi = map_and_soft_gradient(u, theta, settings.kappa)
         innovation = (y - previous) - q
         Ppsi, spread = times(p, psi)
         S = r + spread
         # A joint that changed (wear, a new valve) shows as innovations persistently larger
         # than the filter expects: then the covariance is reset so that it re-learns fast,
         # instead of creeping along its slow random walk (or rejecting the news as outliers).
+        # (Comparisons stand for min/max: a builtin call per clip costs more than the clip.)
         z = innovation / math.sqrt(S)
-        normalised = min(z * z, 100.0)
-        self.nis += (normalised - self.nis) / self.settings.change_memory
+        normalised = z * z
+        normalised = 100.0 if 100.0 < normalised else normalised
+        self.nis += (normalised - self.nis) / settings.change_memory
         cusum = self._cusum
         side = 0 if u < 0.5 * (theta[2] + theta[5]) else 2
-        drift = self.settings.cusum_drift
-        z = min(max(z, -10.0), 10.0)
-        cusum[side] = max(0.0, cusum[side] + z - drift)
-        cusum[side + 1] = max(0.0, cusum[side + 1] - z - drift)
+        drift = settings.cusum_drift
+        z = -10.0 if -10.0 > z else 10.0 if 10.0 < z else z
+        rising = cusum[side] + z - drift
+        falling = cusum[side + 1] - z - drift
+        cusum[side] = rising if rising > 0.0 else 0.0
+        cusum[side + 1] = falling if falling > 0.0 else 0.0
         self._since_reset += 1
-        lower = max(cusum[0], cusum[1]) > self.settings.cusum_limit
-        upper = max(cusum[2], cusum[3]) > self.settings.cusum_limit
-        if self.nis > self.settings.change_level:
+        limit = settings.cusum_limit
+        lower = cusum[0] > limit or cusum[1] > limit
+        upper = cusum[2] > limit or cusum[3] > limit
+        if self.nis > settings.change_level:
             lower = upper = True
-        if (lower or upper) and self._since_reset > 5 * self.settings.change_memory:
+        if (lower or upper) and self._since_reset > 5 * settings.change_memory:
             self._reset_covariance(lower, upper)
             Ppsi, spread = times(p, psi)
             S = r + spread
-        elif self.updates > 100 and innovation * innovation > self.settings.outlier ** 2 * S:
+        elif self.updates > 100 and innovation * innovation > settings.outlier ** 2 * S:
             return False
         h0, h1, h2, h3, h4, h5 = Ppsi
         gain = (h0 / S, h1 / S, h2 / S, h3 / S, h4 / S, h5 / S)
         self._p = downdated(p, gain, Ppsi)
-        # theta + K eps, projected on the box (a NaN would pass through, as in numpy).
-        estimate = [a + k * innovation for a, k in zip(theta, gain)]
-        self._theta = [low if a < low else high if a > high else a
-                       for a, low, high in zip(estimate, self._lower, self._upper)]
+        self._theta = boxed(theta, gain, innovation, self._lower, self._upper)
         # Track the noise level slowly, never below a quarter of the start value.
-        self.r = max(self._r_min, 0.999 * r + 0.001 * (innovation * innovation - spread))
+        r = 0.999 * r + 0.001 * (innovation * innovation - spread)
+        self.r = r if r > self._r_min else self._r_min
         self.updates += 1
         return True
 

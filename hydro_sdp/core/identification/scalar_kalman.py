@@ -1,12 +1,12 @@
 """
-A symmetric 6 x 6 covariance held as 21 Python floats, for the online identifier's update.
+The online identifier's six-state Kalman step on Python floats (docs/methods.md 7.2).
 
-The online identifier (docs/methods.md section 7.2) runs one Kalman step per sample on six
-coefficients. On six numbers each numpy call costs about a microsecond of overhead, many
-times the arithmetic it does, so the per-sample path writes the arithmetic out on Python
-floats instead. The covariance is symmetric, so only its upper triangle is kept, row by
-row (``P00 P01 .. P05 P11 .. P15 P22 .. P55``): 21 numbers, and the downdate computes
-each of them once.
+One step per sample on six coefficients: on six numbers each numpy call costs about a
+microsecond of overhead, many times the arithmetic it does, so the per-sample path
+writes the arithmetic out on Python floats instead. The covariance is symmetric, so
+only its upper triangle is kept, row by row (``P00 P01 .. P05 P11 .. P15 P22 .. P55``):
+21 numbers, and the downdate computes each of them once. :func:`packed`,
+:func:`unpacked` and :func:`diagonal` convert to and from numpy for callers.
 
 """
 
@@ -162,3 +162,42 @@ def downdated(packed_matrix: list[float], gain: Six, h: Six) -> list[float]:
             m33 - k3 * h3, m34 - k3 * h4, m35 - k3 * h5,
             m44 - k4 * h4, m45 - k4 * h5,
             m55 - k5 * h5]
+
+
+def boxed(theta: list[float], gain: Six, innovation: float, lower: Six, upper: Six) -> list[float]:
+    """
+    Return ``theta + gain innovation`` projected on the box ``[lower, upper]``.
+
+    Parameters
+    ----------
+    theta : list[float]
+        The six coefficients.
+    gain : tuple of six floats
+        The Kalman gain ``K``.
+    innovation : float
+        The innovation ``eps``.
+    lower, upper : tuple of six floats
+        The box.
+
+    Returns
+    -------
+    list[float]
+        The new coefficients (a new list); a NaN stays NaN, as through ``np.clip``.
+
+    """
+    a0, a1, a2, a3, a4, a5 = theta
+    k0, k1, k2, k3, k4, k5 = gain
+    a0 += k0 * innovation
+    a1 += k1 * innovation
+    a2 += k2 * innovation
+    a3 += k3 * innovation
+    a4 += k4 * innovation
+    a5 += k5 * innovation
+    l0, l1, l2, l3, l4, l5 = lower
+    u0, u1, u2, u3, u4, u5 = upper
+    return [l0 if a0 < l0 else u0 if a0 > u0 else a0,
+            l1 if a1 < l1 else u1 if a1 > u1 else a1,
+            l2 if a2 < l2 else u2 if a2 > u2 else a2,
+            l3 if a3 < l3 else u3 if a3 > u3 else a3,
+            l4 if a4 < l4 else u4 if a4 > u4 else a4,
+            l5 if a5 < l5 else u5 if a5 > u5 else a5]
