@@ -246,7 +246,7 @@ class OnlineSdpIdentifier:
         return np.array(self._theta)
 
     @property
-    def P(self) -> FloatArray:  # noqa: N802 - the covariance's name in methods.md 7.2
+    def P(self) -> FloatArray:
         """Return the covariance of ``theta`` (a new 6 x 6 array)."""
         return unpacked(self._p)
 
