@@ -295,7 +295,9 @@ class OnlineSdpIdentifier:
         commands = self._commands
         commands.push(v)
         self._pushed += 1
-        previous, self._last_angle = self._last_angle, float(y)
+        # A numpy scalar would carry numpy's slower scalar arithmetic through the whole step.
+        y = float(y)
+        previous, self._last_angle = self._last_angle, y
         delay = self.delay
         if previous is None or self._pushed < delay + 2:
             return False
