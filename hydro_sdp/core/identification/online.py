@@ -20,6 +20,9 @@ from typing import Any
 
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import ConfigurationError
+from hydro_sdp.core.identification.scalar_kalman import (
+    add_to_diagonal, boxed, diagonal, downdated, packed, times, unpacked)
+from hydro_sdp.core.identification.soft_edges import map_and_soft_gradient
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.static_maps import SdpMap
 from hydro_sdp.core.model.timing import check_sample_period, DelayLine
@@ -182,12 +185,6 @@ saturation_positive_std, curvature_negative_std, curvature_positive_std : float
         return self.dead_zone_lower_std, self.dead_zone_upper_std
 
 
-def _softplus(x: float, kappa: float) -> float:
-    # kappa ln(1 + e^{x/kappa}), computed without overflow.
-    z = x / kappa
-    return kappa * (z + math.log1p(math.exp(-z))) if z > 0 else kappa * math.log1p(math.exp(z))
-
-
 class OnlineSdpIdentifier:
     """
     Random-walk Kalman filter on the six coefficients of eq. (5).
@@ -213,13 +210,13 @@ class OnlineSdpIdentifier:
         self.settings = settings
         self.delay = model.delay_samples(self.dt)
         s = settings.input_scale
-        self.theta = np.array(model.alpha(self.dt), dtype=np.float64)
+        # theta and the upper triangle of P as Python floats: the per-sample arithmetic on
+        # six numbers is cheaper written out than as numpy calls (docs/methods.md 7.2).
+        self._theta = [float(a) for a in model.alpha(self.dt)]
         speed = (self.dt / 0.01) ** 2
-        self._P0 = np.diag([0.01 * speed, 1.0 / s ** 2, 0.5 * s ** 2,
-                            0.01 * speed, 1.0 / s ** 2, 0.5 * s ** 2])
-        self.P = self._P0.copy()
-        # A writable view of P's diagonal, for the random walk's time update in place.
-        self._diagonal = np.einsum('ii->i', self.P)
+        self._start_variances = (0.01 * speed, 1.0 / s ** 2, 0.5 * s ** 2,
+                                 0.01 * speed, 1.0 / s ** 2, 0.5 * s ** 2)
+        self._p = packed(np.diag(self._start_variances))
         # Mean normalised innovation squared: about 1 while the model holds.
         self.nis = 1.0
         # Two-sided CUSUM of the normalised innovations, for commands below and above the
@@ -227,16 +224,14 @@ class OnlineSdpIdentifier:
         self._cusum = [0.0, 0.0, 0.0, 0.0]
         self.resets = 0
         self._since_reset = 0
-        self._ratios = np.array(NOISE_VARIANCE_RATIOS) * np.array(
-            [speed, 1.0 / s ** 2, s ** 2, speed, 1.0 / s ** 2, s ** 2])
+        scales = (speed, 1.0 / s ** 2, s ** 2, speed, 1.0 / s ** 2, s ** 2)
+        self._ratios = tuple(ratio * scale for ratio, scale in zip(NOISE_VARIANCE_RATIOS, scales))
         self.r = 2.0 * settings.noise_std ** 2
         self._r_min = 0.25 * self.r
-        a1, a4 = self.theta[0], self.theta[3]
+        a1, a4 = self._theta[0], self._theta[3]
         low, high = model.static_map.dead_zone
-        self._lower = np.array([5.0 * a1, 0.1 / s, -4.0 * s * max(1.0, abs(low)),
-                                0.0, 0.1 / s, low])
-        self._upper = np.array([0.0, 10.0 / s, high, 5.0 * a4, 10.0 / s,
-                                4.0 * s * max(1.0, abs(high))])
+        self._lower = (5.0 * a1, 0.1 / s, -4.0 * s * max(1.0, abs(low)), 0.0, 0.1 / s, low)
+        self._upper = (0.0, 10.0 / s, high, 5.0 * a4, 10.0 / s, 4.0 * s * max(1.0, abs(high)))
         # v_{k-tau} and v_{k-tau-1}: the gate needs the command before the delayed one too.
         self._commands = DelayLine(self.delay + 1, before=math.nan)
         self._pushed = 0
@@ -246,13 +241,23 @@ class OnlineSdpIdentifier:
         self.updates = 0
 
     @property
+    def theta(self) -> FloatArray:
+        """Return the estimate ``(a1 .. a6)`` of eq. (5), per-sample units (a new array)."""
+        return np.array(self._theta)
+
+    @property
+    def P(self) -> FloatArray:
+        """Return the covariance of ``theta`` (a new 6 x 6 array)."""
+        return unpacked(self._p)
+
+    @property
     def standard_errors(self) -> FloatArray:
         """Return the standard deviations of ``theta``."""
-        return np.sqrt(np.maximum(np.diag(self.P), 0.0))
+        return np.sqrt(np.maximum(diagonal(self._p), 0.0))
 
     def static_map(self) -> SdpMap:
         """Return the current estimate as a rate-based map."""
-        return SdpMap.from_alpha(tuple(self.theta), self.dt)
+        return SdpMap.from_alpha(tuple(self._theta), self.dt)
 
     def estimate(self) -> JointModel:
         """Return the model with the current estimate of its map."""
@@ -260,33 +265,10 @@ class OnlineSdpIdentifier:
 
     def named_estimate(self) -> SdpEstimate:
         """Return the current estimate and its standard deviations by name."""
-        a1, a2, a3, a4, a5, a6 = (float(a) for a in self.theta)
+        a1, a2, a3, a4, a5, a6 = self._theta
         s1, s2, s3, s4, s5, s6 = (float(s) for s in self.standard_errors)
         dt = self.dt
         return SdpEstimate(a3, a6, a1 / dt, a4 / dt, a2, a5, s3, s6, s1 / dt, s4 / dt, s2, s5)
-
-    def _map_and_gradient(self, u: float, theta: list[float]) -> tuple[float, FloatArray]:
-        """
-        Return eq. (5) at ``u`` and the gradient of its soft-edged form.
-
-        Scalar arithmetic in Python floats: per sample, a handful of numpy calls on
-        six numbers would cost more than the arithmetic (docs/methods.md section 7.2).
-
-        """
-        # theta is eq. (5) in per-sample form: (a1, a2, a3) below, (a4, a5, a6) above.
-        a1, a2, a3, a4, a5, a6 = theta
-        q = a1 * -math.expm1(a2 * min(u - a3, 0.0)) + a4 * -math.expm1(-a5 * max(u - a6, 0.0))
-        # Smooth min/max replace the kinks at the edges in the gradient.
-        kappa = self.settings.kappa
-        below = -_softplus(-(u - a3), kappa)            # smooth min(u - a3, 0)
-        above = _softplus(u - a6, kappa)                # smooth max(u - a6, 0)
-        e = math.exp(a2 * below)
-        g = math.exp(-a5 * above)
-        sigma_below = 1.0 / (1.0 + math.exp(min((u - a3) / kappa, 700.0)))
-        sigma_above = 1.0 / (1.0 + math.exp(min(-(u - a6) / kappa, 700.0)))
-        return q, np.array([
-            1.0 - e, -a1 * below * e, a1 * a2 * e * sigma_below,
-            1.0 - g, a4 * above * g, -a4 * a5 * g * sigma_above])
 
     def update(self, v: float, y: float) -> bool:
         """
@@ -306,74 +288,93 @@ class OnlineSdpIdentifier:
 
         """
         self.samples += 1
+        settings = self.settings
         if not (math.isfinite(v) and math.isfinite(y)):
-            self._quiet = self.settings.hold_off
+            self._quiet = settings.hold_off
             return False
-        self._commands.push(v)
+        commands = self._commands
+        commands.push(v)
         self._pushed += 1
-        previous, self._last_angle = self._last_angle, float(y)
-        if previous is None or self._pushed < self.delay + 2:
+        # A numpy scalar would carry numpy's slower scalar arithmetic through the whole step.
+        y = float(y)
+        previous, self._last_angle = self._last_angle, y
+        delay = self.delay
+        if previous is None or self._pushed < delay + 2:
             return False
-        u = self._commands.delayed(self.delay)
-        if abs(u - self._commands.delayed(self.delay + 1)) > self.settings.change_gate:
-            self._quiet = self.settings.hold_off
+        u = commands.delayed(delay)
+        if abs(u - commands.delayed(delay + 1)) > settings.change_gate:
+            self._quiet = settings.hold_off
             return False
         if self._quiet > 0:
             self._quiet -= 1
             return False
         limits = self.model.angle_limits
-        if limits is not None and (min(y, previous) < limits[0] + self.settings.margin or
-                                   max(y, previous) > limits[1] - self.settings.margin):
-            return False
+        if limits is not None:
+            low, high = limits[0] + settings.margin, limits[1] - settings.margin
+            if y < low or previous < low or y > high or previous > high:
+                return False
         # Time update of the random walk, in place: its diagonal grows.
-        P = self.P
-        self._diagonal += self._ratios * self.r
-        theta = self.theta.tolist()
-        q, psi = self._map_and_gradient(u, theta)
+        r = self.r
+        p = self._p
+        n0, n1, n2, n3, n4, n5 = self._ratios
+        add_to_diagonal(p, (n0 * r, n1 * r, n2 * r, n3 * r, n4 * r, n5 * r))
+        theta = self._theta
+        q, psi = map_and_soft_gradient(u, theta, settings.kappa)
         innovation = (y - previous) - q
-        Ppsi = P @ psi
-        spread = float(psi.dot(Ppsi))
-        S = self.r + spread
+        Ppsi, spread = times(p, psi)
+        S = r + spread
         # A joint that changed (wear, a new valve) shows as innovations persistently larger
         # than the filter expects: then the covariance is reset so that it re-learns fast,
         # instead of creeping along its slow random walk (or rejecting the news as outliers).
+        # (Comparisons stand for min/max: a builtin call per clip costs more than the clip.)
         z = innovation / math.sqrt(S)
-        normalised = min(z * z, 100.0)
-        self.nis += (normalised - self.nis) / self.settings.change_memory
+        normalised = z * z
+        normalised = 100.0 if 100.0 < normalised else normalised
+        self.nis += (normalised - self.nis) / settings.change_memory
         cusum = self._cusum
         side = 0 if u < 0.5 * (theta[2] + theta[5]) else 2
-        drift = self.settings.cusum_drift
-        z = min(max(z, -10.0), 10.0)
-        cusum[side] = max(0.0, cusum[side] + z - drift)
-        cusum[side + 1] = max(0.0, cusum[side + 1] - z - drift)
+        drift = settings.cusum_drift
+        z = -10.0 if -10.0 > z else 10.0 if 10.0 < z else z
+        rising = cusum[side] + z - drift
+        falling = cusum[side + 1] - z - drift
+        cusum[side] = rising if rising > 0.0 else 0.0
+        cusum[side + 1] = falling if falling > 0.0 else 0.0
         self._since_reset += 1
-        lower = max(cusum[0], cusum[1]) > self.settings.cusum_limit
-        upper = max(cusum[2], cusum[3]) > self.settings.cusum_limit
-        if self.nis > self.settings.change_level:
+        limit = settings.cusum_limit
+        lower = cusum[0] > limit or cusum[1] > limit
+        upper = cusum[2] > limit or cusum[3] > limit
+        if self.nis > settings.change_level:
             lower = upper = True
-        if (lower or upper) and self._since_reset > 5 * self.settings.change_memory:
-            # Dead-zone edges are what wear moves: forget the edge of the side that changed;
-            # its speed and curvature, poorly excited while a set-point is held, keep most
-            # of what they know, and the other side keeps everything.
-            weights = np.array([0.01, 0.01, 1.0])
-            forget = np.r_[weights * lower, weights * upper]
-            P += self._P0 @ np.diag(forget)
-            Ppsi = P @ psi
-            spread = float(psi.dot(Ppsi))
-            S = self.r + spread
-            self.nis = 1.0
-            cusum[:] = [0.0, 0.0, 0.0, 0.0]
-            self._since_reset = 0
-            self.resets += 1
-        elif self.updates > 100 and innovation * innovation > self.settings.outlier ** 2 * S:
+        if (lower or upper) and self._since_reset > 5 * settings.change_memory:
+            self._reset_covariance(lower, upper)
+            Ppsi, spread = times(p, psi)
+            S = r + spread
+        elif self.updates > 100 and innovation * innovation > settings.outlier ** 2 * S:
             return False
-        gain = Ppsi / S
-        P -= np.multiply.outer(gain, Ppsi)
-        gain *= innovation
-        estimate = self.theta + gain
-        self.theta = np.minimum(np.maximum(estimate, self._lower, out=estimate), self._upper,
-                                out=estimate)
+        h0, h1, h2, h3, h4, h5 = Ppsi
+        gain = (h0 / S, h1 / S, h2 / S, h3 / S, h4 / S, h5 / S)
+        self._p = downdated(p, gain, Ppsi)
+        self._theta = boxed(theta, gain, innovation, self._lower, self._upper)
         # Track the noise level slowly, never below a quarter of the start value.
-        self.r = max(self._r_min, 0.999 * self.r + 0.001 * (innovation * innovation - spread))
+        r = 0.999 * r + 0.001 * (innovation * innovation - spread)
+        self.r = r if r > self._r_min else self._r_min
         self.updates += 1
         return True
+
+    def _reset_covariance(self, lower: bool, upper: bool) -> None:
+        """
+        Add part of the start covariance back on the side(s) that changed (section 7.4).
+
+        Dead-zone edges are what wear moves: the edge of a changed side is forgotten; its
+        speed and curvature, poorly excited while a set-point is held, keep most of what
+        they know, and the other side keeps everything.
+        """
+        below = 1.0 if lower else 0.0
+        above = 1.0 if upper else 0.0
+        v = self._start_variances
+        add_to_diagonal(self._p, (v[0] * 0.01 * below, v[1] * 0.01 * below, v[2] * below,
+                                  v[3] * 0.01 * above, v[4] * 0.01 * above, v[5] * above))
+        self.nis = 1.0
+        self._cusum[:] = [0.0, 0.0, 0.0, 0.0]
+        self._since_reset = 0
+        self.resets += 1
