@@ -1,6 +1,6 @@
 """Identification with known answers: dead time and lag, map families, methods, step-and-return."""
 
-from hydro_sdp.core.identification.evaluation import mean_errors, RecordScore
+from hydro_sdp.core.identification.evaluation import mean_errors, record_mae, RecordScore
 from hydro_sdp.core.identification.identify import identify
 from hydro_sdp.core.identification.map_fit import pwl_layout
 from hydro_sdp.core.model.effects import StrokeGeometry, ValveLag
@@ -46,6 +46,20 @@ def test_dead_time_and_valve_lag_are_found_together():
     np.testing.assert_allclose(model.static_map.exponent, (3.0, 2.5), rtol=0.02)
     np.testing.assert_allclose(model.dead_zone, (-37.5, 37.5), atol=0.2)
     assert model.angle_limits == pytest.approx((-40.0, 50.0), abs=0.05)
+
+
+def test_a_level_that_creeps_just_beyond_the_edge_bounds_it():
+    # At +-45 the convex valve moves the joint at 1.1 and 0.45 deg/s, 1-3 % of its full
+    # speed, for a whole 90 s stroke: the edge must lie inside that level.
+    truth = JointModel('j', CONVEX, 0.2, angle_limits=(-40.0, 50.0))
+    assert 0.0 < -float(truth.rate(-45.0)) < 0.02 * 40.0
+    records = full_strokes(truth, (45, 60, 80, 100), low=-40.0, high=50.0)
+    model = identify(records).model
+    assert model.kind == 'power_sat'
+    np.testing.assert_allclose(model.dead_zone, CONVEX.dead_zone, atol=0.1)
+    np.testing.assert_allclose(model.static_map.exponent, CONVEX.exponent, rtol=0.02)
+    slowest = [record for record in records if abs(record.v[-1]) == 45.0]
+    assert max(record_mae(model, record) for record in slowest) < 0.05
 
 
 def test_pwl_puts_a_knot_at_every_measured_level():

@@ -28,6 +28,8 @@ NAMES = ('saturation_velocity[0]', 'curvature[0]', 'exponent[0]', 'dead_zone[0]'
          'saturation_velocity[1]', 'curvature[1]', 'exponent[1]', 'dead_zone[1]')
 #: Exponents tried as starts.
 START_EXPONENTS = (1.0, 2.0, 3.0, 5.0)
+#: Standard errors by which a level's mean speed must exceed zero to count as moving.
+MOVING_T = 5.0
 
 
 def power_sat_rate_function(x: FloatArray) -> RateFunction:
@@ -42,7 +44,7 @@ def power_sat_from_vector(x: FloatArray) -> PowerSatMap:
                        curvature=(float(x[1]), float(x[5])), exponent=(float(x[2]), float(x[6])))
 
 
-def _bounds(levels: FloatArray, speeds: FloatArray, rest: float
+def _bounds(levels: FloatArray, speeds: FloatArray, errors: FloatArray, rest: float
             ) -> tuple[FloatArray, FloatArray]:
     """Bounds of ``(vn, cn, nn, a3, vp, cp, np, a6)`` from the per-level speeds."""
     scale = max(float(np.max(np.abs(levels - rest))), 1e-9)
@@ -51,7 +53,11 @@ def _bounds(levels: FloatArray, speeds: FloatArray, rest: float
     for sign in (-1.0, 1.0):
         side = sign * (levels - rest) > 0.0
         fastest = max(float(np.max(sign * speeds[side], initial=0.0)), 1e-3 * peak)
-        moving = side & (sign * speeds > 0.02 * peak)
+        # A level moves the joint when its mean speed, in the commanded direction, stands
+        # clear of its own noise: a convex valve just outside its edge creeps at well under
+        # a percent of its full speed, and an edge put beyond such a level predicts a joint
+        # standing still where it crept all along.
+        moving = side & (sign * speeds > MOVING_T * errors)
         # The edge lies between rest and the innermost level that moves the joint.
         inner = float(np.min(sign * (levels[moving] - rest), initial=scale))
         edge = (rest - inner, rest) if sign < 0 else (rest, rest + inner)
@@ -102,7 +108,7 @@ def _start(table: bytes, given: bytes) -> tuple[tuple[float, ...], ...]:
     levels, speeds = points[:, 0].copy(), points[:, 1].copy()
     weights = 1.0 / np.maximum(points[:, 2], 1e-3 * np.max(np.abs(speeds)))
     rest, low, high = np.frombuffer(given).tolist()
-    lower, upper = _bounds(levels, speeds, rest)
+    lower, upper = _bounds(levels, speeds, points[:, 2], rest)
     best: tuple[float, FloatArray] | None = None
     for exponent in START_EXPONENTS:
         x0 = np.array([lower[0], 0.0, exponent, low, upper[4], 0.0, exponent, high])
