@@ -12,8 +12,9 @@ volts, ``programs`` (comma-separated, default ``random,stroke``: random levels a
 full strokes), ``seeds`` draws each (default 1). Prints the
 confusion table (hidden word against the first word named), the cases gone wrong,
 the cases identify left nothing to remove from, and the shares right (the right word
-first and the gap halved; 30 % for ``load_dependence``; ``none`` for every model
-identified on the same kind of runs).
+first and the gap halved, the gap being the validation MAE above that of the model the
+word was removed from; 30 % for ``load_dependence``; ``none`` for every model identified
+on the same kind of runs), and the share with the gap taken as the whole MAE.
 
 """
 
@@ -51,10 +52,12 @@ def main():
                     verdict = 'right' if result.right else 'wrong'
                     print(f'  {verdict}: {word} ({kind}, {joint} {units}, seed {seed}) named '
                           f'{result.named}, MAE {result.mae_before:.3g} -> '
-                          f'{result.mae_after:.3g} deg', flush=True)
+                          f'{result.mae_after:.3g} deg (floor {case.floor:.3g})', flush=True)
     took = time.perf_counter() - started
     print('\n'.join(confusion_table(results, words)))
-    print('\n'.join(shares(results, 'gap halved (30 % for load_dependence)')))
+    print('\n'.join(shares(results, 'gap above the floor halved (30 % for load_dependence)')))
+    hidden = [r for r in results if r.word != 'none']
+    print(f'with the gap the whole MAE: {sum(r.right_whole for r in hidden)}/{len(hidden)}')
     print(f'not hidden ({len(skipped)}: identify found nothing to remove, or the plant has '
           f'no such effect there): ' + '; '.join(skipped))
     print('left out: ' + '; '.join(f'{word}: {why}' for word, why in LEFT_OUT.items()))

@@ -26,6 +26,10 @@ class GridResult:
         Validation MAE of the nominal and of the final model, degrees.
     shrink : float
         Largest share of the gap left for the case to count as right (0.5: halved).
+    floor : float
+        Validation MAE of a model that has the hidden word, degrees: the gap is the
+        MAE above it (0: the gap is the whole MAE, as where the true joint is the
+        generator's own).
 
     """
 
@@ -36,13 +40,21 @@ class GridResult:
     mae_before: float
     mae_after: float
     shrink: float = 0.5
+    floor: float = 0.0
 
     @property
     def right(self) -> bool:
         """Whether the right word came first and (when one is missing) the gap shrank enough."""
         if self.word == 'none':
             return self.named == 'none'
-        return self.named == self.word and self.mae_after <= self.shrink * self.mae_before
+        return self.named == self.word and \
+            self.mae_after - self.floor <= self.shrink * (self.mae_before - self.floor)
+
+    @property
+    def right_whole(self) -> bool:
+        """Whether :attr:`right` holds with the gap taken as the whole MAE (floor 0)."""
+        return self.word == 'none' and self.named == 'none' or self.named == self.word and \
+            self.word != 'none' and self.mae_after <= self.shrink * self.mae_before
 
 
 def confusion_table(results: Sequence[GridResult],

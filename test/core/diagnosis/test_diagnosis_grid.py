@@ -84,6 +84,16 @@ def test_the_confusion_table_counts_hidden_against_named():
         '| dead_zone | 2 | 0 | 0 | 1/2 |', '| none | 0 | 0 | 1 | 0/1 |', '| all |  |  |  | 1/3 |']
 
 
+def test_the_gap_is_the_error_above_the_floor_of_a_model_with_the_word():
+    # 1.5 -> 1.3 deg against a floor of 1.0: 60 % of the 0.5 deg gap left, not right;
+    # 1.5 -> 1.1: 20 % left, right, though the whole MAE only fell by 27 %.
+    short = GridResult('asymmetry', 'stroke', 'arm', 'asymmetry', 1.5, 1.3, floor=1.0)
+    halved = GridResult('asymmetry', 'stroke', 'arm', 'asymmetry', 1.5, 1.1, floor=1.0)
+    assert not short.right and not short.right_whole
+    assert halved.right and not halved.right_whole
+    assert GridResult('none', 'stroke', 'arm', 'none', 1.0, 1.0, floor=0.9).right
+
+
 #: A subset of the grid (bench/bench_diagnosis_grid.py runs it whole): every program and
 #: unit, the states the other tests leave (the stops and the dead-zone are in
 #: test_diagnose_failures.py, the angle factors in test_diagnose_stroke.py, the lag in the
