@@ -34,11 +34,13 @@ def held_at_stops(context: Context) -> tuple[float | None, float | None, int]:
 
     A stop shows as motion that ends at one angle each time the command drives the
     joint towards it: samples from which the model moves the joint at least ten noise
-    levels within 0.2 s while the measured angle moves less than a fifth of that, near
-    the extreme angle of the data on that side, while the delayed command drives the
-    joint that way beyond its dead-zone: at least as far from rest as the smallest
-    command seen moving the joint that way elsewhere (a joint resting inside its
-    dead-zone, or a model still moving on after the command turned, is not at a stop).
+    levels within 0.2 s while the measured angle moves less than a fifth of that, while
+    the delayed command drives the joint that way beyond its dead-zone: at least as far
+    from rest as the smallest command seen moving the joint that way elsewhere (a joint
+    resting inside its dead-zone, or a model still moving on after the command turned,
+    is not at a stop). The stop is the outermost angle such samples gather at for
+    :data:`MIN_CONTACT` s, passed by fewer samples than are held there (a rebound beyond
+    it is brief; a stall that the joint later passes is no stop).
 
     Parameters
     ----------
@@ -82,19 +84,61 @@ def held_at_stops(context: Context) -> tuple[float | None, float | None, int]:
     inner = (y > low_end + band) & (y < high_end - band)
     stops: list[float | None] = []
     contact = 0
-    for sign, extreme in ((-1.0, low_end), (1.0, high_end)):
+    for sign in (-1.0, 1.0):
         # The smallest drive seen moving the joint that way away from the ends.
         moving = inner & (np.sign(drive) == sign) & (np.sign(dy) == sign) & \
             (np.abs(dy) > 10.0 * noise)
         edge = float(np.min(np.abs(drive[moving]))) if np.any(moving) else math.inf
-        held = still & (np.sign(move) == sign) & (np.abs(y - extreme) < band) & \
-            (np.sign(drive) == sign) & (np.abs(drive) >= edge)
-        if np.count_nonzero(held) >= needed:
+        driven = still & (np.sign(move) == sign) & (np.sign(drive) == sign) & \
+            (np.abs(drive) >= edge)
+        dwell = outermost_dwell(sign * y[driven], band, needed)
+        if dwell is None:
+            stops.append(None)
+            continue
+        held = driven & (np.abs(y - sign * dwell) < band)
+        # A stop is never passed: the joint may rebound beyond it for moments (a boom
+        # dropped onto its stop at full duty), not for longer than it is held there.
+        beyond = int(np.count_nonzero(sign * y - dwell > band))
+        if np.count_nonzero(held) >= needed and beyond < np.count_nonzero(held):
             stops.append(float(np.median(y[held])))
             contact += int(np.count_nonzero(held))
         else:
             stops.append(None)
     return stops[0], stops[1], contact
+
+
+def outermost_dwell(outward: FloatArray, band: float, needed: int) -> float | None:
+    """
+    Return the outermost value near which at least ``needed`` of ``outward`` gather.
+
+    Parameters
+    ----------
+    outward : FloatArray
+        Angles of the samples held still while driven, signed so that larger is further
+        towards the stop.
+    band : float
+        Half-width of a dwell, degrees.
+    needed : int
+        Samples a dwell takes.
+
+    Returns
+    -------
+    float or None
+        The median of the outermost ``2 band`` wide window holding ``needed`` samples (in
+        the signed angles), None where no window does. The outermost single sample is
+        not the stop: a joint rebounds beyond where it then rests.
+
+    """
+    values = np.sort(outward)
+    if values.size < needed:
+        return None
+    first = np.searchsorted(values, values - 2.0 * band, side='right')
+    counts = np.arange(1, values.size + 1) - first
+    full = np.flatnonzero(counts >= needed)
+    if full.size == 0:
+        return None
+    last = int(full[-1])
+    return float(np.median(values[first[last]:last + 1]))
 
 
 def directional_signature(word: str, model: JointModel, augmented: JointModel,
