@@ -33,10 +33,12 @@ def test_every_named_test_is_collected(request):
     missing = [path for path in files if path not in here]
     skipped: set[str] = set()
     if missing:
-        listing = subprocess.run(
+        done = subprocess.run(
             [sys.executable, '-m', 'pytest', '--collect-only', '-q', '-rs', '-n0', '-p',
-             'no:cacheprovider', *missing], cwd=REPO, capture_output=True, text=True,
-            check=True).stdout
+             'no:cacheprovider', *missing], cwd=REPO, capture_output=True, text=True)
+        # 5: nothing collected, as when every missing file skipped itself.
+        assert done.returncode in (0, 5), done.stdout + done.stderr
+        listing = done.stdout
         collected += [line for line in listing.splitlines() if '::' in line]
         # A module that skips itself (the rosbag2 fixtures beside the repository are
         # missing) collects nothing: its tests must then at least be defined in it.
