@@ -103,8 +103,8 @@ SHRINK = {'load_dependence': 0.7}
 #: Payloads of the load_dependence runs, kg (identified at the first).
 PAYLOADS = (0.0, 600.0)
 
-#: Largest delay the diagnosis considers, s (``diagnose``'s default): the floor's MAE is
-#: taken on the validation runs as it takes its own.
+#: Largest delay the diagnosis considers, s (``diagnose``'s default, passed to it by
+#: :func:`run_case`): the floor's MAE is taken on the validation runs as it takes its own.
 MAX_DELAY = 0.5
 
 
@@ -375,7 +375,7 @@ def make_case(word: str, program: str, joint: str, units: str, seed: int, *,
 def run_case(case: PlantCase, **options: Any) -> GridResult:
     """Diagnose one case (one word added at most) and return what was named."""
     result = diagnose(case.estimation, case.model, validation=case.validation,
-                      **{'max_iterations': 1, **options})
+                      **{'max_iterations': 1, 'max_delay': MAX_DELAY, **options})
     return GridResult(case.word, case.program, f'{case.joint} {case.units}', result.effect,
                       result.mae_before, result.mae_after,
                       shrink=SHRINK.get(case.word, 0.5), floor=case.floor)
