@@ -213,20 +213,20 @@ def test_bad_or_read_only_values_are_refused_and_change_nothing(ros):
     assert identifier.recalibration.policy.cooldown == 9.0
 
 
-#: The quietest and the noisiest sensor of the README (0.02 lies between and proves no more).
-NOISE_LEVELS = (0.01, 0.05)
+#: The noisiest sensor of the README; the demo's test runs the quietest (0.01 deg) through the
+#: same scenario and asserts the same (0.02 lies between and proves no more).
+NOISE = 0.05
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize('noise', NOISE_LEVELS)
-def test_wear_is_recalibrated_at_every_noise_level(noise):
+def test_wear_is_recalibrated_at_the_noisiest_sensor():
     # Ten holds of 4 s: the updates of both edges end by 31 s (14.3, 20.7, 25.7 and 30.7 s at
     # 0.05 deg, seed 2), and the last three holds show the loop on the recalibrated IDZ.
-    run = wear_and_recalibration(holds=10, drift_at=3, noise_std=noise, seed=2)
+    run = wear_and_recalibration(holds=10, drift_at=3, noise_std=NOISE, seed=2)
     # The dead-zone narrowed at 12 s: one edge is set within 5 s, both by the end.
     assert run.time_to_recalibration < 5.0
     assert run.recalibrations >= 2
-    np.testing.assert_allclose(run.edges[-1], WORN, atol=max(0.05, 2.0 * noise))
+    np.testing.assert_allclose(run.edges[-1], WORN, atol=2.0 * NOISE)
     error = np.abs(run.angle - run.setpoint).reshape(10, 400)[:, -50:].max(axis=1)
     assert error[-3:].max() < 0.5
 

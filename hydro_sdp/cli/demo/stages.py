@@ -263,7 +263,8 @@ def _ros_nodes(report: Report) -> None:
     report.payload['recalibration'] = {
         'recalibrations': recalibrations, 'edges': list(final_edges),
         'error_before': float(before), 'error_after_drift': float(during),
-        'error_recalibrated': float(after)}
+        'error_recalibrated': float(after),
+        'seconds_to_recalibration': float(run.time_to_recalibration)}
 
 
 STAGES: list[tuple[str, Callable[[Report], None]]] = [

@@ -35,7 +35,11 @@ def test_demo_writes_a_report(tmp_path, capsys):
     mae = identified['mae']
     assert mae['model'] < mae['sdp_dz'] < mae['linear']
     recalibration = summary['recalibration']
-    assert recalibration['recalibrations'] >= 1
+    # The quiet sensor (0.01 deg) of the wear scenario: both edges updated, the first within
+    # 5 s of the wear, to the worn dead-zone (test_identifier_node runs the noisiest sensor).
+    assert recalibration['recalibrations'] >= 2
+    assert recalibration['seconds_to_recalibration'] < 5.0
+    np.testing.assert_allclose(recalibration['edges'], (-1.0298, 1.0124), atol=0.05)
     assert recalibration['error_recalibrated'] < 0.5 < recalibration['error_after_drift']
     diagnosis = summary['diagnosis']
     assert diagnosis['effect'] == 'valve_lag'
