@@ -232,7 +232,7 @@ def _ros_nodes(report: Report) -> None:
         report.sections.append(f'## The ROS nodes\n\nSkipped: {error}.\n')
         return
 
-    holds, steps, drift_at = (14, 400, 4) if report.short else (20, 400, 5)
+    holds, steps, drift_at = (10, 400, 3) if report.short else (20, 400, 5)
     run = wear_and_recalibration(holds=holds, steps=steps, drift_at=drift_at,
                                  seed=report.seed)
     recalibrations = run.recalibrations
