@@ -27,6 +27,7 @@ from hydro_sdp.bags.live_writer import Sqlite3BagWriter
 from hydro_sdp.ros.node_options import NodeOptions
 from hydro_sdp.ros.parameters.node_parameters import NodeParameters
 from hydro_sdp.ros.parameters.recorder import RECORDER_PARAMETERS
+from hydro_sdp.ros.qos import subscription_events
 from hydro_sdp.ros.runner import run_node
 from rclpy.clock import Clock, ClockType, ROSClock
 from rclpy.duration import Duration
@@ -176,7 +177,8 @@ class BagRecorderNode(Node):
         # rclpy hands a callback of two parameters the message info too (Subscription's
         # callback setter); its annotation names only the one-parameter form.
         self.create_subscription(cls, topic, self._recorder_for(topic),  # type: ignore[arg-type]
-                                 qos, raw=True)
+                                 qos, raw=True,
+                                 event_callbacks=subscription_events(self.context))
         if self._announced:
             self.get_logger().info(f'now recording {topic} ({msgtype})')
 

@@ -63,6 +63,7 @@ class ControllerInterfaces:
         self._node = node
         self._publishers = []
         self._subscriptions = []
+        events = qos.subscription_events(node.context)
         for loop in loops:
             loop.command_pub = node.create_publisher(
                 Float64, f'{loop.joint}/valve_command', qos.COMMAND_QOS,
@@ -73,11 +74,13 @@ class ControllerInterfaces:
             self._publishers += [loop.command_pub, loop.state_pub]
             self._subscriptions.append(node.create_subscription(
                 Float64, f'{loop.joint}/setpoint',
-                partial(self._setpoint, on_setpoint, loop), qos.COMMAND_QOS))
-        self._subscriptions.append(node.create_subscription(JointState, 'joint_states',
-                                                            on_state, qos.STATE_QOS))
-        self._subscriptions.append(node.create_subscription(JointTrajectory, 'joint_trajectory',
-                                                            on_trajectory, qos.COMMAND_QOS))
+                partial(self._setpoint, on_setpoint, loop), qos.COMMAND_QOS,
+                event_callbacks=events))
+        self._subscriptions.append(node.create_subscription(
+            JointState, 'joint_states', on_state, qos.STATE_QOS, event_callbacks=events))
+        self._subscriptions.append(node.create_subscription(
+            JointTrajectory, 'joint_trajectory', on_trajectory, qos.COMMAND_QOS,
+            event_callbacks=events))
         self.watchdog = node.create_timer(watchdog_period_ns(timeout_ns) * 1e-9, on_watchdog)
         #: The message every joint's controller_state is filled into.
         self.state_message = controller_state_message()

@@ -131,6 +131,7 @@ class IdentifierNode(Node):
     def _create_topics(self) -> None:
         """Create each joint's estimate topics and command subscription, and joint_states'."""
         quiet = qos.QUIET_PUBLISHER       # fifteen estimate topics per joint
+        events = qos.subscription_events(self.context)
         for item in self.identified:
             base = f'{item.joint}/sdp/'
             topics = tuple(estimate_topics(item.estimator.named_estimate())) + (
@@ -142,8 +143,10 @@ class IdentifierNode(Node):
             item.flag_pub = self.create_publisher(Bool, base + 'recalibration_needed',
                                                   qos.ESTIMATE_QOS, event_callbacks=quiet)
             self.create_subscription(Float64, f'{item.joint}/valve_command',
-                                     partial(self._on_command, item=item), qos.COMMAND_QOS)
-        self.create_subscription(JointState, 'joint_states', self._on_state, qos.STATE_QOS)
+                                     partial(self._on_command, item=item), qos.COMMAND_QOS,
+                                     event_callbacks=events)
+        self.create_subscription(JointState, 'joint_states', self._on_state, qos.STATE_QOS,
+                                 event_callbacks=events)
 
     # The first (only) joint under the names of the one-joint node.
     joint = first_joint('identified', 'joint', "The first joint's name.")

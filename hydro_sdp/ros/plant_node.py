@@ -84,7 +84,8 @@ class PlantNode(Node):
                                                 event_callbacks=qos.QUIET_PUBLISHER)
         self._command_subs = [
             self.create_subscription(Float64, f'{name}/valve_command',
-                                     partial(self._on_command, index), qos.COMMAND_QOS)
+                                     partial(self._on_command, index), qos.COMMAND_QOS,
+                                     event_callbacks=qos.subscription_events(self.context))
             for index, name in enumerate(self.names)]
         parameters.start()
         self._timer = self.create_timer(self.sample_period, self._on_tick)

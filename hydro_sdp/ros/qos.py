@@ -1,6 +1,9 @@
-"""Quality-of-service profiles of hydro_sdp's topics, and the publishers' event callbacks."""
+"""Quality-of-service profiles of hydro_sdp's topics, and the nodes' QoS event callbacks."""
 
-from rclpy.event_handler import PublisherEventCallbacks
+from weakref import WeakSet
+
+from rclpy.context import Context
+from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
 from rclpy.qos import QoSProfile
 
 #: joint_states: reliable, depth 10 (both reliable and best-effort subscribers can attach).
@@ -18,3 +21,36 @@ DIAGNOSTICS_QOS = QoSProfile(depth=10)
 #: is still reported by the subscription's side. The nodes' subscriptions keep theirs: a
 #: best-effort publisher (a sensor driver's joint_states) never reaches a reliable one.
 QUIET_PUBLISHER = PublisherEventCallbacks(use_default_callbacks=False)
+
+#: For the subscriptions of nodes that share a context with their publishers only (the
+#: in-process harness, :mod:`hydro_sdp.ros.testing`): no QoS event handlers either. Their
+#: two handlers each (incompatible QoS, incompatible type) are most of the entities an
+#: executor checks per wait there, and every publisher in such a context is one of ours.
+QUIET_SUBSCRIPTION = SubscriptionEventCallbacks(use_default_callbacks=False)
+
+#: Contexts whose nodes' subscriptions go without QoS event handlers.
+_IN_PROCESS: 'WeakSet[Context]' = WeakSet()
+
+
+def mark_in_process(context: Context) -> None:
+    """Let the subscriptions of the nodes made in ``context`` go without QoS event handlers."""
+    _IN_PROCESS.add(context)
+
+
+def subscription_events(context: Context) -> SubscriptionEventCallbacks | None:
+    """
+    Return the event callbacks for a node's subscription in ``context``.
+
+    Parameters
+    ----------
+    context : Context
+        The node's context.
+
+    Returns
+    -------
+    SubscriptionEventCallbacks or None
+        :data:`QUIET_SUBSCRIPTION` in a context marked by :func:`mark_in_process`; else
+        None, rclpy's defaults, which warn of a publisher whose QoS or type cannot match.
+
+    """
+    return QUIET_SUBSCRIPTION if context in _IN_PROCESS else None

