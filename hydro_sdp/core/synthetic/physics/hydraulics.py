@@ -96,6 +96,26 @@ class Actuator:
             out_area = out_area * cushion / math.sqrt(out_area * out_area + cushion * cushion)
         return inlet, outlet, force + self.friction, area, out_area
 
+    def blocked(self, area: float, extension: float) -> bool:
+        """
+        Whether the cylinder cannot move: its spool closed or driving it into the end it is at.
+
+        Parameters
+        ----------
+        area : float
+            Signed effective meter-in area, m^2 (positive extends).
+        extension : float
+            Cylinder extension, m.
+
+        Returns
+        -------
+        bool
+            True when :meth:`demand` and :meth:`supplied` give no speed and no flow.
+
+        """
+        return area == 0.0 or (area > 0.0 and extension >= self.stroke) or (
+            area < 0.0 and extension <= 0.0)
+
     def demand(self, area: float, extension: float) -> tuple[float, float]:
         """
         Cylinder speed and pump flow before flow sharing.
@@ -113,8 +133,7 @@ class Actuator:
             Speed, m/s (signed), and the flow drawn from the pump, m^3/s.
 
         """
-        if area == 0.0 or (area > 0.0 and extension >= self.stroke) or (
-                area < 0.0 and extension <= 0.0):
+        if self.blocked(area, extension):
             return 0.0, 0.0
         inlet, outlet, force, a_in, a_out = self._sides(area, extension)
         speed = a_in * self.margin_speed / inlet
@@ -151,8 +170,7 @@ class Actuator:
             load holds the pressure off: a load check valve stops backflow).
 
         """
-        if area == 0.0 or (area > 0.0 and extension >= self.stroke) or (
-                area < 0.0 and extension <= 0.0):
+        if self.blocked(area, extension):
             return 0.0, 0.0
         inlet, outlet, force, a_in, a_out = self._sides(area, extension)
         k_out = self.half_rho * outlet ** 3 / (a_out * a_out)

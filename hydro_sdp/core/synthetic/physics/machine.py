@@ -98,6 +98,20 @@ def _initial(machine: Machine, actuators: Sequence[Actuator],
     return extensions, commands
 
 
+def _blocked(actuators: Sequence[Actuator], areas: Sequence[float],
+             extensions: Sequence[float]) -> bool:
+    """Whether no cylinder can move (spool closed or driving it into its end): speeds all 0."""
+    return all(act.blocked(area, s) for act, area, s in zip(actuators, areas, extensions))
+
+
+def _next_turn(areas: FloatArray) -> list[int]:
+    """For each sample, the next one where an area changes sign, opens or closes (n if none)."""
+    n = areas.shape[0]
+    turns = np.flatnonzero(np.any(np.diff(np.sign(areas), axis=0) != 0.0, axis=1)) + 1
+    following = np.append(turns, n)[np.searchsorted(turns, np.arange(n), side='right')]
+    return following.tolist()
+
+
 def _advance(actuators: Sequence[Actuator], pump: Pump, areas: Sequence[float],
              extensions: list[float], dt: float) -> list[float]:
     """Move every cylinder over one sample; return the speeds the pump allows (m/s)."""
@@ -154,13 +168,23 @@ def simulate_plant(machine: Machine, commands: FloatArray, dt: float, *,
     speed = np.zeros((n, count))
     if n:
         path[0] = extensions
-    # Samples with every spool inside its overlap move nothing: skip them.
-    busy = np.flatnonzero(np.any(areas[1:] != 0.0, axis=1)) + 1
     table = areas.tolist()
-    for k in busy.tolist():
-        speed[k] = _advance(actuators, machine.pump, table[k], extensions, dt)
-        path[k] = extensions
-    # Between busy samples the cylinders stay where they were: carry the last value.
+    following = _next_turn(areas)
+    moved, rows, where = [], [], []
+    k = 1
+    while k < n:
+        if _blocked(actuators, table[k], extensions):
+            # Nothing moves until a spool closes, opens or reverses: skip to that sample.
+            k = following[k]
+            continue
+        rows.append(k)
+        moved.append(_advance(actuators, machine.pump, table[k], extensions, dt))
+        where.append(list(extensions))
+        k += 1
+    if rows:
+        speed[rows] = moved
+        path[rows] = where
+    # Between the samples that move, the cylinders stay where they were: carry the last value.
     index = np.where(np.isnan(path[:, 0]), 0, np.arange(n))
     path = path[np.maximum.accumulate(index)]
     kinematic = np.column_stack([act.geometry.angles(path[:, i])
@@ -280,7 +304,7 @@ class PlantSimulator:
         previous = [act.geometry.angle(s) for act, s in zip(self._actuators, self.extensions)]
         before = list(self.extensions)
         moved = [0.0] * len(areas)
-        if any(area != 0.0 for area in areas):
+        if not _blocked(self._actuators, areas, self.extensions):
             moved = _advance(self._actuators, self.machine.pump, areas, self.extensions,
                              self.dt)
         # What the chambers' pressure sensors read over the sample (as simulate_plant's).
