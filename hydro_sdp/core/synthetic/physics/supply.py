@@ -21,21 +21,23 @@ need plus its margin (at most the relief). It gives at most its ``flow``, and wi
 
 from __future__ import annotations
 
-from typing import Sequence
+from typing import Callable, Sequence
 
 from hydro_sdp.core.synthetic.physics.hydraulics import Actuator
 from hydro_sdp.core.synthetic.physics.parameters import Pump
 
+#: Speed, m/s, and flow, m^3/s, of one joint.
+Flow = tuple[float, float]
 #: Bisection steps on the pump pressure (a relative precision of 2^-50).
 STEPS = 50
 
 
-def _passed(actuators: Sequence[Actuator], areas: Sequence[float], extensions: Sequence[float],
-            demands: Sequence[tuple[float, float]], supply: float) -> list[tuple[float, float]]:
-    """Speed and flow of every joint at a pump pressure."""
+def _passed(actuators: Sequence[Actuator], curves: Sequence[Callable[[float], Flow]],
+            demands: Sequence[Flow], supply: float) -> list[Flow]:
+    """Speed and flow of every joint at a pump pressure (``curves``: their supplied_at)."""
     out = []
-    for act, area, extension, demand in zip(actuators, areas, extensions, demands):
-        passed = act.supplied(area, extension, supply)
+    for act, curve, demand in zip(actuators, curves, demands):
+        passed = curve(supply)
         if act.compensated and abs(demand[0]) <= abs(passed[0]):
             passed = demand
         out.append(passed)
@@ -130,15 +132,16 @@ class Supply:
             available = pump.available(sensed)
             share = available / total if total > available else 1.0
             return [speed * share for speed, _ in demands]
-        flows = _passed(actuators, areas, extensions, demands, sensed)
+        curves = [act.supplied_at(area, s) for act, area, s in zip(actuators, areas, extensions)]
+        flows = _passed(actuators, curves, demands, sensed)
         if sum(flow for _, flow in flows) <= pump.available(sensed):
             return [speed for speed, _ in flows]
         low, high = 0.0, sensed
         for _ in range(STEPS):
             middle = 0.5 * (low + high)
-            passed = sum(flow for _, flow in _passed(actuators, areas, extensions, demands, middle))
+            passed = sum(flow for _, flow in _passed(actuators, curves, demands, middle))
             if passed > pump.available(middle):
                 high = middle
             else:
                 low = middle
-        return [speed for speed, _ in _passed(actuators, areas, extensions, demands, low)]
+        return [speed for speed, _ in _passed(actuators, curves, demands, low)]

@@ -117,7 +117,7 @@ class Spool:
         self.area = Notch(valve)
 
     def command(self, command: float) -> float:
-        """:func:`spool_command` of one command (the same arithmetic, without arrays)."""
+        """Map one command to spool travel: :func:`spool_command`'s arithmetic, no arrays."""
         offset = command - self._neutral
         travel = offset / (self._above if command >= self._neutral else self._below)
         return min(max(travel, -1.0), 1.0)
