@@ -32,6 +32,7 @@ meets what the valves pass.
 from __future__ import annotations
 
 import math
+from typing import Callable
 
 from hydro_sdp.core.synthetic.physics.linkage import Geometry
 from hydro_sdp.core.synthetic.physics.parameters import Pump
@@ -96,6 +97,26 @@ class Actuator:
             out_area = out_area * cushion / math.sqrt(out_area * out_area + cushion * cushion)
         return inlet, outlet, force + self.friction, area, out_area
 
+    def blocked(self, area: float, extension: float) -> bool:
+        """
+        Whether the cylinder cannot move: its spool closed or driving it into the end it is at.
+
+        Parameters
+        ----------
+        area : float
+            Signed effective meter-in area, m^2 (positive extends).
+        extension : float
+            Cylinder extension, m.
+
+        Returns
+        -------
+        bool
+            True when :meth:`demand` and :meth:`supplied` give no speed and no flow.
+
+        """
+        return area == 0.0 or (area > 0.0 and extension >= self.stroke) or (
+            area < 0.0 and extension <= 0.0)
+
     def demand(self, area: float, extension: float) -> tuple[float, float]:
         """
         Cylinder speed and pump flow before flow sharing.
@@ -113,8 +134,7 @@ class Actuator:
             Speed, m/s (signed), and the flow drawn from the pump, m^3/s.
 
         """
-        if area == 0.0 or (area > 0.0 and extension >= self.stroke) or (
-                area < 0.0 and extension <= 0.0):
+        if self.blocked(area, extension):
             return 0.0, 0.0
         inlet, outlet, force, a_in, a_out = self._sides(area, extension)
         speed = a_in * self.margin_speed / inlet
@@ -151,19 +171,46 @@ class Actuator:
             load holds the pressure off: a load check valve stops backflow).
 
         """
-        if area == 0.0 or (area > 0.0 and extension >= self.stroke) or (
-                area < 0.0 and extension <= 0.0):
-            return 0.0, 0.0
+        return self.supplied_at(area, extension)(supply)
+
+    def supplied_at(self, area: float, extension: float
+                    ) -> Callable[[float], tuple[float, float]]:
+        """
+        :meth:`supplied` at one area and extension, as a function of the pump pressure.
+
+        The orifices and the load are worked out once, for the many pressures the
+        machine tries at one sample (:mod:`.supply`).
+
+        Parameters
+        ----------
+        area : float
+            Signed effective meter-in area ``Cd A``, m^2 (positive extends).
+        extension : float
+            Cylinder extension, m.
+
+        Returns
+        -------
+        Callable[[float], tuple[float, float]]
+            Pump pressure, Pa, to speed, m/s, and flow, m^3/s, as :meth:`supplied` gives.
+
+        """
+        if self.blocked(area, extension):
+            return lambda supply: (0.0, 0.0)
         inlet, outlet, force, a_in, a_out = self._sides(area, extension)
         k_out = self.half_rho * outlet ** 3 / (a_out * a_out)
-        drive = min(supply, self.relief) * inlet - self.tank * outlet - force
-        if drive <= 0.0:
-            return 0.0, 0.0
-        speed = math.sqrt(drive / (self.half_rho * inlet ** 3 / (a_in * a_in) + k_out))
-        if force + self.tank * outlet + k_out * speed * speed < 0.0:
-            # An overrunning load pulls the inlet below 0 bar: the outlet edge sets the speed.
-            speed = min(speed, math.sqrt(-(force + self.tank * outlet) / k_out))
-        return (speed if area > 0.0 else -speed), speed * inlet
+        held = self.tank * outlet
+        resisted = self.half_rho * inlet ** 3 / (a_in * a_in) + k_out
+
+        def at(supply: float) -> tuple[float, float]:
+            drive = min(supply, self.relief) * inlet - held - force
+            if drive <= 0.0:
+                return 0.0, 0.0
+            speed = math.sqrt(drive / resisted)
+            if force + held + k_out * speed * speed < 0.0:
+                # An overrunning load pulls the inlet below 0 bar: the outlet edge sets the speed.
+                speed = min(speed, math.sqrt(-(force + held) / k_out))
+            return (speed if area > 0.0 else -speed), speed * inlet
+        return at
 
     def inlet_pressure(self, area: float, extension: float, speed: float) -> float:
         """

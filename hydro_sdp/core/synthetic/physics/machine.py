@@ -26,9 +26,8 @@ from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import DataError
 from hydro_sdp.core.model.timing import check_sample_period
 from hydro_sdp.core.synthetic.physics.hydraulics import Actuator
-from hydro_sdp.core.synthetic.physics.parameters import Pump
 from hydro_sdp.core.synthetic.physics.plant import Machine
-from hydro_sdp.core.synthetic.physics.supply import speeds
+from hydro_sdp.core.synthetic.physics.supply import Supply
 from hydro_sdp.core.synthetic.physics.valve import metering_area, Spool, spool_travel
 import numpy as np
 from scipy.signal import bilinear, lfilter, lfilter_zi
@@ -98,11 +97,25 @@ def _initial(machine: Machine, actuators: Sequence[Actuator],
     return extensions, commands
 
 
-def _advance(actuators: Sequence[Actuator], pump: Pump, areas: Sequence[float],
-             extensions: list[float], dt: float) -> list[float]:
+def _blocked(actuators: Sequence[Actuator], areas: Sequence[float],
+             extensions: Sequence[float]) -> bool:
+    """Whether no cylinder can move (spool closed or driving it into its end): speeds all 0."""
+    return all(act.blocked(area, s) for act, area, s in zip(actuators, areas, extensions))
+
+
+def _next_turn(areas: FloatArray) -> list[int]:
+    """For each sample, the next one where an area changes sign, opens or closes (n if none)."""
+    n = areas.shape[0]
+    turns = np.flatnonzero(np.any(np.diff(np.sign(areas), axis=0) != 0.0, axis=1)) + 1
+    following = np.append(turns, n)[np.searchsorted(turns, np.arange(n), side='right')]
+    return following.tolist()
+
+
+def _advance(supply: Supply, areas: Sequence[float], extensions: list[float],
+             dt: float) -> list[float]:
     """Move every cylinder over one sample; return the speeds the pump allows (m/s)."""
-    moved = speeds(actuators, pump, areas, extensions)
-    for i, (act, speed) in enumerate(zip(actuators, moved)):
+    moved = supply.speeds(areas, extensions)
+    for i, (act, speed) in enumerate(zip(supply.actuators, moved)):
         extensions[i] = min(max(extensions[i] + dt * speed, 0.0), act.stroke)
     return moved
 
@@ -146,6 +159,7 @@ def simulate_plant(machine: Machine, commands: FloatArray, dt: float, *,
     n, count = v.shape
     actuators = [Actuator(joint, machine.pump) for joint in machine.joints]
     extensions, before = _initial(machine, actuators, angles0, command_before)
+    supply = Supply(actuators, machine.pump)
     areas = np.column_stack([
         metering_area(joint.valve, spool_travel(joint.valve, v[:, i], dt,
                                                 command_before=before[i]))
@@ -154,13 +168,23 @@ def simulate_plant(machine: Machine, commands: FloatArray, dt: float, *,
     speed = np.zeros((n, count))
     if n:
         path[0] = extensions
-    # Samples with every spool inside its overlap move nothing: skip them.
-    busy = np.flatnonzero(np.any(areas[1:] != 0.0, axis=1)) + 1
     table = areas.tolist()
-    for k in busy.tolist():
-        speed[k] = _advance(actuators, machine.pump, table[k], extensions, dt)
-        path[k] = extensions
-    # Between busy samples the cylinders stay where they were: carry the last value.
+    following = _next_turn(areas)
+    moved, rows, where = [], [], []
+    k = 1
+    while k < n:
+        if _blocked(actuators, table[k], extensions):
+            # Nothing moves until a spool closes, opens or reverses: skip to that sample.
+            k = following[k]
+            continue
+        rows.append(k)
+        moved.append(_advance(supply, table[k], extensions, dt))
+        where.append(list(extensions))
+        k += 1
+    if rows:
+        speed[rows] = moved
+        path[rows] = where
+    # Between the samples that move, the cylinders stay where they were: carry the last value.
     index = np.where(np.isnan(path[:, 0]), 0, np.arange(n))
     path = path[np.maximum.accumulate(index)]
     kinematic = np.column_stack([act.geometry.angles(path[:, i])
@@ -217,14 +241,18 @@ class PlantSimulator:
         self.dt = check_sample_period(dt)
         self._actuators = [Actuator(joint, machine.pump) for joint in machine.joints]
         self.extensions, before = _initial(machine, self._actuators, angles0, command_before)
+        self._supply = Supply(self._actuators, machine.pump)
         self._spools = [Spool(joint.valve, self.dt, before[i])
                         for i, joint in enumerate(machine.joints)]
-        self._filters = [_stop_filter(joint.stop_frequency, joint.stop_damping, self.dt)
-                         for joint in machine.joints]
+        filters = [_stop_filter(joint.stop_frequency, joint.stop_damping, self.dt)
+                   for joint in machine.joints]
+        # Python floats: the same arithmetic as on numpy scalars, without their overhead.
+        self._filters = [(b.tolist(), a.tolist()) for b, a in filters]
         self._sigma = [joint.noise if noise else 0.0 for joint in machine.joints]
         self._rng = np.random.default_rng(seed) if noise else None
         kinematic = [act.geometry.angle(s) for act, s in zip(self._actuators, self.extensions)]
-        self._state = [list(lfilter_zi(b, a) * x) for (b, a), x in zip(self._filters, kinematic)]
+        self._state = [(lfilter_zi(b, a) * x).tolist() for (b, a), x in zip(filters, kinematic)]
+        self._kinematic = kinematic
         self._angles = self._measure(kinematic)
         self.speeds = [0.0] * len(self._actuators)
         #: Piston-side and rod-side pressure of each joint over the last sample, bar.
@@ -239,7 +267,7 @@ class PlantSimulator:
             y = b[0] * x + z[0]
             z[0] = b[1] * x - a[1] * y + z[1]
             z[1] = b[2] * x - a[2] * y
-            out.append(float(y))
+            out.append(y)
         if self._rng is not None:
             draws = self._rng.standard_normal(len(out))
             out = [y + float(d) * s for y, d, s in zip(out, draws, self._sigma)]
@@ -275,18 +303,19 @@ class PlantSimulator:
         if not all(math.isfinite(c) for c in commands):
             raise DataError(f'commands must be finite, got {list(commands)}')
         travel = [spool.step(c) for spool, c in zip(self._spools, commands)]
-        areas = [float(metering_area(spool.valve, np.array([x]))[0])
-                 for spool, x in zip(self._spools, travel)]
-        previous = [act.geometry.angle(s) for act, s in zip(self._actuators, self.extensions)]
+        areas = [spool.area(x) for spool, x in zip(self._spools, travel)]
+        previous = self._kinematic
         before = list(self.extensions)
         moved = [0.0] * len(areas)
-        if any(area != 0.0 for area in areas):
-            moved = _advance(self._actuators, self.machine.pump, areas, self.extensions,
-                             self.dt)
+        if not _blocked(self._actuators, areas, self.extensions):
+            moved = _advance(self._supply, areas, self.extensions, self.dt)
         # What the chambers' pressure sensors read over the sample (as simulate_plant's).
         self.pressures = [act.pressures(area, extension, speed) for act, area, extension, speed
                           in zip(self._actuators, areas, before, moved)]
-        kinematic = [act.geometry.angle(s) for act, s in zip(self._actuators, self.extensions)]
+        # A cylinder that did not move keeps its angle.
+        kinematic = [p if s == b else act.geometry.angle(s) for act, s, b, p
+                     in zip(self._actuators, self.extensions, before, previous)]
+        self._kinematic = kinematic
         self.speeds = [(x - p) / self.dt for x, p in zip(kinematic, previous)]
         self._angles = self._measure(kinematic)
         self.samples += 1

@@ -11,6 +11,7 @@ beyond it the metering notch opens the area of the valve's ``opening`` table.
 
 from __future__ import annotations
 
+from bisect import bisect_right
 import math
 
 from hydro_sdp.core.arrays import FloatArray
@@ -110,10 +111,20 @@ class Spool:
         self.travel = float(spool_command(valve, np.array([command_before]))[0])
         self._line = DelayLine(self._tau, self.travel)
         self._p = lag_pole(valve, dt)
+        self._neutral = valve.neutral
+        self._above = valve.limits[1] - valve.neutral
+        self._below = valve.neutral - valve.limits[0]
+        self.area = Notch(valve)
+
+    def command(self, command: float) -> float:
+        """Map one command to spool travel: :func:`spool_command`'s arithmetic, no arrays."""
+        offset = command - self._neutral
+        travel = offset / (self._above if command >= self._neutral else self._below)
+        return min(max(travel, -1.0), 1.0)
 
     def step(self, command: float) -> float:
         """Take the command in force over the next interval; return the spool travel there."""
-        self._line.push(float(spool_command(self.valve, np.array([command]))[0]))
+        self._line.push(self.command(command))
         u = self._line.delayed(self._tau)
         # Same arithmetic as lfilter's transposed direct form, so both paths agree.
         self.travel = u if self._p == 0.0 else (1.0 - self._p) * u + self._p * self.travel
@@ -145,3 +156,40 @@ def metering_area(valve: Valve, travel: FloatArray) -> FloatArray:
     magnitude = np.interp(np.abs(x), travels, areas, left=0.0)
     side = np.where(x < 0.0, -valve.retract_ratio, 1.0)
     return np.where(x == 0.0, 0.0, side) * valve.discharge_coefficient * magnitude
+
+
+class Notch:
+    """
+    :func:`metering_area` of one valve at one travel at a time, as :class:`Spool` steps.
+
+    The same table and arithmetic as :func:`numpy.interp` (the slope of the segment
+    times the distance from its lower knot, plus the knot's area; a knot's own area
+    at a knot), so both give the same bits.
+
+    Parameters
+    ----------
+    valve : Valve
+        The valve.
+
+    """
+
+    def __init__(self, valve: Valve) -> None:
+        self.travels = [valve.overlap] + [row[0] for row in valve.opening]
+        self.areas = [0.0] + [row[1] * _MM2 for row in valve.opening]
+        self.slopes = [(a1 - a0) / (t1 - t0) for t0, t1, a0, a1
+                       in zip(self.travels, self.travels[1:], self.areas, self.areas[1:])]
+        self.extend = 1.0 * valve.discharge_coefficient
+        self.retract = -valve.retract_ratio * valve.discharge_coefficient
+
+    def __call__(self, travel: float) -> float:
+        """Signed effective area, m^2, at spool travel ``travel``."""
+        x = abs(travel)
+        j = bisect_right(self.travels, x) - 1
+        if j < 0:
+            magnitude = 0.0
+        elif j == len(self.travels) - 1 or x == self.travels[j]:
+            magnitude = self.areas[j]
+        else:
+            magnitude = self.slopes[j] * (x - self.travels[j]) + self.areas[j]
+        side = 0.0 if travel == 0.0 else self.retract if travel < 0.0 else self.extend
+        return side * magnitude

@@ -10,7 +10,8 @@ from hydro_sdp.core.synthetic.physics.linkage import Geometry
 from hydro_sdp.core.synthetic.physics.plant import with_payload
 from hydro_sdp.core.synthetic.physics.runs import (
     duty_command, full_stroke_runs, random_levels, step_and_return)
-from hydro_sdp.core.synthetic.physics.valve import spool_travel
+from hydro_sdp.core.synthetic.physics.valve import (
+    metering_area, Spool, spool_command, spool_travel)
 from hydro_sdp.io.documents import load_yaml, shipped_config
 from hydro_sdp.io.plant_files import load_machine
 import numpy as np
@@ -234,6 +235,24 @@ def test_stepping_and_vectorised_simulation_agree(arm_and_boom):
     np.testing.assert_allclose(np.array(stepped), run.angles, rtol=0.0, atol=1e-9)
     assert np.ptp(run.angles[:, 0]) > 20.0 and np.ptp(run.angles[:, 1]) > 20.0
     assert sim.speeds == pytest.approx(run.speeds[-1].tolist(), abs=1e-6)
+
+
+@pytest.mark.parametrize('preset', ['physics_arm.yaml', 'physics_arm_pwm.yaml',
+                                    'physics_boom.yaml'])
+def test_the_stepped_spool_gives_the_arrays_bits(preset):
+    # PlantSimulator maps one command and one travel at a time; simulate_plant whole arrays.
+    valve = load_machine(shipped_config(preset)).joints[0].valve
+    spool = Spool(valve, DT, valve.neutral)
+    rng = np.random.default_rng(2)
+    low, high = valve.limits
+    commands = np.concatenate([rng.uniform(low - 10.0, high + 10.0, 2000),
+                               [low, valve.neutral, high]])
+    stepped = np.array([spool.command(c) for c in commands.tolist()])
+    assert stepped.tobytes() == spool_command(valve, commands).tobytes()
+    knots = np.array(spool.area.travels)
+    travels = np.concatenate([rng.uniform(-1.0, 1.0, 2000), knots, -knots, [0.0]])
+    stepped = np.array([spool.area(x) for x in travels.tolist()])
+    assert stepped.tobytes() == metering_area(valve, travels).tobytes()
 
 
 def test_programs_are_records_shaped_like_real_runs(arm):
