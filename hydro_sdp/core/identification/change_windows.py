@@ -40,6 +40,7 @@ from hydro_sdp.core.identification.experiment import Experiment
 from hydro_sdp.core.model.first_order import first_order
 from hydro_sdp.core.model.timing import delayed_at
 import numpy as np
+import numpy.typing as npt
 from scipy.optimize import minimize_scalar
 
 #: Candidate lag time constants, in sample periods (0: pure delay).
@@ -111,6 +112,9 @@ class ChangeWindows:
         self.dy: FloatArray = np.where(mask, gathered, 0.0)
         self.windows = int(at.size)
         self.energy = float(np.sum(self.dy ** 2))
+        # Windows share a few places of the change, and a dead time moves them all alike.
+        self._places, self._place_of = np.unique(self.earliest, return_inverse=True)
+        self._by_delay: dict[int, tuple[npt.NDArray[np.bool_], FloatArray, FloatArray]] = {}
 
     def residual(self, delay: int, pole: float) -> float:
         """
@@ -134,24 +138,23 @@ class ChangeWindows:
         p = float(pole)
         width = self.dy.shape[1]
         t = np.arange(width, dtype=np.float64)
-        # Where the change shows in each window; windows share a few such places.
-        places, place_of = np.unique(self.earliest + delay - 1, return_inverse=True)
-        i = t[None, :] - places[:, None]
-        after = i >= 0.0
+        after, exponent, drift = self._shifted(delay)
         # The old level, filtered and continued past the change, and the free initial
         # speed decaying from the window's first sample span the same responses as
         # {1 then p^(i+1)} and {p^(t+1)}.
-        decay = np.where(after, p ** np.maximum(i + 1.0, 0.0), 1.0) if p > 0.0 else \
+        decay = np.where(after, p ** exponent, 1.0) if p > 0.0 else \
             (~after).astype(np.float64)
         step = np.where(after, 1.0 - decay, 0.0)
-        drift = np.where(after, i / AFTER, 0.0)
         ramp = first_order(drift, p, 1.0 - p) if p > 0.0 else drift
-        free = np.broadcast_to(p ** (t + 1.0) if p > 0.0 else np.zeros(width), i.shape)
+        free = np.broadcast_to(p ** (t + 1.0) if p > 0.0 else np.zeros(width), after.shape)
         basis = np.stack([decay, step, ramp, free], axis=2)
-        rhs = np.einsum('wt,wtj->wj', self.dy, basis[place_of])
-        # Each window's Gram matrix: partial sums from its first sample to its last.
-        grams = np.cumsum(basis[:, :, :, None] * basis[:, :, None, :], axis=1)
-        gram = grams[place_of, self.length - 1]
+        rhs = np.einsum('wt,wtj->wj', self.dy, basis[self._place_of])
+        # Each window's Gram matrix: partial sums from its first sample to its last, of
+        # the products of the columns on and above the diagonal (the rest mirror them).
+        upper, lower = np.triu_indices(_PER_WINDOW)
+        grams = np.cumsum(basis[:, :, upper] * basis[:, :, lower], axis=1)
+        gram = np.empty((self.windows, _PER_WINDOW, _PER_WINDOW))
+        gram[:, upper, lower] = gram[:, lower, upper] = grams[self._place_of, self.length - 1]
         # Unit diagonal, then a tiny ridge: columns may vanish (no lag) or coincide
         # (a change at the window's first sample).
         diagonal = np.einsum('wjj->wj', gram)
@@ -161,6 +164,17 @@ class ChangeWindows:
         rhs = rhs * norm
         theta = np.linalg.solve(gram, rhs[:, :, None])[:, :, 0]
         return max(self.energy - float(np.sum(theta * rhs)), 0.0)
+
+    def _shifted(self, delay: int) -> tuple[npt.NDArray[np.bool_], FloatArray, FloatArray]:
+        """Per place of the change with dead time ``delay``: samples after it, ``i + 1``, drift."""
+        cached = self._by_delay.get(delay)
+        if cached is None:
+            t = np.arange(self.dy.shape[1], dtype=np.float64)
+            i = t[None, :] - (self._places + (delay - 1))[:, None]
+            after = i >= 0.0
+            cached = (after, np.maximum(i + 1.0, 0.0), np.where(after, i / AFTER, 0.0))
+            self._by_delay[delay] = cached
+        return cached
 
 
 # The paper baseline's delay (:mod:`.paper_baseline`): one mean speed with a drift
