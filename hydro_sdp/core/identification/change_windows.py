@@ -31,6 +31,7 @@ time constant is then refined continuously.
 
 from __future__ import annotations
 
+import copy
 import math
 from typing import Sequence
 
@@ -66,7 +67,10 @@ class ChangeWindows:
 
     Each window holds the samples where the change can show for any dead time
     from 1 to ``max_delay``, and no other change can: the same samples are
-    scored for every dead time, so their residuals compare directly.
+    scored for every dead time, so their residuals compare directly. Each
+    window's share of the fit is its own, whatever other windows are scored with
+    it: :meth:`part` scores some of the experiments from what these windows
+    computed already (the folds of a held-out check score the same pairs).
 
     Parameters
     ----------
@@ -80,8 +84,14 @@ class ChangeWindows:
     def __init__(self, experiments: Sequence[Experiment], max_delay: int) -> None:
         increments, firsts, lengths, earliest = [], [], [], []
         offset = 0
+        self.max_delay = max_delay
+        # Where each experiment's windows lie, found by the experiment itself.
+        self._experiments = tuple(experiments)
+        self._spans: dict[int, tuple[int, int]] = {}
+        count = 0
         for experiment in experiments:
             n = experiment.y.size - experiment.start - 1
+            self._spans[id(experiment)] = (count, count)
             # The command change at v[m] shows in increment m - start - 1 + delay.
             shows = np.flatnonzero(experiment.v[1:] != experiment.v[:-1]) - experiment.start
             increments.append(np.diff(experiment.y[experiment.start:]))
@@ -95,6 +105,8 @@ class ChangeWindows:
             last = np.minimum.reduce([shows + 1 + max_delay + AFTER, following + 1,
                                       np.full(shows.size, n)])
             keep = (last > first) & (shows + max_delay >= 0) & (shows + 1 < n)
+            self._spans[id(experiment)] = (count, count + int(np.count_nonzero(keep)))
+            count += int(np.count_nonzero(keep))
             firsts.append(offset - n + first[keep].astype(np.int64))
             lengths.append((last - first)[keep].astype(np.int64))
             earliest.append((shows + 1 - first)[keep].astype(np.int64))
@@ -115,6 +127,42 @@ class ChangeWindows:
         # Windows share a few places of the change, and a dead time moves them all alike.
         self._places, self._place_of = np.unique(self.earliest, return_inverse=True)
         self._by_delay: dict[int, tuple[npt.NDArray[np.bool_], FloatArray, FloatArray]] = {}
+        # Per (dead time, pole), each window's share of the explained energy; and the
+        # windows these are, of those of the windows that compute them.
+        self._shares: dict[tuple[int, float], FloatArray] = {}
+        self._source = self
+        self._rows: IntArray | None = None
+
+    def part(self, experiments: Sequence[Experiment]) -> ChangeWindows:
+        """
+        Return the windows of some of the experiments, scored from what these compute.
+
+        Parameters
+        ----------
+        experiments : sequence of Experiment
+            Experiments these windows were made of, in any order.
+
+        Returns
+        -------
+        ChangeWindows
+            What ``ChangeWindows(experiments, max_delay)`` would be, with the same
+            residuals bit for bit, made without computing a window twice.
+
+        """
+        spans = [self._source._spans.get(id(e)) for e in experiments]
+        if any(span is None for span in spans):
+            return ChangeWindows(experiments, self.max_delay)
+        rows = np.concatenate([np.arange(*span) for span in spans if span is not None]
+                              + [np.zeros(0, np.int64)])
+        part = copy.copy(self._source)
+        part.length, part.earliest = part.length[rows], part.earliest[rows]
+        width = int(part.length.max()) if rows.size else 0
+        # The increments exactly as made for these experiments alone (their energy too).
+        part.dy = part.dy[rows, :width] if rows.size else np.zeros((0, 0))
+        part.windows = int(rows.size)
+        part.energy = float(np.sum(part.dy ** 2))
+        part._rows = rows
+        return part
 
     def residual(self, delay: int, pole: float) -> float:
         """
@@ -135,7 +183,21 @@ class ChangeWindows:
         """
         if self.windows == 0:
             return 0.0
-        p = float(pole)
+        shares = self._source._explained(delay, float(pole))
+        if self._rows is not None:
+            shares = shares[self._rows]
+        return max(self.energy - float(np.sum(shares)), 0.0)
+
+    def _explained(self, delay: int, p: float) -> FloatArray:
+        """Return each window's fitted parameters times their right-hand sides."""
+        shares = self._shares.get((delay, p))
+        if shares is None:
+            shares = self._fit(delay, p)
+            self._shares[(delay, p)] = shares
+        return shares
+
+    def _fit(self, delay: int, p: float) -> FloatArray:
+        """Fit every window with dead time ``delay`` and lag pole ``p``."""
         width = self.dy.shape[1]
         t = np.arange(width, dtype=np.float64)
         after, exponent, drift = self._shifted(delay)
@@ -163,7 +225,7 @@ class ChangeWindows:
         gram = gram * norm[:, :, None] * norm[:, None, :] + 1e-10 * np.eye(_PER_WINDOW)
         rhs = rhs * norm
         theta = np.linalg.solve(gram, rhs[:, :, None])[:, :, 0]
-        return max(self.energy - float(np.sum(theta * rhs)), 0.0)
+        return np.asarray(theta * rhs, dtype=np.float64)
 
     def _shifted(self, delay: int) -> tuple[npt.NDArray[np.bool_], FloatArray, FloatArray]:
         """Per place of the change with dead time ``delay``: samples after it, ``i + 1``, drift."""
@@ -262,7 +324,8 @@ def fit_delay_and_lag(experiments: Sequence[Experiment], dt: float, max_delay: i
     return delay, lag, explained
 
 
-def fit_delay_lag_and_pure(experiments: Sequence[Experiment], dt: float, max_delay: int
+def fit_delay_lag_and_pure(experiments: Sequence[Experiment], dt: float, max_delay: int,
+                           windows: ChangeWindows | None = None
                            ) -> tuple[int, float, FloatArray, int]:
     """
     Dead time and lag time constant that explain the increments best, and the best pure delay.
@@ -275,6 +338,8 @@ def fit_delay_lag_and_pure(experiments: Sequence[Experiment], dt: float, max_del
         Sample period, s.
     max_delay : int
         Largest dead time, samples.
+    windows : ChangeWindows or None
+        The experiments' windows, if made already (:meth:`ChangeWindows.part`).
 
     Returns
     -------
@@ -291,7 +356,8 @@ def fit_delay_lag_and_pure(experiments: Sequence[Experiment], dt: float, max_del
         If no command change can show in the experiments.
 
     """
-    windows = ChangeWindows(experiments, max_delay)
+    if windows is None:
+        windows = ChangeWindows(experiments, max_delay)
     if windows.windows == 0:
         # Without a change every pair would explain everything: say so instead.
         raise DataError('the command never changes in a way the delay could show in '

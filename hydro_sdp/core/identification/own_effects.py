@@ -74,12 +74,14 @@ def check_lag(experiments: Sequence[Experiment], delay: DelayEstimate, dt: float
     pooled = np.zeros(2)
     count = 0.0
     per_fold = []
+    # The folds score the same windows with the same pairs: each window is fitted once.
+    every = ChangeWindows(experiments, max_delay)
     for train, test in folds(experiments, rest):
-        windows = ChangeWindows(test, max_delay)
+        windows = every.part(test)
         if windows.windows == 0:
             continue
         try:
-            dead, lag, _, pure = fit_delay_lag_and_pure(train, dt, max_delay)
+            dead, lag, _, pure = fit_delay_lag_and_pure(train, dt, max_delay, every.part(train))
         except HydroSdpError:
             continue
         before = windows.residual(pure, 0.0)
