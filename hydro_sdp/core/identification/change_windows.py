@@ -133,14 +133,18 @@ class ChangeWindows:
         self._source = self
         self._rows: IntArray | None = None
 
-    def part(self, experiments: Sequence[Experiment]) -> ChangeWindows:
+    def part(self, experiments: Sequence[Experiment], max_delay: int | None = None
+             ) -> ChangeWindows:
         """
         Return the windows of some of the experiments, scored from what these compute.
 
         Parameters
         ----------
         experiments : sequence of Experiment
-            Experiments these windows were made of, in any order.
+            Experiments these windows were made of, in any order (any other: the
+        windows are made anew).
+    max_delay : int or None
+        Largest dead time, samples (another than these windows': made anew).
 
         Returns
         -------
@@ -150,6 +154,8 @@ class ChangeWindows:
 
         """
         spans = [self._source._spans.get(id(e)) for e in experiments]
+        if max_delay is not None and max_delay != self.max_delay:
+            return ChangeWindows(experiments, max_delay)
         if any(span is None for span in spans):
             return ChangeWindows(experiments, self.max_delay)
         rows = np.concatenate([np.arange(*span) for span in spans if span is not None]
