@@ -142,9 +142,9 @@ class ChangeWindows:
         ----------
         experiments : sequence of Experiment
             Experiments these windows were made of, in any order (any other: the
-        windows are made anew).
-    max_delay : int or None
-        Largest dead time, samples (another than these windows': made anew).
+            windows are made anew).
+        max_delay : int or None
+            Largest dead time, samples (another than these windows': made anew).
 
         Returns
         -------

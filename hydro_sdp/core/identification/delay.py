@@ -170,9 +170,8 @@ def estimate_delay(experiments: Sequence[Experiment], dt: float, *, max_delay: i
     """
     if not experiments:
         raise DataError('no experiments to estimate the delay from')
-    best, lag, explained, pure = fit_delay_lag_and_pure(
-        experiments, dt, max_delay, None if windows is None else windows.part(experiments,
-                                                                             max_delay))
+    shared = None if windows is None else windows.part(experiments, max_delay)
+    best, lag, explained, pure = fit_delay_lag_and_pure(experiments, dt, max_delay, shared)
     return DelayEstimate(samples=best, seconds=whole_samples_seconds(best, dt), fit=best,
                          onset=_onset(experiments, noise, max_delay, lag_pole(lag, dt)),
                          xcorr=_xcorr(experiments, max_delay, lag_pole(lag, dt)),
