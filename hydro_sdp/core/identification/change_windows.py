@@ -31,6 +31,7 @@ time constant is then refined continuously.
 
 from __future__ import annotations
 
+import copy
 import math
 from typing import Sequence
 
@@ -40,6 +41,7 @@ from hydro_sdp.core.identification.experiment import Experiment
 from hydro_sdp.core.model.first_order import first_order
 from hydro_sdp.core.model.timing import delayed_at
 import numpy as np
+import numpy.typing as npt
 from scipy.optimize import minimize_scalar
 
 #: Candidate lag time constants, in sample periods (0: pure delay).
@@ -65,7 +67,10 @@ class ChangeWindows:
 
     Each window holds the samples where the change can show for any dead time
     from 1 to ``max_delay``, and no other change can: the same samples are
-    scored for every dead time, so their residuals compare directly.
+    scored for every dead time, so their residuals compare directly. Each
+    window's share of the fit is its own, whatever other windows are scored with
+    it: :meth:`part` scores some of the experiments from what these windows
+    computed already (the folds of a held-out check score the same pairs).
 
     Parameters
     ----------
@@ -79,8 +84,14 @@ class ChangeWindows:
     def __init__(self, experiments: Sequence[Experiment], max_delay: int) -> None:
         increments, firsts, lengths, earliest = [], [], [], []
         offset = 0
+        self.max_delay = max_delay
+        # Where each experiment's windows lie, found by the experiment itself.
+        self._experiments = tuple(experiments)
+        self._spans: dict[int, tuple[int, int]] = {}
+        count = 0
         for experiment in experiments:
             n = experiment.y.size - experiment.start - 1
+            self._spans[id(experiment)] = (count, count)
             # The command change at v[m] shows in increment m - start - 1 + delay.
             shows = np.flatnonzero(experiment.v[1:] != experiment.v[:-1]) - experiment.start
             increments.append(np.diff(experiment.y[experiment.start:]))
@@ -94,6 +105,8 @@ class ChangeWindows:
             last = np.minimum.reduce([shows + 1 + max_delay + AFTER, following + 1,
                                       np.full(shows.size, n)])
             keep = (last > first) & (shows + max_delay >= 0) & (shows + 1 < n)
+            self._spans[id(experiment)] = (count, count + int(np.count_nonzero(keep)))
+            count += int(np.count_nonzero(keep))
             firsts.append(offset - n + first[keep].astype(np.int64))
             lengths.append((last - first)[keep].astype(np.int64))
             earliest.append((shows + 1 - first)[keep].astype(np.int64))
@@ -111,6 +124,51 @@ class ChangeWindows:
         self.dy: FloatArray = np.where(mask, gathered, 0.0)
         self.windows = int(at.size)
         self.energy = float(np.sum(self.dy ** 2))
+        # Windows share a few places of the change, and a dead time moves them all alike.
+        self._places, self._place_of = np.unique(self.earliest, return_inverse=True)
+        self._by_delay: dict[int, tuple[npt.NDArray[np.bool_], FloatArray, FloatArray]] = {}
+        # Per (dead time, pole), each window's share of the explained energy; and the
+        # windows these are, of those of the windows that compute them.
+        self._shares: dict[tuple[int, float], FloatArray] = {}
+        self._source = self
+        self._rows: IntArray | None = None
+
+    def part(self, experiments: Sequence[Experiment], max_delay: int | None = None
+             ) -> ChangeWindows:
+        """
+        Return the windows of some of the experiments, scored from what these compute.
+
+        Parameters
+        ----------
+        experiments : sequence of Experiment
+            Experiments these windows were made of, in any order (any other: the
+            windows are made anew).
+        max_delay : int or None
+            Largest dead time, samples (another than these windows': made anew).
+
+        Returns
+        -------
+        ChangeWindows
+            What ``ChangeWindows(experiments, max_delay)`` would be, with the same
+            residuals bit for bit, made without computing a window twice.
+
+        """
+        spans = [self._source._spans.get(id(e)) for e in experiments]
+        if max_delay is not None and max_delay != self.max_delay:
+            return ChangeWindows(experiments, max_delay)
+        if any(span is None for span in spans):
+            return ChangeWindows(experiments, self.max_delay)
+        rows = np.concatenate([np.arange(*span) for span in spans if span is not None]
+                              + [np.zeros(0, np.int64)])
+        part = copy.copy(self._source)
+        part.length, part.earliest = part.length[rows], part.earliest[rows]
+        width = int(part.length.max()) if rows.size else 0
+        # The increments exactly as made for these experiments alone (their energy too).
+        part.dy = part.dy[rows, :width] if rows.size else np.zeros((0, 0))
+        part.windows = int(rows.size)
+        part.energy = float(np.sum(part.dy ** 2))
+        part._rows = rows
+        return part
 
     def residual(self, delay: int, pole: float) -> float:
         """
@@ -131,27 +189,40 @@ class ChangeWindows:
         """
         if self.windows == 0:
             return 0.0
-        p = float(pole)
+        shares = self._source._explained(delay, float(pole))
+        if self._rows is not None:
+            shares = shares[self._rows]
+        return max(self.energy - float(np.sum(shares)), 0.0)
+
+    def _explained(self, delay: int, p: float) -> FloatArray:
+        """Return each window's fitted parameters times their right-hand sides."""
+        shares = self._shares.get((delay, p))
+        if shares is None:
+            shares = self._fit(delay, p)
+            self._shares[(delay, p)] = shares
+        return shares
+
+    def _fit(self, delay: int, p: float) -> FloatArray:
+        """Fit every window with dead time ``delay`` and lag pole ``p``."""
         width = self.dy.shape[1]
         t = np.arange(width, dtype=np.float64)
-        # Where the change shows in each window; windows share a few such places.
-        places, place_of = np.unique(self.earliest + delay - 1, return_inverse=True)
-        i = t[None, :] - places[:, None]
-        after = i >= 0.0
+        after, exponent, drift = self._shifted(delay)
         # The old level, filtered and continued past the change, and the free initial
         # speed decaying from the window's first sample span the same responses as
         # {1 then p^(i+1)} and {p^(t+1)}.
-        decay = np.where(after, p ** np.maximum(i + 1.0, 0.0), 1.0) if p > 0.0 else \
+        decay = np.where(after, p ** exponent, 1.0) if p > 0.0 else \
             (~after).astype(np.float64)
         step = np.where(after, 1.0 - decay, 0.0)
-        drift = np.where(after, i / AFTER, 0.0)
         ramp = first_order(drift, p, 1.0 - p) if p > 0.0 else drift
-        free = np.broadcast_to(p ** (t + 1.0) if p > 0.0 else np.zeros(width), i.shape)
+        free = np.broadcast_to(p ** (t + 1.0) if p > 0.0 else np.zeros(width), after.shape)
         basis = np.stack([decay, step, ramp, free], axis=2)
-        rhs = np.einsum('wt,wtj->wj', self.dy, basis[place_of])
-        # Each window's Gram matrix: partial sums from its first sample to its last.
-        grams = np.cumsum(basis[:, :, :, None] * basis[:, :, None, :], axis=1)
-        gram = grams[place_of, self.length - 1]
+        rhs = np.einsum('wt,wtj->wj', self.dy, basis[self._place_of])
+        # Each window's Gram matrix: partial sums from its first sample to its last, of
+        # the products of the columns on and above the diagonal (the rest mirror them).
+        upper, lower = np.triu_indices(_PER_WINDOW)
+        grams = np.cumsum(basis[:, :, upper] * basis[:, :, lower], axis=1)
+        gram = np.empty((self.windows, _PER_WINDOW, _PER_WINDOW))
+        gram[:, upper, lower] = gram[:, lower, upper] = grams[self._place_of, self.length - 1]
         # Unit diagonal, then a tiny ridge: columns may vanish (no lag) or coincide
         # (a change at the window's first sample).
         diagonal = np.einsum('wjj->wj', gram)
@@ -160,7 +231,18 @@ class ChangeWindows:
         gram = gram * norm[:, :, None] * norm[:, None, :] + 1e-10 * np.eye(_PER_WINDOW)
         rhs = rhs * norm
         theta = np.linalg.solve(gram, rhs[:, :, None])[:, :, 0]
-        return max(self.energy - float(np.sum(theta * rhs)), 0.0)
+        return np.asarray(theta * rhs, dtype=np.float64)
+
+    def _shifted(self, delay: int) -> tuple[npt.NDArray[np.bool_], FloatArray, FloatArray]:
+        """Per place of the change with dead time ``delay``: samples after it, ``i + 1``, drift."""
+        cached = self._by_delay.get(delay)
+        if cached is None:
+            t = np.arange(self.dy.shape[1], dtype=np.float64)
+            i = t[None, :] - (self._places + (delay - 1))[:, None]
+            after = i >= 0.0
+            cached = (after, np.maximum(i + 1.0, 0.0), np.where(after, i / AFTER, 0.0))
+            self._by_delay[delay] = cached
+        return cached
 
 
 # The paper baseline's delay (:mod:`.paper_baseline`): one mean speed with a drift
@@ -248,7 +330,8 @@ def fit_delay_and_lag(experiments: Sequence[Experiment], dt: float, max_delay: i
     return delay, lag, explained
 
 
-def fit_delay_lag_and_pure(experiments: Sequence[Experiment], dt: float, max_delay: int
+def fit_delay_lag_and_pure(experiments: Sequence[Experiment], dt: float, max_delay: int,
+                           windows: ChangeWindows | None = None
                            ) -> tuple[int, float, FloatArray, int]:
     """
     Dead time and lag time constant that explain the increments best, and the best pure delay.
@@ -261,6 +344,8 @@ def fit_delay_lag_and_pure(experiments: Sequence[Experiment], dt: float, max_del
         Sample period, s.
     max_delay : int
         Largest dead time, samples.
+    windows : ChangeWindows or None
+        The experiments' windows, if made already (:meth:`ChangeWindows.part`).
 
     Returns
     -------
@@ -277,7 +362,8 @@ def fit_delay_lag_and_pure(experiments: Sequence[Experiment], dt: float, max_del
         If no command change can show in the experiments.
 
     """
-    windows = ChangeWindows(experiments, max_delay)
+    if windows is None:
+        windows = ChangeWindows(experiments, max_delay)
     if windows.windows == 0:
         # Without a change every pair would explain everything: say so instead.
         raise DataError('the command never changes in a way the delay could show in '

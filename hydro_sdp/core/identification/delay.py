@@ -27,7 +27,8 @@ from typing import Sequence
 
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import DataError
-from hydro_sdp.core.identification.change_windows import fit_delay_lag_and_pure, lag_pole
+from hydro_sdp.core.identification.change_windows import (
+    ChangeWindows, fit_delay_lag_and_pure, lag_pole)
 from hydro_sdp.core.identification.experiment import Experiment
 from hydro_sdp.core.model.first_order import first_order
 from hydro_sdp.core.model.sample_period import whole_samples_seconds
@@ -140,7 +141,8 @@ def _xcorr(experiments: Sequence[Experiment], max_delay: int, pole: float) -> in
 
 
 def estimate_delay(experiments: Sequence[Experiment], dt: float, *, max_delay: int,
-                   rest: float = 0.0, noise: float = 0.0) -> DelayEstimate:
+                   rest: float = 0.0, noise: float = 0.0,
+                   windows: ChangeWindows | None = None) -> DelayEstimate:
     """
     Estimate the pure delay from experiments.
 
@@ -156,6 +158,9 @@ def estimate_delay(experiments: Sequence[Experiment], dt: float, *, max_delay: i
         Rest command.
     noise : float
         Angle noise standard deviation, degrees.
+    windows : ChangeWindows or None
+        Change windows of these experiments or more, whose fits are shared with
+        later checks (:meth:`~.change_windows.ChangeWindows.part`).
 
     Returns
     -------
@@ -165,7 +170,8 @@ def estimate_delay(experiments: Sequence[Experiment], dt: float, *, max_delay: i
     """
     if not experiments:
         raise DataError('no experiments to estimate the delay from')
-    best, lag, explained, pure = fit_delay_lag_and_pure(experiments, dt, max_delay)
+    shared = None if windows is None else windows.part(experiments, max_delay)
+    best, lag, explained, pure = fit_delay_lag_and_pure(experiments, dt, max_delay, shared)
     return DelayEstimate(samples=best, seconds=whole_samples_seconds(best, dt), fit=best,
                          onset=_onset(experiments, noise, max_delay, lag_pole(lag, dt)),
                          xcorr=_xcorr(experiments, max_delay, lag_pole(lag, dt)),

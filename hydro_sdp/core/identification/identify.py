@@ -26,6 +26,7 @@ from dataclasses import dataclass
 from typing import Callable, Sequence
 
 from hydro_sdp.core.errors import DataError
+from hydro_sdp.core.identification.change_windows import ChangeWindows
 from hydro_sdp.core.identification.delay import (
     DelayEstimate, estimate_delay, level_speeds)
 from hydro_sdp.core.identification.effect_check import HeldOut, simulation_errors
@@ -102,11 +103,14 @@ def _segment(records: Sequence[Record], dt: float, max_delay: int,
 def _delay(segmentation: Segmentation, pieces: _Pieces, dt: float, max_delay: int
            ) -> tuple[DelayEstimate, list[HeldOut]]:
     """Estimate the dead time with the valve lag, keeping the lag only if held-out data need it."""
-    delay = estimate_delay(thin(pieces.every, DELAY_SAMPLES), dt, max_delay=max_delay,
-                           rest=segmentation.rest, noise=segmentation.noise_std)
+    sample = thin(pieces.every, DELAY_SAMPLES)
+    # The lag check's folds score the same windows with the same pairs as the fit.
+    windows = ChangeWindows(sample, max_delay)
+    delay = estimate_delay(sample, dt, max_delay=max_delay, rest=segmentation.rest,
+                           noise=segmentation.noise_std, windows=windows)
     if delay.lag <= 0.0:
         return delay, []
-    lag_check = check_lag(pieces.trial, delay, dt, segmentation.rest, max_delay)
+    lag_check = check_lag(pieces.trial, delay, dt, segmentation.rest, max_delay, windows)
     return (delay if lag_check.kept else delay.without_lag(dt)), [lag_check]
 
 

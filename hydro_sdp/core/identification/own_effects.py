@@ -41,7 +41,7 @@ MapRefit = Callable[[FitData], MapFit[StaticMap]]
 
 
 def check_lag(experiments: Sequence[Experiment], delay: DelayEstimate, dt: float, rest: float,
-              max_delay: int) -> HeldOut:
+              max_delay: int, windows: ChangeWindows | None = None) -> HeldOut:
     """
     Held-out error of the increments around command changes, with and without a lag.
 
@@ -64,6 +64,8 @@ def check_lag(experiments: Sequence[Experiment], delay: DelayEstimate, dt: float
         Rest command.
     max_delay : int
         Largest dead time, samples.
+    windows : ChangeWindows or None
+        Change windows of these experiments or more, fitted already for the delay.
 
     Returns
     -------
@@ -74,12 +76,15 @@ def check_lag(experiments: Sequence[Experiment], delay: DelayEstimate, dt: float
     pooled = np.zeros(2)
     count = 0.0
     per_fold = []
+    # The folds score the same windows with the same pairs: each window is fitted once.
+    every = ChangeWindows(experiments, max_delay) if windows is None else \
+        windows.part(experiments, max_delay)
     for train, test in folds(experiments, rest):
-        windows = ChangeWindows(test, max_delay)
+        windows = every.part(test)
         if windows.windows == 0:
             continue
         try:
-            dead, lag, _, pure = fit_delay_lag_and_pure(train, dt, max_delay)
+            dead, lag, _, pure = fit_delay_lag_and_pure(train, dt, max_delay, every.part(train))
         except HydroSdpError:
             continue
         before = windows.residual(pure, 0.0)

@@ -91,7 +91,8 @@ def first_order(x: FloatArray, a: float, b: float = 1.0,
     if b != 1.0:
         sums *= b
     last = float(powers[-1])
-    if x.ndim == 1:
+    starts = _carried(sums[..., -1], last, before)
+    if starts is None and x.ndim == 1:
         # One series: carry the state in Python floats (the same IEEE arithmetic, without
         # an array operation per block).
         states, state = [], float(np.asarray(before, dtype=np.float64))
@@ -99,7 +100,7 @@ def first_order(x: FloatArray, a: float, b: float = 1.0,
             states.append(state)
             state = (end + state) * last
         starts = np.array(states)
-    else:
+    elif starts is None:
         starts = np.empty(x.shape[:-1] + (count,))
         carried = np.broadcast_to(np.asarray(before, dtype=np.float64), x.shape[:-1])
         for index in range(count):
@@ -108,3 +109,25 @@ def first_order(x: FloatArray, a: float, b: float = 1.0,
     sums += starts[..., None]
     sums *= powers
     return sums.reshape(padded.shape)[..., :size]
+
+
+def _carried(ends: FloatArray, last: float, before: float | FloatArray) -> FloatArray | None:
+    """
+    Return the state entering each block, all blocks at once, or None where it cannot.
+
+    The state entering block ``i + 1`` is ``(ends_i + start_i) last``. A block's
+    scaled sum ``ends_i`` is of order ``e^600`` times the state, which it then
+    absorbs exactly: ``ends_i + start_i == ends_i``. Where every block after the
+    first does so (checked), the states are ``ends_i last``, bit for bit the
+    block-by-block recursion; otherwise (a block ending in zeros) None.
+    """
+    first = np.broadcast_to(np.asarray(before, dtype=np.float64), ends.shape[:-1])
+    starts = np.empty(ends.shape)
+    starts[..., 0] = first
+    if ends.shape[-1] > 1:
+        starts[..., 1] = (ends[..., 0] + first) * last
+        np.multiply(ends[..., 1:-1], last, out=starts[..., 2:])
+        middle = ends[..., 1:-1]
+        if not np.array_equal(middle + starts[..., 1:-1], middle):
+            return None
+    return starts
