@@ -15,7 +15,9 @@ search held out; the estimation records when there are none):
 A candidate that passes both is *accepted*; one that removes at least :data:`MOST` of
 the squared velocity residual and lowers the windowed error is accepted whatever its
 test says (the answer is never ``none`` while a candidate removes most of the
-residual). Accepted candidates are ranked: those whose signature the data show which
+residual). Neither is accepted when it raises the held-out simulation error over whole
+runs by more than :data:`RISE` (a factor that mends a few seconds at a time while the
+model drifts further over the run). Accepted candidates are ranked: those whose signature the data show which
 no other word explains (a stop held while driven beyond the dead-zone, a factor of the
 angle shared by both directions where the data name the angle) first, then those of the
 states the SDP analysis names (:mod:`.naming`), each group by the share of the windowed
@@ -42,6 +44,8 @@ MARGIN = 0.1
 #: A candidate removing at least this share of the held-out squared velocity residual is
 #: never dismissed (when it also lowers the windowed error).
 MOST = 0.5
+#: No candidate raises the held-out simulation error over whole runs by more than this share.
+RISE = 0.25
 #: Words that hold a simpler word as a special case (different delays for the two
 #: directions hold one delay for both): the richer is named before the simpler only
 #: when its windowed error is lower by :data:`MARGIN` of the simpler's.
@@ -93,10 +97,18 @@ def judge(trial: Trial, model: JointModel, checks: Sequence[Run], base: Sequence
     held = 1.0 - after / before if before > 0.0 else 0.0
     size = held >= MARGIN and reduction.gain >= MIN_GAIN
     accepted = (reduction.significant and size) or (reduction.gain >= MOST and held > 0.0)
+    whole_before, whole_after = errors.compare([model, augmented], seconds=None) \
+        if accepted else (0.0, 0.0)
+    drifts = whole_after > (1.0 + RISE) * whole_before
+    accepted = accepted and not drifts
     evidence = candidate.evidence
     if not accepted:
         # What the fit found is not a finding until the decision says so.
-        if reduction.gain <= 0.0:
+        if drifts:
+            why = (f'it lowers the windowed error by {100 * held:.3g} % but raises the '
+                   f'held-out error over whole runs from {whole_before:.3g} to '
+                   f'{whole_after:.3g} deg')
+        elif reduction.gain <= 0.0:
             why = (f'no better on held-out data: it adds {-100 * reduction.gain:.3g} % to '
                    'the residual')
         elif reduction.significant:
