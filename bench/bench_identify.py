@@ -144,7 +144,7 @@ def main() -> None:
               f"(x{theirs / floor:.1f} against the paper's fit: the most any such command "
               'can reach)')
         print(f'  ... identify beyond that start-up: {whole_command - floor:7.3f} s '
-              f"(x{theirs / max(whole_command - floor, 1e-9):.1f})")
+              f'(x{theirs / max(whole_command - floor, 1e-9):.1f})')
 
     with tempfile.TemporaryDirectory() as folder:
         hour = experiment_record(model, 'random', seed=5, duration=3600.0, noise=0.03)

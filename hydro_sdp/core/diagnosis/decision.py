@@ -17,11 +17,11 @@ the squared velocity residual and lowers the windowed error is accepted whatever
 test says (the answer is never ``none`` while a candidate removes most of the
 residual). Neither is accepted when it raises the held-out simulation error over whole
 runs by more than :data:`RISE` (a factor that mends a few seconds at a time while the
-model drifts further over the run). Accepted candidates are ranked: those whose signature the data show which
-no other word explains (a stop held while driven beyond the dead-zone, a factor of the
-angle shared by both directions where the data name the angle) first, then those of the
-states the SDP analysis names (:mod:`.naming`), each group by the share of the windowed
-error it removes (docs/methods.md section 8.4). A word that holds an accepted simpler
+model drifts further over the run). Accepted candidates are ranked: those whose
+signature the data show which no other word explains (a stop held while driven beyond
+the dead-zone, a factor of the angle shared by both directions where the data name the
+angle) first, then those of the states the SDP analysis names (:mod:`.naming`), each
+group by the share of the windowed error it removes (docs/methods.md section 8.4). A word that holds an accepted simpler
 word as a special case (:data:`NESTED`) comes after it unless it removes clearly more.
 
 """
