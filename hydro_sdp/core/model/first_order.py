@@ -80,54 +80,65 @@ def first_order(x: FloatArray, a: float, b: float = 1.0,
     if size <= block:
         return _block(x, a, b, before)
     # All blocks at once: each block's sum from zero, then the state carried across
-    # blocks (the same operations, in the same order, as block after block).
+    # blocks (the same operations, in the same order, as block after block). The whole
+    # blocks are a view of the output and the last, shorter one follows: no padding.
     count = -(-size // block)
-    padded = np.zeros(x.shape[:-1] + (count * block,))
-    padded[..., :size] = x
-    blocks = padded.reshape(x.shape[:-1] + (count, block))
+    whole = (count - 1 if size % block else count) * block
+    out = np.empty(x.shape)
+    blocks = out[..., :whole].reshape(x.shape[:-1] + (whole // block, block))
+    tail = out[..., whole:]
     powers = _powers(a, block)
-    sums = np.divide(blocks, powers)
-    np.cumsum(sums, axis=-1, out=sums)
+    np.divide(x[..., :whole].reshape(blocks.shape), powers, out=blocks)
+    np.cumsum(blocks, axis=-1, out=blocks)
+    np.divide(x[..., whole:], powers[:size - whole], out=tail)
+    np.cumsum(tail, axis=-1, out=tail)
     if b != 1.0:
-        sums *= b
+        out *= b
     last = float(powers[-1])
-    starts = _carried(sums[..., -1], last, before)
+    # The state entering each block follows from the ends of the blocks before it.
+    ends = blocks[..., :count - 1, -1]
+    starts = _carried(ends, last, before)
     if starts is None and x.ndim == 1:
         # One series: carry the state in Python floats (the same IEEE arithmetic, without
         # an array operation per block).
-        states, state = [], float(np.asarray(before, dtype=np.float64))
-        for end in sums[:, -1].tolist():
-            states.append(state)
+        state = float(np.asarray(before, dtype=np.float64))
+        states = [state]
+        for end in ends.tolist():
             state = (end + state) * last
+            states.append(state)
         starts = np.array(states)
     elif starts is None:
         starts = np.empty(x.shape[:-1] + (count,))
         carried = np.broadcast_to(np.asarray(before, dtype=np.float64), x.shape[:-1])
-        for index in range(count):
-            starts[..., index] = carried
-            carried = (sums[..., index, -1] + carried) * last
-    sums += starts[..., None]
-    sums *= powers
-    return sums.reshape(padded.shape)[..., :size]
+        starts[..., 0] = carried
+        for index in range(count - 1):
+            carried = (ends[..., index] + carried) * last
+            starts[..., index + 1] = carried
+    blocks += starts[..., :whole // block, None]
+    blocks *= powers
+    tail += starts[..., -1:]
+    tail *= powers[:size - whole]
+    return out
 
 
 def _carried(ends: FloatArray, last: float, before: float | FloatArray) -> FloatArray | None:
     """
     Return the state entering each block, all blocks at once, or None where it cannot.
 
-    The state entering block ``i + 1`` is ``(ends_i + start_i) last``. A block's
+    ``ends`` are the scaled sums at the end of every block but the last. The
+    state entering block ``i + 1`` is ``(ends_i + start_i) last``. A block's
     scaled sum ``ends_i`` is of order ``e^600`` times the state, which it then
     absorbs exactly: ``ends_i + start_i == ends_i``. Where every block after the
     first does so (checked), the states are ``ends_i last``, bit for bit the
     block-by-block recursion; otherwise (a block ending in zeros) None.
     """
     first = np.broadcast_to(np.asarray(before, dtype=np.float64), ends.shape[:-1])
-    starts = np.empty(ends.shape)
+    starts = np.empty(ends.shape[:-1] + (ends.shape[-1] + 1,))
     starts[..., 0] = first
-    if ends.shape[-1] > 1:
+    if ends.shape[-1] > 0:
         starts[..., 1] = (ends[..., 0] + first) * last
-        np.multiply(ends[..., 1:-1], last, out=starts[..., 2:])
-        middle = ends[..., 1:-1]
+        np.multiply(ends[..., 1:], last, out=starts[..., 2:])
+        middle = ends[..., 1:]
         if not np.array_equal(middle + starts[..., 1:-1], middle):
             return None
     return starts
