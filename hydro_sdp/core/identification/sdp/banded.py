@@ -153,7 +153,7 @@ def _prior_bands(groups: int, kind: str, prior: float) -> FloatArray:
 
 
 def fit_banded(stats: GroupStats, kind: str, nvr: float, *,
-               prior: float | None = None, penalty: FloatArray | None = None) -> BandedFit:
+               prior: float | None = None, dd_bands: FloatArray | None = None) -> BandedFit:
     """
     Smooth the parameter at a given NVR by the banded normal equations.
 
@@ -167,7 +167,7 @@ def fit_banded(stats: GroupStats, kind: str, nvr: float, *,
         Noise variance ratio (> 0).
     prior : float or None
         Variance of the initial state normalised by ``sigma^2``; None: diffuse.
-    penalty : FloatArray or None
+    dd_bands : FloatArray or None
         ``penalty_bands(stats.groups, kind)`` when the caller has it (a search over
         the NVR builds it once); None: built here.
 
@@ -183,7 +183,7 @@ def fit_banded(stats: GroupStats, kind: str, nvr: float, *,
         raise DataError(f'nvr must be a positive number, got {nvr}')
     if M <= d:
         raise DataError(f'{M} distinct state values: an {kind} walk needs more than {d}')
-    bands = (penalty_bands(M, kind) if penalty is None else penalty) / nvr
+    bands = (penalty_bands(M, kind) if dd_bands is None else dd_bands) / nvr
     bands[0] += stats.weight
     if prior is not None:
         bands = bands + _prior_bands(M, kind, prior)

@@ -95,10 +95,10 @@ def estimate_nvr(stats: GroupStats, kind: str) -> NvrEstimate:
     flat = fit_flat(stats, kind).neg2_log_likelihood
     low, high = (math.log(value) for value in nvr_range(stats))
     # The same for every trial NVR: built once.
-    penalty = penalty_bands(stats.groups, kind)
+    dd_bands = penalty_bands(stats.groups, kind)
 
     def cost(log_nvr: float) -> float:
-        return fit_banded(stats, kind, math.exp(log_nvr), penalty=penalty).neg2_log_likelihood
+        return fit_banded(stats, kind, math.exp(log_nvr), dd_bands=dd_bands).neg2_log_likelihood
 
     scan = np.linspace(low, high, SCAN_POINTS)
     values = np.array([cost(float(x)) for x in scan])
