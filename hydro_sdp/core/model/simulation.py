@@ -26,6 +26,7 @@ import math
 
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import DataError
+from hydro_sdp.core.model.angle_recursion import integrate_angle_dependent
 from hydro_sdp.core.model.bounded_sum import bounded_cumsum
 from hydro_sdp.core.model.effects import (
     AngleDependentVelocity, Backlash, DirectionDependentDelay, FlowSharing, LoadDependence,
@@ -119,7 +120,7 @@ def integrate_speed(model: JointModel, speed: FloatArray, dt: float, y0: float,
     # starts e away from the angle read, and it is the actuator that meets the stops.
     initial = min(max(backlash_offset, -half), half)
     if gravity is not None or geometry is not None:
-        y = _integrate_angle_dependent(speed, dt, y0 - initial, low, high, gravity, geometry)
+        y = integrate_angle_dependent(speed, dt, y0 - initial, low, high, gravity, geometry)
     else:
         y = bounded_cumsum(y0 - initial, dt * speed[1:], low, high)
     if half > 0.0:
@@ -230,26 +231,6 @@ def _angle_effects(model: JointModel) -> AngleEffects:
     geometry = model.effect(StrokeGeometry.name)
     return (gravity if isinstance(gravity, AngleDependentVelocity) else None,
             geometry if isinstance(geometry, StrokeGeometry) else None)
-
-
-def _integrate_angle_dependent(speed: FloatArray, dt: float, y0: float, low: float,
-                               high: float, gravity: AngleDependentVelocity | None,
-                               geometry: StrokeGeometry | None) -> FloatArray:
-    # The speed depends on the angle just reached, so this recursion is inherently serial;
-    # JointSimulator.step does the same arithmetic in the same order.
-    y = np.empty(speed.size)
-    current = min(max(float(y0), low), high)
-    y[0] = current
-    amplitude = gravity.amplitude if gravity is not None else 0.0
-    phase = math.radians(gravity.phase) if gravity is not None else 0.0
-    for k, w in enumerate(speed[1:].tolist(), start=1):
-        if geometry is not None:
-            w *= geometry.factor_at(current, w)
-        if gravity is not None:
-            w += amplitude * abs(w) * math.cos(math.radians(current) + phase)
-        current = min(max(current + dt * w, low), high)
-        y[k] = current
-    return y
 
 
 class JointSimulator:

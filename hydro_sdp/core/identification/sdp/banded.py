@@ -34,7 +34,8 @@ from hydro_sdp.core.errors import DataError
 from hydro_sdp.core.identification.sdp.random_walk import (
     difference, GroupStats, order_of, STENCILS)
 import numpy as np
-from scipy.linalg import cho_solve_banded, cholesky_banded, LinAlgError
+from scipy.linalg import LinAlgError
+from scipy.linalg.lapack import dpbtrf, dpbtrs
 
 
 @dataclass(frozen=True, eq=False)
@@ -68,7 +69,7 @@ class BandedFit:
 
     def solve(self, moment: FloatArray) -> FloatArray:
         """Return ``A^{-1} moment`` (columns: several right-hand sides at once)."""
-        return np.asarray(cho_solve_banded((self.factor, True), moment, check_finite=False))
+        return banded_solve(self.factor, moment)
 
     def variance(self) -> FloatArray:
         """Return ``diag(A^{-1})``: the smoothed variances normalised by ``sigma^2``."""
@@ -77,6 +78,36 @@ class BandedFit:
     def standard_error(self) -> FloatArray:
         """Return the standard error of the smoothed parameter per group."""
         return np.sqrt(self.variance() * self.sigma2)
+
+
+def banded_factor(bands: FloatArray) -> FloatArray:
+    """
+    Return the lower banded Cholesky factor of ``bands`` (lower banded storage).
+
+    LAPACK's ``dpbtrf`` called directly: the numbers of ``scipy.linalg.cholesky_banded``
+    without its checks and dispatch, which cost more than the factorisation of these
+    short bands.
+
+    Raises
+    ------
+    LinAlgError
+        The matrix is not positive definite.
+
+    """
+    factor, info = dpbtrf(bands, lower=1)
+    if info > 0:
+        raise LinAlgError(f'{info}-th leading minor not positive definite')
+    if info < 0:
+        raise ValueError(f'illegal value in argument {-info} of dpbtrf')
+    return np.asarray(factor)
+
+
+def banded_solve(factor: FloatArray, rhs: FloatArray) -> FloatArray:
+    """Return ``A^{-1} rhs`` from the factor of :func:`banded_factor` (LAPACK ``dpbtrs``)."""
+    solution, info = dpbtrs(factor, rhs, lower=1)
+    if info != 0:
+        raise ValueError(f'illegal value in argument {-info} of dpbtrs')
+    return np.asarray(solution)
 
 
 def penalty_bands(groups: int, kind: str) -> FloatArray:
@@ -122,7 +153,7 @@ def _prior_bands(groups: int, kind: str, prior: float) -> FloatArray:
 
 
 def fit_banded(stats: GroupStats, kind: str, nvr: float, *,
-               prior: float | None = None) -> BandedFit:
+               prior: float | None = None, dd_bands: FloatArray | None = None) -> BandedFit:
     """
     Smooth the parameter at a given NVR by the banded normal equations.
 
@@ -136,6 +167,9 @@ def fit_banded(stats: GroupStats, kind: str, nvr: float, *,
         Noise variance ratio (> 0).
     prior : float or None
         Variance of the initial state normalised by ``sigma^2``; None: diffuse.
+    dd_bands : FloatArray or None
+        ``penalty_bands(stats.groups, kind)`` when the caller has it (a search over
+        the NVR builds it once); None: built here.
 
     Returns
     -------
@@ -149,16 +183,16 @@ def fit_banded(stats: GroupStats, kind: str, nvr: float, *,
         raise DataError(f'nvr must be a positive number, got {nvr}')
     if M <= d:
         raise DataError(f'{M} distinct state values: an {kind} walk needs more than {d}')
-    bands = penalty_bands(M, kind) / nvr
+    bands = (penalty_bands(M, kind) if dd_bands is None else dd_bands) / nvr
     bands[0] += stats.weight
     if prior is not None:
         bands = bands + _prior_bands(M, kind, prior)
     try:
-        factor = cholesky_banded(bands, lower=True, check_finite=False)
+        factor = banded_factor(bands)
     except LinAlgError:
         raise DataError('the regressor is zero at too many state values to smooth along '
                         'them') from None
-    estimate = np.asarray(cho_solve_banded((factor, True), stats.moment, check_finite=False))
+    estimate = banded_solve(factor, stats.moment)
     residual = stats.residual_sum(estimate)
     penalty = float(np.sum(difference(estimate, kind) ** 2)) / nvr
     if prior is not None:

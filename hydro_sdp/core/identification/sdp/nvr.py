@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import math
 
 from hydro_sdp.core.errors import DataError
-from hydro_sdp.core.identification.sdp.banded import fit_banded, fit_flat
+from hydro_sdp.core.identification.sdp.banded import fit_banded, fit_flat, penalty_bands
 from hydro_sdp.core.identification.sdp.random_walk import GroupStats
 import numpy as np
 from scipy.optimize import minimize_scalar
@@ -94,9 +94,11 @@ def estimate_nvr(stats: GroupStats, kind: str) -> NvrEstimate:
     """
     flat = fit_flat(stats, kind).neg2_log_likelihood
     low, high = (math.log(value) for value in nvr_range(stats))
+    # The same for every trial NVR: built once.
+    dd_bands = penalty_bands(stats.groups, kind)
 
     def cost(log_nvr: float) -> float:
-        return fit_banded(stats, kind, math.exp(log_nvr)).neg2_log_likelihood
+        return fit_banded(stats, kind, math.exp(log_nvr), dd_bands=dd_bands).neg2_log_likelihood
 
     scan = np.linspace(low, high, SCAN_POINTS)
     values = np.array([cost(float(x)) for x in scan])

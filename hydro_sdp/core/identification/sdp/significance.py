@@ -27,13 +27,14 @@ from dataclasses import dataclass
 import math
 
 from hydro_sdp.core.arrays import FloatArray
-from hydro_sdp.core.identification.sdp.banded import null_basis, penalty_bands
+from hydro_sdp.core.identification.sdp.banded import (
+    banded_factor, banded_solve, null_basis, penalty_bands)
 from hydro_sdp.core.identification.sdp.nvr import nvr_range
 from hydro_sdp.core.identification.sdp.ordering import coarsened, Ordering
 from hydro_sdp.core.identification.sdp.random_walk import GroupStats, inner, order_of
 import numpy as np
 from scipy import sparse
-from scipy.linalg import cho_solve_banded, cholesky_banded, LinAlgError
+from scipy.linalg import LinAlgError
 
 #: Autocorrelation below which residuals count as uncorrelated, for the block length.
 ACF_CUT = 0.1
@@ -114,7 +115,7 @@ class LikelihoodRatio:
             bands = penalty / nvr
             bands[0] += self.weight
             try:
-                factor = cholesky_banded(bands, lower=True, check_finite=False)
+                factor = banded_factor(bands)
             except LinAlgError:
                 continue
             log_det = 2.0 * float(np.sum(np.log(factor[0])))
@@ -151,7 +152,7 @@ class LikelihoodRatio:
         flat = self._neg2(flat_squares, self.flat_log_det)
         best = np.full(moment.shape[1], np.inf)
         for nvr, factor, extra in self.factors:
-            estimate = cho_solve_banded((factor, True), moment, check_finite=False)
+            estimate = banded_solve(factor, moment)
             squares = (total - 2.0 * np.sum(estimate * moment, axis=0)
                        + np.sum(self.weight[:, None] * estimate ** 2, axis=0)
                        + np.sum(np.diff(estimate, n=self.d, axis=0) ** 2, axis=0) / nvr)
