@@ -21,8 +21,9 @@ model drifts further over the run). Accepted candidates are ranked: those whose
 signature the data show which no other word explains (a stop held while driven beyond
 the dead-zone, a factor of the angle shared by both directions where the data name the
 angle) first, then those of the states the SDP analysis names (:mod:`.naming`), each
-group by the share of the windowed error it removes (docs/methods.md section 8.4). A word that holds an accepted simpler
-word as a special case (:data:`NESTED`) comes after it unless it removes clearly more.
+group by the share of the windowed error it removes (docs/methods.md section 8.4). A
+word that holds an accepted simpler word as a special case (:data:`NESTED`) comes after
+it unless it removes clearly more.
 
 """
 
