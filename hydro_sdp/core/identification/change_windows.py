@@ -85,7 +85,8 @@ class ChangeWindows:
         increments, firsts, lengths, earliest = [], [], [], []
         offset = 0
         self.max_delay = max_delay
-        # Where each experiment's windows lie, found by the experiment itself.
+        # Where each experiment's windows lie, by the experiment's id; the experiments are
+        # held, so that no other object takes one of these ids while the windows live.
         self._experiments = tuple(experiments)
         self._spans: dict[int, tuple[int, int]] = {}
         count = 0
@@ -153,9 +154,9 @@ class ChangeWindows:
             residuals bit for bit, made without computing a window twice.
 
         """
-        spans = [self._source._spans.get(id(e)) for e in experiments]
         if max_delay is not None and max_delay != self.max_delay:
             return ChangeWindows(experiments, max_delay)
+        spans = [self._source._spans.get(id(e)) for e in experiments]
         if any(span is None for span in spans):
             return ChangeWindows(experiments, self.max_delay)
         rows = np.concatenate([np.arange(*span) for span in spans if span is not None]
