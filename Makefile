@@ -11,19 +11,25 @@ DEMO_OUT ?= demo_output
 
 venv: $(STAMP)
 
+# Bytecode is compiled once, on every core (pip would compile on one), without the
+# libraries' own tests: where PYTHONDONTWRITEBYTECODE is set, a module without it
+# is compiled again at each import, in every process.
 $(STAMP): requirements.txt requirements-test.txt setup.py setup.cfg package.xml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --disable-pip-version-check --upgrade pip==25.3
-	$(BIN)/python -m pip install --quiet --disable-pip-version-check -r requirements-test.txt
+	$(BIN)/python -m pip install --quiet --disable-pip-version-check --no-compile -r requirements-test.txt
 	$(BIN)/python -m pip install --quiet --disable-pip-version-check --no-deps --no-build-isolation -e .
+	$(BIN)/python -m compileall -q -j 0 -x '/tests?/' $(VENV)/lib > /dev/null
 	touch $(STAMP)
 
 demo: $(STAMP)
 	$(BIN)/hydro-sdp demo --out $(DEMO_OUT)
 
 # The test workers (one more than there are cores, test/conftest.py) share the cores:
-# one BLAS thread each (more would mostly wait, as the console script knows).
+# one BLAS thread each (more would mostly wait, as the console script knows). The
+# package's bytecode first, for the same reason as the libraries'.
 test: $(STAMP)
+	$(BIN)/python -m compileall -q -j 0 hydro_sdp test > /dev/null
 	OPENBLAS_NUM_THREADS=1 $(BIN)/python -m pytest
 
 bench: $(STAMP)
