@@ -83,7 +83,9 @@ def save_figure(figure: Figure, path: str | os.PathLike[str], *, dpi: int = 130)
 
     """
     buffer = io.BytesIO()
-    figure.savefig(buffer, format='png', dpi=dpi)
+    # zlib's fastest level: a tenth larger, and the compression no longer costs a
+    # good part of the figure's time.
+    figure.savefig(buffer, format='png', dpi=dpi, pil_kwargs={'compress_level': 1})
     return atomic_write_bytes(path, buffer.getvalue())
 
 

@@ -191,8 +191,11 @@ def identify(records: Sequence[Record], *, method: FitMethod = 'rr', kind: KindC
     search = data if len(pieces.search) == len(pieces.every) else FitData(
         pieces.search, delay.samples, dt, delay.lag)
     step(IdentifyStage.MAP)
-    sdp_fit = fit_sdp(search, points, rest_command, method=method,
-                      polish=None if search is data else data)
+    # Eq. (5) by the method asked when it may be the answer; for another family asked
+    # for by name it is only a start (its dead-zone, its curvature): one regret fit.
+    answer = kind in ('auto', 'sdp')
+    sdp_fit = fit_sdp(search, points, rest_command, method=method if answer else 'rr',
+                      starts=4 if answer else 1, polish=None if search is data else data)
     chosen, comparison = _family(kind, pieces, delay, dt, rest_command, method, step)
     fit: MapFit[StaticMap] = sdp_fit if chosen == 'sdp' else fit_family(
         chosen, data, points, rest_command, method, sdp_fit.static_map)
