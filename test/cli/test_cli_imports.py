@@ -189,6 +189,16 @@ def test_identify_starts_without_scipy_signal_and_stats_and_stays_light():
     assert min(seconds for seconds, _ in runs) < 15.0 * min(numpy)
 
 
+def test_design_runs_without_scipy_signal(tmp_path):
+    # The noise gain of the IDZ band is a Gramian now; scipy.signal's import alone took
+    # longer than the whole design.
+    (run,) = _probe(['design', str(REPO / 'config' / 'physics_arm_model.yaml'),
+                     '--noise-std', '0.01', '--out', str(tmp_path / 'controller.yaml')],
+                    cwd=tmp_path)
+    assert run.code == 0 and (tmp_path / 'controller.yaml').is_file()
+    assert 'scipy.signal' not in run.modules
+
+
 def test_calibrate_and_diagnose_start_without_scipy_stats():
     # scipy.stats cost them 0.7 s at start-up for one chi-square tail probability.
     _, modules = _import_time('import hydro_sdp.cli.calibrate, hydro_sdp.cli.diagnose, '
