@@ -31,7 +31,8 @@ from hydro_sdp.core.errors import DataError, HydroSdpError
 from hydro_sdp.core.identification.delay import estimate_delay
 from hydro_sdp.core.identification.experiment import split_long, thin
 from hydro_sdp.core.identification.rest import estimate_rest_command
-from hydro_sdp.core.identification.sdp.backfit import Backfit, backfit, base_fit, Term
+from hydro_sdp.core.identification.sdp.backfit import (
+    Backfit, backfit, base_fit, Term, with_tests)
 from hydro_sdp.core.identification.sdp.ordering import MAX_GROUPS
 from hydro_sdp.core.identification.sdp.random_walk import order_of, TvpKind
 from hydro_sdp.core.identification.sdp.results import (
@@ -121,6 +122,11 @@ class _Setting:
         return backfit(z, terms, replicates=self.replicates, max_groups=self.max_groups,
                        seed=seed, segment=self.segment)
 
+    def tested(self, fit: Backfit, z: FloatArray, names: Sequence[str], seed: int) -> Backfit:
+        """Return ``fit`` (of ``z``, by :meth:`backfit` with ``seed``), ``names`` tested."""
+        return with_tests(fit, z, names, replicates=self.replicates, seed=seed,
+                          segment=self.segment)
+
 
 class _Target:
     """
@@ -143,9 +149,9 @@ class _Target:
         self.fixed = fixed
         self.gains = gains
 
-    def alone(self, state: FloatArray, setting: _Setting, seed: int, test: bool) -> Backfit:
-        """Back-fit the gains along one state."""
-        terms = self.fixed + [Term(name, x, state, setting.kind, test=test)
+    def alone(self, state: FloatArray, setting: _Setting, seed: int) -> Backfit:
+        """Back-fit the gains along one state, untested (:meth:`_Setting.tested`)."""
+        terms = self.fixed + [Term(name, x, state, setting.kind, test=False)
                               for name, x in self.gains]
         return setting.backfit(self.z, terms, seed)
 
@@ -197,11 +203,12 @@ def _two_stages(target: _Target, rows: Rows, names: Sequence[str], parameter: st
     alone: dict[str, Backfit] = {}
     for name in names:
         step(name)
-        alone[name] = target.alone(rows.state(name), setting, setting.seed, test=False)
+        alone[name] = target.alone(rows.state(name), setting, setting.seed)
         setting.alone[f'{prefix}{name}'] = sum(alone[name].term(g).share for g in gain_names)
     first = max(names, key=lambda name: sum(alone[name].term(g).share for g in gain_names))
     step(first)
-    fits[f'{prefix}{first}'] = target.alone(rows.state(first), setting, setting.seed, True)
+    # The first state's gains tested: the fit alone, weighed again (nothing refitted).
+    fits[f'{prefix}{first}'] = setting.tested(alone[first], target.z, gain_names, setting.seed)
     entries = _entries(fits[f'{prefix}{first}'], first, parameter, gain_names, None)
     for index, name in enumerate(names):
         if name == first:

@@ -16,7 +16,7 @@ bootstrap p-value of its dependence
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 import math
 from typing import Sequence
 
@@ -303,6 +303,41 @@ def backfit(z: FloatArray, terms: Sequence[Term], *, max_groups: int | None = MA
                       for i in range(len(terms)))
     return Backfit(estimates, fitted, inner(residual, residual), rss_base, base,
                    base_se, passes, converged)
+
+
+def with_tests(fit: Backfit, z: FloatArray, names: Sequence[str], *, replicates: int = 199,
+               seed: int = 0, segment: IntArray | None = None) -> Backfit:
+    """
+    Return a back-fit with the terms ``names`` tested, as if fitted with ``test=True``.
+
+    The back-fit does not depend on the tests (they only weigh the converged
+    terms), so the terms named are weighed again, with the seeds :func:`backfit`
+    gives them, and nothing is fitted twice.
+
+    Parameters
+    ----------
+    fit : Backfit
+        A back-fit of ``z`` made with ``replicates``, ``seed`` and ``segment``.
+    z : FloatArray
+        Its observations.
+    names : sequence of str
+        The terms to test.
+    replicates, seed, segment
+        As :func:`backfit` was given them.
+
+    Returns
+    -------
+    Backfit
+        The same fit, those terms with their p-values.
+
+    """
+    residual = np.asarray(z, dtype=np.float64) - fit.fitted
+    terms = tuple(
+        _weigh(residual, np.asarray(e.term.regressor, dtype=np.float64),
+               replace(e.term, test=True), e.ordering, e.smoothed, e.parameter,
+               fit.base_residual_sum, replicates, seed + i, segment)
+        if e.term.name in names else e for i, e in enumerate(fit.terms))
+    return replace(fit, terms=terms)
 
 
 def _weigh(residual: FloatArray, x: FloatArray, term: Term, ordering: Ordering,
