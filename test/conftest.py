@@ -7,6 +7,7 @@ from pathlib import Path
 from hydro_sdp.io.model_files import default_model_path, load_model
 import numpy as np
 import pytest
+from support.figures import figures_not_drawn as not_drawn
 
 REPO = Path(__file__).resolve().parent.parent
 # Real rosbag2 bags (rosbag2's own test resources) live beside the repository, not in it;
@@ -57,3 +58,15 @@ def rng():
 def j2():
     """Load the shipped BROKK J2 model."""
     return load_model(default_model_path())
+
+
+@pytest.fixture(scope='module')
+def figures_not_drawn():
+    """
+    Write the module's figures as blank PNGs (``support.figures``).
+
+    For modules that test what commands compute: ``pytestmark =
+    pytest.mark.usefixtures('figures_not_drawn')`` sets it up before their other fixtures.
+    """
+    with not_drawn():
+        yield

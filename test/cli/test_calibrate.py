@@ -32,6 +32,8 @@ from hydro_sdp.report import calibration as report_calibration
 import numpy as np
 import pytest
 
+pytestmark = [pytest.mark.usefixtures('figures_not_drawn')]
+
 #: The hidden valve lag of the "measured" joint, s.
 LAG = 0.12
 

@@ -37,6 +37,8 @@ import pytest
 from support.independent_loop import FileController, judge, run_loop
 from support.real_valve_joints import ESTIMATION, PhysicsJoint, VALIDATION
 
+pytestmark = [pytest.mark.usefixtures('figures_not_drawn')]
+
 DT = 0.01
 #: Set-points, degrees: steps of 20 to 30 deg across the arm's stroke (-45..40 deg).
 LEVELS = (-20.0, 10.0, 30.0, 0.0, -30.0, -10.0)

@@ -15,6 +15,8 @@ import numpy as np
 import pytest
 from rosbags.rosbag2 import Writer
 
+pytestmark = [pytest.mark.usefixtures('figures_not_drawn')]
+
 
 def run(capsys, *argv):
     code = main(list(argv))

@@ -20,7 +20,7 @@ import pytest
 from support.cli_runs import run_json
 from support.plant_levels import plant_levels
 
-pytestmark = [pytest.mark.slow]
+pytestmark = [pytest.mark.slow, pytest.mark.usefixtures('figures_not_drawn')]
 
 DT = 0.01
 SIGNALS = """\

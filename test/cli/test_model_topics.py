@@ -13,6 +13,8 @@ import numpy as np
 import pytest
 from support.cli_runs import json_result
 
+pytestmark = [pytest.mark.usefixtures('figures_not_drawn')]
+
 TOPIC = '/boom/pwm'
 
 

@@ -23,6 +23,8 @@ import pytest
 from support.recorded_stamps import (
     asynchronous_commands, EPOCH, program_of_samples, write_recorded_bag)
 
+pytestmark = [pytest.mark.usefixtures('figures_not_drawn')]
+
 DT = 0.01
 NOISE = 0.02
 

@@ -23,6 +23,8 @@ from hydro_sdp.io.logs.csv_logs import read_csv_log
 import pytest
 from support.real_valve_joints import cases, cycles, SETTLE, settles, truth_loop
 
+pytestmark = [pytest.mark.usefixtures('figures_not_drawn')]
+
 
 def read_logs(paths, options):
     """Read CSV logs with the command line's options (``--joint arm --time t ...``)."""

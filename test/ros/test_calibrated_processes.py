@@ -24,7 +24,7 @@ import pytest
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64
 
-pytestmark = [pytest.mark.ros, pytest.mark.slow]
+pytestmark = [pytest.mark.ros, pytest.mark.slow, pytest.mark.usefixtures('figures_not_drawn')]
 
 SETPOINT = 20.0        # deg, from the plant's start at 0 deg
 BAND = 0.5             # deg

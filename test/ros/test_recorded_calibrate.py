@@ -21,7 +21,7 @@ from outside import Processes
 import pytest
 from std_msgs.msg import Float64
 
-pytestmark = [pytest.mark.ros, pytest.mark.slow]
+pytestmark = [pytest.mark.ros, pytest.mark.slow, pytest.mark.usefixtures('figures_not_drawn')]
 
 #: Steps from rest, volts, each held HOLD s (up) or HOLD_DOWN s (down), then REST s at rest.
 LEVELS = (2.0, -2.0, 3.0, -3.0, 1.6, -1.6, 5.0, -5.0, 2.5, -2.5, 1.8, -1.8)

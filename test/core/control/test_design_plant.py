@@ -14,12 +14,17 @@ from hydro_sdp.core.model.static_maps import LinearMap
 import numpy as np
 import pytest
 
-control = pytest.importorskip('control')
+
+@pytest.fixture(scope='module')
+def control():
+    """Return python-control, imported by the worker that runs this module only (2 s)."""
+    return pytest.importorskip('control')
 
 
 @pytest.mark.parametrize('time_constant, period', [(0.12, 0.05), (0.3, 0.05), (0.05, 0.1),
                                                    (0.02, 0.05)])
-def test_the_lagged_integrator_is_python_controls_zero_order_hold(time_constant, period):
+def test_the_lagged_integrator_is_python_controls_zero_order_hold(
+        control, time_constant, period):
     # u in degrees per control sample asks for u / T deg/s through the lag 1 / (T_v s + 1).
     continuous = control.tf([1.0 / period], [time_constant, 1.0, 0.0])
     discrete = control.c2d(continuous, period, method='zoh')
@@ -67,7 +72,7 @@ def test_the_plant_matches_the_model_simulated_finely():
 
 
 @pytest.mark.parametrize('delay', [1, 3, 8])
-def test_pole_assignment_on_the_lagged_plant_places_the_poles(delay):
+def test_pole_assignment_on_the_lagged_plant_places_the_poles(control, delay):
     plant = lagged_integrator(delay, 0.15, 0.05)
     poles = completed_poles(plant, [0.93 + 0.04j, 0.93 - 0.04j])
     assert len(poles) == plant.n + plant.m and poles[2] == pytest.approx(np.exp(-0.05 / 0.15))
@@ -82,7 +87,7 @@ def test_pole_assignment_on_the_lagged_plant_places_the_poles(delay):
 
 
 @pytest.mark.parametrize('delay, lag', [(3, 0.12), (8, 0.12), (9, 0.065), (2, 0.4)])
-def test_lq_on_the_lagged_plant_is_python_controls_dlqr(delay, lag):
+def test_lq_on_the_lagged_plant_is_python_controls_dlqr(control, delay, lag):
     plant = lagged_integrator(delay, lag, 0.05)
     weights = LqWeights()
     gains = lq_design(plant, weights)

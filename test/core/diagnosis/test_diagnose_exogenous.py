@@ -24,7 +24,7 @@ from support.diagnosis_grid import hide
 from support.joint_generator import record
 from support.plant_levels import plant_levels
 
-pytestmark = [pytest.mark.slow]
+pytestmark = [pytest.mark.slow, pytest.mark.usefixtures('figures_not_drawn')]
 
 DT = 0.01
 DUTIES = (55, 75, 100)

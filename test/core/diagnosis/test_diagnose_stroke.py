@@ -14,6 +14,8 @@ import numpy as np
 import pytest
 from support.diagnosis_grid import make_case, run_case
 
+pytestmark = [pytest.mark.usefixtures('figures_not_drawn')]
+
 
 def context_of(case):
     return Context(case.model, runs_of(case.estimation, 0.5), 50)

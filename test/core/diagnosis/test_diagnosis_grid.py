@@ -12,6 +12,8 @@ import pytest
 from support.diagnosis_grid import make_case, run_case
 from support.grid_results import confusion_table, GridResult
 
+pytestmark = [pytest.mark.usefixtures('figures_not_drawn')]
+
 
 def test_validation_mae_is_the_per_record_mean_of_evaluate():
     case = make_case('none', 'random', 'volt', 0, seconds=30.0)
