@@ -11,15 +11,21 @@ DEMO_OUT ?= demo_output
 
 venv: $(STAMP)
 
-# Bytecode is compiled once, on every core (pip would compile on one), without the
-# libraries' own tests: where PYTHONDONTWRITEBYTECODE is set, a module without it
-# is compiled again at each import, in every process.
+# pip comes from the interpreter's own pip where it can install into another environment
+# (pip >= 22.3): the venv's ensurepip would install and compile one pip only for it to be
+# replaced (9 s against 2 s); ensurepip otherwise. Bytecode is compiled once, on every core
+# (pip would compile on one), without the libraries' own tests and the installers: where
+# PYTHONDONTWRITEBYTECODE is set, a module without it is compiled again at each import,
+# in every process.
 $(STAMP): requirements.txt requirements-test.txt setup.py setup.cfg package.xml
-	$(PYTHON) -m venv $(VENV)
-	$(BIN)/python -m pip install --quiet --disable-pip-version-check --upgrade pip==25.3
+	$(PYTHON) -m venv --without-pip $(VENV)
+	$(PYTHON) -m pip --python $(BIN)/python install --quiet --disable-pip-version-check \
+		--no-compile pip==25.3 || { $(BIN)/python -m ensurepip --default-pip > /dev/null && \
+		$(BIN)/python -m pip install --quiet --disable-pip-version-check --upgrade pip==25.3; }
 	$(BIN)/python -m pip install --quiet --disable-pip-version-check --no-compile -r requirements-test.txt
 	$(BIN)/python -m pip install --quiet --disable-pip-version-check --no-deps --no-build-isolation -e .
-	$(BIN)/python -m compileall -q -j 0 -x '/tests?/' $(VENV)/lib > /dev/null
+	$(BIN)/python -m compileall -q -j 0 -x '/tests?/|/site-packages/(pip|setuptools)/' \
+		$(VENV)/lib > /dev/null
 	touch $(STAMP)
 
 demo: $(STAMP)
