@@ -34,8 +34,10 @@ from support.doc_blocks import Block, blocks, commands
 from support.your_machine import write_your_machine
 import yaml
 
-# The longest module of the suite, one chain of pages: started first.
-pytestmark = [pytest.mark.slow(120)]
+# The longest module of the suite, one chain of pages: started first. The commands' figures
+# are written as blank PNGs (support.figures): drawing them is what the tests of
+# test/plots and test/report, the demo's and test_cli_says_what_it_wrote are for.
+pytestmark = [pytest.mark.slow(120), pytest.mark.usefixtures('figures_not_drawn')]
 
 #: The pages, in the order a newcomer reads them (each may use what those before it made).
 PAGES = ['README.md'] + [f'docs/guide/{name}.md' for name in (

@@ -1,13 +1,18 @@
 """The discrepancy report draws what the diagnosis carries; the demo and the CLI share it."""
 
+from pathlib import Path
+
 from hydro_sdp.core.diagnosis import diagnose, runs_of
 from hydro_sdp.core.diagnosis.detectors.base import feature_signature
+from hydro_sdp.core.diagnosis.results import Candidate
 from hydro_sdp.core.model.effects import ValveLag
 from hydro_sdp.core.synthetic.joint_experiments import experiment_record
 from hydro_sdp.io.model_files import load_model
-from hydro_sdp.plots import plot_signature
+from hydro_sdp.plots import plot_signature, save_figure
+from hydro_sdp.plots.diagnosis import plot_record_scales
 from hydro_sdp.report.diagnosis import write_report
 import numpy as np
+from PIL import Image
 
 
 def test_a_report_without_an_effect_has_no_signature_but_its_candidates(tmp_path, j2):
@@ -47,3 +52,23 @@ def test_the_signature_figure_shows_the_features_of_the_signature(j2):
             assert rows
         else:
             assert 0 < len(before) <= 30
+
+
+def test_every_figure_of_a_named_effect_is_drawn_whole(tmp_path, j2):
+    # Drawn here for real: the tests of what commands compute write them as blank PNGs
+    # (support.figures), the docs examples too.
+    lagged = j2.with_effect(ValveLag(0.12))
+    records = [experiment_record(lagged, 'random', seed=seed, duration=20.0) for seed in (1, 2)]
+    result = diagnose(records[:1], j2, validation=records[1:], max_iterations=1)
+    assert result.effect == 'valve_lag' and result.evidence is not None
+    pngs = [Path(path) for path in write_report(tmp_path / 'report', result)
+            if path.endswith('.png')]
+    scales = Candidate('load_dependence', True, parameters={
+        'scales_positive': [1.0, 0.8, None], 'errors_positive': [0.02, 0.03, None],
+        'scales_negative': [1.1, 1.0, 0.9], 'errors_negative': [0.02, 0.02, 0.04]})
+    pngs.append(save_figure(plot_record_scales(scales), tmp_path / 'record_scales.png'))
+    assert {png.name for png in pngs} == {'gap.png', 'signature.png', 'evidence.png',
+                                          'ledger.png', 'candidates.png', 'record_scales.png'}
+    for png in pngs:
+        with Image.open(png) as image:
+            assert min(image.size) > 300, png.name
