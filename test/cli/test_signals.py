@@ -15,10 +15,10 @@ import numpy as np
 import pytest
 import yaml
 
-# The console script's code, run with this interpreter (installed or not), started as a
-# shell starts it: Ctrl-C acted on. A test worker may hold SIGINT ignored or blocked (nodes
-# run in it before), and a child inherits both: the command would never see the signal and
-# run to its end.
+# The console script's code, run with this interpreter (installed or not), started as an
+# interactive shell starts it: Ctrl-C acted on. A suite started as a background job of a
+# non-interactive shell holds SIGINT ignored (POSIX), and a child inherits that (a blocked
+# SIGINT too): the command would never see the signal and run to its end.
 COMMAND = [sys.executable, '-c',
            'import signal; signal.signal(signal.SIGINT, signal.default_int_handler); '
            'signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT}); '

@@ -2,9 +2,9 @@
 Figures written as a blank PNG, for tests of what a command computes rather than of what it draws.
 
 Drawing is most of a report's time (layout, ticks, text: about 0.6 s of CPU a figure).
-The figures themselves are checked where they are the subject: ``test/plots``, the
-report tests, the demo, ``test_cli_says_what_it_wrote`` and the docs examples, which
-draw every figure the guide's commands make.
+The figures are drawn where they are the subject: ``test/plots``, the report tests (every
+diagnosis figure, opened whole), ``test_sdp_cli``, the demo's test and
+``test_cli_says_what_it_wrote``.
 """
 
 from __future__ import annotations
