@@ -5,6 +5,7 @@ from pathlib import Path
 import signal
 import subprocess
 import sys
+import threading
 import time
 
 from conftest import REPO
@@ -145,14 +146,20 @@ def test_sigint_while_the_demo_identifies(tmp_path):
 def test_sigint_while_the_demos_nodes_run(tmp_path):
     # Ctrl-C while rclpy's nodes run in the process (the wear scenario has begun).
     process = _start(['demo', '--short', '--out', 'report'], tmp_path)
+    # A demo that hangs silently is killed: its stderr then ends and the test fails.
+    watchdog = threading.Timer(120.0, process.kill)
+    watchdog.start()
     seen = []
-    for line in process.stderr:
-        seen.append(line)
-        if NODES_RUNNING in line:
-            break
-    else:
-        process.wait(timeout=120)
-        pytest.fail('the demo ended without its nodes logging the wear: ' + ''.join(seen))
+    try:
+        for line in process.stderr:
+            seen.append(line)
+            if NODES_RUNNING in line:
+                break
+        else:
+            process.wait(timeout=120)
+            pytest.fail('the demo ended without its nodes logging the wear: ' + ''.join(seen))
+    finally:
+        watchdog.cancel()
     process.send_signal(signal.SIGINT)
     _, rest = process.communicate(timeout=120)
     stderr = ''.join(seen) + rest
