@@ -21,7 +21,8 @@ model drifts further over the run). Accepted candidates are ranked: those whose
 signature the data show which no other word explains (a stop held while driven beyond
 the dead-zone, a factor of the angle shared by both directions where the data name the
 angle) first, then those of the states the SDP analysis names (:mod:`.naming`), each
-group by the share of the windowed error it removes (docs/methods.md section 8.4). A
+group by the share of the windowed error it removes, all of them over the same samples
+(:func:`on_common_samples`; docs/methods.md section 8.4). A
 word that holds an accepted simpler word as a special case (:data:`NESTED`) comes after
 it unless it removes clearly more.
 
@@ -124,6 +125,49 @@ def judge(trial: Trial, model: JointModel, checks: Sequence[Run], base: Sequence
                    significant=reduction.significant, held_out=held, window_before=before,
                    window_after=after, accepted=accepted, state=state, named_by_data=named,
                    evidence=evidence)
+
+
+def on_common_samples(judged: Sequence[tuple[Candidate, JointModel | None]],
+                      model: JointModel, errors: WindowErrors
+                      ) -> list[tuple[Candidate, JointModel | None]]:
+    """
+    Return the judged candidates with the accepted ones' windowed errors over the same samples.
+
+    Each candidate is judged against the model over the samples where neither depends on
+    what came before the record; a lag's candidate starts later than a delay's. Ranked
+    by shares taken over different samples, a delay could win over a lag only because
+    its share counted the first seconds, where both do little. The accepted candidates
+    are therefore compared again, all of them and the model over the samples where none
+    of them depends on the past.
+
+    Parameters
+    ----------
+    judged : sequence of (Candidate, JointModel or None)
+        Candidates judged on the runs of ``errors``, with their augmented models.
+    model : JointModel
+        The model under test.
+    errors : WindowErrors
+        The simulation errors on the held-out runs.
+
+    Returns
+    -------
+    list of (Candidate, JointModel or None)
+        ``judged``, the accepted candidates' held-out share and windowed errors now
+        over the samples they share.
+
+    """
+    accepted = {i: augmented for i, (candidate, augmented) in enumerate(judged)
+                if candidate.accepted and augmented is not None}
+    if len(accepted) < 2:
+        return list(judged)
+    before, *after = errors.compare([model, *accepted.values()])
+    alike = list(judged)
+    for i, error in zip(accepted, after):
+        candidate, augmented = alike[i]
+        held = 1.0 - error / before if before > 0.0 else 0.0
+        alike[i] = (replace(candidate, held_out=held, window_before=before,
+                            window_after=error), augmented)
+    return alike
 
 
 def _direction_agrees(word: str, naming: Naming) -> bool:

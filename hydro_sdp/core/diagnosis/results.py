@@ -44,7 +44,8 @@ class Candidate:
     p_value : float
         Block-bootstrap p-value of the reduction.
     held_out : float
-        Share of the windowed simulation error on the held-out runs it removes.
+        Share of the windowed simulation error on the held-out runs it removes; once
+        accepted, over the samples all accepted candidates share (what they rank by).
     window_before, window_after : float
         That error of the model under test and with the effect, degrees.
     accepted : bool

@@ -17,7 +17,7 @@ from dataclasses import replace
 from typing import Callable, Sequence
 
 from hydro_sdp.core.diagnosis.context import Context
-from hydro_sdp.core.diagnosis.decision import judge, rank
+from hydro_sdp.core.diagnosis.decision import judge, on_common_samples, rank
 from hydro_sdp.core.diagnosis.detectors import detector, DETECTORS
 from hydro_sdp.core.diagnosis.held_out import WindowErrors
 from hydro_sdp.core.diagnosis.naming import name_states, Naming
@@ -98,6 +98,8 @@ def _round(context: Context, checks: Sequence[Run], progress: Callable[[str], No
     block = bootstrap_block(base, max(2, int(round(BLOCK_SECONDS / checks[0].dt))))
     errors = WindowErrors(checks)
     judged: list[tuple[Candidate, JointModel | None]] = []
+    # Judged on the estimation runs (the records' own factors): compared apart.
+    on_own: list[tuple[Candidate, JointModel | None]] = []
     for each in DETECTORS:
         if progress is not None:
             progress(each.word)
@@ -118,13 +120,14 @@ def _round(context: Context, checks: Sequence[Run], progress: Callable[[str], No
             # Factors of the records themselves hold for no other record: judged on those;
             # the records' scales differing beyond their noise is what names the word.
             own = velocity_residuals(context.model, context.runs)
-            judged.append((replace(judge(trial, context.model, context.runs, own, block,
+            on_own.append((replace(judge(trial, context.model, context.runs, own, block,
                                          context.naming, each.state,
                                          WindowErrors(context.runs)), named_by_data=True),
                            trial[1]))
             continue
         judged.append((judge(trial, context.model, checks, base, block, context.naming,
                              each.state, errors), trial[1]))
+    judged = on_common_samples(judged, context.model, errors) + on_own
     models = {id(candidate): model for candidate, model in judged}
     ranked = rank([candidate for candidate, _ in judged], context.naming)
     return [(candidate, models[id(candidate)]) for candidate in ranked]

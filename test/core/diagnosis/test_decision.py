@@ -1,0 +1,42 @@
+"""The decision compares the accepted candidates over the samples they share."""
+
+from dataclasses import replace
+
+from hydro_sdp.core.diagnosis.decision import on_common_samples
+from hydro_sdp.core.diagnosis.held_out import WindowErrors
+from hydro_sdp.core.diagnosis.residuals import runs_of
+from hydro_sdp.core.diagnosis.results import Candidate
+from hydro_sdp.core.model.effects import ValveLag
+from hydro_sdp.core.model.joint_model import JointModel
+import numpy as np
+import pytest
+from support.diagnosis_grid import hide, records_of
+
+
+def test_accepted_candidates_are_compared_over_the_same_samples():
+    rng = np.random.default_rng(4)
+    truth, _ = hide('valve_lag', rng, 'volt')
+    model = JointModel.from_mapping({**truth.mapping, 'effects': {}})
+    runs = runs_of(records_of(truth, 'random', rng, seconds=20.0, count=1), 0.5)
+    # A lag's candidate is compared from later than a delay's: its state forgets the
+    # record's start only after a few time constants.
+    lagged = model.with_effect(ValveLag(0.3))
+    later = replace(model, delay=model.delay + 0.05)
+    judged = [(Candidate('valve_lag', True, 0.3, 5.0, True, held_out=0.4, accepted=True),
+               lagged),
+              (Candidate('time_delay', True, 0.2, 4.0, True, held_out=0.5, accepted=True),
+               later),
+              (Candidate('backlash', True, 0.1, 1.0, False, held_out=0.7), model)]
+    pairwise = WindowErrors(runs).compare([model, later])
+    errors = WindowErrors(runs)
+    alike = on_common_samples(judged, model, errors)
+    before, lag_after, delay_after = errors.compare([model, lagged, later])
+    (lag, _), (delay, _), (rejected, _) = alike
+    assert lag.window_before == delay.window_before == before
+    assert (lag.window_after, delay.window_after) == (lag_after, delay_after)
+    assert lag.held_out == pytest.approx(1.0 - lag_after / before)
+    assert delay.held_out == pytest.approx(1.0 - delay_after / before)
+    # The delay's own comparison started earlier, over samples the lag's leaves out.
+    assert pairwise[0] != pytest.approx(before)
+    # Candidates not accepted keep what their own judgement found.
+    assert rejected is judged[2][0]
