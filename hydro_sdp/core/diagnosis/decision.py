@@ -135,10 +135,10 @@ def on_common_samples(judged: Sequence[tuple[Candidate, JointModel | None]],
 
     Each candidate is judged against the model over the samples where neither depends on
     what came before the record; a lag's candidate starts later than a delay's. Ranked
-    by shares taken over different samples, a delay could win over a lag only because
-    its share counted the first seconds, where both do little. The accepted candidates
-    are therefore compared again, all of them and the model over the samples where none
-    of them depends on the past.
+    by shares taken over different samples, a delay could win over a lag by what it
+    mends in the first samples, which the lag's comparison leaves out. The accepted
+    candidates are therefore compared again, all of them and the model over the samples
+    where none of them depends on the past.
 
     Parameters
     ----------
