@@ -46,6 +46,10 @@ its spool lag 1.49 and 1.40 deg (the lag, named, refitted to 1.06 and 1.08 deg: 
 without its linkage factor 1.30 and 1.35 deg. A word whose removal does not raise the
 validation MAE at all (the random levels' sides: the model with them drifts further, 8.06
 against 5.84 deg on the arm) hides nothing the runs can show: no case is made of it.
+``flow_sharing``'s floor is the model's own error on the program's validation runs with
+the other joint still: measured against zero, the model's error where the partner does
+nothing counted as a gap no pump word can close (the arm's strokes: 1.06 deg of the
+1.80). A partner that costs the model nothing on the validation runs makes no case.
 
 The diagnosis strokes run at five duties each way, from 40 % (:data:`DUTIES`), as many as
 the model was identified from and more: a ``power_sat`` side has four parameters (its
@@ -133,8 +137,9 @@ class PlantCase:
     estimation, validation : tuple of Record
         Plant records.
     floor : float
-        Validation MAE of the model the word was removed from, degrees (0 for the words
-        never excited while identifying, and ``none``).
+        Validation MAE of the model the word was removed from, degrees; for
+        ``flow_sharing`` the model's on the same program with the other joint still; 0
+        for ``load_dependence`` and ``none``.
 
     """
 
@@ -307,14 +312,22 @@ def _without(word: str, found: Identified, rng: np.random.Generator) -> JointMod
 
 
 def _exogenous(word: str, joint: str, units: str, program: str, seed: int, seconds: float
-               ) -> tuple[JointModel, list[Record], list[Record]] | None:
-    """Return the model and the runs of ``flow_sharing`` and ``load_dependence``."""
+               ) -> tuple[JointModel, list[Record], list[Record], float] | None:
+    """Return the model, the runs and the floor of ``flow_sharing`` and ``load_dependence``."""
     if word == 'flow_sharing':
         # The same draws: the joint of identified(), with the other on its pump.
+        found = identified(joint, units, program, seed, seconds)
         shared = variant(joint, units, _rng(joint, units, program, seed, 0), partner=True)
-        return (identified(joint, units, program, seed, seconds).power_sat,
+        # The floor: the model's own error on the program's validation runs with the
+        # other joint still, what no word of the pump's share can remove.
+        alone = _runs(found.machine, program, seed + 500, 'validate', seconds=seconds)
+        validation = _runs(shared, program, seed + 500, 'validate', seconds=seconds)
+        floor = mae(found.power_sat, runs_of(alone, MAX_DELAY, settle=0.0))
+        if floor >= mae(found.power_sat, runs_of(validation, MAX_DELAY, settle=0.0)):
+            return None  # The other joint costs the model nothing the runs show.
+        return (found.power_sat,
                 _runs(shared, program, seed + 500, 'estimate', seconds=seconds),
-                _runs(shared, program, seed + 500, 'validate', seconds=seconds))
+                validation, floor)
     if joint != 'boom':
         return None  # The arm's compensated valve holds its speed under any payload.
     machine = variant(joint, units, _rng(joint, units, program, seed, 1), power=True)
@@ -328,7 +341,7 @@ def _exogenous(word: str, joint: str, units: str, program: str, seed: int, secon
         for part, out in (('estimate', estimation), ('validate', validation)):
             out += [replace(r, source=f'{payload:g} kg {r.source}') for r in _runs(
                 loaded, program, seed + int(payload), part, seconds=seconds, pressure=True)]
-    return model, estimation, validation
+    return model, estimation, validation, 0.0
 
 
 def make_case(word: str, program: str, joint: str, units: str, seed: int, *,
@@ -361,9 +374,9 @@ def make_case(word: str, program: str, joint: str, units: str, seed: int, *,
         made = _exogenous(word, joint, units, program, seed, seconds)
         if made is None:
             return None
-        model, estimation, validation = made
+        model, estimation, validation, floor = made
         return PlantCase(word, program, joint, units, model, tuple(estimation),
-                         tuple(validation))
+                         tuple(validation), floor)
     if word == 'angle_limits' and program == 'random':
         return None
     found = identified(joint, units, program, seed, seconds)
