@@ -13,7 +13,8 @@ full strokes), ``seeds`` draws each (default 1). Prints the
 confusion table (hidden word against the first word named), the cases gone wrong,
 the cases identify left nothing to remove from, and the shares right (the right word
 first and the gap halved, the gap being the validation MAE above that of the model the
-word was removed from; 30 % for ``load_dependence``; ``none`` for every model identified
+word was removed from, for ``flow_sharing`` above the model's own with the other joint
+still; 30 % for ``load_dependence``; ``none`` for every model identified
 on the same kind of runs), and the share with the gap taken as the whole MAE.
 
 """
