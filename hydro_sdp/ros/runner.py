@@ -21,6 +21,7 @@ executor never waits longer than :data:`WAKE_PERIOD` before it looks again.
 
 from __future__ import annotations
 
+import faulthandler
 import signal
 import sys
 from types import FrameType
@@ -80,7 +81,8 @@ def run_node(node_cls: Callable[[], Node], args: list[str] | None = None) -> Non
 
     A configuration error (a bad parameter or file) ends the process with one
     line on stderr and exit code 2, not a traceback. SIGINT and SIGTERM end it
-    with code 0 within about :data:`WAKE_PERIOD` (plus the node's own clean-up).
+    with code 0 within about :data:`WAKE_PERIOD` (plus the node's own clean-up). A
+    crash in compiled code prints every thread's Python stack (:mod:`faulthandler`).
 
     Parameters
     ----------
@@ -90,6 +92,10 @@ def run_node(node_cls: Callable[[], Node], args: list[str] | None = None) -> Non
         Command-line arguments (``--ros-args`` included) passed to ``rclpy.init``.
 
     """
+    # A crash in compiled code (rclpy, the middleware) prints where every thread was, the
+    # first thing a bug report needs, instead of ending the process without a word.
+    if not faulthandler.is_enabled():
+        faulthandler.enable(all_threads=True)
     stop = _Stop()
     # Installed before rclpy.init, whose own handlers call the ones they replace.
     previous: dict[int, SignalHandler] = {

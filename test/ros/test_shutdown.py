@@ -158,3 +158,26 @@ def test_sigint_while_a_node_loads_prints_no_traceback(delay):
         pytest.fail(f'plant_node did not end within {EXIT_LIMIT} s of SIGINT')
     assert b'Traceback' not in output, output.decode(errors='replace')
     assert process.returncode in (0, 130)
+
+
+def test_a_crash_in_a_node_prints_where_its_threads_were(graph):
+    # A segfault in compiled code (seen once: plant_node on SIGTERM) is reported with every
+    # thread's Python stack, for the bug report, not as a bare exit status.
+    environment, watcher, _ = graph
+    process = subprocess.Popen(
+        [_script('plant_node'), '--ros-args', '-r', '__node:=crash_probe'], env=environment,
+        stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    try:
+        deadline = time.monotonic() + 30.0
+        while 'crash_probe' not in watcher.get_node_names():
+            assert time.monotonic() < deadline and process.poll() is None, 'not up'
+            time.sleep(0.05)
+        process.send_signal(signal.SIGSEGV)
+        _, errors = process.communicate(timeout=EXIT_LIMIT)
+    finally:
+        if process.poll() is None:
+            process.kill()
+            process.wait()
+    assert process.returncode == -signal.SIGSEGV
+    assert 'Fatal Python error: Segmentation fault' in errors, errors
+    assert 'in run_node' in errors, errors
