@@ -132,14 +132,18 @@ def test_sigint_during_simulate(tmp_path, delay):
         assert not bag.exists()
 
 
+def _check_demo_cut_short(code, stderr, folder):
+    """Check that Ctrl-C ended the demo (130): each file it wrote whole, the summary (last) not."""
+    _check_interrupted(code, stderr)
+    assert code == 130, stderr
+    assert _leftovers(folder) == [] and not (folder / 'report' / 'summary.md').exists()
+
+
 @pytest.mark.slow
 def test_sigint_while_the_demo_identifies(tmp_path):
     # 3 s in: the demo (15 s of CPU) is simulating and identifying, far from its end.
     code, stderr = _interrupt(['demo', '--short', '--out', 'report'], 3.0, tmp_path)
-    _check_interrupted(code, stderr)
-    assert code == 130, stderr
-    # Each file the demo wrote is whole; the summary, written last, is not there.
-    assert _leftovers(tmp_path) == [] and not (tmp_path / 'report' / 'summary.md').exists()
+    _check_demo_cut_short(code, stderr, tmp_path)
 
 
 @pytest.mark.slow
@@ -162,11 +166,7 @@ def test_sigint_while_the_demos_nodes_run(tmp_path):
         watchdog.cancel()
     process.send_signal(signal.SIGINT)
     _, rest = process.communicate(timeout=120)
-    stderr = ''.join(seen) + rest
-    _check_interrupted(process.returncode, stderr)
-    assert process.returncode == 130, stderr
-    # Each file the demo wrote is whole; the summary, written last, is not there.
-    assert _leftovers(tmp_path) == [] and not (tmp_path / 'report' / 'summary.md').exists()
+    _check_demo_cut_short(process.returncode, ''.join(seen) + rest, tmp_path)
 
 
 def test_a_ctrl_c_that_an_extension_turns_into_another_error_still_exits_130(

@@ -79,6 +79,16 @@ def _arguments(script, output):
     return []
 
 
+def _wait_in_graph(watcher, names, processes):
+    """Wait until every node of ``names`` is in the graph, the ``processes`` all running."""
+    deadline = time.monotonic() + 30.0
+    while not names <= set(watcher.get_node_names()):
+        assert time.monotonic() < deadline, 'the nodes did not come up'
+        assert all(p.poll() is None for p in processes.values()), \
+            {s: p.stderr.read() for s, p in processes.items() if p.poll() is not None}
+        time.sleep(0.05)
+
+
 @pytest.mark.parametrize('moment, delay, signum', ROUNDS)
 def test_a_signal_stops_every_node_cleanly(graph, moment, delay, signum):
     environment, watcher, bag = graph
@@ -88,12 +98,7 @@ def test_a_signal_stops_every_node_cleanly(graph, moment, delay, signum):
         stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True) for script in NODES}
     try:
         if moment == 'up':
-            deadline = time.monotonic() + 30.0
-            while not set(NODES.values()) <= set(watcher.get_node_names()):
-                assert time.monotonic() < deadline, 'the nodes did not come up'
-                assert all(p.poll() is None for p in processes.values()), \
-                    {s: p.stderr.read() for s, p in processes.items() if p.poll() is not None}
-                time.sleep(0.05)
+            _wait_in_graph(watcher, set(NODES.values()), processes)
         time.sleep(delay)
         signalled = time.monotonic()
         for process in processes.values():
@@ -168,10 +173,7 @@ def test_a_crash_in_a_node_prints_where_its_threads_were(graph):
         [_script('plant_node'), '--ros-args', '-r', '__node:=crash_probe'], env=environment,
         stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
     try:
-        deadline = time.monotonic() + 30.0
-        while 'crash_probe' not in watcher.get_node_names():
-            assert time.monotonic() < deadline and process.poll() is None, 'not up'
-            time.sleep(0.05)
+        _wait_in_graph(watcher, {'crash_probe'}, {'plant_node': process})
         process.send_signal(signal.SIGSEGV)
         _, errors = process.communicate(timeout=EXIT_LIMIT)
     finally:
