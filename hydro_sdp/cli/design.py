@@ -165,6 +165,7 @@ def run(args: argparse.Namespace) -> Outcome:
         rows.append(['u limits', ', '.join(f'{x:.4f}' for x in spec.u_limits)])
     lines = [f'PIP-IDZ controller for joint {spec.joint} ({spec.design["method"]} design)']
     lines += table(rows, ['', 'value'])
+    lines += list(spec.notes)
     if args.out:
         lines.append(f'wrote {payload["controller"]}')
     if args.plot:

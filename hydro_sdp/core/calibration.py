@@ -238,10 +238,10 @@ def _clean(poles: Sequence[complex]) -> list[complex]:
 
 
 def _stroke(model: JointModel, records: Sequence[Record]) -> tuple[float, float]:
-    if model.angle_limits is not None:
-        return model.angle_limits
-    low = min(float(np.min(r.y)) for r in records)
-    high = max(float(np.max(r.y)) for r in records)
+    # A side without a stop: the farthest the records went.
+    stops = model.angle_limits or (-math.inf, math.inf)
+    low = stops[0] if math.isfinite(stops[0]) else min(float(np.min(r.y)) for r in records)
+    high = stops[1] if math.isfinite(stops[1]) else max(float(np.max(r.y)) for r in records)
     if not high - low > 1.0:
         raise DataError(f'the joint moved only {high - low:.2f} deg in the records; the '
                         'closed-loop check needs the stroke (give --angle-limits)')
@@ -356,6 +356,7 @@ def calibrate(records: Sequence[Record], validation: Sequence[Record] | None = N
                         f'(the check with each idealised: {tried})')
     if not all(math.isfinite(s.model) for s in final_scores):
         warnings.append('the final model diverges on a validation record')
+    warnings += list(spec.notes)
     return CalibrationResult(identified, note, tuple(estimation), tuple(checks), scores,
                              final_scores, diagnosis, spec, check, tuple(designs), stroke,
                              tuple(warnings), tuple(forms), found)

@@ -18,6 +18,7 @@ from typing import Mapping, Sequence
 
 from hydro_sdp.core.control.design_plant import check_plant_lag, model_lag, plant_for_model
 from hydro_sdp.core.control.idz import IdzMode
+from hydro_sdp.core.control.idz_bounds import design_edges
 from hydro_sdp.core.control.idz_design import default_u_limits, idz_for_model, IdzForm
 from hydro_sdp.core.control.idz_mapping import idz_from_mapping, idz_to_mapping
 from hydro_sdp.core.control.idz_table import Idz
@@ -88,6 +89,12 @@ class ControllerSpec:
         if np.max(np.abs(poles)) >= 1.0:
             raise ConfigurationError(f'the closed loop is unstable: poles {np.round(poles, 4)}')
         self.settings()  # validates limits against the IDZ
+
+    @property
+    def notes(self) -> tuple[str, ...]:
+        """Return what the design says of the values it took where the data left a choice."""
+        notes = self.design.get('undetermined', ())
+        return tuple(str(note) for note in notes) if isinstance(notes, (list, tuple)) else ()
 
     @property
     def delay_samples(self) -> int:
@@ -247,6 +254,9 @@ def design_from_model(model: JointModel, *, control_period: float = 0.05,
                                               'w_e': weights.w_e}}
     idz = idz_for_model(model, period, form=form, beta=beta, mode=mode, v_range=v_range,
                         design=(plant, gains, lag), noise_std=noise_std)
+    notes = design_edges(model)[1]
+    if notes:
+        design['undetermined'] = list(notes)
     if u_limits is None:
         u_limits = default_u_limits(model, idz, period)
     return ControllerSpec(joint=model.joint, control_period=period, plant=plant, gains=gains,

@@ -22,20 +22,22 @@ held levels) take their own route, the map from the one-step increments
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+import math
 from typing import Callable, Sequence
 
 from hydro_sdp.core.errors import DataError
 from hydro_sdp.core.identification.change_windows import ChangeWindows
 from hydro_sdp.core.identification.delay import (
-    DelayEstimate, estimate_delay, level_speeds)
+    DelayEstimate, estimate_delay, level_speeds, LevelSpeed)
+from hydro_sdp.core.identification.determined import undetermined_edges
 from hydro_sdp.core.identification.effect_check import HeldOut, simulation_errors
 from hydro_sdp.core.identification.end_stops import stop_reach
 from hydro_sdp.core.identification.experiment import (
     Experiment, split_long, thin, thin_evenly)
 from hydro_sdp.core.identification.family_choice import (
-    choose_kind, compare_kinds, FIRST_KINDS, fit_family, FittedKind, FoldFits, KindChoice,
-    KINDS, KindScore)
+    compare_kinds, FIRST_KINDS, fit_family, FittedKind, FoldErrors, FoldFits, KindChoice, KINDS,
+    KindScore)
 from hydro_sdp.core.identification.identified import Identification, IdentifyStage
 from hydro_sdp.core.identification.limits import model_limits
 from hydro_sdp.core.identification.map_fit import FIT_METHODS, fit_sdp, FitData, FitMethod, MapFit
@@ -49,7 +51,7 @@ from hydro_sdp.core.model.effects import Effect, ValveLag
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.records import Record
 from hydro_sdp.core.model.sample_period import whole_samples_seconds
-from hydro_sdp.core.model.static_maps import StaticMap
+from hydro_sdp.core.model.static_maps import SdpMap, StaticMap
 
 __all__ = ['experiments_mae', 'Identification', 'identify', 'IdentifyStage', 'KindChoice',
            'KINDS', 'KindScore', 'PIECE_SAMPLES']
@@ -101,36 +103,55 @@ def _segment(records: Sequence[Record], dt: float, max_delay: int,
 
 
 def _delay(segmentation: Segmentation, pieces: _Pieces, dt: float, max_delay: int
-           ) -> tuple[DelayEstimate, list[HeldOut]]:
-    """Estimate the dead time with the valve lag, keeping the lag only if held-out data need it."""
+           ) -> DelayEstimate:
+    """Estimate the dead time with the valve lag (the lag is judged with the map)."""
     sample = thin(pieces.every, DELAY_SAMPLES)
-    # The lag check's folds score the same windows with the same pairs as the fit.
-    windows = ChangeWindows(sample, max_delay)
-    delay = estimate_delay(sample, dt, max_delay=max_delay, rest=segmentation.rest,
-                           noise=segmentation.noise_std, windows=windows)
-    if delay.lag <= 0.0:
-        return delay, []
-    lag_check = check_lag(pieces.trial, delay, dt, segmentation.rest, max_delay, windows)
-    return (delay if lag_check.kept else delay.without_lag(dt)), [lag_check]
+    return estimate_delay(sample, dt, max_delay=max_delay, rest=segmentation.rest,
+                          noise=segmentation.noise_std, windows=ChangeWindows(sample, max_delay))
+
+
+@dataclass(frozen=True, eq=False)
+class _MapStage:
+    """The map fitted at one timing: the level speeds, the data, eq. (5) and the family."""
+
+    points: tuple[LevelSpeed, ...]
+    data: FitData
+    sdp_fit: MapFit[SdpMap]
+    fit: MapFit[StaticMap]
+
+
+def _fit_map(kind: FittedKind, pieces: _Pieces, delay: DelayEstimate, dt: float, rest: float,
+             method: FitMethod, answer: bool) -> _MapStage:
+    """Fit eq. (5) and, when another family is asked for, that family at this timing."""
+    points = tuple(level_speeds(pieces.every, delay.samples, dt, rest=rest))
+    data = FitData(pieces.every, delay.samples, dt, delay.lag)
+    search = data if len(pieces.search) == len(pieces.every) else FitData(
+        pieces.search, delay.samples, dt, delay.lag)
+    # Eq. (5) by the method asked when it may be the answer; for another family asked
+    # for by name it is only a start (its dead-zone, its curvature): one regret fit.
+    sdp_fit = fit_sdp(search, points, rest, method=method if answer else 'rr',
+                      starts=4 if answer else 1, polish=None if search is data else data)
+    fit: MapFit[StaticMap] = sdp_fit if kind == 'sdp' else fit_family(
+        kind, data, points, rest, method, sdp_fit.static_map)
+    return _MapStage(points, data, sdp_fit, fit)
 
 
 def _family(kind: KindChoice, pieces: _Pieces, delay: DelayEstimate, dt: float, rest: float,
             method: FitMethod, step: Callable[[IdentifyStage], None]
-            ) -> tuple[FittedKind, tuple[KindScore, ...]]:
-    """Return the map family asked for, or the one that predicts held-out experiments best."""
+            ) -> tuple[FittedKind, FoldErrors | None, FoldFits | None]:
+    """Return the map family asked for, or the one the held-out rule chooses, and its folds."""
     if kind != 'auto':
-        return kind, ()
+        return kind, None, None
     step(IdentifyStage.FAMILIES)
     fold_fits = FoldFits(pieces.trial, delay.samples, dt, rest, method, delay.lag)
-    comparison = tuple(compare_kinds(pieces.trial, delay.samples, dt, rest, method,
-                                     FIRST_KINDS, lag=delay.lag, fold_fits=fold_fits))
-    chosen = choose_kind(comparison)
-    if chosen != 'sdp':
+    comparison = compare_kinds(pieces.trial, delay.samples, dt, rest, method, FIRST_KINDS,
+                               lag=delay.lag, fold_fits=fold_fits)
+    if comparison.chosen() != 'sdp':
         # Eq. (5) lost: try its generalisation, convex from the dead-zone, on the same folds.
-        comparison += tuple(compare_kinds(pieces.trial, delay.samples, dt, rest, method,
-                                          ('power_sat',), lag=delay.lag, fold_fits=fold_fits))
-        chosen = choose_kind(comparison)
-    return chosen, comparison
+        comparison = comparison.merged(compare_kinds(
+            pieces.trial, delay.samples, dt, rest, method, ('power_sat',), lag=delay.lag,
+            fold_fits=fold_fits))
+    return comparison.chosen(), comparison, fold_fits
 
 
 def identify(records: Sequence[Record], *, method: FitMethod = 'rr', kind: KindChoice = 'auto',
@@ -185,20 +206,23 @@ def identify(records: Sequence[Record], *, method: FitMethod = 'rr', kind: KindC
                                 kind=kind, angle_limits=angle_limits,
                                 input_limits=input_limits, progress=step)
     step(IdentifyStage.DELAY)
-    delay, checks = _delay(segmentation, pieces, dt, max_delay_samples)
-    points = tuple(level_speeds(pieces.every, delay.samples, dt, rest=rest_command))
-    data = FitData(pieces.every, delay.samples, dt, delay.lag)
-    search = data if len(pieces.search) == len(pieces.every) else FitData(
-        pieces.search, delay.samples, dt, delay.lag)
+    delay = _delay(segmentation, pieces, dt, max_delay_samples)
     step(IdentifyStage.MAP)
-    # Eq. (5) by the method asked when it may be the answer; for another family asked
-    # for by name it is only a start (its dead-zone, its curvature): one regret fit.
+    chosen, comparison, fold_fits = _family(kind, pieces, delay, dt, rest_command, method, step)
     answer = kind in ('auto', 'sdp')
-    sdp_fit = fit_sdp(search, points, rest_command, method=method if answer else 'rr',
-                      starts=4 if answer else 1, polish=None if search is data else data)
-    chosen, comparison = _family(kind, pieces, delay, dt, rest_command, method, step)
-    fit: MapFit[StaticMap] = sdp_fit if chosen == 'sdp' else fit_family(
-        chosen, data, points, rest_command, method, sdp_fit.static_map)
+    stage = _fit_map(chosen, pieces, delay, dt, rest_command, method, answer)
+    checks: list[HeldOut] = []
+    if delay.lag > 0.0:
+        # The lag earns its place with the family chosen, on the same folds.
+        lag_check = check_lag(
+            fold_fits or FoldFits(pieces.trial, delay.samples, dt, rest_command, method,
+                                  delay.lag), chosen, delay,
+            None if comparison is None else comparison.errors[chosen])
+        checks.append(lag_check)
+        if not lag_check.kept:
+            delay = delay.without_lag(dt)
+            stage = _fit_map(chosen, pieces, delay, dt, rest_command, method, answer)
+    points, data, sdp_fit, fit = stage.points, stage.data, stage.sdp_fit, stage.fit
     low_stop, high_stop = segmentation.end_stops
     bounds = model_limits(records, segmentation.end_stops, rest_command,
                           angle_limits=angle_limits, input_limits=input_limits)
@@ -212,7 +236,7 @@ def identify(records: Sequence[Record], *, method: FitMethod = 'rr', kind: KindC
     stops = limits if limits is not None else (low_stop, high_stop)
     reach = stop_reach(segmentation.noise_std)
     geometry = fit_stroke_geometry(pieces.search, fit.static_map.rate, delay.samples, dt,
-                                   delay.lag, stops, reach)
+                                   delay.lag, stops, reach, delay.transient)
     if geometry is not None:
         geometry_check = check_geometry(pieces.trial, model, delay, dt, stops, reach)
         checks.append(geometry_check)
@@ -223,5 +247,12 @@ def identify(records: Sequence[Record], *, method: FitMethod = 'rr', kind: KindC
                 fit, pieces.every, pieces.search, delay, dt, stops, reach)
             if shaped is not None:
                 model, fit, mae = shaped, refit, experiments_mae(shaped, pieces.every, dt)
-    return Identification(model, dt, delay, segmentation, points, fit, comparison, mae,
-                          tuple(checks), commands=bounds.commands)
+    # Which edges the data bound, from speeds past the valve's transient.
+    settled = level_speeds(pieces.every, delay.samples, dt, rest=rest_command,
+                           skip=int(math.ceil(delay.transient / dt)))
+    model = replace(model, undetermined=undetermined_edges(settled, model.static_map,
+                                                           rest_command))
+    scores = () if comparison is None else tuple(comparison.scores())
+    return Identification(model, dt, delay, segmentation, points, fit, scores, mae,
+                          tuple(checks), commands=bounds.commands,
+                          family=None if comparison is None else comparison.judgement())
