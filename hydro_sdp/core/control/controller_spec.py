@@ -18,7 +18,7 @@ from typing import Mapping, Sequence
 
 from hydro_sdp.core.control.design_plant import check_plant_lag, model_lag, plant_for_model
 from hydro_sdp.core.control.idz import IdzMode
-from hydro_sdp.core.control.idz_bounds import design_edges
+from hydro_sdp.core.control.idz_bounds import design_notes
 from hydro_sdp.core.control.idz_design import default_u_limits, idz_for_model, IdzForm
 from hydro_sdp.core.control.idz_mapping import idz_from_mapping, idz_to_mapping
 from hydro_sdp.core.control.idz_table import Idz
@@ -254,7 +254,7 @@ def design_from_model(model: JointModel, *, control_period: float = 0.05,
                                               'w_e': weights.w_e}}
     idz = idz_for_model(model, period, form=form, beta=beta, mode=mode, v_range=v_range,
                         design=(plant, gains, lag), noise_std=noise_std)
-    notes = design_edges(model)[1]
+    notes = design_notes(model)
     if notes:
         design['undetermined'] = list(notes)
     if u_limits is None:

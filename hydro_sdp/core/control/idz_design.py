@@ -24,8 +24,6 @@ from typing import get_args, Literal
 
 from hydro_sdp.core.control.design_plant import model_lag, plant_for_model
 from hydro_sdp.core.control.idz import IdzMode, InverseDeadZone
-from hydro_sdp.core.control.idz_bounds import (
-    chord_with_edges_out, design_edges, table_with_edges_out)
 from hydro_sdp.core.control.idz_table import Idz, TableInverseDeadZone
 from hydro_sdp.core.control.idz_table_design import (
     command_span, DEFAULT_NOISE, table_beta, table_idz)
@@ -196,14 +194,9 @@ def idz_for_model(model: JointModel, control_period: float, *, form: IdzForm | N
 
     """
     form = default_form(model) if form is None else idz_form(form)
-    # Where the data leave an edge undetermined, the design says which value it takes.
-    edges, _ = design_edges(model)
     if form == 'chord':
-        chord = chord_idz(model, control_period, beta=beta, mode=mode, v_range=v_range)
-        return chord if edges is None else chord_with_edges_out(chord, edges)
+        return chord_idz(model, control_period, beta=beta, mode=mode, v_range=v_range)
     table = table_idz(model, control_period, beta=0.0, mode=mode, v_range=v_range)
-    if edges is not None:
-        table = table_with_edges_out(table, edges)
     if beta is None:
         if design is None:
             plant = plant_for_model(model, control_period)

@@ -4,7 +4,7 @@ Whether an effect ``identify`` adds on its own earns its place, on held-out expe
 ``identify`` proposes a ``valve_lag`` with the dead time and a ``stroke_geometry``
 factor when the runs span the stroke. Either fits *something* on any data, so each
 is kept only when the model with it, fitted on each fold's training part, predicts
-the windows of the test parts better by the one rule of :mod:`.held_out`
+the test parts better by the one rule of :mod:`.held_out`
 (docs/methods.md section 13.8). Neither is fitted on samples where the joint sits at
 an end stop (:func:`at_stop`): there the command drives a joint that cannot move.
 
@@ -18,7 +18,7 @@ from typing import Callable, Sequence
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import HydroSdpError
 from hydro_sdp.core.identification.experiment import Experiment
-from hydro_sdp.core.identification.held_out import judge, Judgement, window_pieces
+from hydro_sdp.core.identification.held_out import judge, Judgement
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.simulation import simulate
 import numpy as np
@@ -102,7 +102,7 @@ def compared(effect: str, rows: Sequence[tuple[float, float]],
 def held_out(effect: str, parts: Sequence[tuple[list[Experiment], list[Experiment]]],
              without: Fitter, with_effect: Fitter, dt: float) -> HeldOut:
     """
-    Compare a model without and with an effect on the windows of every fold's test part.
+    Compare a model without and with an effect on the experiments of every fold's test part.
 
     Parameters
     ----------
@@ -134,9 +134,8 @@ def held_out(effect: str, parts: Sequence[tuple[list[Experiment], list[Experimen
             shaped = with_effect(train)
         except HydroSdpError:
             shaped = None
-        windows = window_pieces(test, dt)
-        before, samples = simulation_errors(plain, windows, dt)
-        after = before if shaped is None else simulation_errors(shaped, windows, dt)[0]
+        before, samples = simulation_errors(plain, test, dt)
+        after = before if shaped is None else simulation_errors(shaped, test, dt)[0]
         if samples == 0:
             continue
         rows.append((before / samples, after / samples))

@@ -1,8 +1,9 @@
 """
 The map families, and choosing one on held-out experiments (docs/methods.md section 13.4).
 
-Each family is fitted on every fold's training part and scored on the windows of its
-test part; the one rule of :mod:`.held_out` chooses.
+Each family is fitted on every fold's training part and scored on the experiments of its
+test part, each simulated from its measured start; the one rule of :mod:`.held_out`
+chooses.
 
 """
 
@@ -15,8 +16,7 @@ from typing import Callable, cast, get_args, Literal, Sequence
 from hydro_sdp.core.errors import DataError, HydroSdpError
 from hydro_sdp.core.identification.delay import level_speeds, LevelSpeed
 from hydro_sdp.core.identification.experiment import Experiment
-from hydro_sdp.core.identification.held_out import (
-    deal, judge, Judgement, Unit, window_pieces)
+from hydro_sdp.core.identification.held_out import deal, judge, Judgement, Unit
 from hydro_sdp.core.identification.map_fit import (
     fit_poly, fit_pwl, fit_sdp, FitData, FitMethod, MapFit)
 from hydro_sdp.core.identification.map_fit.power_sat import fit_power_sat
@@ -96,8 +96,8 @@ class KindScore:
     kind : str
         Map family (one of :data:`KINDS`).
     mae : float
-        Mean absolute error over held-out windows, pooled over the folds, degrees
-        (NaN if it could not be fitted).
+        Mean absolute simulation error over the held-out experiments, pooled over the
+        folds, degrees (NaN if it could not be fitted).
     note : str
         Why it could not be fitted, if so.
 
@@ -276,8 +276,7 @@ class FoldFits:
             except HydroSdpError as error:
                 self.error = error
                 break
-            self.folds.append(Fold(data, FitData(window_pieces(test, dt), delay, dt, lag),
-                                   points, sdp_map))
+            self.folds.append(Fold(data, FitData(test, delay, dt, lag), points, sdp_map))
 
 
 def compare_kinds(experiments: Sequence[Experiment], delay: int, dt: float, rest: float,
@@ -312,7 +311,7 @@ def compare_kinds(experiments: Sequence[Experiment], delay: int, dt: float, rest
     Returns
     -------
     FoldErrors
-        Each family's mean absolute error over the windows of each fold's test part.
+        Each family's mean absolute simulation error over each fold's test part.
 
     """
     if fold_fits is None:

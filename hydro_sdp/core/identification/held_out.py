@@ -4,8 +4,9 @@ Held-out judgement: the folds, the error and the rule that every choice on data 
 The map family, the effects ``identify`` proposes, the routine route's family, the
 diagnosis's candidates and the SDP analysis's shares are judged alike
 (docs/methods.md section 16): units dealt into folds (:func:`deal`), the simulation
-error over windows restarted from the measured angle (:data:`WINDOW_SECONDS`), and one
-rule (:func:`judge`).
+error from the measured angle at the start of every unit (an experiment, a piece of
+routine operation, or a window of :data:`WINDOW_SECONDS` of a long record:
+:class:`WindowErrors`), and one rule (:func:`judge`).
 
 """
 
@@ -13,12 +14,16 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 import math
-from typing import Hashable, Sequence
+from typing import Hashable, Protocol, Sequence
 
-from hydro_sdp.core.identification.experiment import Experiment, split_long
+from hydro_sdp.core.identification.evaluation import first_compared
+from hydro_sdp.core.model.exogenous_signals import Exogenous
+from hydro_sdp.core.model.joint_model import JointModel
+from hydro_sdp.core.model.records import Record
+from hydro_sdp.core.model.windows import simulate_windows
 import numpy as np
 
-#: Windows of the held-out simulation error, s: each starts afresh from the measured angle.
+#: Windows long records are cut into, s: each simulated afresh from the measured angle.
 WINDOW_SECONDS = 2.0
 #: The tie band's floor: a richer candidate must lower the held-out error by this share of
 #: the simpler one's at least.
@@ -103,10 +108,77 @@ def deal(units: Sequence[Unit], count: int | None = None) -> list[tuple[list[int
     return out
 
 
-def window_pieces(experiments: Sequence[Experiment], dt: float) -> list[Experiment]:
-    """Cut experiments into windows of :data:`WINDOW_SECONDS`, each with its command history."""
-    history = max((experiment.start for experiment in experiments), default=0)
-    return split_long(experiments, max(1, int(round(WINDOW_SECONDS / dt))), history)
+class Scored(Protocol):
+    """A record to score, with its sample period and its load and other joints' speeds."""
+
+    @property
+    def record(self) -> Record:
+        """Return the measured record."""
+
+    @property
+    def dt(self) -> float:
+        """Return its sample period, s."""
+
+    @property
+    def exogenous(self) -> Exogenous:
+        """Return its load and other joints' speeds."""
+
+
+class WindowErrors:
+    """
+    Simulation errors of models over held-out records, over windows, each simulation once.
+
+    Parameters
+    ----------
+    runs : sequence of Scored
+        Held-out records.
+
+    """
+
+    def __init__(self, runs: Sequence[Scored]) -> None:
+        self.runs = runs
+        self._cache: dict[tuple[int, int, int, float | None], float] = {}
+        self._models: dict[int, JointModel] = {}
+
+    def _error(self, model: JointModel, index: int, start: int, seconds: float | None) -> float:
+        key = (id(model), index, start, seconds)
+        if key not in self._cache:
+            # Holding the model keeps its id from being reused while it is cached.
+            self._models[id(model)] = model
+            run = self.runs[index]
+            record = run.record
+            width = len(record) if seconds is None else max(1, int(round(seconds / run.dt)))
+            simulated = simulate_windows(model, record.v, record.y, run.dt,
+                                         list(range(start, len(record) - 1, width)),
+                                         v_before=float(record.v[0]), exogenous=run.exogenous)
+            self._cache[key] = float(np.mean(np.abs(record.y[start:] - simulated[start:])))
+        return self._cache[key]
+
+    def compare(self, models: Sequence[JointModel],
+                seconds: float | None = WINDOW_SECONDS) -> list[float]:
+        """
+        Return each model's mean absolute simulation error, averaged per record, deg.
+
+        Parameters
+        ----------
+        models : sequence of JointModel
+            The models compared, over the same samples: from the later of the samples
+            at which each model's state no longer depends on the past.
+        seconds : float or None
+            Window length, s; None: one window, the whole record from that sample.
+
+        Returns
+        -------
+        list[float]
+            One error per model, degrees.
+
+        """
+        errors = np.zeros((len(self.runs), len(models)))
+        for i, run in enumerate(self.runs):
+            start = max(first_compared(model, run.dt, run.record) for model in models)
+            for j, model in enumerate(models):
+                errors[i, j] = self._error(model, i, start, seconds)
+        return errors.mean(axis=0).tolist()
 
 
 @dataclass(frozen=True)

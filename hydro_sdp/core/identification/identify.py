@@ -30,7 +30,8 @@ from hydro_sdp.core.errors import DataError
 from hydro_sdp.core.identification.change_windows import ChangeWindows
 from hydro_sdp.core.identification.delay import (
     DelayEstimate, estimate_delay, level_speeds, LevelSpeed)
-from hydro_sdp.core.identification.determined import undetermined_edges
+from hydro_sdp.core.identification.determined import (
+    moving_levels_a_side, parameters, undetermined_edges, unpinned)
 from hydro_sdp.core.identification.effect_check import HeldOut, simulation_errors
 from hydro_sdp.core.identification.end_stops import stop_reach
 from hydro_sdp.core.identification.experiment import (
@@ -103,11 +104,17 @@ def _segment(records: Sequence[Record], dt: float, max_delay: int,
 
 
 def _delay(segmentation: Segmentation, pieces: _Pieces, dt: float, max_delay: int
-           ) -> DelayEstimate:
-    """Estimate the dead time with the valve lag (the lag is judged with the map)."""
+           ) -> tuple[DelayEstimate, list[HeldOut]]:
+    """Estimate the dead time with the valve lag, keeping the lag only if held-out data need it."""
     sample = thin(pieces.every, DELAY_SAMPLES)
-    return estimate_delay(sample, dt, max_delay=max_delay, rest=segmentation.rest,
-                          noise=segmentation.noise_std, windows=ChangeWindows(sample, max_delay))
+    # The lag check's folds score the same windows with the same pairs as the fit.
+    windows = ChangeWindows(sample, max_delay)
+    delay = estimate_delay(sample, dt, max_delay=max_delay, rest=segmentation.rest,
+                           noise=segmentation.noise_std, windows=windows)
+    if delay.lag <= 0.0:
+        return delay, []
+    lag_check = check_lag(pieces.trial, delay, dt, segmentation.rest, max_delay, windows)
+    return (delay if lag_check.kept else delay.without_lag(dt)), [lag_check]
 
 
 @dataclass(frozen=True, eq=False)
@@ -120,9 +127,9 @@ class _MapStage:
     fit: MapFit[StaticMap]
 
 
-def _fit_map(kind: FittedKind, pieces: _Pieces, delay: DelayEstimate, dt: float, rest: float,
+def _fit_sdp(pieces: _Pieces, delay: DelayEstimate, dt: float, rest: float,
              method: FitMethod, answer: bool) -> _MapStage:
-    """Fit eq. (5) and, when another family is asked for, that family at this timing."""
+    """Fit eq. (5) at this timing: the answer, or where another family starts."""
     points = tuple(level_speeds(pieces.every, delay.samples, dt, rest=rest))
     data = FitData(pieces.every, delay.samples, dt, delay.lag)
     search = data if len(pieces.search) == len(pieces.every) else FitData(
@@ -131,17 +138,24 @@ def _fit_map(kind: FittedKind, pieces: _Pieces, delay: DelayEstimate, dt: float,
     # for by name it is only a start (its dead-zone, its curvature): one regret fit.
     sdp_fit = fit_sdp(search, points, rest, method=method if answer else 'rr',
                       starts=4 if answer else 1, polish=None if search is data else data)
-    fit: MapFit[StaticMap] = sdp_fit if kind == 'sdp' else fit_family(
-        kind, data, points, rest, method, sdp_fit.static_map)
-    return _MapStage(points, data, sdp_fit, fit)
+    return _MapStage(points, data, sdp_fit, sdp_fit)
+
+
+def _fit_family(stage: _MapStage, kind: FittedKind, rest: float,
+                method: FitMethod) -> _MapStage:
+    """Fit the family chosen, from eq. (5)'s fit at the same timing."""
+    if kind == 'sdp':
+        return stage
+    return replace(stage, fit=fit_family(kind, stage.data, stage.points, rest, method,
+                                         stage.sdp_fit.static_map))
 
 
 def _family(kind: KindChoice, pieces: _Pieces, delay: DelayEstimate, dt: float, rest: float,
             method: FitMethod, step: Callable[[IdentifyStage], None]
-            ) -> tuple[FittedKind, FoldErrors | None, FoldFits | None]:
-    """Return the map family asked for, or the one the held-out rule chooses, and its folds."""
+            ) -> tuple[FittedKind, FoldErrors | None]:
+    """Return the map family asked for, or the one the held-out rule chooses."""
     if kind != 'auto':
-        return kind, None, None
+        return kind, None
     step(IdentifyStage.FAMILIES)
     fold_fits = FoldFits(pieces.trial, delay.samples, dt, rest, method, delay.lag)
     comparison = compare_kinds(pieces.trial, delay.samples, dt, rest, method, FIRST_KINDS,
@@ -151,7 +165,7 @@ def _family(kind: KindChoice, pieces: _Pieces, delay: DelayEstimate, dt: float, 
         comparison = comparison.merged(compare_kinds(
             pieces.trial, delay.samples, dt, rest, method, ('power_sat',), lag=delay.lag,
             fold_fits=fold_fits))
-    return comparison.chosen(), comparison, fold_fits
+    return comparison.chosen(), comparison
 
 
 def identify(records: Sequence[Record], *, method: FitMethod = 'rr', kind: KindChoice = 'auto',
@@ -206,22 +220,12 @@ def identify(records: Sequence[Record], *, method: FitMethod = 'rr', kind: KindC
                                 kind=kind, angle_limits=angle_limits,
                                 input_limits=input_limits, progress=step)
     step(IdentifyStage.DELAY)
-    delay = _delay(segmentation, pieces, dt, max_delay_samples)
+    delay, checks = _delay(segmentation, pieces, dt, max_delay_samples)
     step(IdentifyStage.MAP)
-    chosen, comparison, fold_fits = _family(kind, pieces, delay, dt, rest_command, method, step)
-    answer = kind in ('auto', 'sdp')
-    stage = _fit_map(chosen, pieces, delay, dt, rest_command, method, answer)
-    checks: list[HeldOut] = []
-    if delay.lag > 0.0:
-        # The lag earns its place with the family chosen, on the same folds.
-        lag_check = check_lag(
-            fold_fits or FoldFits(pieces.trial, delay.samples, dt, rest_command, method,
-                                  delay.lag), chosen, delay,
-            None if comparison is None else comparison.errors[chosen])
-        checks.append(lag_check)
-        if not lag_check.kept:
-            delay = delay.without_lag(dt)
-            stage = _fit_map(chosen, pieces, delay, dt, rest_command, method, answer)
+    # Eq. (5) first: it refuses data that never moved the joint one way, naming why.
+    stage = _fit_sdp(pieces, delay, dt, rest_command, method, kind in ('auto', 'sdp'))
+    chosen, comparison = _family(kind, pieces, delay, dt, rest_command, method, step)
+    stage = _fit_family(stage, chosen, rest_command, method)
     points, data, sdp_fit, fit = stage.points, stage.data, stage.sdp_fit, stage.fit
     low_stop, high_stop = segmentation.end_stops
     bounds = model_limits(records, segmentation.end_stops, rest_command,
@@ -236,7 +240,7 @@ def identify(records: Sequence[Record], *, method: FitMethod = 'rr', kind: KindC
     stops = limits if limits is not None else (low_stop, high_stop)
     reach = stop_reach(segmentation.noise_std)
     geometry = fit_stroke_geometry(pieces.search, fit.static_map.rate, delay.samples, dt,
-                                   delay.lag, stops, reach, delay.transient)
+                                   delay.lag, stops, reach)
     if geometry is not None:
         geometry_check = check_geometry(pieces.trial, model, delay, dt, stops, reach)
         checks.append(geometry_check)
@@ -250,8 +254,8 @@ def identify(records: Sequence[Record], *, method: FitMethod = 'rr', kind: KindC
     # Which edges the data bound, from speeds past the valve's transient.
     settled = level_speeds(pieces.every, delay.samples, dt, rest=rest_command,
                            skip=int(math.ceil(delay.transient / dt)))
-    model = replace(model, undetermined=undetermined_edges(settled, model.static_map,
-                                                           rest_command))
+    model = replace(model, undetermined=undetermined_edges(settled, rest_command) + unpinned(
+        dict(parameters(model)), fit.standard_errors, moving_levels_a_side(settled, rest_command)))
     scores = () if comparison is None else tuple(comparison.scores())
     return Identification(model, dt, delay, segmentation, points, fit, scores, mae,
                           tuple(checks), commands=bounds.commands,

@@ -12,17 +12,17 @@ of experiments it was not fitted on by a clear margin (:mod:`.effect_check`);
 from __future__ import annotations
 
 from dataclasses import replace
-import math
 from typing import Callable, Sequence
 
 from hydro_sdp.core.errors import HydroSdpError
-from hydro_sdp.core.identification.delay import DelayEstimate, level_speeds
+from hydro_sdp.core.identification.change_windows import (
+    ChangeWindows, fit_delay_lag_and_pure, lag_pole)
+from hydro_sdp.core.identification.delay import DelayEstimate
 from hydro_sdp.core.identification.effect_check import (
     compared, held_out, HeldOut, simulation_errors)
 from hydro_sdp.core.identification.experiment import Experiment
-from hydro_sdp.core.identification.family_choice import (
-    fit_family, FittedKind, FoldFits, folds)
-from hydro_sdp.core.identification.map_fit import fit_sdp, FitData, MapFit
+from hydro_sdp.core.identification.family_choice import folds
+from hydro_sdp.core.identification.map_fit import FitData, MapFit
 from hydro_sdp.core.identification.stroke_fit import fit_stroke_geometry, speed_gains
 from hydro_sdp.core.model.effects import StrokeGeometry
 from hydro_sdp.core.model.joint_model import JointModel
@@ -38,25 +38,31 @@ GEOMETRY_ROUNDS = 3
 MapRefit = Callable[[FitData], MapFit[StaticMap]]
 
 
-def check_lag(fold_fits: FoldFits, kind: FittedKind, delay: DelayEstimate,
-              with_lag: Sequence[float] | None = None) -> HeldOut:
+def check_lag(experiments: Sequence[Experiment], delay: DelayEstimate, dt: float, rest: float,
+              max_delay: int, windows: ChangeWindows | None = None) -> HeldOut:
     """
-    Held-out windowed error of the chosen family with the lag and with the best pure delay.
+    Held-out angle error around the command changes, with the lag and with the best pure delay.
 
-    On each fold the family is fitted on the training part with each timing (the dead
-    time and lag, the best pure delay) and the windows of the test part are simulated
-    with both (:mod:`.held_out`).
+    On each fold the dead time and lag, and the best pure delay, are fitted on the
+    training part (:func:`~.change_windows.fit_delay_lag_and_pure`); the test part's
+    windows around its command changes are integrated from their measured first angles
+    with each timing, the speeds before and after each change fitted in the window, so
+    that no map shape enters (docs/methods.md section 13.8).
 
     Parameters
     ----------
-    fold_fits : FoldFits
-        The folds, fitted with the lag (:class:`~.family_choice.FoldFits`).
-    kind : str
-        The map family.
+    experiments : sequence of Experiment
+        Experiments to deal into folds (:func:`~.family_choice.folds`).
     delay : DelayEstimate
-        The dead time with the lag, and the best pure delay.
-    with_lag : sequence of float or None
-        The family's error on each fold with the lag, if scored already.
+        The delay and lag fitted on all experiments (its lag is what is checked).
+    dt : float
+        Sample period, s.
+    rest : float
+        Rest command.
+    max_delay : int
+        Largest dead time, samples.
+    windows : ChangeWindows or None
+        Change windows of these experiments or more, fitted already for the delay.
 
     Returns
     -------
@@ -64,33 +70,22 @@ def check_lag(fold_fits: FoldFits, kind: FittedKind, delay: DelayEstimate,
         The judgement (:mod:`.effect_check`).
 
     """
-    if with_lag is None:
-        with_lag = _fold_errors(fold_fits, kind, delay.samples, delay.lag)
-    pure = delay.without_lag(fold_fits.dt)
-    without = _fold_errors(fold_fits, kind, pure.samples, 0.0)
-    if delay.lag <= 0.0:
-        return compared('valve_lag', [], [])
-    weights = [float(fold.held_out.samples) for fold in fold_fits.folds]
-    return compared('valve_lag', list(zip(without, with_lag)), weights)
-
-
-def _fold_errors(fold_fits: FoldFits, kind: FittedKind, samples: int, lag: float
-                 ) -> list[float]:
-    """Each fold's held-out error of ``kind`` fitted on its training part with this timing."""
-    errors = []
-    dt, rest = fold_fits.dt, fold_fits.rest
-    for fold in fold_fits.folds:
-        train, test = fold.data.experiments, fold.held_out.experiments
-        data = FitData(train, samples, dt, lag)
-        points = level_speeds(train, samples, dt, rest=rest)
+    rows, weights = [], []
+    every = ChangeWindows(experiments, max_delay) if windows is None else \
+        windows.part(experiments, max_delay)
+    for train, test in folds(experiments, rest):
+        windows = every.part(test)
+        if windows.windows == 0 or delay.lag <= 0.0:
+            continue
         try:
-            start = fit_sdp(data, points, rest, starts=2).static_map
-            static_map = start if kind == 'sdp' else fit_family(
-                kind, data, points, rest, fold_fits.method, start, starts=2).static_map
-            errors.append(FitData(test, samples, dt, lag).simulation_mae(static_map.rate))
+            dead, lag, _, pure = fit_delay_lag_and_pure(train, dt, max_delay, every.part(train))
         except HydroSdpError:
-            errors.append(math.nan)
-    return errors
+            continue
+        before, samples = windows.angle_error(pure, 0.0)
+        after = windows.angle_error(dead, lag_pole(lag, dt))[0] if lag > 0.0 else before
+        rows.append((before / samples, after / samples))
+        weights.append(float(samples))
+    return compared('valve_lag', rows, weights)
 
 
 def check_geometry(experiments: Sequence[Experiment], model: JointModel, delay: DelayEstimate,
@@ -122,7 +117,7 @@ def check_geometry(experiments: Sequence[Experiment], model: JointModel, delay: 
     """
     def shaped(train: Sequence[Experiment]) -> JointModel | None:
         geometry = fit_stroke_geometry(train, model.static_map.rate, delay.samples, dt,
-                                       delay.lag, stops, reach, delay.transient)
+                                       delay.lag, stops, reach)
         return None if geometry is None else replace(model, effects=model.effects + (geometry,))
     return held_out('stroke_geometry', folds(experiments, model.rest_command),
                     lambda train: model, shaped, dt)
@@ -181,7 +176,7 @@ def shape_with_geometry(model: JointModel, geometry: StrokeGeometry | None, refi
         refit = refit_map(FitData(pieces, delay.samples, dt, delay.lag, speed_gains(
             pieces, refit.static_map.rate, delay.samples, dt, delay.lag, geometry)))
         geometry = fit_stroke_geometry(sample, refit.static_map.rate, delay.samples, dt,
-                                       delay.lag, stops, reach, delay.transient)
+                                       delay.lag, stops, reach)
     if geometry is None:
         return None, refit
     shaped = replace(model, static_map=refit.static_map, effects=model.effects + (geometry,))

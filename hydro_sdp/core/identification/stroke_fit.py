@@ -35,21 +35,6 @@ SPAN = 0.6
 SMOOTHING = 1e-3
 
 
-def settled(experiments: Sequence[Experiment], delay: int, dt: float,
-            settle: float) -> np.ndarray:
-    """Mark the predicted samples whose delayed command has held for ``settle`` seconds."""
-    hold = int(round(settle / dt))
-    marks = []
-    for experiment in experiments:
-        k = np.arange(experiment.start + 1, experiment.y.size)
-        delayed = delayed_at(experiment.v, np.arange(experiment.y.size), delay)
-        # A piece cut from a long run shows no change: its samples count as settled.
-        changed = np.r_[False, delayed[1:] != delayed[:-1]]
-        last = np.maximum.accumulate(np.where(changed, np.arange(delayed.size), -hold))
-        marks.append(k - last[k] >= hold)
-    return np.concatenate(marks) if marks else np.zeros(0, dtype=bool)
-
-
 def model_speeds(experiments: Sequence[Experiment], rate_of: object, delay: int, dt: float,
                  lag: float) -> tuple[FloatArray, FloatArray, FloatArray]:
     """
@@ -270,8 +255,7 @@ def geometry_of(knots: FloatArray, shared: FloatArray,
 def fit_stroke_geometry(experiments: Sequence[Experiment], rate_of: object, delay: int,
                         dt: float, lag: float,
                         stops: tuple[float | None, float | None] = (None, None),
-                        reach: float = STOP_REACH, settle: float = 0.0
-                        ) -> StrokeGeometry | None:
+                        reach: float = STOP_REACH) -> StrokeGeometry | None:
     """
     Fit a shared angle factor with a per-direction part, if the data span the stroke.
 
@@ -292,8 +276,6 @@ def fit_stroke_geometry(experiments: Sequence[Experiment], rate_of: object, dela
     reach : float
         How near a stop the joint counts as sitting at it, degrees: samples there
         that drive it into the stop are left out (:func:`.effect_check.at_stop`).
-    settle : float
-        Samples this soon after a change of the delayed command are left out, s.
 
     Returns
     -------
@@ -303,9 +285,7 @@ def fit_stroke_geometry(experiments: Sequence[Experiment], rate_of: object, dela
     """
     w, dy, previous = model_speeds(experiments, rate_of, delay, dt, lag)
     peak = float(np.max(np.abs(w))) if w.size else 0.0
-    # The valve's transient is the timing's to explain, not the stroke's.
-    moving = (np.abs(w) > 0.1 * peak) & ~at_stop(previous, w, stops, reach) \
-        & settled(experiments, delay, dt, settle)
+    moving = (np.abs(w) > 0.1 * peak) & ~at_stop(previous, w, stops, reach)
     if peak <= 0.0 or np.sum(moving) < 50 * KNOTS:
         return None
     low, high = float(np.min(previous)), float(np.max(previous))

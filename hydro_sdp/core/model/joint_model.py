@@ -64,7 +64,8 @@ class JointModel:
         ``evaluate`` and ``diagnose`` read it when no ``--load-topic`` is given.
     undetermined : tuple[Undetermined, ...]
         Parameters the data it was identified from bound but do not pin (key
-        ``undetermined``).
+        ``undetermined``): for a map without a dead-zone (``poly``), where its speed
+        leaves zero.
 
     """
 
@@ -267,8 +268,6 @@ class JointModel:
             undetermined=tuple(Undetermined.from_mapping(str(name), entry)
                                for name, entry in bounds.items()),
         )
-        if model.undetermined and model.dead_zone is None:
-            raise ModelFileError(f"key 'undetermined': kind {kind!r} has no dead_zone")
         return model
 
 

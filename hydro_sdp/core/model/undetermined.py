@@ -13,10 +13,10 @@ import math
 from typing import Mapping
 
 from hydro_sdp.core.errors import ModelFileError
-from hydro_sdp.core.validation import require_ordered_pair
+from hydro_sdp.core.validation import require_float
 
-#: Parameters a bound can be given for.
-BOUNDED = ('dead_zone[0]', 'dead_zone[1]')
+#: The dead-zone's edges: bounded by the commands used, and taken by the IDZ.
+EDGES = ('dead_zone[0]', 'dead_zone[1]')
 
 
 @dataclass(frozen=True)
@@ -27,7 +27,7 @@ class Undetermined:
     Parameters
     ----------
     parameter : str
-        The parameter, by its model-file name (one of :data:`BOUNDED`).
+        The parameter, by its model-file name (``dead_zone[1]``, ``curvature[0]``).
     bound : tuple[float, float]
         The values the data allow, low to high.
     reason : str
@@ -48,11 +48,11 @@ class Undetermined:
 
     def __post_init__(self) -> None:
         key = f'undetermined.{self.parameter}'
-        if self.parameter not in BOUNDED:
-            raise ModelFileError(f"key 'undetermined': {self.parameter!r} is not one of "
-                                 f"{', '.join(BOUNDED)}")
+        if not self.parameter or any(c.isspace() for c in self.parameter):
+            raise ModelFileError(f"key 'undetermined': expected a parameter name, "
+                                 f'got {self.parameter!r}')
         low, high = self.bound
-        if not (math.isfinite(low) and math.isfinite(high) and low <= high):
+        if math.isnan(low) or math.isnan(high) or not low <= high:
             raise ModelFileError(f"key '{key}.bound': expected [low, high], "
                                  f'got {list(self.bound)}')
         if not (math.isfinite(self.motion) and 0.0 <= self.motion <= 1.0):
@@ -60,9 +60,14 @@ class Undetermined:
                                  f'got {self.motion}')
 
     @property
+    def is_edge(self) -> bool:
+        """Whether this is a dead-zone edge (:data:`EDGES`)."""
+        return self.parameter in EDGES
+
+    @property
     def side(self) -> int:
-        """Return the dead-zone side: 0 below rest, 1 above."""
-        return int(self.parameter[-2])
+        """Return the side of a dead-zone edge: 0 below rest, 1 above."""
+        return EDGES.index(self.parameter)
 
     @property
     def moving_end(self) -> float:
@@ -77,8 +82,8 @@ class Undetermined:
 
     def to_mapping(self) -> dict[str, object]:
         """Return the entry under the model file's ``undetermined`` key."""
-        return {'bound': list(self.bound), 'reason': self.reason, 'record': self.record,
-                'motion': self.motion}
+        return {'bound': [x if math.isfinite(x) else None for x in self.bound],
+                'reason': self.reason, 'record': self.record, 'motion': self.motion}
 
     @classmethod
     def from_mapping(cls, parameter: str, data: object) -> Undetermined:
@@ -92,5 +97,10 @@ class Undetermined:
         motion = data.get('motion', 0.0)
         if not isinstance(motion, (int, float)) or isinstance(motion, bool):
             raise ModelFileError(f"key '{key}.motion': expected a number, got {motion!r}")
-        return cls(parameter, require_ordered_pair(data.get('bound'), f'{key}.bound'), reason,
-                   record, float(motion))
+        bound = data.get('bound')
+        if not isinstance(bound, (list, tuple)) or len(bound) != 2:
+            raise ModelFileError(f"key '{key}.bound': expected [low, high], got {bound!r}")
+        # An open side (a standard error without end) is null in the file.
+        low, high = (open_end if value is None else require_float(value, f'{key}.bound')
+                     for value, open_end in zip(bound, (-math.inf, math.inf)))
+        return cls(parameter, (low, high), reason, record, float(motion))

@@ -25,7 +25,7 @@ from hydro_sdp.core.errors import HydroSdpError
 from hydro_sdp.core.identification.delay import LevelSpeed
 from hydro_sdp.core.identification.experiment import Experiment, split_long
 from hydro_sdp.core.identification.family_choice import FittedKind, FoldErrors
-from hydro_sdp.core.identification.held_out import deal, Unit, WINDOW_SECONDS
+from hydro_sdp.core.identification.held_out import deal, Unit
 from hydro_sdp.core.identification.map_fit import FitData
 from hydro_sdp.core.identification.routine.increment_fit import (
     fit_increments, fit_sdp_increments)
@@ -33,8 +33,8 @@ from hydro_sdp.core.identification.routine.increments import increments_of
 from hydro_sdp.core.model.static_maps import StaticMap
 import numpy as np
 
-#: Length of the held-out pieces (the held-out windows), s, and the folds they are dealt to.
-PIECE_SECONDS = WINDOW_SECONDS
+#: Length of the held-out pieces, s, and the number of folds they are dealt to.
+PIECE_SECONDS = 1.0
 FOLDS = 4
 
 

@@ -102,7 +102,7 @@ def identify_routine(records: Sequence[Record], segmentation: Segmentation, dt: 
     model = JointModel(joint=records[0].joint or 'joint', static_map=fit.static_map,
                        delay=whole_samples_seconds(delay.samples, dt),
                        angle_limits=limits.angle_limits, input_limits=limits.input_limits,
-                       undetermined=undetermined_edges(points, fit.static_map, rest))
+                       undetermined=undetermined_edges(points, rest))
     mae = FitData(pieces, delay.samples, dt).simulation_mae(fit.static_map.rate)
     return Identification(model, dt, delay, segmentation, points, fit,
                           () if scores is None else tuple(scores.scores()), mae,
