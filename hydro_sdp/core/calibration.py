@@ -18,7 +18,7 @@ out (never a piece of a record), and the result says which.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 import math
 from typing import Callable, Sequence
 
@@ -33,6 +33,7 @@ from hydro_sdp.core.identification.evaluation import evaluate, RecordScore
 from hydro_sdp.core.identification.identify import Identification, identify, IdentifyStage
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.records import Record
+from hydro_sdp.core.model.sample_period import control_period_on, ControlPeriod
 import numpy as np
 
 #: The stages, in order, as :func:`calibrate` reports them.
@@ -58,7 +59,8 @@ class CalibrationSettings:
     angle_limits : tuple[float, float] or None
         Known end stops, degrees (default: those seen in the data).
     control_period : float
-        Control period, s.
+        Control period asked for, s; the controller runs at the nearest whole
+        multiple of the records' sample period (:func:`.sample_period.control_period_on`).
     poles : tuple[complex, ...] or None
         Closed-loop poles to start from (default: the LQ design); fewer than the
         design needs (``1 +`` the delay in control samples) are completed with
@@ -111,6 +113,8 @@ class CalibrationResult:
         IDZ form of every design tried (``chord`` or ``table``), first to last.
     obstacles : tuple[Obstacle, ...]
         When the check failed: the check with each element idealised.
+    control : ControlPeriod or None
+        The control period, as whole samples of the records' period.
 
     """
 
@@ -128,6 +132,7 @@ class CalibrationResult:
     warnings: tuple[str, ...] = field(default=())
     forms: tuple[str, ...] = field(default=())
     obstacles: tuple[Obstacle, ...] = field(default=())
+    control: ControlPeriod | None = None
 
     @property
     def in_the_way(self) -> tuple[str, ...]:
@@ -308,7 +313,10 @@ def calibrate(records: Sequence[Record], validation: Sequence[Record] | None = N
     noise = noise if math.isfinite(noise) and noise > 0.0 else 0.0
     check_settings = settings.check if settings.check is not None else CheckSettings(
         dt=identified.sample_period, noise_std=noise)
-    designer = _Designer(final, settings, noise)
+    # Whole samples of the records' period: a clock a fraction of a percent off a round
+    # period changes neither the samples per step nor the gains.
+    control = control_period_on(settings.control_period, identified.sample_period)
+    designer = _Designer(final, replace(settings, control_period=control.seconds), noise)
     spec = designer.first(default_form(final))
     designs: list[tuple[str, ...]] = []
     forms: list[str] = []
@@ -359,4 +367,4 @@ def calibrate(records: Sequence[Record], validation: Sequence[Record] | None = N
     warnings += list(spec.notes)
     return CalibrationResult(identified, note, tuple(estimation), tuple(checks), scores,
                              final_scores, diagnosis, spec, check, tuple(designs), stroke,
-                             tuple(warnings), tuple(forms), found)
+                             tuple(warnings), tuple(forms), found, control)

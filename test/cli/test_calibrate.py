@@ -280,7 +280,11 @@ def test_a_csv_log_needs_its_columns(tmp_path, capsys):
     log = tmp_path / 'run.csv'
     log.write_text('t,angle,duty\n0.00,1.0,0\n0.01,1.1,50\n0.02,1.3,50\n')
     code, _, err = run(capsys, 'calibrate', log, '--out', tmp_path / 'out')
-    assert code == 2 and '--joint, --time, --angle, --command' in err
+    assert code == 2 and '--joint, --angle, --command' in err
+    # --time the file itself asks for: a plain table has no time of its own.
+    code, _, err = run(capsys, 'calibrate', log, '--out', tmp_path / 'out', '--joint', 'arm',
+                       '--angle', 'angle', '--command', 'duty')
+    assert code == 2 and err == f'error: {log}: a CSV log needs its time column (--time)\n'
     args = build_parser().parse_args(['calibrate', str(log), '--out', 'x', '--joint', 'arm',
                                       '--time', 't', '--angle', 'angle', '--command', 'duty'])
     (record,), topic = read_inputs([str(log)], args, 'reading')
