@@ -39,9 +39,18 @@ section 4:
      measured level), the second paper's polynomial gain and, when eq. (5)
      loses, a saturating power law (power_sat, convex from the dead-zone), and
      keep the family that predicts held-out experiments best (folds that leave
-     out levels inside the measured range; sdp when it is within 5 %);
+     out levels inside the measured range), the simpler one when it is within
+     its tie band (5 % of its error, or one standard error of its per-fold
+     difference): the table, the bands and the reason are printed;
   6. when the runs span the stroke, fit how the speed changes along it
-     (effect stroke_geometry) and keep it if it lowers the simulation error.
+     (effect stroke_geometry); keep it, and the valve lag, only when held-out
+     experiments need it by the same rule.
+
+What the data do not pin is printed as a bound: a dead-zone edge below every
+command held (with the speed seen at the innermost command and what to record
+to pin it), a parameter whose two standard errors exceed it. Runs that stalled
+(commanded, not moving, not at a stop) are left out and listed; an end stop
+seen on one side only stays in the model.
 
 Routine operation (a closed loop, an operator's joystick: the command changes
 every control period and held levels carry under half of the driving) is

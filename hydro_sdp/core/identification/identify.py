@@ -10,9 +10,9 @@ the raw angles by regret-regression (or their output-error fit). Besides eq.
 polynomial gain (``poly``) and a saturating power law (``power_sat``, convex
 from the dead-zone) are fitted, and the family that predicts held-out
 experiments best is chosen (``kind='auto'``, folds that never extrapolate:
-:mod:`hydro_sdp.core.identification.family_choice`), preferring the simpler ``sdp`` when it is
-within 5 % of the best. When the data span the stroke, a ``stroke_geometry``
-factor of the angle is fitted on top. The result is a
+:mod:`hydro_sdp.core.identification.family_choice`), by the one rule of
+:mod:`~hydro_sdp.core.identification.held_out`. When the data span the stroke, a
+``stroke_geometry`` factor of the angle is fitted on top. The result is a
 :class:`~hydro_sdp.core.model.joint_model.JointModel` whose effects carry the lag and the
 geometry found. Records of routine operation (a closed loop, an operator: few
 held levels) take their own route, the map from the one-step increments
