@@ -197,7 +197,7 @@ class ChangeWindows:
 
     def angle_error(self, delay: int, pole: float) -> tuple[float, int]:
         """
-        Summed absolute angle error over the windows, and the samples summed.
+        Return the summed absolute angle error over the windows, and the samples summed.
 
         Each window is integrated from its measured first angle with its fitted speeds
         (:meth:`residual`'s fit), so that its error reads in degrees of angle, as a
