@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import math
 from typing import Hashable, Protocol, Sequence
 
+from hydro_sdp.core.arrays import IntArray
 from hydro_sdp.core.identification.evaluation import first_compared
 from hydro_sdp.core.model.exogenous_signals import Exogenous
 from hydro_sdp.core.model.joint_model import JointModel
@@ -106,6 +107,47 @@ def deal(units: Sequence[Unit], count: int | None = None) -> list[tuple[list[int
         if test and train:
             out.append((train, test))
     return out
+
+
+#: In :func:`stretch_folds`, a stretch holds at most this share of the samples.
+STRETCHES = 10
+#: Most stretch folds (neighbouring stretches are held out together beyond).
+MAX_STRETCH_FOLDS = 50
+
+
+def stretch_folds(segment: IntArray, stretches: int = STRETCHES,
+                  max_folds: int = MAX_STRETCH_FOLDS) -> IntArray:
+    """
+    Return the fold of each sample in time order: whole records, cut into tenths when longer.
+
+    The folds of the SDP analysis's held-out shares (docs/methods.md section 14.5): each
+    contiguous stretch is a fold, so a state that labels the samples predicts nothing.
+
+    Parameters
+    ----------
+    segment : IntArray
+        Record of each sample, in time order (samples of one record consecutive).
+    stretches : int
+        A stretch is at most ``1 / stretches`` of the samples.
+    max_folds : int
+        Most folds; consecutive stretches are pooled beyond.
+
+    Returns
+    -------
+    IntArray
+        Fold of each sample, ``0..folds-1``.
+
+    """
+    segment = np.asarray(segment)
+    n = segment.size
+    longest = max(1, math.ceil(n / stretches))
+    starts = np.r_[True, segment[1:] != segment[:-1]]
+    index = np.arange(n)
+    # Position of each sample within its record, then its stretch within the record.
+    position = index - np.maximum.accumulate(np.where(starts, index, 0))
+    piece = np.cumsum(starts | (position % longest == 0)) - 1
+    pieces = int(piece[-1]) + 1 if n else 0
+    return piece if pieces <= max_folds else (piece * max_folds) // pieces
 
 
 class Scored(Protocol):

@@ -8,7 +8,7 @@ less the other terms), its NVR re-estimated in the first passes and held
 after; repeat until the squared residual stops changing. Each term is then
 weighed, the others as fitted: its share of the base model's squared residual
 (the reduction from holding it constant to letting it follow its state, on
-held-out data: :mod:`hydro_sdp.core.identification.sdp.held_out`), and the
+held-out data: :mod:`hydro_sdp.core.identification.sdp.shares`), and the
 bootstrap p-value of its dependence
 (:mod:`hydro_sdp.core.identification.sdp.significance`).
 
@@ -22,10 +22,10 @@ from typing import Sequence
 
 from hydro_sdp.core.arrays import FloatArray, IntArray
 from hydro_sdp.core.errors import DataError
-from hydro_sdp.core.identification.sdp.held_out import held_out_reduction
 from hydro_sdp.core.identification.sdp.nvr import NvrEstimate
 from hydro_sdp.core.identification.sdp.ordering import MAX_GROUPS, order_by_state, Ordering
 from hydro_sdp.core.identification.sdp.random_walk import group_stats, inner, order_of, TvpKind
+from hydro_sdp.core.identification.sdp.shares import held_out_reduction
 from hydro_sdp.core.identification.sdp.significance import dependence_test
 from hydro_sdp.core.identification.sdp.smoothing import smooth_parameter, SmoothedParameter
 import numpy as np
@@ -99,7 +99,7 @@ class TermEstimate:
     reduction : float
         Squared residual removed by letting the parameter follow the state (in-sample).
     share : float
-        Held-out reduction (:mod:`hydro_sdp.core.identification.sdp.held_out`, 0 when
+        Held-out reduction (:mod:`hydro_sdp.core.identification.sdp.shares`, 0 when
         negative) over the base model's squared residual.
     p_value : float
         Bootstrap p-value of ``reduction`` (1 when the parameter came out constant).
