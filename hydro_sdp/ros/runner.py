@@ -30,7 +30,8 @@ from typing import Callable, Union
 from hydro_sdp.core.errors import HydroSdpError
 import rclpy
 from rclpy.exceptions import NameValidationException, ParameterException
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.executors import (
+    Executor, ExternalShutdownException, MultiThreadedExecutor, SingleThreadedExecutor)
 from rclpy.node import Node
 from rclpy.signals import install_signal_handlers, SignalHandlerOptions, uninstall_signal_handlers
 
@@ -60,7 +61,7 @@ class _Stop:
         return bool(self.signals)
 
 
-def _destroy(node: Node | None, executor: SingleThreadedExecutor | None, stop: _Stop) -> None:
+def _destroy(node: Node | None, executor: Executor | None, stop: _Stop) -> None:
     # After a signal the context may already be down: a failure to tidy up is then moot.
     try:
         if executor is not None:
@@ -75,14 +76,17 @@ def _destroy(node: Node | None, executor: SingleThreadedExecutor | None, stop: _
         uninstall_signal_handlers()
 
 
-def run_node(node_cls: Callable[[], Node], args: list[str] | None = None) -> None:
+def run_node(node_cls: Callable[[], Node], args: list[str] | None = None,
+             threads: int = 1) -> None:
     """
     Initialise rclpy, spin one node of ``node_cls`` and always clean up.
 
     A configuration error (a bad parameter or file) ends the process with one
-    line on stderr and exit code 2, not a traceback. SIGINT and SIGTERM end it
-    with code 0 within about :data:`WAKE_PERIOD` (plus the node's own clean-up). A
-    crash in compiled code prints every thread's Python stack (:mod:`faulthandler`).
+    line on stderr and exit code 2, not a traceback; a fault the running node
+    cannot work around (a recorder's full disk) with one line and exit code 3.
+    SIGINT and SIGTERM end it with code 0 within about :data:`WAKE_PERIOD` (plus
+    the node's own clean-up). A crash in compiled code prints every thread's
+    Python stack (:mod:`faulthandler`).
 
     Parameters
     ----------
@@ -90,6 +94,9 @@ def run_node(node_cls: Callable[[], Node], args: list[str] | None = None) -> Non
         Node class constructed with no arguments.
     args : list[str] or None
         Command-line arguments (``--ros-args`` included) passed to ``rclpy.init``.
+    threads : int
+        Threads of the executor: more than one runs the node's callback groups side
+        by side (the controller's loop beside its services).
 
     """
     # A crash in compiled code (rclpy, the middleware) prints where every thread was, the
@@ -101,7 +108,7 @@ def run_node(node_cls: Callable[[], Node], args: list[str] | None = None) -> Non
     previous: dict[int, SignalHandler] = {
         signum: signal.signal(signum, stop) for signum in (signal.SIGINT, signal.SIGTERM)}
     node: Node | None = None
-    executor: SingleThreadedExecutor | None = None
+    executor: Executor | None = None
     code = 0
     try:
         # rclpy's handlers (which shut the context down) wait until the node is whole: a
@@ -116,7 +123,8 @@ def run_node(node_cls: Callable[[], Node], args: list[str] | None = None) -> Non
             # held for it, could leave rclpy to destroy them in use (a crash on Ctrl-C).
             stop.interrupts = False
             install_signal_handlers(SignalHandlerOptions.ALL)
-            executor = SingleThreadedExecutor()
+            executor = MultiThreadedExecutor(num_threads=threads) if threads > 1 \
+                else SingleThreadedExecutor()
             executor.add_node(node)
             while not stop and executor.context.ok():
                 executor.spin_once(timeout_sec=WAKE_PERIOD)
@@ -125,7 +133,7 @@ def run_node(node_cls: Callable[[], Node], args: list[str] | None = None) -> Non
     except _CONFIGURATION_ERRORS as error:
         if not stop:
             sys.stderr.write(f'error: {error}\n')
-            code = 2
+            code = 2 if executor is None else 3
     except Exception:
         if not stop:
             raise

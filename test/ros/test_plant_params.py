@@ -32,6 +32,15 @@ def _speed(command, shift=(0.0, 0.0)):
     return math.radians(float(static_map.rate(np.array([command]))[0]))
 
 
+def _send(ros, plant, command):
+    """Publish one valve command from a node of the test, as a controller would."""
+    publisher = ros.helper('commands').create_publisher(Float64, 'j2/valve_command', 10)
+    assert ros.spin_until(lambda: publisher.get_subscription_count() >= 1)
+    count = plant.commands_received
+    publisher.publish(Float64(data=command))
+    assert ros.spin_until(lambda: plant.commands_received > count)
+
+
 @pytest.fixture
 def ros():
     """Return a harness with its own context, closed after the test."""
@@ -66,7 +75,7 @@ def test_noise_std_applies_from_the_next_tick(ros):
 def test_a_refused_request_applies_nothing(ros):
     plant = ros.add(PlantNode)
     loop = Lockstep(ros, plant)
-    plant._on_command(0, Float64(data=COMMAND))
+    _send(ros, plant, COMMAND)
     result = plant.set_parameters_atomically([Parameter('dead_zone_shift', value=SHIFT),
                                               Parameter('noise_std', value=50.0)])
     assert not result.successful and 'noise_std' in result.reason
@@ -140,7 +149,7 @@ def test_run_time_changes_take_effect_over_the_services():
 def test_a_dead_zone_shift_given_at_start_up_takes_effect(ros):
     plant = ros.add(PlantNode, parameters={'dead_zone_shift': SHIFT})
     loop = Lockstep(ros, plant)
-    plant._on_command(0, Float64(data=COMMAND))
+    _send(ros, plant, COMMAND)
     angles = [plant.last_angles[0]]
     loop.run(DELAY + 10, lambda k: angles.append(plant.last_angles[0]))
     speeds = np.radians(np.diff(angles)) / 0.01
