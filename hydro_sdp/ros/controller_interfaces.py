@@ -5,8 +5,8 @@ The topics and timers of a configured controller node, made at configure, destro
 ``<joint>/valve_command`` and ``<joint>/controller_state`` publishers and its
 ``<joint>/setpoint`` subscription, subscribes to ``joint_states`` and ``joint_trajectory``,
 and runs the feedback watchdog, on the node's clock and on a steady clock (a simulated
-clock that stops must not stop it). All of them are in one callback group, apart from
-the node's services. The node's callbacks are passed in; nothing here controls.
+clock that stops must not stop it). The node's callbacks are passed in; nothing here
+controls.
 
 """
 
@@ -19,7 +19,6 @@ from hydro_sdp.core.control.scheduling import watchdog_period_ns
 from hydro_sdp.ros import qos
 from hydro_sdp.ros.conversions import CONTROLLER_STATE_LABELS
 from hydro_sdp.ros.joint_loop import JointLoop
-from rclpy.callback_groups import CallbackGroup
 from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 from sensor_msgs.msg import JointState
@@ -56,8 +55,6 @@ class ControllerInterfaces:
         Called every watchdog period.
     timeout_ns : int
         Feedback timeout, ns (the watchdog runs at :func:`watchdog_period_ns` of it).
-    callback_group : CallbackGroup or None
-        The group of every subscription and timer made here (None: the node's default).
 
     """
 
@@ -65,13 +62,11 @@ class ControllerInterfaces:
                  on_state: Callable[[JointState], None],
                  on_setpoint: Callable[[Float64, JointLoop], None],
                  on_trajectory: Callable[[JointTrajectory], None],
-                 on_watchdog: Callable[[], None], timeout_ns: int,
-                 callback_group: CallbackGroup | None = None) -> None:
+                 on_watchdog: Callable[[], None], timeout_ns: int) -> None:
         self._node = node
         self._publishers = []
         self._subscriptions = []
         events = qos.subscription_events(node.context)
-        group = callback_group
         for loop in loops:
             loop.command_pub = node.create_publisher(
                 Float64, f'{loop.joint}/valve_command', qos.COMMAND_QOS,
@@ -83,18 +78,16 @@ class ControllerInterfaces:
             self._subscriptions.append(node.create_subscription(
                 Float64, f'{loop.joint}/setpoint',
                 partial(self._setpoint, on_setpoint, loop), qos.COMMAND_QOS,
-                event_callbacks=events, callback_group=group))
+                event_callbacks=events))
         self._subscriptions.append(node.create_subscription(
-            JointState, 'joint_states', on_state, qos.STATE_QOS, event_callbacks=events,
-            callback_group=group))
+            JointState, 'joint_states', on_state, qos.STATE_QOS, event_callbacks=events))
         self._subscriptions.append(node.create_subscription(
             JointTrajectory, 'joint_trajectory', on_trajectory, qos.COMMAND_QOS,
-            event_callbacks=events, callback_group=group))
+            event_callbacks=events))
         period = watchdog_period_ns(timeout_ns) * 1e-9
-        self.watchdog = node.create_timer(period, on_watchdog, callback_group=group)
-        self.steady_watchdog = node.create_timer(
-            period, on_watchdog, callback_group=group,
-            clock=Clock(clock_type=ClockType.STEADY_TIME))
+        self.watchdog = node.create_timer(period, on_watchdog)
+        self.steady_watchdog = node.create_timer(period, on_watchdog,
+                                                 clock=Clock(clock_type=ClockType.STEADY_TIME))
         #: The message every joint's controller_state is filled into.
         self.state_message = controller_state_message()
 

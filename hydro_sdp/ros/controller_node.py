@@ -40,10 +40,9 @@ end stops, and near a stop the valve holds in its dead-zone
 (:mod:`~hydro_sdp.core.control.safety`). Per message the node reads the clock once
 and the stamp once, and publishes the command before anything else it does.
 
-Its subscriptions and watchdog run in one callback group and its services
-(parameters, lifecycle) in another, so that run by
-:func:`~hydro_sdp.ros.runner.run_node` on two threads a slow request never holds up
-the loop; a lock keeps the two apart where a request changes what the loop reads.
+Its parameter services answer a request whose arrays or strings are too large from
+the message alone, so no request holds up the loop for more than its reading
+(:class:`~hydro_sdp.ros.parameters.node_parameters.NodeParameters`).
 
 Lifecycle: configure loads the files and designs, and declares the joints'
 parameters; activate starts commanding (every joint first holds where it is
@@ -66,7 +65,6 @@ Trajectories faster than a joint's identified top speed are refused.
 from __future__ import annotations
 
 import math
-import threading
 import time
 from typing import Sequence, Unpack
 
@@ -86,7 +84,6 @@ from hydro_sdp.ros.parameters.controller import CONTROLLER_PARAMETERS
 from hydro_sdp.ros.parameters.node_parameters import NodeParameters, ParameterRequest
 from hydro_sdp.ros.runner import run_node
 from hydro_sdp.ros.trajectory_follower import TrajectoryFollower
-from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64
@@ -118,10 +115,6 @@ class PipControllerNode(LifecycleNode):
     def __init__(self, *, node_name: str = 'pip_controller',
                  **kwargs: Unpack[NodeOptions]) -> None:
         LifecycleNode.__init__(self, node_name, **kwargs)
-        #: Held by the loop's callbacks, and by whatever changes what they read.
-        self.lock = threading.RLock()
-        #: The loop's subscriptions and timers; the services stay in the default group.
-        self.control_group = MutuallyExclusiveCallbackGroup()
         self.loops: list[JointLoop] = []
         self.active = False
         self.interfaces: ControllerInterfaces | None = None
@@ -177,55 +170,49 @@ class PipControllerNode(LifecycleNode):
                 else ConfigurationError(str(error))
             self.get_logger().error(f'configuration failed: {error}')
             return TransitionCallbackReturn.FAILURE
-        with self.lock:
-            self.loops = loops
-            self.trajectories = TrajectoryFollower(loops)
-            self.interfaces = ControllerInterfaces(
-                self, loops, on_state=self._on_state, on_setpoint=self._on_setpoint,
-                on_trajectory=self._on_trajectory, on_watchdog=self._on_watchdog,
-                timeout_ns=seconds_to_ns(self.feedback_timeout),
-                callback_group=self.control_group)
-            self.diagnostics = DiagnosticsReporter(
-                self, self.parameters.double('diagnostic_period'), self._statuses)
+        self.loops = loops
+        self.trajectories = TrajectoryFollower(loops)
+        self.interfaces = ControllerInterfaces(
+            self, loops, on_state=self._on_state, on_setpoint=self._on_setpoint,
+            on_trajectory=self._on_trajectory, on_watchdog=self._on_watchdog,
+            timeout_ns=seconds_to_ns(self.feedback_timeout))
+        self.diagnostics = DiagnosticsReporter(
+            self, self.parameters.double('diagnostic_period'), self._statuses)
         return SUCCESS
 
     def on_activate(self, state: LifecycleState) -> TransitionCallbackReturn:
         """Start commanding; every joint holds where the next sample finds it."""
-        with self.lock:
-            now = self._now_ns()
-            for loop in self.loops:
-                loop.reset(now)
-            self.trajectories = TrajectoryFollower(self.loops)
-            self.active = True
+        now = self._now_ns()
+        for loop in self.loops:
+            loop.reset(now)
+        self.trajectories = TrajectoryFollower(self.loops)
+        self.active = True
         return SUCCESS
 
     def on_deactivate(self, state: LifecycleState) -> TransitionCallbackReturn:
         """Close every valve once and stop commanding."""
-        with self.lock:
-            self.active = False
-            for loop in self.loops:
-                loop.close_valve()
+        self.active = False
+        for loop in self.loops:
+            loop.close_valve()
         return SUCCESS
 
     def on_cleanup(self, state: LifecycleState) -> TransitionCallbackReturn:
         """Undo configure."""
-        with self.lock:
-            if self.interfaces is not None:
-                self.interfaces.destroy(self.loops)
-                self.interfaces = None
-            if self.diagnostics is not None:
-                self.diagnostics.destroy()
-                self.diagnostics = None
-            self.configuration.release(self.loops)
-            self.loops = []
+        if self.interfaces is not None:
+            self.interfaces.destroy(self.loops)
+            self.interfaces = None
+        if self.diagnostics is not None:
+            self.diagnostics.destroy()
+            self.diagnostics = None
+        self.configuration.release(self.loops)
+        self.loops = []
         return SUCCESS
 
     def on_shutdown(self, state: LifecycleState) -> TransitionCallbackReturn:
         """Close the valves if commanding, and release everything."""
-        with self.lock:
-            if self.active:
-                self.on_deactivate(state)
-            return self.on_cleanup(state)
+        if self.active:
+            self.on_deactivate(state)
+        return self.on_cleanup(state)
 
     def state_label(self) -> str:
         """Return the lifecycle state's label (``active``, ``inactive``...)."""
@@ -234,18 +221,17 @@ class PipControllerNode(LifecycleNode):
     # Control: every sample comes through _on_state; rare paths (refusals, warnings) are
     # methods of their own, so the common path stays short.
     def _on_state(self, message: JointState) -> None:
-        with self.lock:
-            self.samples += 1
-            if not self.active:
-                return
-            stamp = message.header.stamp
-            stamp_ns = stamp.sec * 1_000_000_000 + stamp.nanosec
-            names = message.name
-            positions = message.position
-            now = self._now_ns()
-            steady = time.monotonic_ns()
-            for loop in self.loops:
-                self._control(loop, stamp_ns, names, positions, now, steady)
+        self.samples += 1
+        if not self.active:
+            return
+        stamp = message.header.stamp
+        stamp_ns = stamp.sec * 1_000_000_000 + stamp.nanosec
+        names = message.name
+        positions = message.position
+        now = self._now_ns()
+        steady = time.monotonic_ns()
+        for loop in self.loops:
+            self._control(loop, stamp_ns, names, positions, now, steady)
 
     def _control(self, loop: JointLoop, stamp: int, names: Sequence[str],
                  positions: Sequence[float], now: int, steady: int) -> None:
@@ -343,37 +329,34 @@ class PipControllerNode(LifecycleNode):
             return int(handle.get_now().nanoseconds)
 
     def _on_watchdog(self) -> None:
-        with self.lock:
-            if not self.active:
-                return
-            now = self._now_ns()
-            steady = time.monotonic_ns()
-            for loop in self.loops:
-                state = loop.gate.watchdog(now, steady)
-                if state == 'lost':
-                    self._warn(f'{loop.joint}: no valid feedback for '
-                               f'{loop.gate.silence_ns(now, steady) * 1e-9:.2f} s; valve '
-                               'closed')
-                if state != 'fed':
-                    loop.close_valve()
+        if not self.active:
+            return
+        now = self._now_ns()
+        steady = time.monotonic_ns()
+        for loop in self.loops:
+            state = loop.gate.watchdog(now, steady)
+            if state == 'lost':
+                self._warn(f'{loop.joint}: no valid feedback for '
+                           f'{loop.gate.silence_ns(now, steady) * 1e-9:.2f} s; valve '
+                           'closed')
+            if state != 'fed':
+                loop.close_valve()
 
     def _statuses(self, now_ns: int) -> list[tuple[str, HealthStatus]]:
-        with self.lock:
-            return [(loop.joint, joint_health(loop.snapshot(now_ns, self.active)))
-                    for loop in self.loops]
+        return [(loop.joint, joint_health(loop.snapshot(now_ns, self.active)))
+                for loop in self.loops]
 
     # Set-points and trajectories.
     def _on_setpoint(self, message: Float64, loop: JointLoop | None = None) -> None:
-        with self.lock:
-            loop = loop or self.loops[0]
-            self.setpoints_received += 1
-            value = float(message.data)
-            if not math.isfinite(value):
-                self._warn(f'{loop.joint}: refused a non-finite set-point; keeping '
-                           f'{loop.setpoint}')
-                return
-            loop.setpoint = self._safe_setpoint(loop, math.degrees(value))
-            loop.following = False
+        loop = loop or self.loops[0]
+        self.setpoints_received += 1
+        value = float(message.data)
+        if not math.isfinite(value):
+            self._warn(f'{loop.joint}: refused a non-finite set-point; keeping '
+                       f'{loop.setpoint}')
+            return
+        loop.setpoint = self._safe_setpoint(loop, math.degrees(value))
+        loop.following = False
 
     def _safe_setpoint(self, loop: JointLoop, setpoint: float) -> float:
         limits = loop.model.angle_limits
@@ -386,15 +369,14 @@ class PipControllerNode(LifecycleNode):
         return safe
 
     def _on_trajectory(self, message: TrajectoryMessage) -> None:
-        with self.lock:
-            self.trajectories_received += 1
-            try:
-                assert self.trajectories is not None
-                self.trajectories.take(message, self._now_ns() * 1e-9, self.setpoint_margin,
-                                       self.active)
-            except DataError as error:
-                self.trajectories_refused += 1
-                self.get_logger().warning(str(error))
+        self.trajectories_received += 1
+        try:
+            assert self.trajectories is not None
+            self.trajectories.take(message, self._now_ns() * 1e-9, self.setpoint_margin,
+                                   self.active)
+        except DataError as error:
+            self.trajectories_refused += 1
+            self.get_logger().warning(str(error))
 
     # Parameters: checked whole by _check_request, then applied by the handlers below.
     def _check_request(self, request: ParameterRequest) -> None:
@@ -404,53 +386,41 @@ class PipControllerNode(LifecycleNode):
             setpoint_range(loop.model.angle_limits, margin)
 
     def _apply_joints(self, request: ParameterRequest) -> None:
-        specs = [loop.candidate(request) for loop in self.loops]
-        with self.lock:
-            changes = [change for loop, spec in zip(self.loops, specs)
-                       for change in loop.apply(spec)]
-        for change in changes:
-            self.get_logger().info(change)
+        for loop in self.loops:
+            for change in loop.apply(loop.candidate(request)):
+                self.get_logger().info(change)
 
     def _apply_feedback_timeout(self) -> None:
-        with self.lock:
-            self.feedback_timeout = self.parameters.double('feedback_timeout')
-            timeout_ns = seconds_to_ns(self.feedback_timeout)
-            for loop in self.loops:
-                loop.gate.timeout_ns = timeout_ns
-            if self.interfaces is not None:
-                self.interfaces.set_timeout(timeout_ns)
+        self.feedback_timeout = self.parameters.double('feedback_timeout')
+        timeout_ns = seconds_to_ns(self.feedback_timeout)
+        for loop in self.loops:
+            loop.gate.timeout_ns = timeout_ns
+        if self.interfaces is not None:
+            self.interfaces.set_timeout(timeout_ns)
         if self.parameters.live:
             self.get_logger().info(f'feedback_timeout now {self.feedback_timeout:g} s')
 
     def _apply_setpoint_margin(self) -> None:
-        with self.lock:
-            self.setpoint_margin = self.parameters.double('setpoint_margin')
-            for loop in self.loops:
-                loop.allowed = setpoint_range(loop.model.angle_limits, self.setpoint_margin)
-                if loop.setpoint is not None:
-                    loop.setpoint = self._safe_setpoint(loop, loop.setpoint)
+        self.setpoint_margin = self.parameters.double('setpoint_margin')
+        for loop in self.loops:
+            loop.allowed = setpoint_range(loop.model.angle_limits, self.setpoint_margin)
+            if loop.setpoint is not None:
+                loop.setpoint = self._safe_setpoint(loop, loop.setpoint)
 
     def _apply_stop_band(self) -> None:
-        with self.lock:
-            self.stop_band = self.parameters.double('stop_band')
-            for loop in self.loops:
-                loop.stop_hold.band = self.stop_band
+        self.stop_band = self.parameters.double('stop_band')
+        for loop in self.loops:
+            loop.stop_hold.band = self.stop_band
 
     def _apply_feedback_margin(self) -> None:
-        with self.lock:
-            self.feedback_margin = self.parameters.double('feedback_margin')
-            for loop in self.loops:
-                loop.plausibility.margin = self.feedback_margin
+        self.feedback_margin = self.parameters.double('feedback_margin')
+        for loop in self.loops:
+            loop.plausibility.margin = self.feedback_margin
 
     def _apply_feedforward(self) -> None:
         self.feedforward = self.parameters.flag('feedforward')
 
-    def destroy_node(self) -> None:
-        """Destroy the node once no callback of the loop runs."""
-        with self.lock:
-            super().destroy_node()
-
 
 def main(args: list[str] | None = None) -> None:
     """Run :class:`PipControllerNode` until shutdown (console script ``controller_node``)."""
-    run_node(PipControllerNode, args, threads=2)
+    run_node(PipControllerNode, args)

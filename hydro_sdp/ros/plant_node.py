@@ -21,9 +21,9 @@ machine and are read-only (:data:`~hydro_sdp.ros.parameters.plant.PLANT_PARAMETE
 Each joint's valve takes commands as the core
 :class:`~hydro_sdp.core.control.command_gate.CommandGate` says: only while the
 publishers matched to its subscription are the one allowed source (``command_source``,
-named by the ROS graph, or any single node), at most ``command_rate_limit`` per second, clamped to the valve
-range; a refused command closes that valve (throttled warning), and with
-``command_timeout`` the valve closes when its source falls silent.
+named by the ROS graph, or any single node), at most ``command_rate_limit`` per second,
+clamped to the valve range; a refused command closes that valve (throttled warning), and
+with ``command_timeout`` the valve closes when its source falls silent.
 
 """
 

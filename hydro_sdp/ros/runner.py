@@ -30,8 +30,7 @@ from typing import Callable, Union
 from hydro_sdp.core.errors import HydroSdpError
 import rclpy
 from rclpy.exceptions import NameValidationException, ParameterException
-from rclpy.executors import (
-    Executor, ExternalShutdownException, MultiThreadedExecutor, SingleThreadedExecutor)
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.signals import install_signal_handlers, SignalHandlerOptions, uninstall_signal_handlers
 
@@ -61,7 +60,7 @@ class _Stop:
         return bool(self.signals)
 
 
-def _destroy(node: Node | None, executor: Executor | None, stop: _Stop) -> None:
+def _destroy(node: Node | None, executor: SingleThreadedExecutor | None, stop: _Stop) -> None:
     # After a signal the context may already be down: a failure to tidy up is then moot.
     try:
         if executor is not None:
@@ -76,8 +75,7 @@ def _destroy(node: Node | None, executor: Executor | None, stop: _Stop) -> None:
         uninstall_signal_handlers()
 
 
-def run_node(node_cls: Callable[[], Node], args: list[str] | None = None,
-             threads: int = 1) -> None:
+def run_node(node_cls: Callable[[], Node], args: list[str] | None = None) -> None:
     """
     Initialise rclpy, spin one node of ``node_cls`` and always clean up.
 
@@ -94,9 +92,6 @@ def run_node(node_cls: Callable[[], Node], args: list[str] | None = None,
         Node class constructed with no arguments.
     args : list[str] or None
         Command-line arguments (``--ros-args`` included) passed to ``rclpy.init``.
-    threads : int
-        Threads of the executor: more than one runs the node's callback groups side
-        by side (the controller's loop beside its services).
 
     """
     # A crash in compiled code (rclpy, the middleware) prints where every thread was, the
@@ -108,7 +103,7 @@ def run_node(node_cls: Callable[[], Node], args: list[str] | None = None,
     previous: dict[int, SignalHandler] = {
         signum: signal.signal(signum, stop) for signum in (signal.SIGINT, signal.SIGTERM)}
     node: Node | None = None
-    executor: Executor | None = None
+    executor: SingleThreadedExecutor | None = None
     code = 0
     try:
         # rclpy's handlers (which shut the context down) wait until the node is whole: a
@@ -123,8 +118,7 @@ def run_node(node_cls: Callable[[], Node], args: list[str] | None = None,
             # held for it, could leave rclpy to destroy them in use (a crash on Ctrl-C).
             stop.interrupts = False
             install_signal_handlers(SignalHandlerOptions.ALL)
-            executor = MultiThreadedExecutor(num_threads=threads) if threads > 1 \
-                else SingleThreadedExecutor()
+            executor = SingleThreadedExecutor()
             executor.add_node(node)
             while not stop and executor.context.ok():
                 executor.spin_once(timeout_sec=WAKE_PERIOD)

@@ -154,3 +154,24 @@ def test_a_dead_zone_shift_given_at_start_up_takes_effect(ros):
     loop.run(DELAY + 10, lambda k: angles.append(plant.last_angles[0]))
     speeds = np.radians(np.diff(angles)) / 0.01
     assert speeds[-5:] == pytest.approx([_speed(COMMAND, SHIFT)] * 5, rel=1e-9)
+
+
+def test_a_silent_source_closes_the_valve(ros):
+    plant = ros.add(PlantNode, parameters={'command_timeout': 0.2, 'initial_angles': [10.0]})
+    loop = Lockstep(ros, plant)
+    _send(ros, plant, 3.0)
+    angles = [plant.last_angles[0]]
+    loop.run(60, lambda k: angles.append(plant.last_angles[0]))
+    moving = np.diff(angles)
+    # Driven after the 0.15 s delay; 0.2 s after the command the valve closes, and the joint
+    # stops a delay later.
+    assert moving[20] > 0.0 and np.all(moving[40:] == 0.0)
+
+
+def test_commands_from_a_node_other_than_the_named_source_are_refused(ros):
+    plant = ros.add(PlantNode, parameters={'command_source': '/pip_controller',
+                                           'initial_angles': [10.0]})
+    _send(ros, plant, 3.0)                      # from /commands, not /pip_controller
+    assert plant.commands_refused == 1
+    Lockstep(ros, plant).run(40)
+    assert plant.last_angles == [10.0]

@@ -20,7 +20,9 @@ ros2_controllers controller: the node owns one, built from its
 * refuses an array or string larger than the table allows on its length alone, before
   any of its values is read: a request to the parameter services is answered from its
   message, before rclpy turns it into parameters (a million gains would otherwise hold
-  the node for seconds), and a request set in the process in the pre-set callback;
+  the node, and its control loop, for seconds), and a request set in the process in the
+  pre-set callback; a request naming more than :data:`~.spec.MAX_NAMES` parameters is
+  answered with nothing (reading services) or refused (set services);
 * refuses ``use_sim_time`` once the node runs: a clock switched at run time (to a
   ``/clock`` nobody publishes) would stop the node's timers and its watchdog.
 
@@ -35,9 +37,11 @@ from hydro_sdp.core.errors import ConfigurationError, HydroSdpError
 from hydro_sdp.ros.parameters.descriptors import as_double, descriptor, ROS_TYPES
 from hydro_sdp.ros.parameters.request import array_items, ParameterRequest
 from hydro_sdp.ros.parameters.spec import (
-    ParameterSpec, ParameterTable, ParameterValue, size_error)
+    MAX_CHARACTERS, MAX_NAMES, ParameterSpec, ParameterTable, ParameterValue, size_error)
 from rcl_interfaces.msg import SetParametersResult
-from rcl_interfaces.srv import SetParameters, SetParametersAtomically
+from rcl_interfaces.srv import (
+    DescribeParameters, GetParameters, GetParameterTypes, ListParameters, SetParameters,
+    SetParametersAtomically)
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 
@@ -46,6 +50,11 @@ __all__ = ['NodeParameters', 'ParameterRequest']
 #: A set request of the parameter services, and its answer.
 Request = Union[SetParameters.Request, SetParametersAtomically.Request]
 Response = Union[SetParameters.Response, SetParametersAtomically.Response]
+#: A request of the reading services, and its answer.
+Queried = Union[GetParameters.Request, DescribeParameters.Request, GetParameterTypes.Request,
+                ListParameters.Request]
+Answered = Union[GetParameters.Response, DescribeParameters.Response,
+                 GetParameterTypes.Response, ListParameters.Response]
 
 
 class NodeParameters:
@@ -103,6 +112,9 @@ class NodeParameters:
         for service in node.services:
             if service.srv_type in (SetParameters, SetParametersAtomically):
                 service.callback = partial(self._sized, service.callback)
+            elif service.srv_type in (GetParameters, DescribeParameters, GetParameterTypes,
+                                      ListParameters):
+                service.callback = partial(self._listed, service.callback)
 
     # Declaration.
     def declare(self, names: Iterable[str] | None = None,
@@ -294,8 +306,20 @@ class NodeParameters:
                response: Response) -> Response:
         # A set request of the services, refused on the sizes its message gives, before
         # rclpy reads a value of it; else answered as rclpy answers it.
-        reasons = []
+        if len(request.parameters) > MAX_NAMES:
+            reason = f'a request names at most {MAX_NAMES} parameters, got ' \
+                     f'{len(request.parameters)}'
+            if isinstance(response, SetParametersAtomically.Response):
+                response.result = SetParametersResult(successful=False, reason=reason)
+            else:
+                response.results = [SetParametersResult(successful=False, reason=reason)]
+            return response
+        reasons: list[str | None] = []
         for message in request.parameters:
+            if len(message.name) > MAX_CHARACTERS:
+                reasons.append(f'a parameter name takes at most {MAX_CHARACTERS} characters, '
+                               f'got {len(message.name)}')
+                continue
             spec = self.table.find(message.name)
             value = message.value
             sized = value.string_value if spec is not None and spec.kind == 'string' else \
@@ -316,6 +340,16 @@ class NodeParameters:
         response.results = [SetParametersResult(successful=False, reason=reason) if reason
                             else next(results) for reason in reasons]
         return response
+
+    @staticmethod
+    def _listed(answer: Callable[[Queried, Answered], Answered], request: Queried,
+                response: Answered) -> Answered:
+        # A request of the reading services naming more parameters than a node has, or names
+        # longer than any, is answered with nothing, as rclpy answers for names it lacks.
+        names = request.prefixes if isinstance(request, ListParameters.Request) else request.names
+        if len(names) > MAX_NAMES or any(len(name) > MAX_CHARACTERS for name in names):
+            return response
+        return answer(request, response)
 
     def _before_set(self, parameters: list[Parameter]) -> list[Parameter]:
         # Pre-set: a value too large is replaced by an empty one of its type (refused in

@@ -31,6 +31,8 @@ _NUMBER_WORDS = {1: 'one', 2: 'two', 3: 'three'}
 #: beyond them is refused on its size alone, before any value is read.
 MAX_ITEMS = 64
 MAX_CHARACTERS = 4096
+#: Most parameters one request to a node's parameter services names.
+MAX_NAMES = 1024
 #: Most characters of a refused value a message shows.
 _SHOWN = 80
 

@@ -146,6 +146,10 @@ def test_a_value_too_large_is_refused_on_its_size_before_it_is_read(nodes):
     assert first.reason == "parameter 'gains.f' takes at most 64 values, got 100000"
     result = client.set_atomically(gains__f=huge, idz__beta=0.06)
     assert not result.successful and 'at most 64 values' in result.reason
+    # More names than a node has parameters: a reading service answers nothing.
+    assert client.get('idz.beta') == [(Parameter.Type.DOUBLE, before.idz.beta)]
+    assert client.get(*['idz.beta'] * 2000) == []
+    assert client.get('x' * 5000) == []
     # In the process, refused by the pre-set callback, a string as an array.
     result = controller.set_parameters([Parameter('idz.mode', value='x' * 5000)])[0]
     assert result.reason == "parameter 'idz.mode' takes at most 4096 characters, got 5000"
