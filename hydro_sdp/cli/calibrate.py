@@ -212,8 +212,8 @@ def ros_parameters(result: CalibrationResult, folder: Path) -> ParameterFile:
     Returns
     -------
     dict
-        ``/**/pip_controller``, ``/**/hydro_plant`` and, for an ``sdp`` model,
-        ``/**/sdp_identifier``, with the values that differ from the defaults.
+        ``/**/pip_controller``, ``/**/hydro_plant`` and ``/**/sdp_identifier``, with
+        the values that differ from the defaults.
 
     """
     model_file = str(folder / 'model.yaml')
@@ -231,8 +231,7 @@ def ros_parameters(result: CalibrationResult, folder: Path) -> ParameterFile:
         '/**/pip_controller': {'ros__parameters': {
             'model_file': model_file, 'controller_file': str(folder / 'controller.yaml')}},
         '/**/hydro_plant': {'ros__parameters': plant}}
-    if result.model.kind == 'sdp':
-        parameters['/**/sdp_identifier'] = {'ros__parameters': identifier}
+    parameters['/**/sdp_identifier'] = {'ros__parameters': identifier}
     return parameters
 
 
@@ -249,9 +248,6 @@ def describe(result: CalibrationResult, folder: Path) -> Payload:
     """Return the ``--json`` object of a calibration written to ``folder``."""
     check = result.check
     warnings = list(result.warnings)
-    if result.model.kind != 'sdp':
-        warnings.append(f'params.yaml has no sdp_identifier: the online identifier tracks '
-                        f'sdp models, not {result.model.kind}')
     return {
         'model': str(folder / 'model.yaml'),
         'controller': str(folder / 'controller.yaml'),

@@ -81,6 +81,16 @@ class FileController:
             return min(vs[-1] + u * (vs[-1] - vs[-2]) / (us[-1] - us[-2]), high)
         return float(np.interp(u, us, vs))
 
+    def _valve(self, u: float, branch: int) -> float:
+        """The command of ``u`` on ``branch`` (0: rest), the fade-in band applied."""
+        if branch == 0:
+            return self.rest
+        v = self._branch_command(u, branch)
+        if self.fade > 0.0 and self.mode == 'zero':
+            # Beyond the band the command leaves rest as tanh((|u| - beta) / fade).
+            v = self.rest + math.tanh((abs(u) - self.beta) / self.fade) * (v - self.rest)
+        return v
+
     def _increment(self, v: float) -> float:
         if self.table is not None:
             return float(np.interp(v, *self.table[::-1]))
@@ -88,6 +98,44 @@ class FileController:
         if v < low:
             return self.slopes[0] * (v - low)
         return self.slopes[1] * (v - high) if v > high else 0.0
+
+    def _table_slopes(self) -> tuple[float, float]:
+        """Each branch's chord from its edge to two thirds of its largest increment."""
+        slopes = []
+        for (us, vs), edge, end in ((self.negative, self.edges[0], 0),
+                                    (self.positive, self.edges[1], -1)):
+            target = 2.0 / 3.0 * us[end]
+            order = np.argsort(us)
+            slopes.append(target / (float(np.interp(target, us[order], vs[order])) - edge))
+        return slopes[0], slopes[1]
+
+    def recalibrate(self, edges: tuple[float, float], slopes: tuple[float, float]) -> None:
+        """
+        Take new IDZ edges and slopes as the controller node does (methods.md 5.4).
+
+        A chord takes them as they are; a table scales each branch's increments by
+        new over old slope and shifts its commands by the edge's change. The stored
+        increments are those the new IDZ gives for the commands of the old one, so
+        the valve does not jump.
+        """
+        commands = [self._valve(u, self.branch) if self.branch else None for u in self.us]
+        if self.table is None:
+            self.edges, self.slopes = tuple(edges), tuple(slopes)
+        else:
+            ratios = [new / now for new, now in zip(slopes, self._table_slopes())]
+            shifts = [new - now for new, now in zip(edges, self.edges)]
+            (nu, nv), (pu, pv) = self.negative, self.positive
+            self.negative = (nu * ratios[0], nv + shifts[0])
+            self.positive = (pu * ratios[1], pv + shifts[1])
+            if self.negative[1][-1] == self.positive[1][0]:
+                u = np.r_[self.negative[0], self.positive[0][1:]]
+                v = np.r_[self.negative[1], self.positive[1][1:]]
+            else:
+                u = np.r_[self.negative[0], self.positive[0]]
+                v = np.r_[self.negative[1], self.positive[1]]
+            self.table = (u, v)
+            self.edges = (float(self.negative[1][-1]), float(self.positive[1][0]))
+        self.us = [u if v is None else self._increment(v) for u, v in zip(self.us, commands)]
 
     def step(self, setpoint: float, y: float) -> float:
         """One control sample: the valve command for the angle ``y``."""
@@ -109,10 +157,7 @@ class FileController:
             self.branch = -1
         elif self.mode == 'zero':
             self.branch = 0
-        v = self.rest if self.branch == 0 else self._branch_command(u, self.branch)
-        if self.fade > 0.0 and self.branch != 0:
-            # Beyond the band the command leaves rest as tanh((|u| - beta) / fade).
-            v = self.rest + math.tanh((abs(u) - self.beta) / self.fade) * (v - self.rest)
+        v = self._valve(u, self.branch)
         if self.v_limits is not None and not self.v_limits[0] <= v <= self.v_limits[1]:
             v = min(max(v, self.v_limits[0]), self.v_limits[1])
             u = self._increment(v)
