@@ -9,12 +9,13 @@ an ``sdp`` map, the map's own table for the others), and check it in closed
 loop on that final model with its effects and the records' noise
 (:mod:`.loop_check`). When the valve pulses at hold and nothing else fails, the
 IDZ's compensation fades in instead (a fade-in band; the result keeps both
-designs' figures, the trade of settling against chatter); when chords fail the check the table takes their place;
-when the check still fails the dominant poles move toward 1 and the controller
-is designed again, and the result says so; if no design passes, the check is
-run again with each element idealised to say what stands in the way
-(:mod:`.loop_obstacles`). Without validation records, whole records are held
-out (never a piece of a record), and the result says which.
+designs' figures, the trade of settling against chatter); when chords fail the
+check the table takes their place; when the check still fails the dominant
+poles move toward 1 and the controller is designed again, and the result says
+so; if no design passes, the check is run again with each element idealised to
+say what stands in the way (:mod:`.loop_obstacles`). Without validation
+records, whole records are held out (never a piece of a record), and the
+result says which.
 
 """
 

@@ -22,11 +22,11 @@ from hydro_sdp.ros.testing import RosHarness
 import numpy as np
 import pytest
 from rcl_interfaces.srv import SetParameters, SetParametersAtomically
-from support.recalibration_loop import arm_model
-from support.table_valve_joint import TableJoint
 from rclpy.parameter import Parameter
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64
+from support.recalibration_loop import arm_model
+from support.table_valve_joint import TableJoint
 
 pytestmark = pytest.mark.ros
 
@@ -249,7 +249,7 @@ def test_an_unchanged_joint_is_never_recalibrated():
 
 
 class EdgeStub:
-    """Stands in for the edges' filter of a power_sat model: a set estimate, whatever the samples."""
+    """Stands in for the edges' filter of a power_sat model: a set estimate, whatever comes."""
 
     delay = 28
 

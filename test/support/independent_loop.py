@@ -82,7 +82,7 @@ class FileController:
         return float(np.interp(u, us, vs))
 
     def _valve(self, u: float, branch: int) -> float:
-        """The command of ``u`` on ``branch`` (0: rest), the fade-in band applied."""
+        """Return the command of ``u`` on ``branch`` (0: rest), the fade-in band applied."""
         if branch == 0:
             return self.rest
         v = self._branch_command(u, branch)

@@ -23,7 +23,7 @@ from pathlib import Path
 from typing import Sequence
 
 from hydro_sdp.core.control.idz_recalibration import (
-    Recalibration, recalibrated_idz, RecalibrationPolicy)
+    recalibrated_idz, Recalibration, RecalibrationPolicy)
 from hydro_sdp.core.identification.online import OnlineSettings
 from hydro_sdp.core.identification.online_edges import online_identifier
 from hydro_sdp.core.model.effects import ValveLag

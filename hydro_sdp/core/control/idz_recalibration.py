@@ -183,7 +183,7 @@ class Recalibration:
 
 def with_dead_zone(model: JointModel, edges: tuple[float, float]) -> JointModel:
     """
-    Return the model with its dead-zone edges at ``edges``, each side of the map moved with its edge.
+    Return the model with its dead-zone edges at ``edges``, each side moved with its edge.
 
     Parameters
     ----------

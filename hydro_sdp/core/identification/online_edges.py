@@ -105,7 +105,7 @@ def _side(model: JointModel, rest: float, end: float, dt: float) -> tuple[float,
 
 
 def _edge_slopes(table: np.ndarray, step: float) -> list[float]:
-    """Return each segment's slope, at least the chord to a third of the top speed near the edge."""
+    """Return each segment's slope, near the edge at least the chord to a third of the top."""
     slopes = np.diff(table) / step if step > 0.0 else np.zeros(table.size - 1)
     top = float(table[-1])
     reach = int(np.argmax(np.abs(table) >= BAND_SHARE * abs(top)))

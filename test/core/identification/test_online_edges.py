@@ -17,9 +17,10 @@ from hydro_sdp.core.control.idz_design import default_form, faded
 from hydro_sdp.core.control.idz_recalibration import recalibrated_idz, with_dead_zone
 from hydro_sdp.core.control.idz_table import TableInverseDeadZone
 from hydro_sdp.core.control.loop_chatter import MAX_PULSE_RATE
+from hydro_sdp.core.errors import ConfigurationError
 from hydro_sdp.core.identification.online import OnlineSdpIdentifier, OnlineSettings
 from hydro_sdp.core.identification.online_edges import (
-    EdgeEstimate, OnlineEdgeIdentifier, online_identifier)
+    EdgeEstimate, online_identifier, OnlineEdgeIdentifier)
 from hydro_sdp.core.model.effects import ValveLag
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.simulation import simulate
@@ -131,8 +132,17 @@ def test_a_narrowing_dead_zone_is_recalibrated_within_seconds_without_pulsing(jo
     assert after and after[0][0] < 24.0 + 6.0, run.recalibrations
     np.testing.assert_allclose(run.edges, run.worn_edges, atol=1.0 * scale)
     moved = after[-1][1]
-    assert moved[0] > run.worn_edges[0] - 1.5 * scale and moved[1] < run.worn_edges[1] + 1.5 * scale
+    assert moved[0] > run.worn_edges[0] - 1.5 * scale
+    assert moved[1] < run.worn_edges[1] + 1.5 * scale
     # Every step settles, and the holds after the wear pulse less than the check allows.
     assert all(settling < 8.0 for _, settling, _, _ in run.holds)
     held = [h for h in run.holds if h[0] >= 32.0]
     assert sum(h[2] for h in held) / sum(h[3] for h in held) < MAX_PULSE_RATE
+
+
+def test_a_map_that_does_not_move_one_way_is_refused():
+    one_way = JointModel('arm', PwlMap((-100.0, 0.0, 36.0, 100.0), (0.0, 0.0, 0.0, 30.0)), 0.1,
+                         input_limits=(-100.0, 100.0))
+    with pytest.raises(ConfigurationError, match='does not move the joint down within the '
+                                                 r'commands \[-100.0, 0.0\]'):
+        online_identifier(one_way, 0.01)
