@@ -46,7 +46,7 @@ def chatter_lines(result: CalibrationResult, unit: str) -> list[str]:
         f'{MAX_PULSE_RATE:g}/s; triangles on the valve panel of the figures), travel '
         f'{chatter.travel_rate:.3g} {unit}/s'
         + ('' if share is None else f' ({100.0 * share:.0f} % of the valve range)')
-        + f' (bound {chatter.travel_bound:.3g}, two dead-zone widths per s).', '']
+        + f' (bound {chatter.travel_bound:.3g} {unit}/s, two dead-zone widths).', '']
     if result.trade:
         rows = [f'| {"fade-in " + format(f.fade, ".3g") if f.fade else "chatter band alone"} | '
                 f'{_seconds(f.settling[0])}-{_seconds(f.settling[1])} | {f.overshoot:.1f} | '

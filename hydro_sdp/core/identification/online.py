@@ -7,8 +7,12 @@ Its gradient is taken from a soft-edged copy of ``q`` so that a dead-zone edge
 that has moved inwards can still be learned (inside the estimated dead-zone the
 exact gradient is zero). Samples are skipped while the static model does not
 hold: just after a command change (valve transients), near an end stop, for
-non-finite data and for outliers. The estimator is what lets a PIP-IDZ loop
-recalibrate itself after wear or a part replacement, the first paper's promise.
+non-finite data and for outliers. A model's valve lag is followed: the
+prediction and its gradient pass through it, and samples where the valve has
+not settled are skipped. The estimator is what lets a PIP-IDZ loop recalibrate
+itself after wear or a part replacement, the first paper's promise.
+:class:`OnlineMapFilter` is the filter on any six map coefficients; the other
+map families' is :mod:`.online_edges`.
 
 """
 
