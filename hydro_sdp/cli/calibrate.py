@@ -24,6 +24,7 @@ import yaml
 
 if TYPE_CHECKING:
     from hydro_sdp.core.calibration import CalibrationResult
+    from hydro_sdp.core.control.loop_chatter import Chatter
     from hydro_sdp.ros.parameters.spec import ParameterValue
 
     #: A ROS 2 parameter file: node pattern, ``ros__parameters``, name and value.
@@ -216,8 +217,8 @@ def ros_parameters(result: CalibrationResult, folder: Path) -> ParameterFile:
     Returns
     -------
     dict
-        ``/**/pip_controller``, ``/**/hydro_plant`` and, for an ``sdp`` model,
-        ``/**/sdp_identifier``, with the values that differ from the defaults.
+        ``/**/pip_controller``, ``/**/hydro_plant`` and ``/**/sdp_identifier``, with
+        the values that differ from the defaults.
 
     """
     model_file = str(folder / 'model.yaml')
@@ -235,18 +236,23 @@ def ros_parameters(result: CalibrationResult, folder: Path) -> ParameterFile:
         '/**/pip_controller': {'ros__parameters': {
             'model_file': model_file, 'controller_file': str(folder / 'controller.yaml')}},
         '/**/hydro_plant': {'ros__parameters': plant}}
-    if result.model.kind == 'sdp':
-        parameters['/**/sdp_identifier'] = {'ros__parameters': identifier}
+    parameters['/**/sdp_identifier'] = {'ros__parameters': identifier}
     return parameters
+
+
+def chatter_keys(chatter: Chatter) -> Payload:
+    """Return the ``--json`` keys of the valve's work at hold (methods.md section 5.7)."""
+    from hydro_sdp.core.control.loop_chatter import MAX_PULSE_RATE
+    return {'pulse_rate': chatter.pulse_rate, 'pulse_bound': MAX_PULSE_RATE,
+            'travel_rate': chatter.travel_rate, 'travel_share': chatter.travel_share,
+            'travel_bound': chatter.travel_bound, 'held': chatter.duration,
+            'edges': None if chatter.edges is None else list(chatter.edges)}
 
 
 def describe(result: CalibrationResult, folder: Path) -> Payload:
     """Return the ``--json`` object of a calibration written to ``folder``."""
     check = result.check
     warnings = list(result.warnings)
-    if result.model.kind != 'sdp':
-        warnings.append(f'params.yaml has no sdp_identifier: the online identifier tracks '
-                        f'sdp models, not {result.model.kind}')
     return {
         'model': str(folder / 'model.yaml'),
         'controller': str(folder / 'controller.yaml'),
@@ -270,8 +276,15 @@ def describe(result: CalibrationResult, folder: Path) -> Payload:
             'ramp_error': check.ramp_error,
             'ramp_settling': json_number(check.ramp_settling),
             'limit_cycles': check.cycles,
+            'chatter': chatter_keys(check.chatter),
             'designs': [list(poles) for poles in result.designs],
             'idz_forms': list(result.forms),
+            'idz_fades': list(result.fades),
+            'trade': [{'fade': f.fade, 'passed': f.passed,
+                       'settling_time': [json_number(x) for x in f.settling],
+                       'overshoot': f.overshoot, 'pulse_rate': f.pulse_rate,
+                       'travel_rate': f.travel_rate, 'travel_share': f.travel_share}
+                      for f in result.trade],
             'in_the_way': list(result.in_the_way),
             'idealised': {o.element: {'passed': o.passed, 'failures': o.failures}
                           for o in result.obstacles}},

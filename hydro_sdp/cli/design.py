@@ -36,6 +36,11 @@ velocity map in one of two forms (--idz-form):
          Its chatter band covers --noise-std and keeps the smallest correction
          small for the model's delay and lag.
 
+With --idz-fade the compensation fades in from rest beyond the chatter band
+instead of jumping across the dead-zone (zero mode), so that the valve does not
+pulse while the joint holds; calibrate takes twice the band when its check
+finds the valve pulsing.
+
 The controller then sees the integrator with the model's delay and, when the
 model has a valve_lag, that lag (one more pole): the design plant, recorded in
 the controller file. The gains come from LQ design (default weights: the
@@ -92,6 +97,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         help='IDZ chatter band, deg per control sample (default: 0.05)')
     parser.add_argument('--idz-mode', choices=IDZ_MODES, default='zero',
                         help='IDZ near u = 0: zero band (paper), smooth blend or hysteresis')
+    parser.add_argument('--idz-fade', type=non_negative_float, default=0.0, metavar='FADE',
+                        help='IDZ fade-in band beyond the chatter band, deg per control '
+                             'sample: the command leaves rest as tanh((|u| - beta) / FADE) '
+                             '(zero mode; default: 0, none)')
     parser.add_argument('--idz-form', choices=IDZ_FORMS,
                         help="chord: invert chords of the map (the paper's IDZ); table: invert "
                              'the map itself (default: chord for sdp, sdp_dz and linear, '
@@ -126,6 +135,7 @@ def describe(spec: ControllerSpec) -> Payload:
         'dead_zone': None if idz is None else list(idz.dead_zone),
         'beta': None if idz is None else idz.beta,
         'idz_mode': None if idz is None else idz.mode,
+        'fade': None if idz is None else idz.fade,
         'u_limits': None if spec.u_limits is None else list(spec.u_limits),
         'v_limits': None if spec.v_limits is None else list(spec.v_limits),
         'design': dict(spec.design),
@@ -143,7 +153,7 @@ def run(args: argparse.Namespace) -> Outcome:
         poles=args.poles, weights=weights,
         u_limits=tuple(args.u_limits) if args.u_limits else None, beta=args.beta,
         mode=args.idz_mode, v_range=tuple(args.v_range) if args.v_range else None,
-        form=args.idz_form, noise_std=args.noise_std)
+        form=args.idz_form, noise_std=args.noise_std, fade=args.idz_fade)
     payload = describe(spec)
     if control is not None:
         payload['control_samples'] = control.samples
@@ -174,7 +184,8 @@ def run(args: argparse.Namespace) -> Outcome:
                  ['IDZ edges', ', '.join(f'{x:.4f}' for x in spec.idz.dead_zone)],
                  ['IDZ slopes', ', '.join(f'{x:.4f}' for x in spec.idz.slopes)
                   + ' deg/sample per unit'],
-                 ['chatter band', f'{spec.idz.beta:g} ({spec.idz.mode})']]
+                 ['chatter band', f'{spec.idz.beta:g} ({spec.idz.mode})'
+                  + (f', fade-in {spec.idz.fade:g}' if spec.idz.fade else '')]]
     if spec.u_limits is not None:
         rows.append(['u limits', ', '.join(f'{x:.4f}' for x in spec.u_limits)])
     lines = [f'PIP-IDZ controller for joint {spec.joint} ({spec.design["method"]} design)']

@@ -28,7 +28,7 @@ from hydro_sdp.ros.parameters.spec import ParameterValue
 from hydro_sdp.ros.protocols import MessagePublisher
 from std_msgs.msg import Float64
 
-IDZ_PARAMETERS = ('idz.dead_zone', 'idz.slopes', 'idz.beta', 'idz.mode')
+IDZ_PARAMETERS = ('idz.dead_zone', 'idz.slopes', 'idz.beta', 'idz.mode', 'idz.fade')
 GAIN_PARAMETERS = ('gains.f', 'gains.g', 'gains.k_i')
 
 
@@ -125,7 +125,7 @@ class JointLoop:
         idz = self.spec.idz
         if idz is not None:
             values.update({'idz.dead_zone': list(idz.dead_zone), 'idz.slopes': list(idz.slopes),
-                           'idz.beta': idz.beta, 'idz.mode': idz.mode})
+                           'idz.beta': idz.beta, 'idz.mode': idz.mode, 'idz.fade': idz.fade})
         return values
 
     def candidate(self, request: ParameterRequest) -> ControllerSpec:
@@ -167,6 +167,7 @@ class JointLoop:
         slopes = request.pair(prefix + 'idz.slopes', current.slopes)
         beta = request.number(prefix + 'idz.beta', current.beta)
         mode = idz_mode(request.text(prefix + 'idz.mode', current.mode))
+        fade = request.number(prefix + 'idz.fade', current.fade)
         if isinstance(current, TableInverseDeadZone):
             # A table keeps its shape: new slopes scale a branch, new edges shift it.
             idz = current
@@ -174,9 +175,9 @@ class JointLoop:
                 idz = idz.with_slopes(slopes)
             if edges != current.dead_zone:
                 idz = idz.with_edges(edges)
-            return replace(idz, beta=beta, mode=mode)
+            return replace(idz, beta=beta, mode=mode, fade=fade)
         return InverseDeadZone(dead_zone=edges, slopes=slopes, beta=beta, mode=mode,
-                               rest=current.rest)
+                               rest=current.rest, fade=fade)
 
     def apply(self, spec: ControllerSpec) -> list[str]:
         """Use ``spec`` from now on; return what changed, for the log."""

@@ -213,6 +213,16 @@ def test_idz_parameters_move_and_scale_a_table(ros, tmp_path):
     result = controller.set_parameters([Parameter('idz.slopes', value=[0.0, 1.0])])
     assert not result[0].successful and 'slopes' in result[0].reason
     assert controller.controller.settings.idz == scaled
+    # The fade-in band (methods.md 5.2) works with the zero mode only, and takes effect.
+    result = controller.set_parameters([Parameter('idz.fade', value=0.06)])
+    assert not result[0].successful and 'mode zero, not hysteresis' in result[0].reason
+    assert controller.controller.settings.idz == scaled
+    result = controller.set_parameters_atomically([
+        Parameter('idz.mode', value='zero'), Parameter('arm.idz.fade', value=0.06)])
+    assert result.successful, result.reason
+    faded = controller.controller.settings.idz
+    assert (faded.fade, faded.mode) == (0.06, 'zero') and faded.command(0.03)[0] == 0.0
+    assert controller.get_parameter('idz.fade').value == 0.06
 
 
 def test_a_power_sat_model_alone_gets_a_table(ros, tmp_path):

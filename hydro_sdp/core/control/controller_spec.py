@@ -13,7 +13,7 @@ lag). The spec is what ``hydro-sdp design`` writes (format
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Mapping, Sequence
 
 from hydro_sdp.core.control.design_plant import check_plant_lag, model_lag, plant_for_model
@@ -209,7 +209,7 @@ def design_from_model(model: JointModel, *, control_period: float = 0.05,
                       beta: float | None = None, mode: IdzMode = 'zero',
                       v_range: tuple[float, float] | None = None,
                       form: IdzForm | None = None,
-                      noise_std: float = DEFAULT_NOISE) -> ControllerSpec:
+                      noise_std: float = DEFAULT_NOISE, fade: float = 0.0) -> ControllerSpec:
     """
     Design a PIP-IDZ controller for a joint model.
 
@@ -233,6 +233,9 @@ def design_from_model(model: JointModel, *, control_period: float = 0.05,
     noise_std : float
         Angle noise the controller will read, degrees: a table's default chatter
         band covers it (default 0.03, the online identifier's default).
+    fade : float
+        Fade-in band of the IDZ beyond its chatter band, degrees per control sample
+        (0: none; docs/methods.md section 5.2).
 
     Returns
     -------
@@ -257,6 +260,8 @@ def design_from_model(model: JointModel, *, control_period: float = 0.05,
     notes = design_notes(model)
     if notes:
         design['undetermined'] = list(notes)
+    if fade:
+        idz = replace(idz, fade=fade)
     if u_limits is None:
         u_limits = default_u_limits(model, idz, period)
     return ControllerSpec(joint=model.joint, control_period=period, plant=plant, gains=gains,

@@ -84,4 +84,9 @@ CONTROLLER_PARAMETERS = ParameterTable('controller_node', 'pip_controller', (
                   unit='deg per control sample', low=0.0, high=100.0, per_joint=True),
     ParameterSpec('idz.mode', 'string', 'IDZ mode', default_text='designed (zero)',
                   choices=IDZ_MODES, per_joint=True),
+    ParameterSpec('idz.fade', 'double',
+                  'IDZ fade-in band beyond the chatter band: the compensation leaves rest as '
+                  'tanh((|u| - beta) / fade) instead of jumping to the edge (mode zero only; '
+                  '0: none; methods.md section 5.2)', default_text='designed (0)',
+                  unit='deg per control sample', low=0.0, high=100.0, per_joint=True),
 ))
