@@ -168,7 +168,7 @@ def main() -> None:
         edges = identifier_update(edges=True)
         print(f'online identifier update: {update:.1f} us per sample against {plain:.1f} us '
               f'for a plain numpy Kalman step of the same size: x{update / plain:.2f} '
-              f'(target < 10 us); the edges\' filter of any family {edges:.1f} us: '
+              f"(target < 10 us); the edges' filter of any family {edges:.1f} us: "
               f'x{edges / plain:.2f}')
         node, step, echoed = callback_costs()
         print(f'controller_node joint_states callback, in-process, per control sample: '
