@@ -107,6 +107,7 @@ def describe(result: Identification) -> Payload:
     """Return the ``--json`` object of an identification."""
     segmentation = result.segmentation
     payload = result.model.to_mapping()
+    payload.setdefault('undetermined', {})  # in the JSON always; in the file when not empty
     payload.update({
         'alpha': list(result.alpha) if result.alpha is not None else None,
         'sample_period': result.sample_period,
