@@ -333,6 +333,16 @@ def calibrate(records: Sequence[Record], validation: Sequence[Record] | None = N
     CalibrationResult
         The models, the controller, the check and the warnings.
 
+    See Also
+    --------
+    identify, diagnose, design_from_model : the stages one by one.
+
+    Examples
+    --------
+    >>> from hydro_sdp import calibrate, save_controller
+    >>> result = calibrate(records)  # doctest: +SKIP
+    >>> save_controller(result.spec, 'j2_controller.yaml')  # doctest: +SKIP
+
     """
     settings = settings if settings is not None else CalibrationSettings()
     if not records:

@@ -65,6 +65,18 @@ class ControllerSpec:
         Valve lag the plant was made from, s (:func:`.design_plant.lagged_integrator`);
         ``None``: the plant is given as it is.
 
+    See Also
+    --------
+    design_from_model : the controller of a model.
+    load_controller, save_controller : the controller file.
+
+    Examples
+    --------
+    >>> from hydro_sdp import design_from_model, load_model
+    >>> spec = design_from_model(load_model('config/brokk_j2.yaml'))
+    >>> spec.control_period, spec.delay_samples
+    (0.05, 3)
+
     """
 
     joint: str
@@ -241,6 +253,18 @@ def design_from_model(model: JointModel, *, control_period: float = 0.05,
     -------
     ControllerSpec
         The controller, designed on the integrator with the model's delay and valve lag.
+
+    See Also
+    --------
+    ControllerSpec : the controller and its file.
+    calibrate : identification, diagnosis, design and the closed-loop check in one call.
+
+    Examples
+    --------
+    >>> from hydro_sdp import design_from_model, load_model
+    >>> spec = design_from_model(load_model('config/brokk_j2.yaml'))
+    >>> spec.gains.k_i > 0
+    True
 
     """
     period = check_sample_period(control_period)

@@ -206,6 +206,17 @@ def diagnose(records: Sequence[Record], model: JointModel, *,
         signature of the first effect on the first estimation record, the SDP
         estimate along its state).
 
+    See Also
+    --------
+    identify : the model diagnosed.
+    calibrate : identification, diagnosis and design in one call.
+
+    Examples
+    --------
+    >>> from hydro_sdp import diagnose
+    >>> found = diagnose(records, model)  # doctest: +SKIP
+    >>> found.effect, found.model.effects  # doctest: +SKIP
+
     """
     if not records:
         raise DataError('no records to diagnose')

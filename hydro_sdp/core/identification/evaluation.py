@@ -274,6 +274,22 @@ def evaluate(records: Sequence[Record], model: JointModel) -> list[RecordScore]:
     list of RecordScore
         One row per record.
 
+    See Also
+    --------
+    identify : the model to evaluate.
+    simulate : the simulation each score compares.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from hydro_sdp import evaluate, load_model, Record, simulate
+    >>> model = load_model('config/brokk_j2.yaml')
+    >>> t = np.arange(0.0, 5.0, 0.01)
+    >>> v = np.where(t < 1.0, 0.0, 4.0)
+    >>> scores = evaluate([Record(t, v, simulate(model, v, 0.01, 30.0), joint='j2')], model)
+    >>> round(scores[0].model, 6)
+    0.0
+
     """
     benchmark = sdp_dz_benchmark(model)
     scores = []

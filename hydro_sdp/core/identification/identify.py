@@ -202,6 +202,22 @@ def identify(records: Sequence[Record], *, method: FitMethod = 'rr', kind: KindC
     Identification
         The model and the evidence.
 
+    See Also
+    --------
+    Record : a record from arrays.
+    evaluate, diagnose, design_from_model : what follows identification.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from hydro_sdp import identify, load_model, Record, simulate
+    >>> truth = load_model('config/brokk_j2.yaml')
+    >>> t = np.arange(0.0, 8.0, 0.01)
+    >>> steps = [np.where(t < 1.0, 0.0, level) for level in (-6, -4, -2.5, 2.5, 4, 6)]
+    >>> found = identify([Record(t, v, simulate(truth, v, 0.01, 30.0), joint='j2') for v in steps])
+    >>> found.model.delay, found.model.static_map.kind
+    (0.15, 'sdp')
+
     """
     if kind not in KINDS + ('auto',):
         raise DataError(f"kind must be auto, {', '.join(KINDS)}; got {kind!r}")

@@ -67,6 +67,18 @@ class JointModel:
         ``undetermined``): for a map without a dead-zone (``poly``), where its speed
         leaves zero.
 
+    See Also
+    --------
+    load_model, save_model : the model file.
+    identify : a model from records.
+
+    Examples
+    --------
+    >>> from hydro_sdp import load_model
+    >>> model = load_model('config/brokk_j2.yaml')
+    >>> model.joint, model.static_map.kind, model.delay
+    ('j2', 'sdp', 0.15)
+
     """
 
     joint: str

@@ -301,6 +301,15 @@ def analyse(records: Sequence[Record], *, model: JointModel | None = None,
         The parameters against the states: the first state's entries, then the others
         by what they add to it.
 
+    See Also
+    --------
+    identify : the parametric model the analysis guides.
+
+    Examples
+    --------
+    >>> from hydro_sdp import analyse
+    >>> analysis = analyse(records, states=('command', 'angle'))  # doctest: +SKIP
+
     """
     names = check_states(list(states))
     order_of(kind)

@@ -286,11 +286,11 @@ def dependence_test(residual: FloatArray, x: FloatArray, state: FloatArray,
         decision ``p <= alpha`` open.
     seed : int
         Seed of the signs and block offsets.
-    alpha : float
-        The level the decision is made at.
     runs : IntArray or None
         Run of every sample (a command held, within one record): blocks are cut only
         where the run changes; None: anywhere.
+    alpha : float
+        The level the decision is made at.
 
     Returns
     -------
