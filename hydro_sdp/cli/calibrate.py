@@ -288,8 +288,24 @@ def describe(result: CalibrationResult, folder: Path) -> Payload:
             'in_the_way': list(result.in_the_way),
             'idealised': {o.element: {'passed': o.passed, 'failures': o.failures}
                           for o in result.obstacles}},
+        'plausible': None if result.plausible is None else result.plausible.to_mapping(),
         'warnings': warnings,
     }
+
+
+def plausible_lines(result: CalibrationResult) -> list[str]:
+    """Return the worst figures of the check over the models the data do not rule out."""
+    if result.plausible is None or not result.plausible.checks:
+        return []
+    plausible = result.plausible
+    worst = plausible.worst()
+    units = {'settling_time': ('settling', 's'), 'overshoot': ('overshoot', '%'),
+             'steady_error': ('steady error', 'deg'), 'pulse_rate': ('pulses at hold', '/s')}
+    lines = [f'check over {len(plausible.checks)} models the data do not rule out: '
+             f'{len(plausible.checks) - len(plausible.failed)} pass; worst:']
+    lines += [f'  {label} {value:.3g} {unit} ({name})' for metric, (label, unit) in units.items()
+              for value, name in [worst[metric]]]
+    return lines
 
 
 def control_line(result: CalibrationResult) -> str:
@@ -371,6 +387,7 @@ def run(args: argparse.Namespace) -> Outcome:
                  + ('' if result.spec.valve_lag is None
                     else f', valve lag {result.spec.valve_lag:.3g} s'))
     lines.append(control_line(result))
+    lines += plausible_lines(result)
     lines += [f'warning: {w}' for w in payload['warnings']]
     lines += [f'wrote {payload[key]}' for key in ('model', 'controller', 'params')]
     lines.append(f'report: {out / "report" / "summary.md"}')

@@ -23,24 +23,27 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 import math
-from typing import Callable, Sequence
+from typing import Callable, cast, Sequence
 
 from hydro_sdp.core.control.controller_spec import ControllerSpec, design_from_model, format_pole
 from hydro_sdp.core.control.design_plant import completed_poles
 from hydro_sdp.core.control.idz_design import default_form, faded, IdzForm
 from hydro_sdp.core.control.loop_check import check_loop, CheckSettings, LoopCheck, slower_poles
 from hydro_sdp.core.control.loop_obstacles import Obstacle, obstacles, standing_in_the_way
+from hydro_sdp.core.control.plausible_models import (
+    check_over, plausible_models, PlausibleCheck)
 from hydro_sdp.core.diagnosis import DETECTORS, diagnose, Diagnosis
 from hydro_sdp.core.errors import DataError, HydroSdpError
 from hydro_sdp.core.identification.evaluation import evaluate, RecordScore
-from hydro_sdp.core.identification.identify import Identification, identify, IdentifyStage
+from hydro_sdp.core.identification.identify import (
+    Identification, identify, IdentifyStage, KindChoice)
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.records import Record
 from hydro_sdp.core.model.sample_period import control_period_on, ControlPeriod
 import numpy as np
 
 #: The stages, in order, as :func:`calibrate` reports them.
-STAGES = ('identify', 'evaluate', 'diagnose', 'design', 'closed-loop check')
+STAGES = ('identify', 'evaluate', 'diagnose', 'design', 'closed-loop check', 'plausible machines')
 #: Most re-designs with slower poles after a failed check.
 REDESIGNS = 4
 
@@ -165,6 +168,8 @@ class CalibrationResult:
         one whose compensation fades in (settling against chatter); else empty.
     fades : tuple[float, ...]
         IDZ fade-in band of every design tried, first to last (0: none).
+    plausible : PlausibleCheck or None
+        The final controller's check on the models the data do not rule out.
 
     """
 
@@ -185,6 +190,7 @@ class CalibrationResult:
     control: ControlPeriod | None = None
     trade: tuple[DesignFigures, ...] = field(default=())
     fades: tuple[float, ...] = field(default=())
+    plausible: PlausibleCheck | None = None
 
     @property
     def in_the_way(self) -> tuple[str, ...]:
@@ -255,6 +261,42 @@ def split_records(records: Sequence[Record]) -> tuple[list[Record], list[Record]
     names = ', '.join(str(i + 1) for i in sorted(held))
     return estimation, validation, (f'held out: input record{"s" if len(held) > 1 else ""} '
                                     f'{names} of {recordings} (whole records)')
+
+
+def _families_in_band(identified: Identification, final: JointModel,
+                      records: Sequence[Record],
+                      settings: CalibrationSettings) -> list[JointModel]:
+    """Return ``final`` with the map of each other family within the held-out tie band."""
+    judged = identified.family
+    if judged is None or judged.chosen < 0:
+        return []
+    pooled, best = judged.pooled, judged.best
+    models = []
+    for c, name in enumerate(judged.names):
+        if c == judged.chosen or not pooled[c] - pooled[best] <= judged.bands[c]:
+            continue
+        try:
+            other = identify(records, kind=cast(KindChoice, name), rest=settings.rest,
+                             angle_limits=settings.angle_limits,
+                             input_limits=settings.input_limits).model
+        except HydroSdpError:
+            continue
+        models.append(replace(final, static_map=other.static_map,
+                              undetermined=other.undetermined))
+    return models
+
+
+def _plausible_warning(plausible: PlausibleCheck, model: JointModel) -> str:
+    """Say on which plausible models the controller fails, and what would rule them out."""
+    bounded = {entry.parameter: entry.record for entry in model.undetermined}
+    names = [p.name for p, _ in plausible.failed]
+    pins = sorted({record for name in names for key, record in bounded.items()
+                   if name.startswith(key) and record})
+    first = plausible.failed[0][1].failures[0] if plausible.failed[0][1].failures else ''
+    return (f'the controller passes on the identified model but fails on {len(names)} of '
+            f'{len(plausible.checks)} models the data do not rule out: {", ".join(names)} '
+            f'(first: {first})' + (f'; to rule them out: {"; ".join(pins)}' if pins else
+                                   '; more runs at the commands that set them narrow them'))
 
 
 def _identify(records: Sequence[Record], settings: CalibrationSettings,
@@ -435,6 +477,15 @@ def calibrate(records: Sequence[Record], validation: Sequence[Record] | None = N
                         f'again with slower poles {listed}')
         spec = slower
     assert check is not None  # the loop runs at least once
+    report('plausible machines', 0, 1)
+    plausible = check_over(plausible_models(
+        final, standard_errors=identified.fit.standard_errors,
+        sample_period=identified.sample_period,
+        families=_families_in_band(identified, final, estimation, settings)),
+        spec, stroke, check_settings)
+    spec = replace(spec, design={**spec.design, 'checked_over': plausible.to_mapping()})
+    if check.passed and plausible.failed:
+        warnings.append(_plausible_warning(plausible, final))
     found: tuple[Obstacle, ...] = ()
     if not check.passed:
         warnings.append('the controller still fails the closed-loop check: '
@@ -453,4 +504,4 @@ def calibrate(records: Sequence[Record], validation: Sequence[Record] | None = N
     return CalibrationResult(identified, note, tuple(estimation), tuple(checks), scores,
                              final_scores, diagnosis, spec, check, tuple(designs), stroke,
                              tuple(warnings), tuple(forms), found, control, tuple(trade),
-                             tuple(fades))
+                             tuple(fades), plausible)

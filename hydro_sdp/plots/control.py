@@ -17,6 +17,8 @@ import numpy as np
 
 #: Colour of the valve's pulses at hold.
 PULSE = '#c00000'
+#: The controller on the worst of the plausible models (dash-dot, beside the nominal).
+WORST = '#e6ab02'
 
 
 def plot_idz(model: JointModel, idz: InverseDeadZone, control_period: float, *,
@@ -141,7 +143,8 @@ def plot_idz_table(model: JointModel, table: TableInverseDeadZone, chord: Invers
 
 def plot_closed_loop(traces: Sequence[LoopTrace], *, title: str = '',
                      command_unit: str | None = None,
-                     valve: tuple[tuple[float, float], float] | None = None) -> Figure:
+                     valve: tuple[tuple[float, float], float] | None = None,
+                     worst: tuple[LoopTrace, str] | None = None) -> Figure:
     """
     Closed-loop response, as the paper's Fig. 7: angle, u and v against time.
 
@@ -157,6 +160,9 @@ def plot_closed_loop(traces: Sequence[LoopTrace], *, title: str = '',
     valve : tuple or None
         ``(edges, rest)`` of the valve's dead-zone: its edges are drawn and the
         valve's pulses across it at hold marked (methods.md section 5.7).
+    worst : tuple or None
+        ``(trace, name)``: the same controller on the worst of the models the data do not
+        rule out (methods.md section 5.8), drawn beside the first trace.
 
     Returns
     -------
@@ -183,11 +189,19 @@ def plot_closed_loop(traces: Sequence[LoopTrace], *, title: str = '',
             v_ax.plot(trace.t[pulses], trace.v[pulses], linestyle='none', marker='v',
                       markersize=5, color=PULSE,
                       label=f'{pulses.size} pulse{"" if pulses.size == 1 else "s"} at hold')
+    if worst is not None:
+        trace, name = worst
+        angle_ax.plot(trace.t, trace.y, color=WORST, linewidth=1.0, linestyle='-.',
+                      label=f'worst plausible model: {name}')
+        v_ax.plot(trace.t, trace.v, color=WORST, linewidth=0.8, drawstyle='steps-pre',
+                  label='its valve')
+    if valve is not None or worst is not None:
+        v_ax.legend(loc='upper right', fontsize=8, frameon=False,
+                    title='dotted: dead-zone edges' if valve is not None else None,
+                    title_fontsize=8)
     if valve is not None:
         for edge in valve[0]:
             v_ax.axhline(edge, color=LIMIT, linestyle=':', linewidth=0.8)
-        v_ax.legend(loc='upper right', fontsize=8, frameon=False,
-                    title='dotted: dead-zone edges', title_fontsize=8)
     if several:
         axes[1].axhline(0.0, color='black', linewidth=0.6)
         axes[1].set_ylabel('error y - d (deg)')

@@ -7,6 +7,7 @@ from pathlib import Path
 
 from hydro_sdp.core.calibration import CalibrationResult
 from hydro_sdp.core.control.loop_chatter import MAX_PULSE_RATE
+from hydro_sdp.core.control.loop_simulation import LoopTrace
 from hydro_sdp.core.identification.evaluation import simulated_angles
 from hydro_sdp.io.atomic import atomic_write_text
 from hydro_sdp.io.model_files import dump_model
@@ -57,6 +58,33 @@ def chatter_lines(result: CalibrationResult, unit: str) -> list[str]:
                   '', '| IDZ | settling (s) | overshoot (%) | pulses/s | travel '
                   f'({unit}/s) | check |', '|---|---|---|---|---|---|', *rows, '']
     return lines
+
+
+def plausible_lines(result: CalibrationResult) -> list[str]:
+    """Return the table of the check over the models the data do not rule out."""
+    plausible = result.plausible
+    if plausible is None or not plausible.checks:
+        return []
+    rows = []
+    for model, check in plausible.checks:
+        low, high = check.settling_range
+        worst_overshoot = max((m.overshoot for m in check.steps), default=0.0)
+        rows.append(f'| {model.name} | {_seconds(low)}-{_seconds(high)} | '
+                    f'{worst_overshoot:.1f} | {check.chatter.pulse_rate:.2f} | '
+                    f'{"passed" if check.passed else "FAILED: " + "; ".join(check.failures)} |')
+    return ['The same controller on the models the data do not rule out, one change each '
+            '(methods.md section 5.8; the worst settling dash-dot in the steps figure):', '',
+            '| model | settling (s) | overshoot (%) | pulses/s | check |',
+            '|---|---|---|---|---|', *rows, '']
+
+
+def worst_trace(result: CalibrationResult) -> tuple[LoopTrace, str] | None:
+    """Return the steps trace of the plausible model that settles last, and its name."""
+    if result.plausible is None or not result.plausible.checks:
+        return None
+    model, check = max(result.plausible.checks, key=lambda pair: (
+        not pair[1].passed, pair[1].settling_range[1]))
+    return check.steps_trace, model.name
 
 
 def summary_lines(result: CalibrationResult, unit: str, figures: list[str]) -> list[str]:
@@ -147,6 +175,7 @@ def summary_lines(result: CalibrationResult, unit: str, figures: list[str]) -> l
         f'{_seconds(check.ramp_settling)} s after its end; holds ending in a limit cycle: '
         f'{check.cycles}.', '', *chatter_lines(result, unit),
         *[f'- {failure}' for failure in check.failures], '',
+        *plausible_lines(result),
         *in_the_way,
         '## Figures', '', *[f'![{Path(f).stem}]({f})' for f in figures], '',
         '## Final model', '', '```yaml', dump_model(model).rstrip(), '```', '']
@@ -184,7 +213,8 @@ def write_report(folder: Path, result: CalibrationResult, unit: str) -> list[str
                     folder / 'evaluation.png'),
         save_figure(plot_closed_loop([result.check.steps_trace], command_unit=unit,
                                      title='Closed-loop check: steps across the stroke '
-                                           '(final model)', valve=valve),
+                                           '(final model)', valve=valve,
+                                     worst=worst_trace(result)),
                     folder / 'closed_loop.png'),
         save_figure(plot_closed_loop([result.check.ramp_trace], command_unit=unit,
                                      title='Closed-loop check: ramp (final model)',

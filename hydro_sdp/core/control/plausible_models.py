@@ -1,0 +1,207 @@
+"""
+The machines a joint's data do not rule out, and a controller's check over them.
+
+One change at a time from the identified model (not their product, which would grow as the
+power of the parameters): each map parameter at +-2 standard errors, each undetermined
+dead-zone edge at both ends of its bound, the delay +-1 sample of the records, the valve lag
++-50 %, and the map families within the held-out tie band (docs/methods.md section 5.8).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+import math
+from typing import Callable, Mapping, Sequence
+
+from hydro_sdp.core.control.controller_spec import ControllerSpec
+from hydro_sdp.core.control.loop_check import check_loop, CheckSettings, LoopCheck
+from hydro_sdp.core.errors import HydroSdpError
+from hydro_sdp.core.model.effects import ValveLag
+from hydro_sdp.core.model.joint_model import JointModel
+from hydro_sdp.core.model.static_maps.registry import MAP_KINDS
+
+#: Standard errors a map parameter is moved by, each way.
+SPREAD = 2.0
+#: Factors the valve lag's time constant is scaled by.
+LAG_FACTORS = (0.5, 1.5)
+
+
+@dataclass(frozen=True)
+class Plausible:
+    """
+    One model the data do not rule out.
+
+    Parameters
+    ----------
+    name : str
+        What was changed (``dead_zone[0] +2 SE``, ``delay -1 sample``, ``family pwl``...).
+    model : JointModel
+        The changed model.
+
+    """
+
+    name: str
+    model: JointModel
+
+
+def _with_map_value(model: JointModel, key: str, value: float) -> JointModel | None:
+    """Return ``model`` with map parameter ``key`` (``name`` or ``name[i]``) set, or None."""
+    mapping = model.static_map.to_mapping()
+    name, _, index = key.partition('[')
+    if name not in mapping:
+        return None
+    if index:
+        values = mapping[name]
+        if not isinstance(values, list):
+            return None
+        values = list(values)
+        values[int(index.rstrip(']'))] = value
+        mapping[name] = values
+    else:
+        mapping[name] = value
+    try:
+        return replace(model, static_map=MAP_KINDS[model.kind].from_mapping(mapping))
+    except (HydroSdpError, ValueError, TypeError):
+        return None  # the change leaves the family's domain (edges crossing rest...)
+
+
+def _map_value(model: JointModel, key: str) -> float | None:
+    name, _, index = key.partition('[')
+    value = model.static_map.to_mapping().get(name)
+    if index and isinstance(value, list):
+        return float(value[int(index.rstrip(']'))])
+    return float(value) if isinstance(value, (int, float)) else None
+
+
+def plausible_models(model: JointModel, *, standard_errors: Mapping[str, float],
+                     sample_period: float,
+                     families: Sequence[JointModel] = ()) -> tuple[Plausible, ...]:
+    """
+    Return the models one change away from ``model`` that its data do not rule out.
+
+    Parameters
+    ----------
+    model : JointModel
+        The identified model (with its effects).
+    standard_errors : mapping
+        Standard errors of its map parameters, by model-file name (``dead_zone[0]``).
+    sample_period : float
+        The records' sample period, s: the delay's resolution.
+    families : sequence of JointModel
+        Models of the other map families within the held-out tie band.
+
+    Returns
+    -------
+    tuple[Plausible, ...]
+        In the order: families, map parameters, undetermined edges, delay, lag.
+
+    """
+    found = [Plausible(f'family {other.kind}', other) for other in families]
+    bounded = {entry.parameter: entry for entry in model.undetermined}
+    for key, error in sorted(standard_errors.items()):
+        value = _map_value(model, key)
+        if value is None or key in bounded or not (math.isfinite(error) and error > 0.0):
+            continue
+        for sign in (-1.0, 1.0):
+            changed = _with_map_value(model, key, value + sign * SPREAD * error)
+            if changed is not None:
+                found.append(Plausible(f'{key} {sign * SPREAD:+g} SE', changed))
+    for key, entry in sorted(bounded.items()):
+        for end, label in zip(entry.bound, ('low', 'high')):
+            changed = _with_map_value(model, key, end)
+            if changed is not None and math.isfinite(end):
+                found.append(Plausible(f'{key} at the {label} end of its bound, {end:.4g}',
+                                       changed))
+    for sign in (-1, 1):
+        delay = model.delay + sign * sample_period
+        if delay >= 0.0:
+            found.append(Plausible(f'delay {sign:+d} sample', replace(model, delay=delay)))
+    lag = model.effect(ValveLag.name)
+    if isinstance(lag, ValveLag):
+        for factor in LAG_FACTORS:
+            effects = tuple(replace(e, time_constant=e.time_constant * factor)
+                            if isinstance(e, ValveLag) else e for e in model.effects)
+            found.append(Plausible(f'valve_lag x{factor:g}', replace(model, effects=effects)))
+    return tuple(found)
+
+
+@dataclass(frozen=True, eq=False)
+class PlausibleCheck:
+    """
+    A controller's closed-loop check on every plausible model.
+
+    Parameters
+    ----------
+    checks : tuple[tuple[Plausible, LoopCheck], ...]
+        Each model and its check.
+
+    """
+
+    checks: tuple[tuple[Plausible, LoopCheck], ...]
+
+    @property
+    def failed(self) -> tuple[tuple[Plausible, LoopCheck], ...]:
+        """Return the models the controller fails on, with their checks."""
+        return tuple(pair for pair in self.checks if not pair[1].passed)
+
+    def worst(self) -> dict[str, tuple[float, str]]:
+        """
+        Return the worst figure of each metric and the model that gave it.
+
+        Returns
+        -------
+        dict
+            ``settling_time`` (s), ``overshoot`` (%), ``steady_error`` (deg),
+            ``pulse_rate`` (per s of hold): ``(value, model name)``; empty without checks.
+
+        """
+        metrics: dict[str, Callable[[LoopCheck], float]] = {
+            'settling_time': lambda c: max((m.settling_time for m in c.steps), default=0.0),
+            'overshoot': lambda c: max((m.overshoot for m in c.steps), default=0.0),
+            'steady_error': lambda c: max((abs(m.steady_error) for m in c.steps), default=0.0),
+            'pulse_rate': lambda c: c.chatter.pulse_rate,
+        }
+        worst: dict[str, tuple[float, str]] = {}
+        for metric, read in metrics.items():
+            for plausible, check in self.checks:
+                value = float(read(check))
+                value = math.inf if math.isnan(value) else value
+                if metric not in worst or value > worst[metric][0]:
+                    worst[metric] = (value, plausible.name)
+        return worst
+
+    def to_mapping(self) -> dict[str, object]:
+        """Return what the controller file records: the models tried and the worst figures."""
+        return {
+            'models': [p.name for p, _ in self.checks],
+            'failed': [p.name for p, _ in self.failed],
+            'worst': {metric: {'value': value if math.isfinite(value) else None, 'model': name}
+                      for metric, (value, name) in self.worst().items()},
+        }
+
+
+def check_over(models: Sequence[Plausible], spec: ControllerSpec,
+               stroke: tuple[float, float], settings: CheckSettings) -> PlausibleCheck:
+    """
+    Run the closed-loop check of ``spec`` on each of ``models``.
+
+    Parameters
+    ----------
+    models : sequence of Plausible
+        The models (:func:`plausible_models`).
+    spec : ControllerSpec
+        The controller, designed on the identified model and unchanged.
+    stroke : tuple[float, float]
+        Range the check's set-points span, degrees.
+    settings : CheckSettings
+        The check's bounds, timing and noise.
+
+    Returns
+    -------
+    PlausibleCheck
+        Every check, the failures and the worst figures.
+
+    """
+    return PlausibleCheck(tuple((plausible, check_loop(plausible.model, spec, stroke,
+                                                       settings=settings))
+                                for plausible in models))
