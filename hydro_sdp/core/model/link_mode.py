@@ -83,9 +83,13 @@ class LinkMode:
             The link's deviation from the actuator after each interval, deg.
 
         """
+        return self.states(speeds, before)[0]
+
+    def states(self, speeds: FloatArray, before: float) -> tuple[FloatArray, FloatArray]:
+        """Return ``e_k`` and the link's speed ``u_k`` after each interval (as :meth:`deviation`)."""
         w = np.asarray(speeds, dtype=np.float64)
         if w.size == 0:
-            return np.zeros(0)
+            return np.zeros(0), np.zeros(0)
         p00, p01, p10, p11 = self.transition
         matrix = np.array([[p00, p01], [p10, p11]])
         poles, vectors = np.linalg.eig(matrix)
@@ -102,7 +106,8 @@ class LinkMode:
             part = powers * (state + gain * np.cumsum(chunk / powers))
             out[first:first + chunk.size] = part
             state = complex(part[-1])
-        return 2.0 * (complex(vectors[0, 0]) * out).real
+        return (2.0 * (complex(vectors[0, 0]) * out).real,
+                2.0 * (complex(vectors[1, 0]) * out).real)
 
     def ring(self, x: FloatArray, dt: float, before: float) -> FloatArray:
         """Return the link's angles for the actuator's angles ``x`` (first one settled)."""
@@ -116,9 +121,10 @@ class LinkMode:
 class LinkState:
     """The mode stepped one sample at a time (the same equations as :class:`LinkMode`)."""
 
-    def __init__(self, mode: LinkMode, speed: float) -> None:
+    def __init__(self, mode: LinkMode, speed: float,
+                 state: tuple[float, float] | None = None) -> None:
         self.mode = mode
-        self.e, self.u = mode.settled(speed)
+        self.e, self.u = mode.settled(speed) if state is None else state
 
     def step(self, speed: float) -> float:
         """Advance over an interval of actuator speed ``speed``; return ``e = y - x``."""

@@ -221,24 +221,63 @@ def one_step_increments(model: JointModel, v: FloatArray, y: FloatArray, dt: flo
         Predicted increments for samples ``start + 1 ..``.
 
     """
-    profile = speed_profile(model, v, dt, v_before=v_before, exogenous=exogenous)
-    y = np.asarray(y, dtype=np.float64)
-    low, high = _limits(model)
-    mode = _link_mode(model, dt)
-    # The mode's state depends on the motion before ``start``: run it from the record's
-    # start (settled there), so that a link still ringing at ``start`` is predicted.
-    first = 0 if mode is not None else start
-    increment = _actuator_increments(model, profile[first + 1:], y[first:-1], dt)
-    if mode is not None and increment.size:
-        increment = _ringing_increments(mode, increment, y[first:-1], dt, float(profile[first]),
-                                        low, high)[start - first:]
-    previous = y[start:-1]
-    play = model.effect(Backlash.name)
-    if isinstance(play, Backlash) and play.play > 0.0:
-        half = 0.5 * play.play
-        offset = bounded_cumsum(0.0, -increment, -half, half)
-        increment = increment + np.diff(offset)
-    return np.clip(previous + increment, low, high) - previous
+    mode = model.effect(Oscillation.name)
+    steps = OneStep(model.without_effect(Oscillation.name) if mode is not None else model, v, y,
+                    dt, start=start, v_before=v_before, exogenous=exogenous,
+                    from_start=mode is None)
+    return steps.increments(mode if isinstance(mode, Oscillation) else None)
+
+
+class OneStep:
+    """
+    The one-step increments of a model for any link mode added to it.
+
+    What does not depend on the mode (the speed profile, the actuator's increments) is
+    worked out once, for a fit that tries many modes (:func:`one_step_increments`).
+
+    Parameters
+    ----------
+    model : JointModel
+        The model without ``oscillation``.
+    v, y, dt, start, v_before, exogenous
+        As in :func:`one_step_increments`.
+    from_start : bool
+        Whether only the increments from ``start`` are needed (no mode will be added).
+
+    """
+
+    def __init__(self, model: JointModel, v: FloatArray, y: FloatArray, dt: float, *,
+                 start: int = 0, v_before: float = 0.0, exogenous: Exogenous | None = None,
+                 from_start: bool = False) -> None:
+        self.model, self.dt, self.start = model, dt, start
+        profile = speed_profile(model, v, dt, v_before=v_before, exogenous=exogenous)
+        self.y = np.asarray(y, dtype=np.float64)
+        # The mode's state depends on the motion before ``start``: it runs from the
+        # record's start (settled there), so that a link still ringing at ``start`` is
+        # predicted.
+        self.first = start if from_start else 0
+        self.before = float(profile[self.first]) if profile.size else 0.0
+        self.actuator = _actuator_increments(model, profile[self.first + 1:],
+                                             self.y[self.first:-1], dt)
+
+    def increments(self, mode: Oscillation | None = None) -> FloatArray:
+        """Return the predicted increments for samples ``start + 1 ..`` with ``mode`` added."""
+        model, start, first = self.model, self.start, self.first
+        low, high = _limits(model)
+        increment = self.actuator
+        if mode is not None and increment.size:
+            if first != 0:
+                raise ValueError('a mode needs the increments from the record\'s start')
+            increment = _ringing_increments(LinkMode.of(mode, self.dt), increment,
+                                            self.y[:-1], self.dt, self.before, low, high)
+        increment = increment[start - first:]
+        previous = self.y[start:-1]
+        play = model.effect(Backlash.name)
+        if isinstance(play, Backlash) and play.play > 0.0:
+            half = 0.5 * play.play
+            offset = bounded_cumsum(0.0, -increment, -half, half)
+            increment = increment + np.diff(offset)
+        return np.clip(previous + increment, low, high) - previous
 
 
 def _actuator_increments(model: JointModel, speed: FloatArray, previous: FloatArray,
@@ -267,13 +306,20 @@ def _ringing_increments(mode: LinkMode, increment: FloatArray, previous: FloatAr
     deviation, read within the stops (a sensor at the stop does not show how far beyond
     it the link swings).
     """
-    if math.isinf(low) and math.isinf(high):
-        deviation = mode.deviation(increment / dt, before)
-        return increment + np.diff(np.r_[mode.settled(before)[0], deviation])
-    state = LinkState(mode, before)
-    out = np.empty(increment.size)
+    deviation, speed = mode.states(increment / dt, before)
+    out = increment + np.diff(np.r_[mode.settled(before)[0], deviation])
+    # Until the actuator first meets a stop this is the recursion below, all at once.
+    actuator = previous - np.r_[mode.settled(before)[0], deviation[:-1]]
+    meets = np.flatnonzero(((increment > 0.0) & (actuator + increment >= high))
+                           | ((increment < 0.0) & (actuator + increment <= low)))
+    if meets.size == 0:
+        return out
+    first = int(meets[0])
+    state = LinkState(mode, before, None if first == 0 else (float(deviation[first - 1]),
+                                                             float(speed[first - 1])))
     pressed = 0.0
-    for k, (step, angle) in enumerate(zip(increment.tolist(), previous.tolist())):
+    for k, (step, angle) in enumerate(zip(increment[first:].tolist(),
+                                          previous[first:].tolist()), start=first):
         if pressed * step > 0.0:
             moved = 0.0
         else:
