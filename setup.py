@@ -14,7 +14,8 @@ setup(
     data_files=[
         ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
         ('share/' + package_name, ['package.xml']),
-        ('share/' + package_name + '/config', sorted(glob('config/*.yaml'))),
+        ('share/' + package_name + '/config',
+         sorted(glob('config/*.yaml')) + sorted(glob('config/*.xml'))),
     ],
     install_requires=['setuptools'],
     zip_safe=True,

@@ -8,7 +8,9 @@ Prints:
   time) against real time (target: at least 20x faster);
 * one update of the online identifier, per sample, against a plain numpy Kalman step
   of the same six states measured in the same run (target: under 10 us; the update,
-  written out on Python floats, takes about half the plain step's time);
+  written out on Python floats, takes about half the plain step's time): eq. (5)'s
+  filter, and the edges' filter of any other family on the same J2 samples (methods.md
+  section 7.6);
 * the controller node's ``joint_states`` callback in-process, per control sample, with the
   PIP-IDZ step alone and a raw echo callback beside it (:func:`callback_costs`);
 * feedback-to-command latency of ``controller_node`` in its own process against a
@@ -35,6 +37,7 @@ import time
 from typing import Any
 
 from hydro_sdp.core.identification.online import OnlineSdpIdentifier, OnlineSettings
+from hydro_sdp.core.identification.online_edges import OnlineEdgeIdentifier
 from hydro_sdp.core.model.simulation import simulate
 from hydro_sdp.core.synthetic.programs import random_program
 from hydro_sdp.io.model_files import default_model_path, load_model
@@ -59,12 +62,13 @@ def lockstep_speed(steps: int) -> float:
         return steps * plant.sample_period / (time.perf_counter() - started)
 
 
-def identifier_update() -> float:
-    """Return microseconds per sample of the online identifier."""
+def identifier_update(edges: bool = False) -> float:
+    """Return microseconds per sample of the online identifier (``edges``: the edges' filter)."""
     model = load_model(default_model_path())
     v = random_program(model, 0.01, 300.0, seed=1, y0=25.0)
     y = simulate(model, v, 0.01, 25.0) + np.random.default_rng(1).normal(0.0, 0.03, v.size)
-    estimator = OnlineSdpIdentifier(model, 0.01, OnlineSettings(noise_std=0.03))
+    kind = OnlineEdgeIdentifier if edges else OnlineSdpIdentifier
+    estimator = kind(model, 0.01, OnlineSettings(noise_std=0.03))
     pairs = list(zip(v.tolist(), y.tolist()))
     started = time.perf_counter()
     for command, angle in pairs:
@@ -161,9 +165,11 @@ def main() -> None:
         print(f'in-process lockstep loop (plant 100 Hz, controller, identifier): '
               f'{speed:.1f}x real time (target >= 20x)')
         update, plain = identifier_update(), plain_kalman_step()
+        edges = identifier_update(edges=True)
         print(f'online identifier update: {update:.1f} us per sample against {plain:.1f} us '
               f'for a plain numpy Kalman step of the same size: x{update / plain:.2f} '
-              '(target < 10 us)')
+              f"(target < 10 us); the edges' filter of any family {edges:.1f} us: "
+              f'x{edges / plain:.2f}')
         node, step, echoed = callback_costs()
         print(f'controller_node joint_states callback, in-process, per control sample: '
               f'{node:.1f} us (of which the PIP-IDZ step {step:.1f} us) against {echoed:.1f} us '

@@ -3,6 +3,7 @@
 import importlib.util
 import os
 from pathlib import Path
+import sys
 
 from hydro_sdp.io.model_files import default_model_path, load_model
 import numpy as np
@@ -14,6 +15,12 @@ REPO = Path(__file__).resolve().parent.parent
 # HYDRO_SDP_FIXTURES names another place. Tests that need them skip, saying where they looked.
 FIXTURES = Path(os.environ.get('HYDRO_SDP_FIXTURES')
                 or REPO.parent / 'shared' / 'data' / 'rosbag2_fixtures')
+
+# pytest rewrites the asserts of every test module in every worker; with
+# PYTHONDONTWRITEBYTECODE set (as on CI) it would not keep the result, and each of the three
+# workers would rewrite the suite again (5 s of CPU each). The package's own bytecode is
+# compiled before the run (make test).
+sys.dont_write_bytecode = False
 
 # The ROS tests need rclpy; without it they are left out (test_ros_available reports a skip).
 collect_ignore_glob = [] if importlib.util.find_spec('rclpy') else ['ros/*']

@@ -41,8 +41,8 @@ pytestmark = [pytest.mark.slow(120), pytest.mark.usefixtures('figures_not_drawn'
 
 #: The pages, in the order a newcomer reads them (each may use what those before it made).
 PAGES = ['README.md'] + [f'docs/guide/{name}.md' for name in (
-    'command_line', 'files', 'diagnosis', 'your_machine', 'sdp', 'nodes', 'troubleshooting',
-    'development')]
+    'command_line', 'files', 'diagnosis', 'your_machine', 'sdp', 'nodes', 'security',
+    'troubleshooting', 'development')]
 BIN = Path(sys.executable).parent
 #: Longest a single command may take, s.
 TIMEOUT = 300.0

@@ -6,19 +6,24 @@ recording and ``metadata.yaml`` when it stops. :class:`Sqlite3BagWriter` does
 the same with the standard ``sqlite3`` module and commits whenever
 ``flush_period`` has passed, so a recorder killed outright loses at most the
 last period of messages; ``hydro-sdp reindex`` then writes the missing
-``metadata.yaml`` (:mod:`hydro_sdp.bags.reindex`).
+``metadata.yaml`` (:mod:`hydro_sdp.bags.reindex`). A write the disk refuses (full, or
+a file size limit) raises :class:`~hydro_sdp.core.errors.BagWriteError` after rolling back
+the messages not yet committed; :meth:`Sqlite3BagWriter.close` then still closes the bag
+with what was committed.
 
 """
 
 from __future__ import annotations
 
+from contextlib import contextmanager
 import os
 from pathlib import Path
 import sqlite3
 import time
-from typing import Callable
+from typing import Callable, Iterator
 
 from hydro_sdp.bags.reindex import BagSummary, metadata_mapping, METADATA_VERSION, reindex
+from hydro_sdp.core.errors import BagWriteError
 import yaml
 
 #: The sqlite schema of rosbag2 on Jazzy (schema_version 4).
@@ -129,6 +134,13 @@ class Sqlite3BagWriter:
 
         """
         db = self._connection()
+        with self._writing(db):
+            return self._add_topic(db, name, msgtype, msgdef, msgdef_encoding, type_hash,
+                                   offered_qos_profiles, serialization_format)
+
+    def _add_topic(self, db: sqlite3.Connection, name: str, msgtype: str, msgdef: str,
+                   msgdef_encoding: str, type_hash: str, offered_qos_profiles: str,
+                   serialization_format: str) -> int:
         self._begin(db)
         if msgtype not in self._types:
             db.execute('INSERT INTO message_definitions (topic_type, encoding, '
@@ -148,6 +160,24 @@ class Sqlite3BagWriter:
         if not db.in_transaction:
             db.execute('BEGIN')
 
+    @contextmanager
+    def _writing(self, db: sqlite3.Connection) -> Iterator[None]:
+        # A write the disk refuses: what was not committed is rolled back, and one typed
+        # error says what happened and what the bag holds.
+        try:
+            yield
+        except sqlite3.Error as error:
+            lost = self.pending
+            try:
+                if db.in_transaction:
+                    db.execute('ROLLBACK')
+            except sqlite3.Error:
+                pass
+            self.pending = 0
+            raise BagWriteError(f'{self.path}: {error} (is the disk full?): the bag holds what '
+                                f'was committed before; {lost} messages since were lost') \
+                from None
+
     def write(self, topic_id: int, timestamp_ns: int, data: bytes) -> None:
         """
         Add one serialised message; commit if ``flush_period`` has passed.
@@ -163,11 +193,12 @@ class Sqlite3BagWriter:
 
         """
         db = self._connection()
-        self._begin(db)
-        db.execute('INSERT INTO messages (topic_id, timestamp, data) VALUES(?, ?, ?)',
-                   (topic_id, int(timestamp_ns), data))
-        self.counts[topic_id] += 1
-        self.pending += 1
+        with self._writing(db):
+            self._begin(db)
+            db.execute('INSERT INTO messages (topic_id, timestamp, data) VALUES(?, ?, ?)',
+                       (topic_id, int(timestamp_ns), data))
+            self.counts[topic_id] += 1
+            self.pending += 1
         self.flush_if_due()
 
     def flush_if_due(self) -> bool:
@@ -180,8 +211,9 @@ class Sqlite3BagWriter:
     def flush(self) -> None:
         """Commit what was written so far."""
         db = self._connection()
-        if db.in_transaction:
-            db.execute('COMMIT')
+        with self._writing(db):
+            if db.in_transaction:
+                db.execute('COMMIT')
         self.pending = 0
         self._last_commit = self._clock()
 
@@ -201,12 +233,21 @@ class Sqlite3BagWriter:
 
         """
         db = self._connection()
-        self.flush()
-        summary = reindex(self.folder)
-        text = yaml.safe_dump(metadata_mapping(summary)['rosbag2_bagfile_information'],
-                              sort_keys=False, default_flow_style=False)
-        db.execute('INSERT INTO metadata (metadata_version, metadata) VALUES(?, ?)',
-                   (METADATA_VERSION, text.strip()))
-        db.close()
-        self._db = None
+        try:
+            try:
+                self.flush()
+            except BagWriteError:
+                pass                    # rolled back: the bag closes with what was committed
+            summary = reindex(self.folder)
+            text = yaml.safe_dump(metadata_mapping(summary)['rosbag2_bagfile_information'],
+                                  sort_keys=False, default_flow_style=False)
+            try:
+                with self._writing(db):
+                    db.execute('INSERT INTO metadata (metadata_version, metadata) '
+                               'VALUES(?, ?)', (METADATA_VERSION, text.strip()))
+            except BagWriteError:
+                pass                    # metadata.yaml holds the same
+        finally:
+            db.close()
+            self._db = None
         return summary

@@ -10,20 +10,21 @@ from typing import TYPE_CHECKING
 
 from hydro_sdp.bags import STORAGE_SUFFIXES
 from hydro_sdp.cli.common import (
-    add_bag_options, finite_float, json_number, Outcome, Payload, positive_float,
-    read_bag_records, row_number, table)
+    add_bag_options, add_text_options, finite_float, json_number, Outcome, Payload,
+    positive_float, read_bag_records, table)
 from hydro_sdp.cli.design import complex_pole
 from hydro_sdp.cli.progress import ProgressBar
 from hydro_sdp.core.errors import ConfigurationError
 from hydro_sdp.core.model.records import Record
 from hydro_sdp.io.atomic import atomic_directory, atomic_write_text
 from hydro_sdp.io.controller_files import save_controller
-from hydro_sdp.io.logs import ANGLE_UNITS, log_kind, read_machine_log, single_joint_spec
+from hydro_sdp.io.logs import ANGLE_UNITS, read_machine_log, single_joint_spec
 from hydro_sdp.io.model_files import save_model
 import yaml
 
 if TYPE_CHECKING:
     from hydro_sdp.core.calibration import CalibrationResult
+    from hydro_sdp.core.control.loop_chatter import Chatter
     from hydro_sdp.ros.parameters.spec import ParameterValue
 
     #: A ROS 2 parameter file: node pattern, ``ros__parameters``, name and value.
@@ -67,7 +68,12 @@ storage file is read as a logger's file, CSV, MDF4 (.mf4) or MATLAB (.mat), as
 `hydro-sdp import` reads it (one row per sample; the command on a row acts until
 the next row; see `hydro-sdp import --help`), and needs --joint, --time,
 --angle and --command (column names or 0-based indices; --time is optional
-for MDF4, whose channels carry their own time).
+for MDF4, whose channels carry their own time, and for a dSPACE ControlDesk
+CSV export, whose sections name theirs).
+
+The controller runs every whole number of the records' samples: the control
+period is the whole multiple of their sample period nearest --control-period,
+and is reported (records 0.0099909 s apart get 5 samples, 0.0499545 s).
 
 model.yaml remembers the command topic of the bags (key command_topic), so
 evaluate and diagnose read the same topic without --command-topic.
@@ -103,7 +109,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument('--angle-limits', nargs=2, type=finite_float, metavar=('LOW', 'HIGH'),
                         help='known end stops, deg (default: those seen in the data)')
     parser.add_argument('--control-period', type=positive_float, default=0.05,
-                        help='control period, s (default: 0.05)')
+                        help='control period, s (default: 0.05); the controller runs at the '
+                             "nearest whole multiple of the records' sample period")
     parser.add_argument('--poles', nargs='+', type=complex_pole, metavar='P',
                         help='closed-loop poles to start from, the dominant ones first; '
                              'a valve lag keeps its own pole and the rest are 0 (default: '
@@ -124,10 +131,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     logs.add_argument('--command', metavar='COL', help='command column, channel or variable')
     logs.add_argument('--command-negative', metavar='COL',
                       help='subtracted from --command (one valve per direction)')
-    logs.add_argument('--header-row', type=row_number, metavar='N',
-                      help='CSV: the row of the column names (default: the row above the '
-                           'numbers)')
-    logs.add_argument('--delimiter', default=',', help="CSV cell delimiter (default: ',')")
+    add_text_options(logs)
     parser.set_defaults(run=run)
 
 
@@ -166,9 +170,10 @@ def read_inputs(paths: list[str], args: argparse.Namespace, label: str,
     with ProgressBar(label, len(paths)) as bar:
         for done, path in enumerate(paths, start=1):
             if is_log(path):
-                needed = ('joint', 'angle', 'command') if log_kind(path) == 'mdf' else \
-                    ('joint', 'time', 'angle', 'command')
-                missing = [f'--{name}' for name in needed if not getattr(args, name)]
+                # A CSV or MATLAB file without --time says so itself (a ControlDesk export
+                # names its own time, as MDF4 channels carry theirs).
+                missing = [f'--{name}' for name in ('joint', 'angle', 'command')
+                           if not getattr(args, name)]
                 if missing:
                     raise ConfigurationError(f"{path} is read as a logger's file and needs "
                                              f'{", ".join(missing)}')
@@ -176,7 +181,8 @@ def read_inputs(paths: list[str], args: argparse.Namespace, label: str,
                                          command_negative=args.command_negative,
                                          angle_unit=args.angle_unit)
                 records.append(read_machine_log(path, spec, header_row=args.header_row,
-                                                delimiter=args.delimiter).records[0])
+                                                delimiter=args.delimiter,
+                                                encoding=args.encoding).records[0])
             else:
                 # The reader of identify, evaluate and diagnose: cut at gaps, with the load
                 # and the other joints (so the diagnosis can name flow_sharing).
@@ -211,8 +217,8 @@ def ros_parameters(result: CalibrationResult, folder: Path) -> ParameterFile:
     Returns
     -------
     dict
-        ``/**/pip_controller``, ``/**/hydro_plant`` and, for an ``sdp`` model,
-        ``/**/sdp_identifier``, with the values that differ from the defaults.
+        ``/**/pip_controller``, ``/**/hydro_plant`` and ``/**/sdp_identifier``, with
+        the values that differ from the defaults.
 
     """
     model_file = str(folder / 'model.yaml')
@@ -230,18 +236,23 @@ def ros_parameters(result: CalibrationResult, folder: Path) -> ParameterFile:
         '/**/pip_controller': {'ros__parameters': {
             'model_file': model_file, 'controller_file': str(folder / 'controller.yaml')}},
         '/**/hydro_plant': {'ros__parameters': plant}}
-    if result.model.kind == 'sdp':
-        parameters['/**/sdp_identifier'] = {'ros__parameters': identifier}
+    parameters['/**/sdp_identifier'] = {'ros__parameters': identifier}
     return parameters
+
+
+def chatter_keys(chatter: Chatter) -> Payload:
+    """Return the ``--json`` keys of the valve's work at hold (methods.md section 5.7)."""
+    from hydro_sdp.core.control.loop_chatter import MAX_PULSE_RATE
+    return {'pulse_rate': chatter.pulse_rate, 'pulse_bound': MAX_PULSE_RATE,
+            'travel_rate': chatter.travel_rate, 'travel_share': chatter.travel_share,
+            'travel_bound': chatter.travel_bound, 'held': chatter.duration,
+            'edges': None if chatter.edges is None else list(chatter.edges)}
 
 
 def describe(result: CalibrationResult, folder: Path) -> Payload:
     """Return the ``--json`` object of a calibration written to ``folder``."""
     check = result.check
     warnings = list(result.warnings)
-    if result.model.kind != 'sdp':
-        warnings.append(f'params.yaml has no sdp_identifier: the online identifier tracks '
-                        f'sdp models, not {result.model.kind}')
     return {
         'model': str(folder / 'model.yaml'),
         'controller': str(folder / 'controller.yaml'),
@@ -252,6 +263,9 @@ def describe(result: CalibrationResult, folder: Path) -> Payload:
         'rest': result.identification.segmentation.rest,
         'effect': result.effect,
         'effects': list(result.effects),
+        'sample_period': result.identification.sample_period,
+        'control_period': result.spec.control_period,
+        'control_samples': None if result.control is None else result.control.samples,
         'mae': {'identified': json_number(result.mae_identified),
                 'final': json_number(result.mae_final), 'validation': result.validation_note},
         'closed_loop': {
@@ -262,13 +276,30 @@ def describe(result: CalibrationResult, folder: Path) -> Payload:
             'ramp_error': check.ramp_error,
             'ramp_settling': json_number(check.ramp_settling),
             'limit_cycles': check.cycles,
+            'chatter': chatter_keys(check.chatter),
             'designs': [list(poles) for poles in result.designs],
             'idz_forms': list(result.forms),
+            'idz_fades': list(result.fades),
+            'trade': [{'fade': f.fade, 'passed': f.passed,
+                       'settling_time': [json_number(x) for x in f.settling],
+                       'overshoot': f.overshoot, 'pulse_rate': f.pulse_rate,
+                       'travel_rate': f.travel_rate, 'travel_share': f.travel_share}
+                      for f in result.trade],
             'in_the_way': list(result.in_the_way),
             'idealised': {o.element: {'passed': o.passed, 'failures': o.failures}
                           for o in result.obstacles}},
         'warnings': warnings,
     }
+
+
+def control_line(result: CalibrationResult) -> str:
+    """Return the line naming the control period as whole samples of the records' period."""
+    dt, period = result.identification.sample_period, result.spec.control_period
+    control = result.control
+    samples = control.samples if control is not None else round(period / dt)
+    asked = '' if control is None or control.asked == period else \
+        f" (the whole multiple of the records' period nearest the {control.asked:g} s asked)"
+    return f'control every {samples} samples of {dt:.9g} s: {period:.9g} s{asked}'
 
 
 class _StageBars:
@@ -341,6 +372,7 @@ def run(args: argparse.Namespace) -> Outcome:
                     else f', valve lag {result.spec.valve_lag:.3g} s')
                  + ('' if result.spec.oscillation is None
                     else f', link mode {result.spec.oscillation[0]:.3g} Hz'))
+    lines.append(control_line(result))
     lines += [f'warning: {w}' for w in payload['warnings']]
     lines += [f'wrote {payload[key]}' for key in ('model', 'controller', 'params')]
     lines.append(f'report: {out / "report" / "summary.md"}')

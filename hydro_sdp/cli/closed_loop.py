@@ -15,6 +15,7 @@ from hydro_sdp.core.control.loop_simulation import (
 from hydro_sdp.core.control.safety import clamp_setpoint, SETPOINT_MARGIN
 from hydro_sdp.core.errors import ConfigurationError
 from hydro_sdp.core.model.records import Record
+from hydro_sdp.core.model.sample_period import control_period_on
 from hydro_sdp.io.controller_files import controller_for
 from hydro_sdp.io.model_files import load_model
 import numpy as np
@@ -68,7 +69,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument('--sample-period', type=positive_float, default=0.01,
                         help='plant sample period, s (default: 0.01)')
     parser.add_argument('--control-period', type=positive_float, default=0.05,
-                        help='control period when designing from the model, s (default: 0.05)')
+                        help='control period when designing from the model, s (default: 0.05; '
+                             'the nearest whole multiple of --sample-period)')
     parser.add_argument('--y0', type=finite_float,
                         help='starting angle, deg (default: 0, or mid-travel if 0 is outside '
                              'the end stops)')
@@ -101,7 +103,7 @@ def run(args: argparse.Namespace) -> Outcome:
                                  'one controller)')
     model = load_model(args.model[0])
     spec = controller_for(model, args.controller[0] if args.controller else None,
-                          args.control_period)
+                          control_period_on(args.control_period, args.sample_period).seconds)
     y0 = args.y0
     if y0 is None:
         limits = model.angle_limits

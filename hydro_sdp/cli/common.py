@@ -259,3 +259,16 @@ def add_bag_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument('--command-topic',
                         help='Float64 command topic (default: the only one ending in '
                              'valve_command)')
+
+
+def add_text_options(parser: argparse.ArgumentParser | argparse._ArgumentGroup) -> None:
+    """Add the options of CSV files: ``--header-row``, ``--delimiter``, ``--encoding``."""
+    parser.add_argument('--header-row', type=row_number, metavar='N',
+                        help='CSV: the row holding the column names, numbered as a spreadsheet '
+                             'does (default: found above the first row of numbers)')
+    parser.add_argument('--delimiter', metavar='D',
+                        help='CSV cell delimiter: one character, or tab or space (default: the '
+                             'one of , ; tab that makes rows of numbers)')
+    parser.add_argument('--encoding', metavar='NAME',
+                        help='CSV text encoding, e.g. cp949, cp1252, utf-16 (default: a '
+                             'byte-order mark, else UTF-8, else one byte per character)')

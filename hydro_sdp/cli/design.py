@@ -14,6 +14,7 @@ from hydro_sdp.core.control.idz_table import TableInverseDeadZone
 from hydro_sdp.core.control.idz_table_design import DEFAULT_NOISE
 from hydro_sdp.core.control.pip_design import LqWeights
 from hydro_sdp.core.errors import ConfigurationError
+from hydro_sdp.core.model.sample_period import control_period_on
 from hydro_sdp.io.controller_files import save_controller
 from hydro_sdp.io.model_files import load_model
 
@@ -36,6 +37,11 @@ velocity map in one of two forms (--idz-form):
          Its chatter band covers --noise-std and keeps the smallest correction
          small for the model's delay and lag.
 
+With --idz-fade the compensation fades in from rest beyond the chatter band
+instead of jumping across the dead-zone (zero mode), so that the valve does not
+pulse while the joint holds; calibrate takes twice the band when its check
+finds the valve pulsing.
+
 The controller then sees the integrator with the model's delay and, when the
 model has a valve_lag, that lag (one more pole), and with an oscillation the
 link's mode (two more): the design plant, recorded in the controller file. The
@@ -43,6 +49,11 @@ gains come from LQ design (default weights: the paper's design, dominant poles
 0.94 +- 0.05i) or from pole assignment (--poles: n + m poles, complex ones in
 conjugate pairs, zeros allowed and repeated; n + m is 1 + the delay in control
 samples, two more with a valve lag, four more with a mode, six with both).
+
+A controller steps every whole number of the joint's samples: with
+--sample-period S (the period identify printed) the control period is the
+whole multiple of S nearest --control-period, so records 0.0099909 s apart
+(a logger's clock, a DDS timer) get the gains of 0.01 s.
 
 examples:
   hydro-sdp design config/brokk_j2.yaml --out j2_controller.yaml
@@ -75,6 +86,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                              '(default: 1.6567e-3 1 4.1993e-5)')
     parser.add_argument('--control-period', type=positive_float, default=0.05,
                         help='control period in s (default: 0.05)')
+    parser.add_argument('--sample-period', type=positive_float, metavar='S',
+                        help="the records' sample period, s (identify prints it): the control "
+                             'period becomes the nearest whole multiple of it'),
     parser.add_argument('--u-limits', nargs=2, type=finite_float, metavar=('LOW', 'HIGH'),
                         help='limits of u, deg per control sample (default: 1.25 x the '
                              'saturation speeds, or the chord at the input limits)')
@@ -85,6 +99,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         help='IDZ chatter band, deg per control sample (default: 0.05)')
     parser.add_argument('--idz-mode', choices=IDZ_MODES, default='zero',
                         help='IDZ near u = 0: zero band (paper), smooth blend or hysteresis')
+    parser.add_argument('--idz-fade', type=non_negative_float, default=0.0, metavar='FADE',
+                        help='IDZ fade-in band beyond the chatter band, deg per control '
+                             'sample: the command leaves rest as tanh((|u| - beta) / FADE) '
+                             '(zero mode; default: 0, none)')
     parser.add_argument('--idz-form', choices=IDZ_FORMS,
                         help="chord: invert chords of the map (the paper's IDZ); table: invert "
                              'the map itself (default: chord for sdp, sdp_dz and linear, '
@@ -121,6 +139,7 @@ def describe(spec: ControllerSpec) -> Payload:
         'dead_zone': None if idz is None else list(idz.dead_zone),
         'beta': None if idz is None else idz.beta,
         'idz_mode': None if idz is None else idz.mode,
+        'fade': None if idz is None else idz.fade,
         'u_limits': None if spec.u_limits is None else list(spec.u_limits),
         'v_limits': None if spec.v_limits is None else list(spec.v_limits),
         'design': dict(spec.design),
@@ -131,12 +150,17 @@ def run(args: argparse.Namespace) -> Outcome:
     """Run ``design``."""
     model = load_model(args.model)
     weights = LqWeights(*args.weights) if args.weights else None
+    control = (None if args.sample_period is None
+               else control_period_on(args.control_period, args.sample_period))
     spec = design_from_model(
-        model, control_period=args.control_period, poles=args.poles, weights=weights,
+        model, control_period=args.control_period if control is None else control.seconds,
+        poles=args.poles, weights=weights,
         u_limits=tuple(args.u_limits) if args.u_limits else None, beta=args.beta,
         mode=args.idz_mode, v_range=tuple(args.v_range) if args.v_range else None,
-        form=args.idz_form, noise_std=args.noise_std)
+        form=args.idz_form, noise_std=args.noise_std, fade=args.idz_fade)
     payload = describe(spec)
+    if control is not None:
+        payload['control_samples'] = control.samples
     if args.out:
         payload['controller'] = str(save_controller(spec, args.out))
     if args.plot:
@@ -154,7 +178,7 @@ def run(args: argparse.Namespace) -> Outcome:
             ['g', ', '.join(f'{x:.4f}' for x in spec.gains.g) or '-'],
             ['kI', f'{spec.gains.k_i:.4f}'],
             ['poles', ', '.join(payload['poles'])],
-            ['delay', f'{spec.delay_samples} samples of {spec.control_period:g} s'],
+            ['delay', f'{spec.delay_samples} samples of {spec.control_period:.9g} s'],
             ['valve lag', '-' if spec.valve_lag is None else f'{spec.valve_lag:.4g} s (pole '
                           f'{math.exp(-spec.control_period / spec.valve_lag):.4f})'],
             ['link mode', '-' if spec.oscillation is None else
@@ -166,11 +190,16 @@ def run(args: argparse.Namespace) -> Outcome:
                  ['IDZ edges', ', '.join(f'{x:.4f}' for x in spec.idz.dead_zone)],
                  ['IDZ slopes', ', '.join(f'{x:.4f}' for x in spec.idz.slopes)
                   + ' deg/sample per unit'],
-                 ['chatter band', f'{spec.idz.beta:g} ({spec.idz.mode})']]
+                 ['chatter band', f'{spec.idz.beta:g} ({spec.idz.mode})'
+                  + (f', fade-in {spec.idz.fade:g}' if spec.idz.fade else '')]]
     if spec.u_limits is not None:
         rows.append(['u limits', ', '.join(f'{x:.4f}' for x in spec.u_limits)])
     lines = [f'PIP-IDZ controller for joint {spec.joint} ({spec.design["method"]} design)']
+    if control is not None:
+        lines.append(f'control every {control.samples} samples of {args.sample_period:.9g} s: '
+                     f'{control.seconds:.9g} s')
     lines += table(rows, ['', 'value'])
+    lines += list(spec.notes)
     if args.out:
         lines.append(f'wrote {payload["controller"]}')
     if args.plot:

@@ -60,7 +60,8 @@ def run(args: argparse.Namespace) -> Outcome:
     scores = evaluate(records, model)
     # A bag with gaps in its time stamps is read as several pieces, one row each.
     rows = [{'bag': record.source, 'samples': s.samples, 'model': s.model,
-             'sdp_dz': json_number(s.sdp_dz), 'linear': s.linear, 'linear_gain': s.linear_gain}
+             'sdp_dz': json_number(s.sdp_dz), 'linear': s.linear, 'linear_gain': s.linear_gain,
+             'stalled': s.stalled}
             for record, s in zip(records, scores)]
     means = mean_errors(scores)
     mean = {key: json_number(value) for key, value in means['per_record'].items()}
@@ -90,6 +91,9 @@ def run(args: argparse.Namespace) -> Outcome:
                    ['run', 'model', 'SDP-DZ', 'linear'])
     lines.append('mean over runs: each run counts once (Table 2); time-weighted: each sample '
                  'counts once')
+    lines += [f'stalled: {Path(r["bag"]).name} held still for {r["stalled"]:.3g} s while the '
+              'model moved it, away from any stop; left out of its scores'
+              for r in rows if r['stalled'] > 0.0]
     lines += [f'wrote {path}' for path in payload.get('plots', [])]
     return Outcome(payload, lines)
 

@@ -17,6 +17,7 @@ from hydro_sdp.io.model_files import save_model
 import numpy as np
 
 if TYPE_CHECKING:
+    from hydro_sdp.core.identification.held_out import Judgement
     from hydro_sdp.core.identification.identify import Identification
 
 HELP = 'identify a joint model from experiments or routine operation'
@@ -38,9 +39,18 @@ section 4:
      measured level), the second paper's polynomial gain and, when eq. (5)
      loses, a saturating power law (power_sat, convex from the dead-zone), and
      keep the family that predicts held-out experiments best (folds that leave
-     out levels inside the measured range; sdp when it is within 5 %);
+     out levels inside the measured range), the simpler one when it is within
+     its tie band (5 % of its error, or one standard error of its per-fold
+     difference): the table, the bands and the reason are printed;
   6. when the runs span the stroke, fit how the speed changes along it
-     (effect stroke_geometry) and keep it if it lowers the simulation error.
+     (effect stroke_geometry); keep it, and the valve lag, only when held-out
+     experiments need it by the same rule.
+
+What the data do not pin is printed as a bound: a dead-zone edge below every
+command held (with the speed seen at the innermost command and what to record
+to pin it), a parameter whose two standard errors exceed it. Runs that stalled
+(commanded, not moving, not at a stop) are left out and listed; an end stop
+seen on one side only stays in the model.
 
 Routine operation (a closed loop, an operator's joystick: the command changes
 every control period and held levels carry under half of the driving) is
@@ -97,6 +107,7 @@ def describe(result: Identification) -> Payload:
     """Return the ``--json`` object of an identification."""
     segmentation = result.segmentation
     payload = result.model.to_mapping()
+    payload.setdefault('undetermined', {})  # in the JSON always; in the file when not empty
     payload.update({
         'alpha': list(result.alpha) if result.alpha is not None else None,
         'sample_period': result.sample_period,
@@ -107,7 +118,9 @@ def describe(result: Identification) -> Payload:
             'used': len(segmentation.experiments), 'steps': segmentation.steps,
             'runs': segmentation.runs,
             'dropped': [{'t': d.t0, 'reason': d.reason, 'source': d.source}
-                        for d in segmentation.dropped]},
+                        for d in segmentation.dropped],
+            'stalled': [{'t': d.t0, 'reason': d.reason, 'source': d.source}
+                        for d in segmentation.dropped if d.stalled]},
         'route': result.route,
         'rest': segmentation.rest,
         'end_stops': list(segmentation.end_stops),
@@ -122,8 +135,10 @@ def describe(result: Identification) -> Payload:
         'comparison': [{'kind': s.kind, 'mae': json_number(s.mae), 'note': s.note}
                        for s in result.comparison],
         'mae': result.mae,
+        'family_choice': None if result.family is None else _judgement(result.family),
         'effect_checks': [{'effect': c.effect, 'without': c.without, 'with': c.with_effect,
-                           'gain': c.gain, 'kept': c.kept} for c in result.effect_checks],
+                           'gain': c.gain, 'kept': c.kept, **_judgement(c.judgement)}
+                          for c in result.effect_checks],
     })
     return payload
 
@@ -150,13 +165,16 @@ def run(args: argparse.Namespace) -> Outcome:
     if args.plot_dir:
         payload['plots'] = _plots(result, records, Path(args.plot_dir))
     lines = pieces_note(args.bags, records) + _summary(result)
+    bounds = {entry.parameter: entry for entry in model.undetermined}
     rows = [[key, _format(value), _format(result.fit.standard_errors.get(name, math.nan))]
+            if name not in bounds else
+            [key, f'in [{bounds[name].bound[0]:.4g}, {bounds[name].bound[1]:.4g}]',
+             'undetermined']
             for key, value, name in _parameter_rows(model)]
     lines += table(rows, ['parameter', 'value', 'std. error'])
-    if result.comparison:
-        lines.append('held-out simulation MAE by map family:')
-        lines += table([[s.kind, _format(s.mae), s.note[:60]] for s in result.comparison],
-                       ['kind', 'MAE (deg)', 'note'])
+    lines += [entry.describe() for entry in model.undetermined]
+    if result.family is not None:
+        lines += _family_lines(result)
     if result.route == 'routine':
         lines.append(f'chosen: {model.kind} (least squares on the one-step increments); '
                      f'simulation MAE on 1 s pieces of the runs {result.mae:.4f} deg')
@@ -172,6 +190,30 @@ def run(args: argparse.Namespace) -> Outcome:
     return Outcome(payload, lines)
 
 
+def _judgement(judgement: Judgement) -> Payload:
+    """Return the JSON of a held-out judgement: the figures the decision followed."""
+    return {'candidates': list(judgement.names),
+            'pooled': [json_number(e) for e in judgement.pooled],
+            'folds': [[json_number(e) for e in row] for row in judgement.errors],
+            'weights': list(judgement.weights),
+            'bands': [json_number(b) for b in judgement.bands],
+            'chosen': judgement.names[judgement.chosen] if judgement.chosen >= 0 else None,
+            'rule': judgement.rule()}
+
+
+def _family_lines(result: Identification) -> list[str]:
+    """Return the family table with the rule and why the family was chosen."""
+    judgement = result.family
+    assert judgement is not None
+    notes: dict[str, str] = {s.kind: s.note for s in result.comparison}
+    rows = [[name, _format(pooled), _format(band), notes.get(name, '')[:50]]
+            for name, pooled, band in zip(judgement.names, judgement.pooled, judgement.bands)]
+    return (['held-out error by map family (mean absolute error over 2 s windows of the '
+             f'held-out experiments, {len(judgement.weights)} folds; simplest first):']
+            + table(rows, ['kind', 'error (deg)', 'tie band', 'note'])
+            + [f'rule: {judgement.rule()}', f'chosen: {judgement.verdict()}'])
+
+
 def _summary(result: Identification) -> list[str]:
     """Return the lines on what was read: experiments or runs, rest, stops, range, delay."""
     segmentation, model, delay = result.segmentation, result.model, result.delay
@@ -185,6 +227,9 @@ def _summary(result: Identification) -> list[str]:
                  f'({segmentation.steps} steps, {segmentation.runs} runs), {common}']
     for dropped in segmentation.dropped[:5]:
         lines.append(f'  dropped {dropped.since_start:.2f} s from the start: {dropped.reason}')
+    # Every stall is listed: a load held the joint, and its runs say nothing of the valve.
+    lines += [f'  {d.source or "record"} at {d.since_start:.2f} s: {d.reason}'
+              for d in segmentation.dropped[5:] if d.stalled]
     lines.append(f'rest command {segmentation.rest:g}; end stops {_stops(result)}')
     if result.commands is not None:
         low, high = result.commands.seen

@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from hydro_sdp.bags import STORAGES, write_bag
-from hydro_sdp.cli.common import Outcome, row_number
+from hydro_sdp.cli.common import add_text_options, Outcome
 from hydro_sdp.core.errors import ConfigurationError
 from hydro_sdp.io.logs import (
     ANGLE_UNITS, load_signals, MachineLog, MachineSpec, read_machine_log, single_joint_spec)
@@ -23,9 +23,16 @@ files, by their name:
              channel whose values time its group's channels)
   .mat       MATLAB, v5 to v7 and v7.3 (HDF5): numeric vectors by name, struct
              fields as log.Boom_ang, all as long as the --time variable
-  other      CSV: one row per sample, columns by header name or 0-based index;
-             lines of the logger's own above the header are skipped (the header is
-             the row above the first row of numbers; --header-row N names it)
+  other      CSV: one row per sample, columns by name or 0-based index; lines
+             of the logger's own above the header are skipped; the header block
+             (names, then units or descriptions) is the rows above the first row
+             of numbers (--header-row N names the names row). A dSPACE ControlDesk
+             export (a row keyed trace_values) is read by its own layout: each
+             section's time column (--time optional), signals by trace name or,
+             for a block port (In1, Out1), by the last element of their path.
+             Any common encoding: UTF-8, UTF-16 with a byte-order mark, a code
+             page in the metadata (read byte by byte, --encoding to name it);
+             delimiter , ; or tab found (a comma is the decimal point with ; or tab)
 
 one joint: --joint NAME --angle COL --command COL [--command-negative COL]
 a whole machine: --signals machine.yaml, for example
@@ -63,6 +70,8 @@ examples:
   hydro-sdp import log.txt --out bags --joint boom --delimiter tab --header-row 4 \\
       --time 0 --angle 3 --angle-unit rad --command 4 --command-negative 5
   hydro-sdp import day1/*.mf4 --out bags --signals machine.yaml
+  hydro-sdp import arm_*.csv --out bags --joint arm --angle Arm_ang \
+      --command Arm_duty              # ControlDesk exports: no --time needed
   hydro-sdp diagnose bags/* --joint arm --model arm.yaml --load-topic /boom/head_pressure
 """
 
@@ -91,11 +100,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument('--command-negative', metavar='COL',
                         help='subtracted from --command: the duty of the valve that drives the '
                              'other way, on machines that log one per direction')
-    parser.add_argument('--header-row', type=row_number, metavar='N',
-                        help='CSV: the row holding the column names, numbered as a spreadsheet '
-                             'does (default: the row above the first row of numbers)')
-    parser.add_argument('--delimiter', default=',', metavar='D',
-                        help='CSV cell delimiter: one character, or tab or space (default: ,)')
+    add_text_options(parser)
     parser.add_argument('--storage', choices=STORAGES, default='sqlite3',
                         help='rosbag2 storage (default: sqlite3)')
     parser.set_defaults(run=run)
@@ -144,7 +149,8 @@ def run(args: argparse.Namespace) -> Outcome:
     """Run ``import``."""
     spec = machine_spec(args)
     targets = _targets(args.files, args.out)
-    logs = [read_machine_log(name, spec, header_row=args.header_row, delimiter=args.delimiter)
+    logs = [read_machine_log(name, spec, header_row=args.header_row, delimiter=args.delimiter,
+                             encoding=args.encoding)
             for name in args.files]
     # Every file is checked above before the first bag is written.
     bags = [str(write_machine_bag(target, log, args.storage))
@@ -152,7 +158,8 @@ def run(args: argparse.Namespace) -> Outcome:
     joints = list(spec.joints)
     payload = {'bags': bags, 'samples': [log.samples for log in logs], 'joints': joints,
                'signals': list(spec.signals), 'sources': list(args.files),
-               'time_shift': [log.time_shift for log in logs]}
+               'time_shift': [log.time_shift for log in logs],
+               'notes': [list(log.notes) for log in logs]}
     if len(joints) == 1:
         payload['joint'] = joints[0]
     what = f'joint {joints[0]}' if len(joints) == 1 else f"joints {', '.join(joints)}"
@@ -161,4 +168,5 @@ def run(args: argparse.Namespace) -> Outcome:
     lines = [f'wrote {bag} ({args.storage}): {log.samples} samples of {what} from {name}, '
              f'{log.records[0].duration:.1f} s (time shifted by {log.time_shift:+.6g} s)'
              for bag, log, name in zip(bags, logs, args.files)]
+    lines += [f'{name}: {note}' for log, name in zip(logs, args.files) for note in log.notes]
     return Outcome(payload, lines)

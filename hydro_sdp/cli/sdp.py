@@ -44,13 +44,18 @@ States (--states, comma-separated; default all the records can give):
   reversals     travel since the motion last reversed (the model's, with
                 --model), deg: play shows as motion lost right after it
 
+Increments the joint cannot make are left out, with their count: held at an
+end stop while the command drives into it, resting at a stop, or stalled
+(driven, not moving, away from the stops).
+
 Each state is first weighed alone; the one that explains most comes first, and
 every other is weighed by what it adds to it. For each: its share of the
 constant-parameter model's squared residual (held out: predicted on tenths of
 the data it was not fitted to), its NVR (0: no dependence) and whether the
-dependence is significant (p < 0.01 by a block bootstrap that keeps the
-residuals' autocorrelation). --plot-dir draws each parameter against each
-state with +-2 standard-error bands, and the shares.
+dependence is significant (p <= 0.01 by a bootstrap that flips the signs of
+whole runs of held commands, so that neither the residuals' autocorrelation
+nor one run's own error passes for a dependence). --plot-dir draws each
+parameter against each state with +-2 standard-error bands, and the shares.
 
 examples:
   hydro-sdp sdp steps_bag --joint j2 --plot-dir sdp_figures
@@ -128,6 +133,9 @@ def describe(analysis: SdpAnalysis) -> Payload:
         'sample_period': analysis.sample_period,
         'rest': analysis.rest,
         'skipped': [{'state': state, 'reason': reason} for state, reason in analysis.skipped],
+        'left_out': [{'reason': reason, 'rows': rows}
+                     for reason, rows in analysis.left_out.items()],
+        'alone': dict(analysis.alone),
     }
 
 
@@ -186,14 +194,18 @@ def _lines(analysis: SdpAnalysis, skipped: list[tuple[str, str]],
             else 'measured / model increment (ratio) and increment residual')
     lines = [f'{what}: {analysis.samples} samples, delay {analysis.delay} samples '
              f'({analysis.delay * analysis.sample_period:.3g} s), rest {analysis.rest:g}']
+    for reason, rows in analysis.left_out.items():
+        lines.append(f'left out {rows} increments {reason}')
     if analysis.a1 is not None:
         a1 = analysis.a1
         lines.append(f'a1 = {a1.mean:.5f} +- {a1.se:.1e} (NVR along the angle {a1.nvr:.3g}; '
                      '-1: an integrator)')
     lines += _table(analysis.states, 'gain' if analysis.target == 'arx' else 'ratio')
+    lines.append(_alone(analysis, ''))
     if analysis.residual:
         lines.append('increment residual:')
         lines += _table(analysis.residual, 'residual')
+        lines.append(_alone(analysis, 'residual '))
     for state, reason in list(analysis.skipped) + skipped:
         lines.append(f'  {state} not analysed: {reason}')
     if analysis.states:
@@ -204,6 +216,14 @@ def _lines(analysis: SdpAnalysis, skipped: list[tuple[str, str]],
     for path in payload.get('plots', []):
         lines.append(f'wrote {path}')
     return lines
+
+
+def _alone(analysis: SdpAnalysis, prefix: str) -> str:
+    """Return the share each state's gains remove alone: the evidence for the first state."""
+    shares = [f'{key[len(prefix):]} {100 * share:.1f} %' for key, share in analysis.alone.items()
+              if key.startswith(prefix) and (prefix or not key.startswith('residual '))]
+    return ('  alone (first: the largest; within 2 % of it, the first listed): '
+            + ', '.join(shares))
 
 
 def _table(entries: Iterable[StateDependence], what: str) -> list[str]:

@@ -16,6 +16,7 @@ from hydro_sdp.core.control.trajectory import check_trajectory, TrajectorySample
 from hydro_sdp.core.errors import ConfigurationError
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.records import Record
+from hydro_sdp.core.model.sample_period import control_period_on
 from hydro_sdp.io.controller_files import controller_for
 from hydro_sdp.io.model_files import load_model
 from hydro_sdp.io.trajectory_files import load_trajectory, TrajectoryFile
@@ -181,7 +182,8 @@ def run_trajectory(args: argparse.Namespace) -> Outcome:
     if args.controller and len(args.controller) != len(models):
         raise ConfigurationError(f'give one controller per model ({len(models)}), got '
                                  f'{len(args.controller)}')
-    specs = [controller_for(model, path, args.control_period)
+    period = control_period_on(args.control_period, args.sample_period).seconds
+    specs = [controller_for(model, path, period)
              for model, path in zip(models, args.controller or [None] * len(models))]
     plan = load_trajectory(args.trajectory, args.kinematics)
     total = int(round((args.start_at + plan.trajectory.duration + args.settle)

@@ -7,24 +7,27 @@ records, diagnose what it misses and add the named effects, design the PIP-IDZ
 controller from the final model (on its delay and valve lag; the chord IDZ for
 an ``sdp`` map, the map's own table for the others), and check it in closed
 loop on that final model with its effects and the records' noise
-(:mod:`.loop_check`). When chords fail the check the table takes their place;
-when the check still fails the dominant poles move toward 1 and the controller
-is designed again, and the result says so; if no design passes, the check is
-run again with each element idealised to say what stands in the way
-(:mod:`.loop_obstacles`). Without validation records, whole records are held
-out (never a piece of a record), and the result says which.
+(:mod:`.loop_check`). When the valve pulses at hold and nothing else fails, the
+IDZ's compensation fades in instead (a fade-in band; the result keeps both
+designs' figures, the trade of settling against chatter); when chords fail the
+check the table takes their place; when the check still fails the dominant
+poles move toward 1 and the controller is designed again, and the result says
+so; if no design passes, the check is run again with each element idealised to
+say what stands in the way (:mod:`.loop_obstacles`). Without validation
+records, whole records are held out (never a piece of a record), and the
+result says which.
 
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 import math
 from typing import Callable, Sequence
 
 from hydro_sdp.core.control.controller_spec import ControllerSpec, design_from_model, format_pole
 from hydro_sdp.core.control.design_plant import completed_poles, mode_poles
-from hydro_sdp.core.control.idz_design import default_form, IdzForm
+from hydro_sdp.core.control.idz_design import default_form, faded, IdzForm
 from hydro_sdp.core.control.loop_check import check_loop, CheckSettings, LoopCheck, slower_poles
 from hydro_sdp.core.control.loop_obstacles import Obstacle, obstacles, standing_in_the_way
 from hydro_sdp.core.diagnosis import DETECTORS, diagnose, Diagnosis
@@ -33,6 +36,7 @@ from hydro_sdp.core.identification.evaluation import evaluate, RecordScore
 from hydro_sdp.core.identification.identify import Identification, identify, IdentifyStage
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.records import Record
+from hydro_sdp.core.model.sample_period import control_period_on, ControlPeriod
 import numpy as np
 
 #: The stages, in order, as :func:`calibrate` reports them.
@@ -58,7 +62,8 @@ class CalibrationSettings:
     angle_limits : tuple[float, float] or None
         Known end stops, degrees (default: those seen in the data).
     control_period : float
-        Control period, s.
+        Control period asked for, s; the controller runs at the nearest whole
+        multiple of the records' sample period (:func:`.sample_period.control_period_on`).
     poles : tuple[complex, ...] or None
         Closed-loop poles to start from (default: the LQ design); fewer than the
         design needs (``1 +`` the delay in control samples) are completed with
@@ -78,6 +83,48 @@ class CalibrationSettings:
     poles: tuple[complex, ...] | None = None
     iterations: int = 4
     check: CheckSettings | None = None
+
+
+@dataclass(frozen=True)
+class DesignFigures:
+    """
+    One design's closed-loop figures, for the trade of settling against chatter.
+
+    Parameters
+    ----------
+    fade : float
+        The IDZ's fade-in band, degrees per control sample (0: the chatter band alone).
+    passed : bool
+        Whether its check passed.
+    settling : tuple[float, float]
+        Shortest and longest settling time of the steps, s.
+    overshoot : float
+        Largest overshoot, percent.
+    pulse_rate : float
+        Valve pulses across the dead-zone per second of hold.
+    travel_rate : float
+        Valve travel per second of hold, input units.
+    travel_share : float or None
+        The same as a share of the valve range.
+
+    """
+
+    fade: float
+    passed: bool
+    settling: tuple[float, float]
+    overshoot: float
+    pulse_rate: float
+    travel_rate: float
+    travel_share: float | None
+
+    @classmethod
+    def of(cls, spec: ControllerSpec, check: LoopCheck) -> DesignFigures:
+        """Return the figures of a design and its check."""
+        chatter = check.chatter
+        return cls(0.0 if spec.idz is None else spec.idz.fade, check.passed,
+                   check.settling_range,
+                   float(max((m.overshoot for m in check.steps), default=0.0)),
+                   chatter.pulse_rate, chatter.travel_rate, chatter.travel_share)
 
 
 @dataclass(frozen=True, eq=False)
@@ -111,6 +158,13 @@ class CalibrationResult:
         IDZ form of every design tried (``chord`` or ``table``), first to last.
     obstacles : tuple[Obstacle, ...]
         When the check failed: the check with each element idealised.
+    control : ControlPeriod or None
+        The control period, as whole samples of the records' period.
+    trade : tuple[DesignFigures, ...]
+        When the IDZ pulsed at hold: the design with the chatter band alone, then the
+        one whose compensation fades in (settling against chatter); else empty.
+    fades : tuple[float, ...]
+        IDZ fade-in band of every design tried, first to last (0: none).
 
     """
 
@@ -128,6 +182,9 @@ class CalibrationResult:
     warnings: tuple[str, ...] = field(default=())
     forms: tuple[str, ...] = field(default=())
     obstacles: tuple[Obstacle, ...] = field(default=())
+    control: ControlPeriod | None = None
+    trade: tuple[DesignFigures, ...] = field(default=())
+    fades: tuple[float, ...] = field(default=())
 
     @property
     def in_the_way(self) -> tuple[str, ...]:
@@ -213,13 +270,18 @@ class _Designer:
                  noise_std: float) -> None:
         self.model, self.settings, self.noise_std = model, settings, noise_std
         self.form: IdzForm = 'chord'
+        #: Whether the IDZ's compensation fades in (taken once a design pulsed at hold).
+        self.fade = False
 
     def design(self, poles: Sequence[complex] | None = None,
                model: JointModel | None = None) -> ControllerSpec:
         """Design in the current form (LQ without ``poles``), for ``model`` or the final one."""
-        return design_from_model(model if model is not None else self.model,
+        spec = design_from_model(model if model is not None else self.model,
                                  control_period=self.settings.control_period, poles=poles,
                                  form=self.form, noise_std=self.noise_std)
+        if self.fade and spec.idz is not None:
+            spec = replace(spec, idz=faded(spec.idz))
+        return spec
 
     def first(self, form: IdzForm) -> ControllerSpec:
         """Return the first design in ``form``: LQ, or the poles asked for, completed."""
@@ -256,10 +318,10 @@ def _clean(poles: Sequence[complex]) -> list[complex]:
 
 
 def _stroke(model: JointModel, records: Sequence[Record]) -> tuple[float, float]:
-    if model.angle_limits is not None:
-        return model.angle_limits
-    low = min(float(np.min(r.y)) for r in records)
-    high = max(float(np.max(r.y)) for r in records)
+    # A side without a stop: the farthest the records went.
+    stops = model.angle_limits or (-math.inf, math.inf)
+    low = stops[0] if math.isfinite(stops[0]) else min(float(np.min(r.y)) for r in records)
+    high = stops[1] if math.isfinite(stops[1]) else max(float(np.max(r.y)) for r in records)
     if not high - low > 1.0:
         raise DataError(f'the joint moved only {high - low:.2f} deg in the records; the '
                         'closed-loop check needs the stroke (give --angle-limits)')
@@ -288,6 +350,16 @@ def calibrate(records: Sequence[Record], validation: Sequence[Record] | None = N
     -------
     CalibrationResult
         The models, the controller, the check and the warnings.
+
+    See Also
+    --------
+    identify, diagnose, design_from_model : the stages one by one.
+
+    Examples
+    --------
+    >>> from hydro_sdp import calibrate, save_controller
+    >>> result = calibrate(records)  # doctest: +SKIP
+    >>> save_controller(result.spec, 'j2_controller.yaml')  # doctest: +SKIP
 
     """
     settings = settings if settings is not None else CalibrationSettings()
@@ -326,19 +398,40 @@ def calibrate(records: Sequence[Record], validation: Sequence[Record] | None = N
     noise = noise if math.isfinite(noise) and noise > 0.0 else 0.0
     check_settings = settings.check if settings.check is not None else CheckSettings(
         dt=identified.sample_period, noise_std=noise)
-    designer = _Designer(final, settings, noise)
+    # Whole samples of the records' period: a clock a fraction of a percent off a round
+    # period changes neither the samples per step nor the gains.
+    control = control_period_on(settings.control_period, identified.sample_period)
+    designer = _Designer(final, replace(settings, control_period=control.seconds), noise)
     spec = designer.first(default_form(final))
     designs: list[tuple[str, ...]] = []
     forms: list[str] = []
+    fades: list[float] = []
+    trade: list[DesignFigures] = []
     check: LoopCheck | None = None
-    total = REDESIGNS + 2           # the chord, the table, then slower poles
-    for attempt in range(total):
+    total = REDESIGNS + 2           # the chord, the table, then slower poles (and a fade)
+    attempt = 0
+    while True:
         designs.append(tuple(format_pole(p) for p in spec.poles))
         forms.append(designer.form)
+        fades.append(0.0 if spec.idz is None else spec.idz.fade)
         report('closed-loop check', attempt, total)
         check = check_loop(final, spec, stroke, settings=check_settings)
-        if check.passed or attempt == total - 1:
+        if designer.fade and len(trade) == 1:
+            trade.append(DesignFigures.of(spec, check))
+        attempt += 1
+        if check.passed or attempt == total:
             break
+        if (check.failures == check.chatter.failures and not designer.fade
+                and spec.idz is not None and spec.idz.beta > 0.0):
+            # The valve pulses at hold and nothing else fails: the same design with its
+            # compensation fading in (one more attempt, the trade shown).
+            designer.fade = True
+            total += 1
+            trade.append(DesignFigures.of(spec, check))
+            warnings.append(f'the IDZ pulses at hold ({"; ".join(check.chatter.failures)}); '
+                            'its compensation fades in beyond the chatter band instead')
+            spec = replace(spec, idz=faded(spec.idz))
+            continue
         if designer.form == 'chord':
             try:
                 table = designer.first('table')
@@ -374,6 +467,8 @@ def calibrate(records: Sequence[Record], validation: Sequence[Record] | None = N
                         f'(the check with each idealised: {tried})')
     if not all(math.isfinite(s.model) for s in final_scores):
         warnings.append('the final model diverges on a validation record')
+    warnings += list(spec.notes)
     return CalibrationResult(identified, note, tuple(estimation), tuple(checks), scores,
                              final_scores, diagnosis, spec, check, tuple(designs), stroke,
-                             tuple(warnings), tuple(forms), found)
+                             tuple(warnings), tuple(forms), found, control, tuple(trade),
+                             tuple(fades))

@@ -35,6 +35,10 @@ class BagReadError(BagError, OSError):
     """The bag's storage could not be read (truncated or corrupt file)."""
 
 
+class BagWriteError(BagError, OSError):
+    """The bag's storage could not be written (a full disk): what was committed stays."""
+
+
 class TopicNotFoundError(BagError, LookupError):
     """A topic needed for a record is not in the bag."""
 

@@ -26,6 +26,17 @@ def load_controller(path: str | os.PathLike[str]) -> ControllerSpec:
     ControllerSpec
         The controller; its closed loop is checked to be stable.
 
+    See Also
+    --------
+    save_controller : write a controller file.
+
+    Examples
+    --------
+    >>> from hydro_sdp import design_from_model, load_controller, load_model, save_controller
+    >>> path = save_controller(design_from_model(load_model('config/brokk_j2.yaml')), 'c.yaml')
+    >>> load_controller(path).joint
+    'j2'
+
     """
     return load_document(path, ControllerSpec.from_mapping)
 
@@ -61,7 +72,22 @@ def save_controller(spec: ControllerSpec, path: str | os.PathLike[str]) -> Path:
     """
     Write the controller ``spec`` to a file whole or not at all.
 
-    ``path`` and the returned target path as in :func:`save_model`.
+    Parameters
+    ----------
+    spec : ControllerSpec
+        The controller.
+    path : str or PathLike
+        Target file.
+
+    Returns
+    -------
+    Path
+        The target path.
+
+    See Also
+    --------
+    load_controller : read a controller file.
+    design_from_model : the controller of a model.
 
     """
     return atomic_write_text(path, yaml_text(spec.to_mapping()))

@@ -29,6 +29,16 @@ def load_model(path: str | os.PathLike[str]) -> JointModel:
     ModelFileError
         With the file name, the key and the reason.
 
+    See Also
+    --------
+    save_model : write a model file.
+
+    Examples
+    --------
+    >>> from hydro_sdp import load_model
+    >>> load_model('config/brokk_j2.yaml').joint
+    'j2'
+
     """
     return load_document(path, JointModel.from_mapping)
 
@@ -53,6 +63,16 @@ def save_model(model: JointModel, path: str | os.PathLike[str]) -> Path:
     -------
     Path
         The target path.
+
+    See Also
+    --------
+    load_model : read a model file.
+
+    Examples
+    --------
+    >>> from hydro_sdp import load_model, save_model
+    >>> save_model(load_model('config/brokk_j2.yaml'), 'j2_copy.yaml').name
+    'j2_copy.yaml'
 
     """
     return atomic_write_text(path, dump_model(model))

@@ -6,6 +6,7 @@ from typing import Sequence
 
 from hydro_sdp.core.control.idz import InverseDeadZone
 from hydro_sdp.core.control.idz_table import TableInverseDeadZone
+from hydro_sdp.core.control.loop_chatter import hold_pulses
 from hydro_sdp.core.control.loop_simulation import LoopTrace
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.plots.figures import (
@@ -13,6 +14,9 @@ from hydro_sdp.plots.figures import (
 from hydro_sdp.plots.units import UNKNOWN_UNIT
 from matplotlib.figure import Figure
 import numpy as np
+
+#: Colour of the valve's pulses at hold.
+PULSE = '#c00000'
 
 
 def plot_idz(model: JointModel, idz: InverseDeadZone, control_period: float, *,
@@ -136,7 +140,8 @@ def plot_idz_table(model: JointModel, table: TableInverseDeadZone, chord: Invers
 
 
 def plot_closed_loop(traces: Sequence[LoopTrace], *, title: str = '',
-                     command_unit: str | None = None) -> Figure:
+                     command_unit: str | None = None,
+                     valve: tuple[tuple[float, float], float] | None = None) -> Figure:
     """
     Closed-loop response, as the paper's Fig. 7: angle, u and v against time.
 
@@ -149,6 +154,9 @@ def plot_closed_loop(traces: Sequence[LoopTrace], *, title: str = '',
     command_unit : str or None
         Unit of the valve command (default: ``input units``; see
         :func:`~hydro_sdp.plots.units.command_unit_of` for a model's).
+    valve : tuple or None
+        ``(edges, rest)`` of the valve's dead-zone: its edges are drawn and the
+        valve's pulses across it at hold marked (methods.md section 5.7).
 
     Returns
     -------
@@ -170,6 +178,16 @@ def plot_closed_loop(traces: Sequence[LoopTrace], *, title: str = '',
             axes[1].plot(trace.t, trace.y - trace.setpoint, color=colour, linewidth=1.0)
         u_ax.plot(trace.t, trace.u, color=colour, linewidth=1.0, drawstyle='steps-pre')
         v_ax.plot(trace.t, trace.v, color=colour, linewidth=1.0, drawstyle='steps-pre')
+        if valve is not None:
+            pulses = hold_pulses(trace, valve[0], valve[1])
+            v_ax.plot(trace.t[pulses], trace.v[pulses], linestyle='none', marker='v',
+                      markersize=5, color=PULSE,
+                      label=f'{pulses.size} pulse{"" if pulses.size == 1 else "s"} at hold')
+    if valve is not None:
+        for edge in valve[0]:
+            v_ax.axhline(edge, color=LIMIT, linestyle=':', linewidth=0.8)
+        v_ax.legend(loc='upper right', fontsize=8, frameon=False,
+                    title='dotted: dead-zone edges', title_fontsize=8)
     if several:
         axes[1].axhline(0.0, color='black', linewidth=0.6)
         axes[1].set_ylabel('error y - d (deg)')

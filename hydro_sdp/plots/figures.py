@@ -10,6 +10,7 @@ whole or not at all with :func:`save_figure`.
 from __future__ import annotations
 
 import io
+import math
 import os
 from pathlib import Path
 from typing import Literal
@@ -93,10 +94,12 @@ def mark_limits(ax: Axes, limits: tuple[float, float] | None, label: str) -> Non
     """Draw a pair of horizontal limits, dashed, labelled at the right edge."""
     if limits is None:
         return
-    for value in limits:
+    shown = [value for value in limits if math.isfinite(value)]
+    for value in shown:
         ax.axhline(value, color=LIMIT, linestyle='--', linewidth=0.9)
-    ax.text(1.0, limits[1], f' {label}', transform=ax.get_yaxis_transform(),
-            color=LIMIT, fontsize=8, va='center', ha='left', clip_on=False)
+    if shown:
+        ax.text(1.0, shown[-1], f' {label}', transform=ax.get_yaxis_transform(),
+                color=LIMIT, fontsize=8, va='center', ha='left', clip_on=False)
 
 
 def mark_dead_zone(ax: Axes, dead_zone: tuple[float, float]) -> None:

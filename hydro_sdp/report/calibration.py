@@ -6,6 +6,7 @@ import math
 from pathlib import Path
 
 from hydro_sdp.core.calibration import CalibrationResult
+from hydro_sdp.core.control.loop_chatter import MAX_PULSE_RATE
 from hydro_sdp.core.identification.evaluation import simulated_angles
 from hydro_sdp.io.atomic import atomic_write_text
 from hydro_sdp.io.model_files import dump_model
@@ -31,6 +32,31 @@ def _velocity_map(folder: Path, result: CalibrationResult, unit: str) -> Path:
         command_unit=unit,
         title=f'Velocity map of joint {result.model.joint} and the level speeds'),
         folder / 'velocity_map.png')
+
+
+def chatter_lines(result: CalibrationResult, unit: str) -> list[str]:
+    """Return the lines on the valve's work at hold and the trade of settling against chatter."""
+    chatter = result.check.chatter
+    if chatter.travel_bound is None:
+        return ['The map has no dead-zone: the valve cannot pulse across one.', '']
+    share = chatter.travel_share
+    lines = [
+        f'Valve at hold (after each step settled, {chatter.duration:.1f} s in all): '
+        f'{chatter.pulse_rate:.2f} pulses/s across the dead-zone (bound '
+        f'{MAX_PULSE_RATE:g}/s; triangles on the valve panel of the figures), travel '
+        f'{chatter.travel_rate:.3g} {unit}/s'
+        + ('' if share is None else f' ({100.0 * share:.0f} % of the valve range)')
+        + f' (bound {chatter.travel_bound:.3g} {unit}/s, two dead-zone widths).', '']
+    if result.trade:
+        rows = [f'| {"fade-in " + format(f.fade, ".3g") if f.fade else "chatter band alone"} | '
+                f'{_seconds(f.settling[0])}-{_seconds(f.settling[1])} | {f.overshoot:.1f} | '
+                f'{f.pulse_rate:.2f} | {f.travel_rate:.3g} | '
+                f'{"passed" if f.passed else "FAILED"} |' for f in result.trade]
+        lines += ['The first IDZ pulsed at hold; its compensation now fades in beyond the '
+                  'chatter band (methods.md section 5.2). The trade, settling against chatter:',
+                  '', '| IDZ | settling (s) | overshoot (%) | pulses/s | travel '
+                  f'({unit}/s) | check |', '|---|---|---|---|---|---|', *rows, '']
+    return lines
 
 
 def summary_lines(result: CalibrationResult, unit: str, figures: list[str]) -> list[str]:
@@ -63,8 +89,11 @@ def summary_lines(result: CalibrationResult, unit: str, figures: list[str]) -> l
     ledger = [f'| {i} | {s.effect} | {s.mae_before:.4g} | {s.mae_after:.4g} |'
               for i, s in enumerate(diagnosis.ledger, start=1)]
     forms = result.forms or ('chord',) * len(result.designs)
-    designs = [f'{i}. {form} IDZ; poles {", ".join(poles)}'
-               for i, (poles, form) in enumerate(zip(result.designs, forms), start=1)]
+    fades = result.fades or (0.0,) * len(result.designs)
+    designs = [f'{i}. {form} IDZ{f" fading in over {fade:.3g}" if fade else ""}; '
+               f'poles {", ".join(poles)}'
+               for i, (poles, form, fade) in enumerate(zip(result.designs, forms, fades),
+                                                       start=1)]
     plant = (f'the integrator with {spec.delay_samples} samples of delay'
              + ('' if spec.valve_lag is None else f' and a valve lag of {spec.valve_lag:.3g} s')
              + ('' if spec.oscillation is None else
@@ -119,7 +148,7 @@ def summary_lines(result: CalibrationResult, unit: str, figures: list[str]) -> l
         '|---|---|---|---|---|', *steps, '',
         f'Ramp: largest tracking error {check.ramp_error:.3g} deg, settled '
         f'{_seconds(check.ramp_settling)} s after its end; holds ending in a limit cycle: '
-        f'{check.cycles}.', '',
+        f'{check.cycles}.', '', *chatter_lines(result, unit),
         *[f'- {failure}' for failure in check.failures], '',
         *in_the_way,
         '## Figures', '', *[f'![{Path(f).stem}]({f})' for f in figures], '',
@@ -147,6 +176,8 @@ def write_report(folder: Path, result: CalibrationResult, unit: str) -> list[str
     """
     record = result.validation[0]
     name = record.source or 'first'
+    edges = result.check.chatter.edges
+    valve = None if edges is None or result.spec.idz is None else (edges, result.spec.idz.rest)
     written = [
         _velocity_map(folder, result, unit),
         save_figure(plot_record(record, result.model,
@@ -156,9 +187,11 @@ def write_report(folder: Path, result: CalibrationResult, unit: str) -> list[str
                     folder / 'evaluation.png'),
         save_figure(plot_closed_loop([result.check.steps_trace], command_unit=unit,
                                      title='Closed-loop check: steps across the stroke '
-                                           '(final model)'), folder / 'closed_loop.png'),
+                                           '(final model)', valve=valve),
+                    folder / 'closed_loop.png'),
         save_figure(plot_closed_loop([result.check.ramp_trace], command_unit=unit,
-                                     title='Closed-loop check: ramp (final model)'),
+                                     title='Closed-loop check: ramp (final model)',
+                                     valve=valve),
                     folder / 'ramp.png')]
     diagnosis = write_diagnosis(folder / 'diagnosis', result.diagnosis, command_unit=unit)
     figures = [f'{Path(p).name}' for p in written] + [

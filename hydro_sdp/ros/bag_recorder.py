@@ -8,17 +8,21 @@ outright loses at most that much; ``hydro-sdp reindex output`` then writes the
 missing ``metadata.yaml``. An ``output`` that exists is refused and left as it is.
 
 Each topic is recorded with the type its publishers advertise in the ROS graph
-(a ``std_msgs/msg/Bool`` stays a Bool), stamped with the node's clock at
-receipt (simulated time when ``use_sim_time`` is set). A topic nobody publishes
-yet is looked up again every ``discovery_period`` seconds and recorded from
-when it appears; the log says what is recorded, what is still awaited, and at
-the end how many messages were written.
+(a ``std_msgs/msg/Bool`` stays a Bool) if it is one the recorder records, and for
+hydro_sdp's own topics only with their type (``joint_states`` a JointState:
+:mod:`~hydro_sdp.ros.recorded_types`; a class is never imported by a name the graph
+gives), stamped with the node's clock at receipt (simulated time when
+``use_sim_time`` is set). A topic nobody publishes yet, or only with another type,
+is looked up again every ``discovery_period`` seconds and recorded from when it
+appears; the log says what is recorded, what is still awaited, and at the end how
+many messages were written. When the disk refuses a write (full), the recorder
+stops with one line on stderr and exit code 3, the bag closed with what was
+committed (:class:`~hydro_sdp.core.errors.BagWriteError`).
 
 """
 
 from __future__ import annotations
 
-import importlib
 import sys
 import time
 from typing import Callable, Mapping, Unpack
@@ -28,6 +32,7 @@ from hydro_sdp.ros.node_options import NodeOptions
 from hydro_sdp.ros.parameters.node_parameters import NodeParameters
 from hydro_sdp.ros.parameters.recorder import RECORDER_PARAMETERS
 from hydro_sdp.ros.qos import subscription_events
+from hydro_sdp.ros.recorded_types import choose_type, message_class
 from hydro_sdp.ros.runner import run_node
 from rclpy.clock import Clock, ClockType, ROSClock
 from rclpy.duration import Duration
@@ -38,30 +43,6 @@ from rclpy.topic_endpoint_info import TopicEndpointInfo
 #: Longest a callback may run after its message arrived for the arrival stamp to be used, ns
 #: (beyond it, or with a stamp from another clock, the callback's own time is).
 LATE_LIMIT = 1_000_000_000
-
-
-def message_class(msgtype: str) -> type:
-    """
-    Import the Python class of a ROS message type.
-
-    Parameters
-    ----------
-    msgtype : str
-        ``package/msg/Name``.
-
-    Returns
-    -------
-    type
-        The message class.
-
-    Raises
-    ------
-    ImportError
-        If the type's package is not installed.
-
-    """
-    package, kind, name = msgtype.split('/')
-    return getattr(importlib.import_module(f'{package}.{kind}'), name)
 
 
 def _seconds(duration: Duration) -> dict[str, int]:
@@ -118,6 +99,7 @@ class BagRecorderNode(Node):
         self.recorded: dict[str, str] = {}     # topic -> type
         self._last_stamp: dict[str, int] = {}
         self._waiting = {self.resolve_topic_name(t) for t in topics}
+        self._said: set[str] = set()
         self._announced = False
         steady = Clock(clock_type=ClockType.STEADY_TIME)
         self._flush_timer = self.create_timer(flush_period, self._flush, clock=steady)
@@ -147,15 +129,18 @@ class BagRecorderNode(Node):
             return
         advertised = dict(self.get_topic_names_and_types())
         for topic in sorted(self._waiting & advertised.keys()):
-            types = advertised[topic]
-            if len(types) > 1:
-                self.get_logger().warning(f'{topic} is advertised with several types '
-                                          f"({', '.join(types)}); recording {types[0]}")
+            msgtype, problem = choose_type(topic, advertised[topic])
+            if problem and problem not in self._said:
+                self._said.add(problem)      # once: the graph is read again every period
+                log = self.get_logger()
+                (log.warning if msgtype else log.error)(problem)
+            if msgtype is None:
+                continue
             self._waiting.discard(topic)
             try:
-                self._subscribe(topic, types[0])
-            except (ImportError, AttributeError, ValueError) as error:
-                self.get_logger().error(f'cannot record {topic}: type {types[0]} is not '
+                self._subscribe(topic, msgtype)
+            except (ImportError, AttributeError) as error:
+                self.get_logger().error(f'cannot record {topic}: type {msgtype} is not '
                                         f'available here ({error})')
         if not self._waiting:
             self._discovery_timer.cancel()

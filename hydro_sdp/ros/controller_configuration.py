@@ -97,7 +97,8 @@ class ControllerConfiguration:
     def __init__(self, parameters: NodeParameters) -> None:
         self.parameters = parameters
 
-    def build(self, timeout_ns: int, margin: float, now_ns: int) -> list[JointLoop]:
+    def build(self, timeout_ns: int, margin: float, now_ns: int, *, feedback_margin: float,
+              stop_band: float) -> list[JointLoop]:
         """
         Load the files and design; declare each joint's parameters; return the loops.
 
@@ -112,6 +113,8 @@ class ControllerConfiguration:
             Set-point margin, deg (it must leave room between the end stops).
         now_ns : int
             The node clock's reading, ns.
+        feedback_margin, stop_band : float
+            Allowance of the feedback checks and band of the stop-side hold, degrees.
 
         Returns
         -------
@@ -136,8 +139,11 @@ class ControllerConfiguration:
                 if not parameters.declared('joint'):
                     parameters.declare(['joint'], defaults={'joint': spec.joint})
                 joint = parameters.text('joint')
-            setpoint_range(model.angle_limits, margin)      # leaves room between the stops?
-            loops.append(JointLoop(joint, model, spec, timeout_ns, now_ns))
+            loop = JointLoop(joint, model, spec, timeout_ns, now_ns,
+                             feedback_margin=feedback_margin, stop_band=stop_band)
+            # Refused if the margin leaves no room between the stops.
+            loop.allowed = setpoint_range(model.angle_limits, margin)
+            loops.append(loop)
         declared: list[JointLoop] = []
         try:
             for loop in loops:

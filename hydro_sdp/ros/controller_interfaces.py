@@ -4,7 +4,9 @@ The topics and timers of a configured controller node, made at configure, destro
 :class:`ControllerInterfaces` gives each :class:`~hydro_sdp.ros.joint_loop.JointLoop` its
 ``<joint>/valve_command`` and ``<joint>/controller_state`` publishers and its
 ``<joint>/setpoint`` subscription, subscribes to ``joint_states`` and ``joint_trajectory``,
-and runs the feedback watchdog. The node's callbacks are passed in; nothing here controls.
+and runs the feedback watchdog, on the node's clock and on a steady clock (a simulated
+clock that stops must not stop it). The node's callbacks are passed in; nothing here
+controls.
 
 """
 
@@ -17,6 +19,7 @@ from hydro_sdp.core.control.scheduling import watchdog_period_ns
 from hydro_sdp.ros import qos
 from hydro_sdp.ros.conversions import CONTROLLER_STATE_LABELS
 from hydro_sdp.ros.joint_loop import JointLoop
+from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64, Float64MultiArray, MultiArrayDimension
@@ -81,7 +84,10 @@ class ControllerInterfaces:
         self._subscriptions.append(node.create_subscription(
             JointTrajectory, 'joint_trajectory', on_trajectory, qos.COMMAND_QOS,
             event_callbacks=events))
-        self.watchdog = node.create_timer(watchdog_period_ns(timeout_ns) * 1e-9, on_watchdog)
+        period = watchdog_period_ns(timeout_ns) * 1e-9
+        self.watchdog = node.create_timer(period, on_watchdog)
+        self.steady_watchdog = node.create_timer(period, on_watchdog,
+                                                 clock=Clock(clock_type=ClockType.STEADY_TIME))
         #: The message every joint's controller_state is filled into.
         self.state_message = controller_state_message()
 
@@ -93,11 +99,13 @@ class ControllerInterfaces:
     def set_timeout(self, timeout_ns: int) -> None:
         """Run the watchdog at the period of a new feedback timeout."""
         self.watchdog.timer_period_ns = watchdog_period_ns(timeout_ns)
+        self.steady_watchdog.timer_period_ns = watchdog_period_ns(timeout_ns)
 
     def destroy(self, loops: list[JointLoop]) -> None:
         """Destroy every topic and the watchdog."""
         node = self._node
         node.destroy_timer(self.watchdog)
+        node.destroy_timer(self.steady_watchdog)
         for subscription in self._subscriptions:
             node.destroy_subscription(subscription)
         for publisher in self._publishers:

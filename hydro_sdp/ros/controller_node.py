@@ -29,13 +29,20 @@ control and the core :mod:`~hydro_sdp.core.control.scheduling` decides when: the
 JointState sample at or after each control instant is controlled (so the
 feedback-to-command latency is the computation time); a duplicate or
 out-of-order sample is ignored; a sample that cannot be used (NaN, joint
-missing, arrays of different lengths, stamp further than ``feedback_timeout``
-from the node's clock) is refused for that joint with a throttled warning and its
-valve is closed; if no valid feedback arrives for ``feedback_timeout`` the
-watchdog closes the valve, and control resumes from the next valid sample
-without a bump. Set-points are kept ``setpoint_margin`` degrees inside the end
-stops (:mod:`~hydro_sdp.core.control.safety`). Per message the node reads the clock once
+missing, arrays of different lengths, stamp more than ``feedback_timeout``
+behind the node's clock or more than a control period ahead of it, an angle
+beyond the stops or faster than the joint by more than ``feedback_margin``) is
+refused for that joint with a throttled warning and its valve is closed; if no
+valid feedback arrives for ``feedback_timeout``, on the node clock or a steady
+clock, the watchdog closes the valve, and control resumes from the next valid
+sample without a bump. Set-points are kept ``setpoint_margin`` degrees inside the
+end stops, and near a stop the valve holds in its dead-zone
+(:mod:`~hydro_sdp.core.control.safety`). Per message the node reads the clock once
 and the stamp once, and publishes the command before anything else it does.
+
+Its parameter services answer a request whose arrays or strings are too large from
+the message alone, so no request holds up the loop for more than its reading
+(:class:`~hydro_sdp.ros.parameters.node_parameters.NodeParameters`).
 
 Lifecycle: configure loads the files and designs, and declares the joints'
 parameters; activate starts commanding (every joint first holds where it is
@@ -48,14 +55,17 @@ Every writable parameter applies at run time: ``<joint>.gains.k_i``,
 ``gains.k_i``, ``idz.dead_zone``..., kept in step). With a table IDZ (the map's own
 inverse) a new ``idz.dead_zone`` shifts the branch of the edge that moved and a new
 ``idz.slopes`` scales a branch's increments (its chord slope to two thirds of its
-largest increment). A change request is checked as a whole before anything is
-applied and applied in the post-set callback.
+largest increment); new edges must lie inside the valve range and new slopes within
+the model's (:func:`~hydro_sdp.core.control.safety.check_idz_fits`). A change request is
+checked as a whole before anything is applied and applied in the post-set callback.
+Trajectories faster than a joint's identified top speed are refused.
 
 """
 
 from __future__ import annotations
 
 import math
+import time
 from typing import Sequence, Unpack
 
 from hydro_sdp.core.control.health import HealthStatus, joint_health
@@ -98,6 +108,8 @@ class PipControllerNode(LifecycleNode):
     #: The writable parameters in force (set by their handlers, read per message).
     feedback_timeout: float
     setpoint_margin: float
+    stop_band: float
+    feedback_margin: float
     feedforward: bool
 
     def __init__(self, *, node_name: str = 'pip_controller',
@@ -116,6 +128,8 @@ class PipControllerNode(LifecycleNode):
             self, CONTROLLER_PARAMETERS, check=self._check_request,
             apply={'feedback_timeout': self._apply_feedback_timeout,
                    'setpoint_margin': self._apply_setpoint_margin,
+                   'stop_band': self._apply_stop_band,
+                   'feedback_margin': self._apply_feedback_margin,
                    'feedforward': self._apply_feedforward},
             apply_joint=self._apply_joints)
         self.parameters.declare(defaults={'model_file': str(default_model_path())})
@@ -148,8 +162,9 @@ class PipControllerNode(LifecycleNode):
     def on_configure(self, state: LifecycleState) -> TransitionCallbackReturn:
         """Load the files, design, declare the joints' parameters, create the interfaces."""
         try:
-            loops = self.configuration.build(seconds_to_ns(self.feedback_timeout),
-                                             self.setpoint_margin, self._now_ns())
+            loops = self.configuration.build(
+                seconds_to_ns(self.feedback_timeout), self.setpoint_margin, self._now_ns(),
+                feedback_margin=self.feedback_margin, stop_band=self.stop_band)
         except (HydroSdpError, OSError) as error:
             self._configure_error = error if isinstance(error, HydroSdpError) \
                 else ConfigurationError(str(error))
@@ -161,8 +176,8 @@ class PipControllerNode(LifecycleNode):
             self, loops, on_state=self._on_state, on_setpoint=self._on_setpoint,
             on_trajectory=self._on_trajectory, on_watchdog=self._on_watchdog,
             timeout_ns=seconds_to_ns(self.feedback_timeout))
-        self.diagnostics = DiagnosticsReporter(self, self.parameters.double('diagnostic_period'),
-                                               self._statuses)
+        self.diagnostics = DiagnosticsReporter(
+            self, self.parameters.double('diagnostic_period'), self._statuses)
         return SUCCESS
 
     def on_activate(self, state: LifecycleState) -> TransitionCallbackReturn:
@@ -214,14 +229,17 @@ class PipControllerNode(LifecycleNode):
         names = message.name
         positions = message.position
         now = self._now_ns()
+        steady = time.monotonic_ns()
         for loop in self.loops:
-            self._control(loop, stamp_ns, names, positions, now)
+            self._control(loop, stamp_ns, names, positions, now, steady)
 
     def _control(self, loop: JointLoop, stamp: int, names: Sequence[str],
-                 positions: Sequence[float], now: int) -> None:
+                 positions: Sequence[float], now: int, steady: int) -> None:
         try:
             angle = position_of(names, positions, loop.joint)
-            admission = loop.gate.admit(stamp, now)
+            admission = loop.gate.admit(stamp, now, steady)
+            if admission != 'ignored':
+                loop.plausibility.check(stamp, angle)
         except DataError as error:
             self._refuse(loop, error)
             return
@@ -248,6 +266,11 @@ class PipControllerNode(LifecycleNode):
             setpoint = loop.setpoint
         else:
             setpoint = loop.setpoint = angle   # hold where the joint is until told otherwise
+        # Where the joint is headed: the increments already sent still move it a delay on.
+        headed = angle + controller.pending(loop.spec.delay_samples)
+        if loop.stop_hold.decide(setpoint, headed, loop.allowed):
+            self._hold_at_stop(loop, setpoint, angle, stamp)
+            return
         try:
             u, command = controller.step(setpoint, angle, feedforward)
         except HydroSdpError as error:
@@ -260,6 +283,17 @@ class PipControllerNode(LifecycleNode):
         self.outputs += 1
         schedule.stepped(stamp)
         self._report_step(loop, setpoint, angle, u, command)
+
+    def _hold_at_stop(self, loop: JointLoop, setpoint: float, angle: float,
+                      stamp: int) -> None:
+        # Near a set-point at a stop the valve rests in its dead-zone: driving on would
+        # press the cylinder into the stop. The next step starts from rest.
+        loop.close_valve()
+        loop.last_setpoint = setpoint
+        self.outputs += 1
+        loop.schedule.stepped(stamp)
+        loop.schedule.hold()
+        self._report_step(loop, setpoint, angle, 0.0, loop.rest)
 
     def _report_step(self, loop: JointLoop, setpoint: float, angle: float, u: float,
                      command: float) -> None:
@@ -298,11 +332,13 @@ class PipControllerNode(LifecycleNode):
         if not self.active:
             return
         now = self._now_ns()
+        steady = time.monotonic_ns()
         for loop in self.loops:
-            state = loop.gate.watchdog(now)
+            state = loop.gate.watchdog(now, steady)
             if state == 'lost':
                 self._warn(f'{loop.joint}: no valid feedback for '
-                           f'{loop.gate.silence_ns(now) * 1e-9:.2f} s; valve closed')
+                           f'{loop.gate.silence_ns(now, steady) * 1e-9:.2f} s; valve '
+                           'closed')
             if state != 'fed':
                 loop.close_valve()
 
@@ -316,7 +352,8 @@ class PipControllerNode(LifecycleNode):
         self.setpoints_received += 1
         value = float(message.data)
         if not math.isfinite(value):
-            self._warn(f'{loop.joint}: refused a non-finite set-point; keeping {loop.setpoint}')
+            self._warn(f'{loop.joint}: refused a non-finite set-point; keeping '
+                       f'{loop.setpoint}')
             return
         loop.setpoint = self._safe_setpoint(loop, math.degrees(value))
         loop.following = False
@@ -366,8 +403,19 @@ class PipControllerNode(LifecycleNode):
     def _apply_setpoint_margin(self) -> None:
         self.setpoint_margin = self.parameters.double('setpoint_margin')
         for loop in self.loops:
+            loop.allowed = setpoint_range(loop.model.angle_limits, self.setpoint_margin)
             if loop.setpoint is not None:
                 loop.setpoint = self._safe_setpoint(loop, loop.setpoint)
+
+    def _apply_stop_band(self) -> None:
+        self.stop_band = self.parameters.double('stop_band')
+        for loop in self.loops:
+            loop.stop_hold.band = self.stop_band
+
+    def _apply_feedback_margin(self) -> None:
+        self.feedback_margin = self.parameters.double('feedback_margin')
+        for loop in self.loops:
+            loop.plausibility.margin = self.feedback_margin
 
     def _apply_feedforward(self) -> None:
         self.feedforward = self.parameters.flag('feedforward')

@@ -13,8 +13,10 @@ import math
 from typing import Protocol
 
 from hydro_sdp.core.control.health import JointSnapshot
+from hydro_sdp.core.control.idz_design import default_form, IdzForm
 from hydro_sdp.core.control.idz_recalibration import Decision, Recalibration, RecalibrationPolicy
 from hydro_sdp.core.identification.online import SdpEstimate
+from hydro_sdp.core.identification.online_edges import EdgeEstimate
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.ros.protocols import MessagePublisher
 from rcl_interfaces.msg import Parameter as ParameterMessage, ParameterType, ParameterValue
@@ -25,7 +27,8 @@ class OnlineEstimator(Protocol):
     """
     What the node needs of an online estimator (tests put a stand-in with a set estimate).
 
-    :class:`~hydro_sdp.core.identification.online.OnlineSdpIdentifier` is the real one.
+    :func:`~hydro_sdp.core.identification.online_edges.online_identifier` gives the real
+    one: eq. (5)'s filter for an ``sdp`` model, the edges' filter for any other.
     """
 
     @property
@@ -35,20 +38,25 @@ class OnlineEstimator(Protocol):
     def update(self, v: float, y: float) -> bool:
         """Take the command in force and the measured angle of one sample."""
 
-    def named_estimate(self) -> SdpEstimate:
+    def named_estimate(self) -> SdpEstimate | EdgeEstimate:
         """Return the estimates with their standard deviations."""
 
     def estimate(self) -> JointModel:
         """Return the estimate as a joint model."""
 
 
-def estimate_topics(estimate: SdpEstimate) -> dict[str, float]:
+#: Units of the estimates, by the start of their names.
+UNITS = {'dead_zone': 'input units', 'saturation': 'deg/s', 'curvature': '1/input unit',
+         'speed_scale': "times the model's speed"}
+
+
+def estimate_topics(estimate: SdpEstimate | EdgeEstimate) -> dict[str, float]:
     """
     Return the estimate as topic values: saturation speeds in rad/s, the rest as they are.
 
     Parameters
     ----------
-    estimate : SdpEstimate
+    estimate : SdpEstimate or EdgeEstimate
         The estimate (speeds in deg/s).
 
     Returns
@@ -66,15 +74,14 @@ def estimate_topics(estimate: SdpEstimate) -> dict[str, float]:
     return values
 
 
-def estimate_pairs(estimate: SdpEstimate) -> dict[str, tuple[float, float]]:
+def estimate_pairs(estimate: SdpEstimate | EdgeEstimate) -> dict[str, tuple[float, float]]:
     """Return each estimated value with its standard deviation, by name with its unit."""
     values = asdict(estimate)
-    units = {'dead_zone': 'input units', 'saturation': 'deg/s', 'curvature': '1/input unit'}
     pairs = {}
     for name, value in values.items():
         if name.endswith('_std'):
             continue
-        unit = next(u for prefix, u in units.items() if name.startswith(prefix))
+        unit = next(u for prefix, u in UNITS.items() if name.startswith(prefix))
         pairs[f'{name} [{unit}]'] = (float(value), float(values[f'{name}_std']))
     return pairs
 
@@ -107,6 +114,8 @@ class IdentifiedJoint:
         self.joint = joint
         self.model = model
         self.estimator = estimator
+        #: The form of the controller's IDZ the slopes are for: the model family's default.
+        self.form: IdzForm = default_form(model)
         # The IDZ edges the controller uses: those of the model it was designed from.
         self.recalibration = Recalibration(estimator.named_estimate().edges, policy)
         self.recalibrations = 0

@@ -2,19 +2,26 @@
 Online identification as a ROS node (``ros2 run hydro_sdp identifier_node``).
 
 One node identifies one joint (``model_file``) or several (``joints`` with
-``model_files`` in the same order). Per joint it pairs each ``joint_states`` sample
-with the last ``<joint>/valve_command`` received before it (the command in force
-over the interval that ends at the sample, as in a recorded bag), feeds the core
-:class:`~hydro_sdp.core.identification.online.OnlineSdpIdentifier`, and publishes the estimates
-and their standard deviations on ``<joint>/sdp/...`` (``std_msgs/Float64``):
+``model_files`` in the same order), of any map family. Per joint it pairs each
+``joint_states`` sample with the last ``<joint>/valve_command`` received before it
+(the command in force over the interval that ends at the sample, as in a recorded
+bag), feeds the core online identifier
+(:func:`~hydro_sdp.core.identification.online_edges.online_identifier`: eq. (5)'s
+six coefficients for an ``sdp`` model, the edges and the speed scales near them
+for any other), and publishes the estimates and their standard deviations on
+``<joint>/sdp/...`` (``std_msgs/Float64``):
 
 * ``dead_zone_lower``, ``dead_zone_upper``: edges, input units;
-* ``saturation_negative_rad_s``, ``saturation_positive_rad_s``: saturation speeds, rad/s;
-* ``curvature_negative``, ``curvature_positive``: curvatures, 1/input unit;
+* ``sdp`` models: ``saturation_negative_rad_s``, ``saturation_positive_rad_s``,
+  saturation speeds, rad/s, and ``curvature_negative``, ``curvature_positive``,
+  1/input unit; other families: ``speed_scale_negative``, ``speed_scale_positive``,
+  the speeds beyond each edge over the model's;
 * each of these with ``_std`` appended: its standard deviation, same unit;
 * ``delay``: the delay, s;
 * ``slope_negative``, ``slope_positive``: the IDZ slopes for the controller's
-  ``idz.slopes`` parameter, deg per control sample per input unit;
+  ``idz.slopes`` parameter, deg per control sample per input unit, in the IDZ form
+  the family's design takes (chords for ``sdp``, ``sdp_dz`` and ``linear``, a
+  table for the others);
 * ``recalibration_needed`` (``std_msgs/Bool``).
 
 The core :class:`~hydro_sdp.core.control.idz_recalibration.Recalibration` decides when the
@@ -35,11 +42,11 @@ import math
 from typing import Unpack
 
 from hydro_sdp.core.control.health import HealthStatus, joint_health
-from hydro_sdp.core.control.idz import InverseDeadZone
-from hydro_sdp.core.control.idz_design import chord_idz
 from hydro_sdp.core.control.idz_recalibration import recalibrated_idz, RecalibrationPolicy
+from hydro_sdp.core.control.idz_table import Idz
 from hydro_sdp.core.errors import ConfigurationError, DataError, HydroSdpError
-from hydro_sdp.core.identification.online import input_scale, OnlineSdpIdentifier, OnlineSettings
+from hydro_sdp.core.identification.online import input_scale, OnlineSettings
+from hydro_sdp.core.identification.online_edges import online_identifier
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.io.model_files import default_model_path, load_model
 from hydro_sdp.ros import conversions, qos
@@ -125,7 +132,7 @@ class IdentifierNode(Node):
         settings = OnlineSettings.for_input_limits(
             model.input_limits, noise_std=self.parameters.double('noise_std'))
         return IdentifiedJoint(joint, model,
-                               OnlineSdpIdentifier(model, self.sample_period, settings),
+                               online_identifier(model, self.sample_period, settings),
                                self._policy(ParameterRequest([])))
 
     def _create_topics(self) -> None:
@@ -231,8 +238,8 @@ class IdentifierNode(Node):
         decision = item.recalibration.observe(stamp * 1e-9, estimate)
         item.last_decision = decision
         try:
-            values['slope_negative'], values['slope_positive'] = chord_idz(
-                model, self.control_period).slopes
+            values['slope_negative'], values['slope_positive'] = recalibrated_idz(
+                model, estimate.edges, self.control_period, item.form).slopes
         except HydroSdpError:
             pass
         for name, value in values.items():
@@ -241,7 +248,7 @@ class IdentifierNode(Node):
         item.flag_pub.publish(Bool(data=decision.needed))
         if decision.due and self.auto_recalibrate and item.pending is None:
             try:
-                wanted = recalibrated_idz(model, decision.edges, self.control_period)
+                wanted = recalibrated_idz(model, decision.edges, self.control_period, item.form)
             except HydroSdpError as error:
                 self.get_logger().warning(f'{item.joint}: no IDZ from the estimate: {error}',
                                           throttle_duration_sec=5.0,
@@ -249,7 +256,7 @@ class IdentifierNode(Node):
                 return
             self._recalibrate(item, wanted, stamp)
 
-    def _recalibrate(self, item: IdentifiedJoint, idz: InverseDeadZone, stamp: int) -> None:
+    def _recalibrate(self, item: IdentifiedJoint, idz: Idz, stamp: int) -> None:
         if not self._client.service_is_ready():
             self.get_logger().warning(
                 f'{self.controller_name} offers no set_parameters_atomically service; '

@@ -19,6 +19,8 @@ from hydro_sdp.core.control.idz import idz_mode, InverseDeadZone
 from hydro_sdp.core.control.idz_table import TableInverseDeadZone
 from hydro_sdp.core.control.pip_controller import PipIdzController
 from hydro_sdp.core.control.pip_design import PipGains
+from hydro_sdp.core.control.plausibility import FeedbackPlausibility
+from hydro_sdp.core.control.safety import check_idz_fits, StopHold, top_speeds
 from hydro_sdp.core.control.scheduling import ControlSchedule, FeedbackGate, seconds_to_ns
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.ros.parameters.request import ParameterRequest
@@ -26,7 +28,7 @@ from hydro_sdp.ros.parameters.spec import ParameterValue
 from hydro_sdp.ros.protocols import MessagePublisher
 from std_msgs.msg import Float64
 
-IDZ_PARAMETERS = ('idz.dead_zone', 'idz.slopes', 'idz.beta', 'idz.mode')
+IDZ_PARAMETERS = ('idz.dead_zone', 'idz.slopes', 'idz.beta', 'idz.mode', 'idz.fade')
 GAIN_PARAMETERS = ('gains.f', 'gains.g', 'gains.k_i')
 
 
@@ -46,11 +48,16 @@ class JointLoop:
         Feedback watchdog timeout, ns.
     now_ns : int
         The node clock's reading, ns.
+    feedback_margin : float
+        Allowance of the feedback checks, degrees
+        (:class:`~hydro_sdp.core.control.plausibility.FeedbackPlausibility`).
+    stop_band : float
+        Band of the stop-side hold, degrees (:class:`~hydro_sdp.core.control.safety.StopHold`).
 
     """
 
     def __init__(self, joint: str, model: JointModel, spec: ControllerSpec, timeout_ns: int,
-                 now_ns: int) -> None:
+                 now_ns: int, feedback_margin: float, stop_band: float) -> None:
         self.joint = joint
         self.model = model
         self.spec = spec
@@ -58,7 +65,18 @@ class JointLoop:
         self.controller = PipIdzController(spec.settings())
         self.rest = spec.idz.rest if spec.idz is not None else 0.0
         self.schedule = ControlSchedule(seconds_to_ns(spec.control_period))
-        self.gate = FeedbackGate(timeout_ns, now_ns)
+        #: A stamp may lead the node clock by one control period: an earlier command
+        #: stays in force no longer than it would anyway.
+        self.gate = FeedbackGate(timeout_ns, now_ns, lead_ns=self.schedule.period_ns)
+        #: The joint's identified top speeds down and up, deg/s (None: no valve range).
+        self.top_speeds = top_speeds(model)
+        self.plausibility = FeedbackPlausibility(
+            model.angle_limits,
+            None if self.top_speeds is None else max(-self.top_speeds[0], self.top_speeds[1]),
+            feedback_margin)
+        self.stop_hold = StopHold(stop_band)
+        #: Allowed set-points, degrees: the stops less the margin (set by the node).
+        self.allowed: tuple[float, float] | None = None
         #: Step set-point in force, degrees (None: hold where the joint is at the next sample).
         self.setpoint: float | None = None
         #: Whether the set-point follows a trajectory (then fed forward).
@@ -93,7 +111,9 @@ class JointLoop:
         self.setpoint = None
         self.following = False
         self.clamped = False
-        self.gate = FeedbackGate(self.gate.timeout_ns, now_ns)
+        self.gate = FeedbackGate(self.gate.timeout_ns, now_ns, lead_ns=self.gate.lead_ns)
+        self.plausibility.reset()
+        self.stop_hold.holding = False
         self.schedule.hold()
         self.refused_since_report = 0
 
@@ -105,7 +125,7 @@ class JointLoop:
         idz = self.spec.idz
         if idz is not None:
             values.update({'idz.dead_zone': list(idz.dead_zone), 'idz.slopes': list(idz.slopes),
-                           'idz.beta': idz.beta, 'idz.mode': idz.mode})
+                           'idz.beta': idz.beta, 'idz.mode': idz.mode, 'idz.fade': idz.fade})
         return values
 
     def candidate(self, request: ParameterRequest) -> ControllerSpec:
@@ -127,7 +147,10 @@ class JointLoop:
         names = {name[len(prefix):] for name in request.names if name.startswith(prefix)}
         spec = self.spec
         if names & set(IDZ_PARAMETERS) and spec.idz is not None:
-            spec = replace(spec, idz=self._idz(request))    # checks it against the valve range
+            idz = self._idz(request)
+            if (idz.dead_zone, idz.slopes) != (spec.idz.dead_zone, spec.idz.slopes):
+                check_idz_fits(idz, self.model, spec.control_period, spec.v_limits)
+            spec = replace(spec, idz=idz)
         if names & set(GAIN_PARAMETERS):
             gains = spec.gains
             spec = replace(spec, gains=PipGains(    # checks orders and closed-loop stability
@@ -144,6 +167,7 @@ class JointLoop:
         slopes = request.pair(prefix + 'idz.slopes', current.slopes)
         beta = request.number(prefix + 'idz.beta', current.beta)
         mode = idz_mode(request.text(prefix + 'idz.mode', current.mode))
+        fade = request.number(prefix + 'idz.fade', current.fade)
         if isinstance(current, TableInverseDeadZone):
             # A table keeps its shape: new slopes scale a branch, new edges shift it.
             idz = current
@@ -151,9 +175,9 @@ class JointLoop:
                 idz = idz.with_slopes(slopes)
             if edges != current.dead_zone:
                 idz = idz.with_edges(edges)
-            return replace(idz, beta=beta, mode=mode)
+            return replace(idz, beta=beta, mode=mode, fade=fade)
         return InverseDeadZone(dead_zone=edges, slopes=slopes, beta=beta, mode=mode,
-                               rest=current.rest)
+                               rest=current.rest, fade=fade)
 
     def apply(self, spec: ControllerSpec) -> list[str]:
         """Use ``spec`` from now on; return what changed, for the log."""
@@ -161,7 +185,7 @@ class JointLoop:
         if spec.idz is not None and spec.idz != self.spec.idz:
             self.controller.update_idz(spec.idz)
             changes.append(f'{self.joint}: IDZ now edges {list(spec.idz.dead_zone)}, slopes '
-                           f'{[round(s, 4) for s in spec.idz.slopes]}')
+                           f"[{', '.join(f'{s:.4g}' for s in spec.idz.slopes)}]")
         if spec.gains != self.spec.gains:
             self.controller.update_gains(spec.gains)
             changes.append(f'{self.joint}: gains now f {list(spec.gains.f)}, '

@@ -14,19 +14,28 @@ a test can run the machine in lockstep.
 
 Two parameters change at run time, from the next tick: ``noise_std`` (a sensor
 that degrades) and ``dead_zone_shift`` (a valve that wears); a request is checked
-whole before either applies, and values given at start-up apply the same way. The
-others shape the machine and are read-only
-(:data:`~hydro_sdp.ros.parameters.plant.PLANT_PARAMETERS`).
+whole (the worn model as a whole: edges inside the valve range) before either
+applies, and values given at start-up apply the same way. The others shape the
+machine and are read-only (:data:`~hydro_sdp.ros.parameters.plant.PLANT_PARAMETERS`).
+
+Each joint's valve takes commands as the core
+:class:`~hydro_sdp.core.control.command_gate.CommandGate` says: only while the
+publishers matched to its subscription are the one allowed source (``command_source``,
+named by the ROS graph, or any single node), at most ``command_rate_limit`` per second,
+clamped to the valve range; a refused command closes that valve (throttled warning), and
+with ``command_timeout`` the valve closes when its source falls silent.
 
 """
 
 from __future__ import annotations
 
+from dataclasses import replace
 from functools import partial
-import math
 from typing import Unpack
 
-from hydro_sdp.core.errors import ConfigurationError
+from hydro_sdp.core.control.command_gate import CommandGate
+from hydro_sdp.core.control.scheduling import seconds_to_ns
+from hydro_sdp.core.errors import ConfigurationError, DataError
 from hydro_sdp.core.model.simulation import JointSimulator
 from hydro_sdp.core.model.static_maps import shifted_map, StaticMap
 from hydro_sdp.core.synthetic.programs import start_angle
@@ -77,8 +86,18 @@ class PlantNode(Node):
                                            v_before=model.rest_command)
                             for model, angle in zip(self.models, self._initial_angles())]
         self._commands = [model.rest_command for model in self.models]
+        self._gates = [CommandGate(model.input_limits,
+                                   source=parameters.text('command_source'),
+                                   rate_limit=parameters.double('command_rate_limit'),
+                                   timeout_ns=seconds_to_ns(parameters.double('command_timeout')))
+                       for model in self.models]
+        self._command_topics = [self.resolve_topic_name(f'{name}/valve_command')
+                                for name in self.names]
+        self._silent = [False] * len(self.models)
+        self._named_ns = -10**18
         self.ticks = 0
         self.commands_received = 0
+        self.commands_refused = 0
         self.last_angles = [sim.angle for sim in self._simulators]
         self._state_pub = self.create_publisher(JointState, 'joint_states', qos.STATE_QOS,
                                                 event_callbacks=qos.QUIET_PUBLISHER)
@@ -105,8 +124,11 @@ class PlantNode(Node):
         return [shifted_map(base, shift) for base in self._base_maps]
 
     def _check_request(self, request: ParameterRequest) -> None:
-        # Checks only: nothing applies before the whole request is accepted.
-        self._shifted_maps(request.pair('dead_zone_shift', self._shift))
+        # Checks only: nothing applies before the whole request is accepted. The worn model
+        # is built whole, as applying it does (edges inside the valve range...).
+        shift = request.pair('dead_zone_shift', self._shift)
+        for model, static_map in zip(self.models, self._shifted_maps(shift)):
+            replace(model, static_map=static_map)
 
     def _apply_shift(self) -> None:
         request = self.parameters.current(['dead_zone_shift'])
@@ -124,20 +146,56 @@ class PlantNode(Node):
             self.get_logger().info(f'measurement noise now {noise} deg')
         self._noise = noise
 
+    def _command_sources(self, index: int, named: bool = False) -> list[str]:
+        # The writers matched to this subscription, as the middleware counts them (no graph
+        # lookup); their names from the graph only when a source is named (or for a warning),
+        # one '' for each the graph does not know yet.
+        count = self._command_subs[index].get_publisher_count()
+        if not (named or self._gates[index].source) or count == 0:
+            return [''] * count
+        names = [_full_name(info.node_namespace, info.node_name)
+                 for info in self.get_publishers_info_by_topic(self._command_topics[index])]
+        return names + [''] * max(count - len(names), 0)
+
     def _on_command(self, index: int, message: Float64) -> None:
-        value = float(message.data)
-        if not math.isfinite(value):
-            self.get_logger().warning(f'refused a non-finite command for {self.names[index]}',
-                                      throttle_duration_sec=1.0,
-                                      throttle_time_source_type=self.get_clock())
-            return
-        limits = self.models[index].input_limits
-        if limits is not None:
-            value = min(max(value, limits[0]), limits[1])
-        self._commands[index] = value
         self.commands_received += 1
+        topic = self._command_topics[index]
+        publishers = self._command_sources(index)
+        now = self.get_clock().now().nanoseconds
+        try:
+            value = self._gates[index].admit(float(message.data), now, publishers)
+        except DataError as error:
+            self.commands_refused += 1
+            self._commands[index] = self.models[index].rest_command
+            if now - self._named_ns >= 1_000_000_000:       # the names, once a second
+                self._named_ns = now
+                publishers = [name or 'unknown' for name in self._command_sources(index, True)]
+                self._warn(f'refused a command on {topic} ({error}; publishers '
+                           f'{publishers}); valve closed')
+            return
+        if value is None:
+            self.commands_refused += 1
+            self._warn(f'dropped a command on {topic}: more than '
+                       f'{self._gates[index].rate_limit:g} per s')
+            return
+        self._commands[index] = value
+        self._silent[index] = False
+
+    def _warn(self, text: str) -> None:
+        self.get_logger().warning(text, throttle_duration_sec=1.0,
+                                  throttle_time_source_type=self.get_clock())
+
+    def _close_silent_valves(self) -> None:
+        now = self.get_clock().now().nanoseconds
+        for index, gate in enumerate(self._gates):
+            if not self._silent[index] and gate.silent(now):
+                self._silent[index] = True
+                self._commands[index] = self.models[index].rest_command
+                self._warn(f'no command on {self._command_topics[index]} for more than '
+                           f'command_timeout {gate.timeout_ns * 1e-9:g} s; valve closed')
 
     def _on_tick(self) -> None:
+        self._close_silent_valves()
         before = self.last_angles
         if self.ticks:
             angles = [sim.step(command)
@@ -155,6 +213,10 @@ class PlantNode(Node):
             JointState(), self.get_clock().now().nanoseconds, self.names, measured, speeds)
         self._state_pub.publish(message)
         self.ticks += 1
+
+
+def _full_name(namespace: str, name: str) -> str:
+    return f"{namespace.rstrip('/')}/{name}"
 
 
 def main(args: list[str] | None = None) -> None:

@@ -80,9 +80,11 @@ def run_node(node_cls: Callable[[], Node], args: list[str] | None = None) -> Non
     Initialise rclpy, spin one node of ``node_cls`` and always clean up.
 
     A configuration error (a bad parameter or file) ends the process with one
-    line on stderr and exit code 2, not a traceback. SIGINT and SIGTERM end it
-    with code 0 within about :data:`WAKE_PERIOD` (plus the node's own clean-up). A
-    crash in compiled code prints every thread's Python stack (:mod:`faulthandler`).
+    line on stderr and exit code 2, not a traceback; a fault the running node
+    cannot work around (a recorder's full disk) with one line and exit code 3.
+    SIGINT and SIGTERM end it with code 0 within about :data:`WAKE_PERIOD` (plus
+    the node's own clean-up). A crash in compiled code prints every thread's
+    Python stack (:mod:`faulthandler`).
 
     Parameters
     ----------
@@ -125,7 +127,7 @@ def run_node(node_cls: Callable[[], Node], args: list[str] | None = None) -> Non
     except _CONFIGURATION_ERRORS as error:
         if not stop:
             sys.stderr.write(f'error: {error}\n')
-            code = 2
+            code = 2 if executor is None else 3
     except Exception:
         if not stop:
             raise

@@ -13,7 +13,8 @@ when it cannot be followed.
 
 from __future__ import annotations
 
-from hydro_sdp.core.control.trajectory import check_trajectory, start_time, TrajectorySampler
+from hydro_sdp.core.control.trajectory import (
+    check_trajectory, check_trajectory_speeds, start_time, TrajectorySampler)
 from hydro_sdp.core.errors import DataError
 from hydro_sdp.ros.conversions import trajectory_from_message, TrajectoryMessage
 from hydro_sdp.ros.joint_loop import JointLoop
@@ -55,7 +56,8 @@ class TrajectoryFollower:
         DataError
             Naming every reason it is refused (nothing changes then): a message that is
             not a valid trajectory, a joint not controlled, a position beyond the end stops
-            less ``margin``, the controller not active, a named joint without feedback yet.
+            less ``margin``, the controller not active, a named joint without feedback yet,
+            a set-point faster than a joint's identified top speed.
 
         """
         trajectory, stamp = trajectory_from_message(message)
@@ -71,9 +73,14 @@ class TrajectoryFollower:
         sampler = self.sampler
         for loop in loops:
             if not loop.following:
-                # Its set-point held until now is the trajectory's anchor.
+                # Its set-point held until now is the trajectory's anchor (harmless if the
+                # trajectory is then refused: a joint not following does not read it).
                 assert loop.setpoint is not None
                 sampler.hold(loop.joint, loop.setpoint, min(start, now) - 1e-3)
+        check_trajectory_speeds(sampler.planned_rates(trajectory, start),
+                                {loop.joint: loop.top_speeds for loop in loops})
+        for loop in loops:
+            if not loop.following:
                 loop.following = True
                 loop.clamped = False
         sampler.replace(trajectory, start)

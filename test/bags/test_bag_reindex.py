@@ -10,7 +10,7 @@ from hydro_sdp.bags import read_bag, write_bag
 from hydro_sdp.bags.live_writer import Sqlite3BagWriter
 from hydro_sdp.bags.reindex import reindex, summarise
 from hydro_sdp.cli.main import main
-from hydro_sdp.core.errors import BagFormatError, BagNotFoundError
+from hydro_sdp.core.errors import BagFormatError, BagNotFoundError, BagWriteError
 from hydro_sdp.core.model.records import Record
 import numpy as np
 import pytest
@@ -90,6 +90,30 @@ def test_a_closed_writer_writes_metadata_that_bag_tools_read(tmp_path):
     np.testing.assert_array_equal(copy.t, original.t)
     np.testing.assert_array_equal(copy.positions, original.positions)
     assert copy.record().v.tolist() == original.record().v.tolist()
+
+
+def test_a_full_disk_stops_the_writer_and_the_bag_keeps_what_was_committed(tmp_path):
+    now = [0.0]
+    writer = Sqlite3BagWriter(tmp_path / 'bag', flush_period=1.0, clock=lambda: now[0])
+    value = writer.add_topic('/value', 'std_msgs/msg/Float64')
+    Float64 = TYPESTORE.types['std_msgs/msg/Float64']
+    raw = bytes(TYPESTORE.serialize_cdr(Float64(data=1.0), 'std_msgs/msg/Float64'))
+    for k in range(100):                        # committed at 1 s
+        now[0] = k * 0.02
+        writer.write(value, 10**9 + k * 10**7, raw)
+    # The disk is full: sqlite may not grow the file past the pages it has.
+    pages = writer._db.execute('PRAGMA page_count').fetchone()[0]
+    writer._db.execute(f'PRAGMA max_page_count={pages}')
+    with pytest.raises(BagWriteError, match=r'bag_0\.db3: database or disk is full \(is the '
+                                            r'disk full\?\): the bag holds what was committed '
+                                            r'before; \d+ messages since were lost'):
+        for k in range(100, 5000):
+            now[0] = k * 0.02
+            writer.write(value, 10**9 + k * 10**7, raw)
+    summary = writer.close()
+    assert writer.closed and 50 <= summary.count < 5000
+    with Reader(tmp_path / 'bag') as reader:
+        assert reader.message_count == summary.count
 
 
 def test_an_existing_output_is_refused_and_left_as_it_is(tmp_path):

@@ -16,6 +16,7 @@ from hydro_sdp.core.model.records import Record
 from hydro_sdp.io.model_files import save_model
 import numpy as np
 import pytest
+from support.joint_generator import Joint, Machine, record, SpeedMap
 from support.plain_joint import PlainJoint, steps
 
 JOINT = {'lag': 0.05, 'slope': (22.0, 25.0), 'saturation': (45.0, 50.0), 'stops': (-90.0, 90.0)}
@@ -38,7 +39,9 @@ def as_bag_record(record, joint='j2'):
 def bags(tmp_path_factory):
     folder = tmp_path_factory.mktemp('sdp')
     joint = PlainJoint(**JOINT)
-    sizes = np.linspace(1.0, 8.0, 8)
+    # Twelve levels each way: with fewer, one step per level cannot rule out that each step
+    # has a gain of its own (the test flips whole runs, methods.md section 14.5).
+    sizes = np.linspace(1.0, 8.0, 12)
     paths = []
     for i in range(2):
         # Steps out and back: each level, then the same level the other way.
@@ -90,6 +93,24 @@ def test_the_text_report_and_the_model_target(bags, capsys, tmp_path, j2):
     assert {e['parameter'] for e in result['states']} == {'ratio'}
     assert {e['parameter'] for e in result['residual']} == {'residual'}
     assert {e['state'] for e in result['residual']} == {'command', 'since_change'}
+
+
+def test_increments_held_at_a_stop_are_left_out_and_counted(tmp_path, capsys):
+    # A duty held against the top stop for 4 s after each full stroke.
+    joint = Joint(SpeedMap('exp', (38.0, 62.0), (30.0, 35.0), (0.08, 0.09)), delay=0.12,
+                  stops=(-35.0, 40.0), noise=0.02)
+    v = np.r_[np.full(100, 50.0), np.full(600, 90.0), np.full(100, 50.0), np.full(700, 10.0),
+              np.full(100, 50.0)]
+    bag = write_bag(tmp_path / 'stops', [as_bag_record(record(Machine((joint,)), v[:, None],
+                                                              angles0=[0.0], seed=3))])
+    code, out, err = run(capsys, 'sdp', bag, '--states', 'command,since_change', '--json')
+    assert code == 0, err
+    left = {entry['reason']: entry['rows'] for entry in json.loads(out)['left_out']}
+    assert left['held at an end stop while the command drives into it'] > 500
+    code, out, _ = run(capsys, 'sdp', bag, '--states', 'command')
+    assert code == 0
+    assert re.search(r'^left out \d+ increments held at an end stop while the command drives '
+                     r'into it$', out, re.MULTILINE)
 
 
 def test_integrated_random_walks_find_the_same_first_state(bags, capsys):

@@ -186,3 +186,17 @@ def test_a_ctrl_c_that_an_extension_turns_into_another_error_still_exits_130(
     assert main(['reindex', 'anything']) == 130
     assert capsys.readouterr().err.strip() == 'error: interrupted; nothing partial was written'
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+
+
+def test_a_ctrl_c_while_the_command_is_imported_ends_it_in_one_line(tmp_path):
+    # Held in the import for a second, as a loaded machine holds it, and interrupted there.
+    slow = [sys.executable, '-c', 'import signal; '
+            'signal.signal(signal.SIGINT, signal.default_int_handler); '
+            'import hydro_sdp.cli, time; print("imported", flush=True); time.sleep(30)']
+    process = subprocess.Popen(slow, cwd=tmp_path, stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE, text=True,
+                               env=dict(os.environ, PYTHONPATH=str(REPO)))
+    assert process.stdout.readline() == 'imported\n'
+    process.send_signal(signal.SIGINT)
+    _, stderr = process.communicate(timeout=30)
+    assert (process.returncode, stderr) == (130, 'error: interrupted\n')

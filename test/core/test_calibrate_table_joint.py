@@ -12,16 +12,23 @@ takes longer to draw than the calibration). The controller file it writes is
 then run against the joint itself by the loop of
 :mod:`support.independent_loop` (none of hydro_sdp's controller classes): every
 step of 20-25 deg settles into +-0.5 deg within 8 s, overshoots at most 10 %
-and ends its hold without a limit cycle.
+and ends its hold without a limit cycle. The table's first design pulses at hold
+(the valve jumps across the 36 % dead-zone at every small error): calibrate's
+check finds it and fades the compensation in, and on the true joint the first
+design pulses several times a second while the file written holds still.
 
 """
 
+from dataclasses import replace
+
+
 from hydro_sdp.core.calibration import calibrate, CalibrationSettings
+from hydro_sdp.core.control.loop_chatter import MAX_PULSE_RATE
 from hydro_sdp.io.controller_files import load_controller, save_controller
 from hydro_sdp.io.documents import load_yaml
 from hydro_sdp.io.logs.csv_logs import read_csv_log
 import pytest
-from support.real_valve_joints import cases, cycles, SETTLE, settles, truth_loop
+from support.real_valve_joints import cases, cycles, pulse_rate, SETTLE, settles, truth_loop
 
 pytestmark = [pytest.mark.usefixtures('figures_not_drawn')]
 
@@ -61,3 +68,17 @@ def test_calibrates_check_passes_and_its_file_settles_the_joint(calibrated):
         assert r.settling <= SETTLE, f'the {r.size:+.0f} deg step settles in {r.settling} s'
         assert r.overshoot <= 10.0, f'the {r.size:+.0f} deg step overshoots {r.overshoot:.1f} %'
     assert cycles(results) == 0 and settles(results)
+
+
+@pytest.mark.slow
+def test_the_pulsing_table_fades_in_and_the_true_joint_holds_still(calibrated, tmp_path):
+    case, result, path = calibrated
+    band, fade = result.trade
+    assert not band.passed and band.pulse_rate > 2.0 * MAX_PULSE_RATE and band.fade == 0.0
+    assert fade.passed and fade.pulse_rate < 0.5 * MAX_PULSE_RATE and fade.fade > 0.0
+    assert result.spec.idz.fade == fade.fade == result.fades[-1]
+    # The same design without the fade, and the file written, on the true joint.
+    first = save_controller(replace(result.spec, idz=replace(result.spec.idz, fade=0.0)),
+                            tmp_path / 'band.yaml')
+    before, after = pulse_rate(truth_loop(case, first)), pulse_rate(truth_loop(case, path))
+    assert before > 4.0 * MAX_PULSE_RATE and after < 0.2 * MAX_PULSE_RATE, (before, after)

@@ -34,16 +34,16 @@ class Processes:
     """Node processes in a fresh ROS domain found on this host, and a client node."""
 
     def __init__(self, monkeypatch, *commands, cwd=None):
-        scripts = {name: required_script(name) for name, _ in commands}
+        for name, _ in commands:
+            required_script(name)          # skips before anything starts
         domain = fresh_domain()
         # The in-process harness turns discovery off; a process must be found on the host.
         monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
-        environment = dict(os.environ, ROS_DOMAIN_ID=str(domain))
-        self.processes = {name: subprocess.Popen([scripts[name], '--ros-args', *arguments],
-                                                 env=environment, cwd=cwd,
-                                                 stdout=subprocess.DEVNULL,
-                                                 stderr=subprocess.PIPE, text=True)
-                          for name, arguments in commands}
+        self.environment = dict(os.environ, ROS_DOMAIN_ID=str(domain))
+        self.cwd = cwd
+        self.processes = {}
+        for name, arguments in commands:
+            self.start(name, *arguments)
         from rclpy.context import Context
         from rclpy.executors import SingleThreadedExecutor
         from rclpy.node import Node
@@ -52,6 +52,14 @@ class Processes:
         self.node = Node('outside_client', context=self.context)
         self.executor = SingleThreadedExecutor(context=self.context)
         self.executor.add_node(self.node)
+
+    def start(self, name, *arguments, **options):
+        """Start the console script ``name`` (``options`` go to :class:`subprocess.Popen`)."""
+        self.processes[name] = subprocess.Popen(
+            [required_script(name), '--ros-args', *arguments], env=self.environment,
+            cwd=self.cwd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+            **options)
+        return self.processes[name]
 
     def died(self):
         """Describe the processes that ended, with their stderr."""

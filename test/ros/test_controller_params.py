@@ -78,7 +78,7 @@ def test_a_refused_atomic_change_changes_nothing(ros):
 
 def test_an_accepted_change_keeps_the_spec_current(ros):
     controller = ros.add(PipControllerNode)
-    gains = controller.spec.gains
+    gains, design = controller.spec.gains, controller.spec.design
     assert controller.set_parameters_atomically([
         Parameter('idz.dead_zone', value=NEW_EDGES), Parameter('idz.beta', value=0.1),
         Parameter('gains.k_i', value=gains.k_i * 0.5)]).successful
@@ -89,7 +89,8 @@ def test_an_accepted_change_keeps_the_spec_current(ros):
     assert controller.set_parameters([Parameter('gains.k_i', value=gains.k_i)])[0].successful
     assert controller.spec.idz.dead_zone == (-1.0, 1.0)
     assert controller.controller.settings.idz.dead_zone == (-1.0, 1.0)
-    assert controller.spec.design == design_from_model(controller.model).design
+    # How the gains were designed is what the node started with, not rebuilt from the model.
+    assert controller.spec.design == design and design['method'] == 'lq'
 
 
 def test_integers_are_accepted_for_double_parameters():
@@ -213,6 +214,16 @@ def test_idz_parameters_move_and_scale_a_table(ros, tmp_path):
     result = controller.set_parameters([Parameter('idz.slopes', value=[0.0, 1.0])])
     assert not result[0].successful and 'slopes' in result[0].reason
     assert controller.controller.settings.idz == scaled
+    # The fade-in band (methods.md 5.2) works with the zero mode only, and takes effect.
+    result = controller.set_parameters([Parameter('idz.fade', value=0.06)])
+    assert not result[0].successful and 'mode zero, not hysteresis' in result[0].reason
+    assert controller.controller.settings.idz == scaled
+    result = controller.set_parameters_atomically([
+        Parameter('idz.mode', value='zero'), Parameter('arm.idz.fade', value=0.06)])
+    assert result.successful, result.reason
+    faded = controller.controller.settings.idz
+    assert (faded.fade, faded.mode) == (0.06, 'zero') and faded.command(0.03)[0] == 0.0
+    assert controller.get_parameter('idz.fade').value == 0.06
 
 
 def test_a_power_sat_model_alone_gets_a_table(ros, tmp_path):

@@ -1,10 +1,17 @@
-"""The identifier node: topics in SI, parameters changed over the services, the wear scenario."""
+"""
+The identifier node: topics in SI, parameters changed over the services, the wear scenario.
+
+Any map family is identified: a power_sat model's table IDZ is recalibrated too.
+"""
 
 from dataclasses import replace
 import math
 
 from hydro_sdp.core.control.idz_design import idz_for_model
+from hydro_sdp.core.control.idz_recalibration import recalibrated_idz, with_dead_zone
+from hydro_sdp.core.control.idz_table import TableInverseDeadZone
 from hydro_sdp.core.identification.online import SdpEstimate
+from hydro_sdp.core.identification.online_edges import EdgeEstimate, OnlineEdgeIdentifier
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.static_maps import SdpMap
 from hydro_sdp.io.model_files import default_model_path, load_model, save_model
@@ -18,6 +25,8 @@ from rcl_interfaces.srv import SetParameters, SetParametersAtomically
 from rclpy.parameter import Parameter
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64
+from support.recalibration_loop import arm_model
+from support.table_valve_joint import TableJoint
 
 pytestmark = pytest.mark.ros
 
@@ -237,3 +246,48 @@ def test_an_unchanged_joint_is_never_recalibrated():
                                  shift=(0.0, 0.0))
     assert run.recalibrations == 0
     np.testing.assert_array_equal(run.edges[-1], (-1.3298, 1.3124))
+
+
+class EdgeStub:
+    """Stands in for the edges' filter of a power_sat model: a set estimate, whatever comes."""
+
+    delay = 28
+
+    def __init__(self, model, edges, std=0.2):
+        self.model, self.edges = model, edges
+        self.named = EdgeEstimate(edges[0], edges[1], 1.0, 1.0, std, std, 0.01, 0.01)
+
+    def update(self, v, y):
+        return True
+
+    def named_estimate(self):
+        return self.named
+
+    def estimate(self):
+        return with_dead_zone(self.model, self.edges)
+
+
+def test_a_power_sat_joint_is_identified_and_its_table_recalibrated(ros, tmp_path):
+    # The measured-table arm's power_sat model: no longer refused; the controller designs a
+    # table from it, and the recalibration moves and scales that table.
+    model = replace(arm_model(TableJoint()), joint='j2')
+    path = save_model(model, tmp_path / 'arm.yaml')
+    controller = ros.add(PipControllerNode, parameters={'model_file': str(path)})
+    identifier = ros.add(IdentifierNode, parameters={
+        'model_file': str(path), 'auto_recalibrate': True, 'noise_std': 0.01})
+    assert isinstance(identifier.estimator, OnlineEdgeIdentifier)
+    table = controller.controller.settings.idz
+    assert isinstance(table, TableInverseDeadZone) and table.dead_zone == (-37.0, 36.0)
+    topics = {name for name, _ in identifier.get_publisher_names_and_types_by_node(
+        'sdp_identifier', '/')}
+    assert {'/j2/sdp/speed_scale_negative', '/j2/sdp/dead_zone_upper_std'} <= topics
+    assert '/j2/sdp/saturation_negative_rad_s' not in topics
+    worn = (-31.0, 30.0)
+    identifier.estimator = EdgeStub(model, worn)
+    assert ros.spin_until(identifier._client.service_is_ready)
+    Feeder(ros, identifier).run(2.5)
+    assert ros.spin_until(lambda: identifier.recalibrations == 1)
+    moved = controller.controller.settings.idz
+    assert isinstance(moved, TableInverseDeadZone) and moved.dead_zone == pytest.approx(worn)
+    assert moved.slopes == pytest.approx(
+        recalibrated_idz(with_dead_zone(model, worn), worn, 0.05, 'table').slopes)

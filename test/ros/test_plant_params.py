@@ -32,6 +32,15 @@ def _speed(command, shift=(0.0, 0.0)):
     return math.radians(float(static_map.rate(np.array([command]))[0]))
 
 
+def _send(ros, plant, command):
+    """Publish one valve command from a node of the test, as a controller would."""
+    publisher = ros.helper('commands').create_publisher(Float64, 'j2/valve_command', 10)
+    assert ros.spin_until(lambda: publisher.get_subscription_count() >= 1)
+    count = plant.commands_received
+    publisher.publish(Float64(data=command))
+    assert ros.spin_until(lambda: plant.commands_received > count)
+
+
 @pytest.fixture
 def ros():
     """Return a harness with its own context, closed after the test."""
@@ -66,7 +75,7 @@ def test_noise_std_applies_from_the_next_tick(ros):
 def test_a_refused_request_applies_nothing(ros):
     plant = ros.add(PlantNode)
     loop = Lockstep(ros, plant)
-    plant._on_command(0, Float64(data=COMMAND))
+    _send(ros, plant, COMMAND)
     result = plant.set_parameters_atomically([Parameter('dead_zone_shift', value=SHIFT),
                                               Parameter('noise_std', value=50.0)])
     assert not result.successful and 'noise_std' in result.reason
@@ -140,8 +149,29 @@ def test_run_time_changes_take_effect_over_the_services():
 def test_a_dead_zone_shift_given_at_start_up_takes_effect(ros):
     plant = ros.add(PlantNode, parameters={'dead_zone_shift': SHIFT})
     loop = Lockstep(ros, plant)
-    plant._on_command(0, Float64(data=COMMAND))
+    _send(ros, plant, COMMAND)
     angles = [plant.last_angles[0]]
     loop.run(DELAY + 10, lambda k: angles.append(plant.last_angles[0]))
     speeds = np.radians(np.diff(angles)) / 0.01
     assert speeds[-5:] == pytest.approx([_speed(COMMAND, SHIFT)] * 5, rel=1e-9)
+
+
+def test_a_silent_source_closes_the_valve(ros):
+    plant = ros.add(PlantNode, parameters={'command_timeout': 0.2, 'initial_angles': [10.0]})
+    loop = Lockstep(ros, plant)
+    _send(ros, plant, 3.0)
+    angles = [plant.last_angles[0]]
+    loop.run(60, lambda k: angles.append(plant.last_angles[0]))
+    moving = np.diff(angles)
+    # Driven after the 0.15 s delay; 0.2 s after the command the valve closes, and the joint
+    # stops a delay later.
+    assert moving[20] > 0.0 and np.all(moving[40:] == 0.0)
+
+
+def test_commands_from_a_node_other_than_the_named_source_are_refused(ros):
+    plant = ros.add(PlantNode, parameters={'command_source': '/pip_controller',
+                                           'initial_angles': [10.0]})
+    _send(ros, plant, 3.0)                      # from /commands, not /pip_controller
+    assert plant.commands_refused == 1
+    Lockstep(ros, plant).run(40)
+    assert plant.last_angles == [10.0]

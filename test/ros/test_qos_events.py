@@ -7,31 +7,49 @@ publisher whose QoS cannot match (a best-effort sensor driver's joint_states); i
 subscriptions go without them (docs/methods.md section 9.4).
 """
 
+import time
+
 from hydro_sdp.ros.controller_node import PipControllerNode
 from hydro_sdp.ros.testing import RosHarness
 import pytest
+from rcl_interfaces.msg import Log
 import rclpy
 from rclpy.context import Context
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from sensor_msgs.msg import JointState
+from support.domains import fresh_domain
 
 pytestmark = pytest.mark.ros
 
 
-def _topics_with_handlers(node):
-    return sorted(s.topic_name for s in node.subscriptions if s.event_handlers)
-
-
-def test_a_node_in_its_own_context_keeps_the_mismatch_warnings():
+def test_a_node_in_its_own_context_warns_of_a_best_effort_joint_states():
+    # A sensor driver that publishes best effort never reaches the reliable subscription:
+    # the controller says so on /rosout, naming the topic and the policy.
     context = Context()
-    rclpy.init(context=context, domain_id=211)
+    rclpy.init(context=context, domain_id=fresh_domain())
+    executor = SingleThreadedExecutor(context=context)
     try:
         node = PipControllerNode(context=context)
-        try:
-            with_handlers = _topics_with_handlers(node)
-        finally:
-            node.destroy_node()
+        driver = Node('sensor_driver', context=context)
+        warnings = []
+        driver.create_subscription(
+            Log, '/rosout', lambda log: warnings.append(log.msg) if log.name == node.get_name()
+            and 'incompatible QoS' in log.msg else None,
+            QoSProfile(depth=100, durability=DurabilityPolicy.TRANSIENT_LOCAL))
+        driver.create_publisher(JointState, '/joint_states',
+                                QoSProfile(depth=10, reliability=ReliabilityPolicy.BEST_EFFORT))
+        executor.add_node(node)
+        executor.add_node(driver)
+        deadline = time.monotonic() + 30.0  # discovery on a loaded host
+        while not warnings and time.monotonic() < deadline:
+            executor.spin_once(timeout_sec=0.1)
     finally:
+        executor.shutdown()
         rclpy.try_shutdown(context=context)
-    assert {'/j2/setpoint', '/joint_states', '/joint_trajectory'} <= set(with_handlers)
+    assert warnings and 'joint_states' in warnings[0] and 'RELIABILITY' in warnings[0], \
+        warnings
 
 
 def test_the_harness_nodes_subscribe_without_handlers():

@@ -49,14 +49,6 @@ STOPPED = Joint(SpeedMap('exp', (-0.8, 0.9), (35.0, 45.0), (0.45, 0.55)), delay=
                 stops=(-40.0, 55.0), noise=0.02)
 
 
-def _steps(sizes: list[float]) -> FloatArray:
-    """Return steps of each size from rest and back to where they started, 1.5 s each."""
-    parts = [np.zeros(100)]
-    for size in sizes:
-        parts += [np.full(150, size), np.zeros(60), np.full(150, -size), np.zeros(60)]
-    return np.concatenate(parts)
-
-
 def _random_level(joint: Joint, rng: np.random.Generator, y: float,
                   magnitudes: tuple[float, float], margin: float) -> tuple[float, int, float]:
     """
@@ -103,9 +95,16 @@ def _rare_program(joint: Joint, seed: int, seconds: float) -> FloatArray:
 def rare_stop(seconds: float = 60.0) -> Case:
     """Return the model identified from steps; a run that meets the stop once, and another."""
     machine = Machine((STOPPED,))
-    sizes = [1.0, 1.3, 1.6, 2.0, 2.5, 3.0, 4.0, 5.0, 6.5, 8.0]
-    steps = record(machine, _steps(sizes + [-s for s in sizes])[:, None], angles0=[5.0],
-                   seed=1, source='steps')
+    # Each step up is followed by one down that takes the joint back: they never drift
+    # to the stops (-40, 55).
+    parts = [np.zeros(100)]
+    for size in [1.0, 1.3, 1.6, 2.0, 2.5, 3.0, 4.0, 5.0, 6.5, 8.0]:
+        up, down = STOPPED.speed_map.speed(size), -STOPPED.speed_map.speed(-size)
+        hold = int(round(40.0 / up / DT)) if up * 1.5 > 40.0 else 150
+        parts += [np.full(hold, size), np.zeros(60),
+                  np.full(int(round(hold * up / down)), -size), np.zeros(60)]
+    steps = record(machine, np.concatenate(parts)[:, None], angles0=[0.0], seed=1,
+                   source='steps')
     model = identify([steps], kind='sdp').model
     runs = [record(machine, _rare_program(STOPPED, seed, seconds)[:, None], angles0=[0.0],
                    seed=seed, source=f'levels {seed}') for seed in (11, 12)]

@@ -5,10 +5,12 @@ It uses none of hydro_sdp's controller classes: the file is read with PyYAML,
 the control law is the incremental PIP of docs/methods.md section 4.2 (for
 ``n = 1, m = 3`` eq. (8) of West et al. 2018), ``u`` is clamped to
 ``u_limits``, the inverse dead-zone is the chord of section 5.1 or the table
-of section 5.4 (zero band or hysteresis), the command is clamped to
-``v_limits`` and the history keeps the increment the valve really gives. The
-plant is any object with ``angle`` (the reading now) and ``step(command)``,
-stepped at its own period with the command held between control instants.
+of section 5.4 (zero band, with or without its fade-in band, or hysteresis),
+the command is clamped to ``v_limits`` and the history keeps the increment the
+valve really gives. The plant is any object with ``angle`` (the reading now)
+and ``step(command)``, stepped at its own period with the command held between
+control instants. :func:`judge` counts the valve's pulses at hold from the
+definition of section 5.7, written again here.
 
 """
 
@@ -50,6 +52,7 @@ class FileController:
         self.rest = float(self.idz.get('rest', 0.0))
         self.beta = float(self.idz.get('beta', 0.05))
         self.mode = self.idz.get('mode', 'zero')
+        self.fade = float(self.idz.get('fade', 0.0))
         if self.mode not in ('zero', 'hysteresis'):
             raise ValueError(f'mode {self.mode} is not written here')
         if 'table' in self.idz:
@@ -78,6 +81,16 @@ class FileController:
             return min(vs[-1] + u * (vs[-1] - vs[-2]) / (us[-1] - us[-2]), high)
         return float(np.interp(u, us, vs))
 
+    def _valve(self, u: float, branch: int) -> float:
+        """Return the command of ``u`` on ``branch`` (0: rest), the fade-in band applied."""
+        if branch == 0:
+            return self.rest
+        v = self._branch_command(u, branch)
+        if self.fade > 0.0 and self.mode == 'zero':
+            # Beyond the band the command leaves rest as tanh((|u| - beta) / fade).
+            v = self.rest + math.tanh((abs(u) - self.beta) / self.fade) * (v - self.rest)
+        return v
+
     def _increment(self, v: float) -> float:
         if self.table is not None:
             return float(np.interp(v, *self.table[::-1]))
@@ -85,6 +98,44 @@ class FileController:
         if v < low:
             return self.slopes[0] * (v - low)
         return self.slopes[1] * (v - high) if v > high else 0.0
+
+    def _table_slopes(self) -> tuple[float, float]:
+        """Each branch's chord from its edge to two thirds of its largest increment."""
+        slopes = []
+        for (us, vs), edge, end in ((self.negative, self.edges[0], 0),
+                                    (self.positive, self.edges[1], -1)):
+            target = 2.0 / 3.0 * us[end]
+            order = np.argsort(us)
+            slopes.append(target / (float(np.interp(target, us[order], vs[order])) - edge))
+        return slopes[0], slopes[1]
+
+    def recalibrate(self, edges: tuple[float, float], slopes: tuple[float, float]) -> None:
+        """
+        Take new IDZ edges and slopes as the controller node does (methods.md 5.4).
+
+        A chord takes them as they are; a table scales each branch's increments by
+        new over old slope and shifts its commands by the edge's change. The stored
+        increments are those the new IDZ gives for the commands of the old one, so
+        the valve does not jump.
+        """
+        commands = [self._valve(u, self.branch) if self.branch else None for u in self.us]
+        if self.table is None:
+            self.edges, self.slopes = tuple(edges), tuple(slopes)
+        else:
+            ratios = [new / now for new, now in zip(slopes, self._table_slopes())]
+            shifts = [new - now for new, now in zip(edges, self.edges)]
+            (nu, nv), (pu, pv) = self.negative, self.positive
+            self.negative = (nu * ratios[0], nv + shifts[0])
+            self.positive = (pu * ratios[1], pv + shifts[1])
+            if self.negative[1][-1] == self.positive[1][0]:
+                u = np.r_[self.negative[0], self.positive[0][1:]]
+                v = np.r_[self.negative[1], self.positive[1][1:]]
+            else:
+                u = np.r_[self.negative[0], self.positive[0]]
+                v = np.r_[self.negative[1], self.positive[1]]
+            self.table = (u, v)
+            self.edges = (float(self.negative[1][-1]), float(self.positive[1][0]))
+        self.us = [u if v is None else self._increment(v) for u, v in zip(self.us, commands)]
 
     def step(self, setpoint: float, y: float) -> float:
         """One control sample: the valve command for the angle ``y``."""
@@ -106,7 +157,7 @@ class FileController:
             self.branch = -1
         elif self.mode == 'zero':
             self.branch = 0
-        v = self.rest if self.branch == 0 else self._branch_command(u, self.branch)
+        v = self._valve(u, self.branch)
         if self.v_limits is not None and not self.v_limits[0] <= v <= self.v_limits[1]:
             v = min(max(v, self.v_limits[0]), self.v_limits[1])
             u = self._increment(v)
@@ -150,22 +201,53 @@ def run_loop(controller: FileController, plant, dt: float, levels: Sequence[floa
 
 @dataclass
 class StepResult:
-    """Settling, overshoot and the end of one hold."""
+    """Settling, overshoot, the end of one hold and the valve's work while it held."""
 
     size: float
     settling: float
     overshoot: float
     reversals: int
     wander: float
+    pulses: int = 0
+    travel: float = 0.0
+    held: float = 0.0
+
+
+def openings(v: np.ndarray, edges: tuple[float, float], rest: float) -> int:
+    """
+    Count the valve's openings across its dead-zone (methods.md section 5.7).
+
+    The valve is shut within the inner half of the dead-zone around ``rest`` and
+    open beyond an edge; in between it is where it was. An opening is the valve
+    coming to one side from shut or from the other side.
+    """
+    low, high = edges
+    last, count = None, 0
+    for command in v:
+        if command < low:
+            side = -1
+        elif command > high:
+            side = 1
+        elif rest - (rest - low) / 2 <= command <= rest + (high - rest) / 2:
+            side = 0
+        else:
+            continue
+        if side != 0 and last is not None and side != last:
+            count += 1
+        last = side
+    return count
 
 
 def judge(run: LoopRun, *, band: float = 0.5, tail: float = 2.0,
-          rest: float = 0.0) -> list[StepResult]:
+          rest: float = 0.0, edges: tuple[float, float] | None = None) -> list[StepResult]:
     """
     Settling into ``band``, overshoot (% of the step) and the last ``tail`` s of each hold.
 
     ``reversals`` counts sign changes of the command about ``rest`` in the tail
-    (samples at rest ignored), ``wander`` the angle's range there.
+    (samples at rest ignored), ``wander`` the angle's range there. With the
+    valve's dead-zone ``edges``, ``pulses`` counts its openings from the
+    settling to the end of the hold (``held`` s) and ``travel`` the sum of the
+    command's changes there.
     """
     dt = float(run.t[1] - run.t[0])
     y = run.y
@@ -185,6 +267,11 @@ def judge(run: LoopRun, *, band: float = 0.5, tail: float = 2.0,
         side = np.sign(run.v[window] - rest)
         side = side[side != 0]
         reversals = int(np.count_nonzero(np.diff(side)))
-        results.append(StepResult(float(size), settling, overshoot, reversals,
-                                  float(np.ptp(y[window]))))
+        settled = start + (int(outside[-1]) + 1 if outside.size else 0)
+        held = run.v[settled:end]
+        results.append(StepResult(
+            float(size), settling, overshoot, reversals, float(np.ptp(y[window])),
+            0 if edges is None or held.size < 2 else openings(held, edges, rest),
+            float(np.sum(np.abs(np.diff(held)))) if held.size > 1 else 0.0,
+            (end - settled) * dt))
     return results

@@ -12,8 +12,9 @@ constant duty driven from stop to stop and back, identified on 40, 60, 80 and
 Run as a script, it calibrates each joint with whichever ``hydro_sdp`` is
 importable and prints, per joint, the closed-loop check of the first and of
 the written design and the written controller file run on the true joint in
-:mod:`support.independent_loop`: settling into +-0.5 deg, overshoot and the
-holds that end in a limit cycle::
+:mod:`support.independent_loop`: settling into +-0.5 deg, overshoot, the
+holds that end in a limit cycle and the valve's pulses across the true
+dead-zone per second of hold::
 
     .venv/bin/python test/support/real_valve_joints.py [joint ...]
 
@@ -65,6 +66,8 @@ class Case:
     input_limits: tuple[float, float]
     write: Callable[[Path], tuple[list[str], list[str], list[str]]]
     plant: Callable[[float], object]
+    #: The true valve's dead-zone edges, valve units.
+    edges: tuple[float, float]
 
 
 def _table_case(name: str, joint: TableJoint) -> Case:
@@ -75,8 +78,9 @@ def _table_case(name: str, joint: TableJoint) -> Case:
             paths[duty] = str(write_log(folder / f'duty_{duty}.csv', commands, angles, DT))
         options = ['--joint', 'arm', '--time', 't', '--angle', 'arm_deg', '--command', 'duty']
         return [paths[d] for d in ESTIMATION], [paths[d] for d in VALIDATION], options
+    edges = sorted(float(x) for x in joint.command(list(joint.closed)))
     return Case(name, joint.command_limits, write,
-                lambda y0: TableJointSimulator(joint, DT, y0, seed=5))
+                lambda y0: TableJointSimulator(joint, DT, y0, seed=5), (edges[0], edges[1]))
 
 
 def _physics_case(name: str, preset: str) -> Case:
@@ -95,8 +99,11 @@ def _physics_case(name: str, preset: str) -> Case:
         return ([p for d in ESTIMATION for p in paths[d]],
                 [p for d in VALIDATION for p in paths[d]], [])
     valve = machine.joints[0].valve
+    # The spool's overlap, as commands (the spool travel is linear on each side of neutral).
+    edges = (valve.neutral - valve.overlap * (valve.neutral - valve.limits[0]),
+             valve.neutral + valve.overlap * (valve.limits[1] - valve.neutral))
     return Case(name, (float(valve.limits[0]), float(valve.limits[1])), write,
-                lambda y0: PhysicsJoint(machine, y0))
+                lambda y0: PhysicsJoint(machine, y0), edges)
 
 
 def cases() -> dict[str, Case]:
@@ -115,7 +122,13 @@ def truth_loop(case: Case, controller_file: str | Path) -> list[StepResult]:
     """Run a controller file on the true joint over :data:`LEVELS`; judge every step."""
     controller = FileController.read(controller_file)
     run = run_loop(controller, case.plant(LEVELS[0]), DT, LEVELS, HOLD)
-    return judge(run, rest=controller.rest)
+    return judge(run, rest=controller.rest, edges=case.edges)
+
+
+def pulse_rate(results: list[StepResult]) -> float:
+    """Return the valve's openings across the true dead-zone per second of hold, pooled."""
+    held = sum(r.held for r in results)
+    return sum(r.pulses for r in results) / held if held > 0.0 else 0.0
 
 
 def cycles(results: list[StepResult], band: float = 0.5) -> int:
@@ -129,13 +142,14 @@ def settles(results: list[StepResult]) -> bool:
         not cycles(results)
 
 
-def _row(settling: list[float], overshoot: list[float], limit_cycles: int) -> str:
+def _row(settling: list[float], overshoot: list[float], limit_cycles: int,
+         pulses: float) -> str:
     def seconds(x: float) -> str:
         return 'never' if not math.isfinite(x) else f'{x:.2f}'
     low, high = seconds(min(settling)), seconds(max(settling))
     span = low if low == high else f'{low}-{high}'
     return (f'{span}{"" if span == "never" else " s"} | '
-            f'{min(overshoot):.1f}-{max(overshoot):.1f} % | {limit_cycles}')
+            f'{min(overshoot):.1f}-{max(overshoot):.1f} % | {limit_cycles} | {pulses:.2f}')
 
 
 def main(names: list[str]) -> None:
@@ -145,8 +159,8 @@ def main(names: list[str]) -> None:
     import json
 
     from hydro_sdp.cli.main import main as cli
-    print('| joint | what | settling | overshoot | limit cycles |')
-    print('|---|---|---|---|---|')
+    print('| joint | what | settling | overshoot | limit cycles | pulses/s at hold |')
+    print('|---|---|---|---|---|---|')
     for key in names or list(cases()):
         case = cases()[key]
         with tempfile.TemporaryDirectory() as folder:
@@ -163,12 +177,13 @@ def main(names: list[str]) -> None:
             settling = [math.inf if x is None else x for x in loop['settling_time']]
             print(f'| {case.name} | calibrate\'s check: {"passed" if loop["passed"] else "FAILED"}'
                   f' after {len(loop["designs"])} design(s) ({forms}) | '
-                  + _row(settling, loop['overshoot'], loop['limit_cycles']) + ' |')
+                  + _row(settling, loop['overshoot'], loop['limit_cycles'],
+                         loop['chatter']['pulse_rate']) + ' |')
             results = truth_loop(case, out / 'controller.yaml')
             verdict = 'settles' if settles(results) else 'fails'
             print(f'| | its controller file on the true joint ({verdict}) | '
                   + _row([r.settling for r in results], [r.overshoot for r in results],
-                         cycles(results)) + ' |')
+                         cycles(results), pulse_rate(results)) + ' |')
 
 
 if __name__ == '__main__':

@@ -2,10 +2,11 @@
 Stand-ins for the recordings and logs that the user guide's "your machine" examples name.
 
 A boom driven in percent duty resting at 50 % on ``/boom/pwm`` (steps and an operator's
-run, as bags ``bag_recorder`` would write), an arm with a signed duty logged by three
-kinds of logger (CSV, MDF4, MATLAB), and a day's logs of both joints with the boom's
-head pressure (MDF4). The joints are ``support.plain_joint`` joints, not the package's
-simulator; stamps run on the loggers' own clocks.
+run, as bags ``bag_recorder`` would write), an arm with a signed duty logged by four
+kinds of logger (CSV, MDF4, MATLAB, a dSPACE ControlDesk export in CP949), and a day's
+logs of both joints with the boom's head pressure (MDF4). The joints are
+``support.plain_joint`` joints, not the package's simulator; stamps run on the loggers'
+own clocks.
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ from asammdf import MDF, Signal
 from hydro_sdp.bags import write_bag
 import numpy as np
 from scipy.io import savemat
+from support.controldesk_files import Trace, write_controldesk
 from support.plain_joint import PlainJoint, steps
 
 #: The boom: a valve in percent duty resting at 50 %, end stops at -40 and 55 deg.
@@ -56,6 +58,10 @@ def _arm_logs(folder: Path) -> None:
     run = ARM.run_levels(20.0, magnitude=(15.0, 90.0), seed=6)
     savemat(folder / 'run2.mat', {'t': (run.t - run.t[0])[:, None],
                                   'log': {'Arm_ang': run.y[:, None], 'Arm_duty': run.v[:, None]}})
+    run = ARM.run_levels(10.0, magnitude=(15.0, 90.0), seed=7)
+    write_controldesk(folder / 'arm_cd_1.csv', [(np.arange(len(run)) * 0.0099909, [
+        Trace('In1', 'Model Root/Arm/Arm_ang/In1', 'deg', run.y),
+        Trace('Out1', 'Model Root/Valves/Arm_duty/Out1', '%', run.v)])])
 
 
 def _day_logs(folder: Path) -> None:

@@ -13,12 +13,13 @@ lag). The spec is what ``hydro-sdp design`` writes (format
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Mapping, Sequence
 
 from hydro_sdp.core.control.design_plant import (
     check_plant_lag, Mode, model_lag, model_mode, plant_for_model)
 from hydro_sdp.core.control.idz import IdzMode
+from hydro_sdp.core.control.idz_bounds import design_notes
 from hydro_sdp.core.control.idz_design import default_u_limits, idz_for_model, IdzForm
 from hydro_sdp.core.control.idz_mapping import idz_from_mapping, idz_to_mapping
 from hydro_sdp.core.control.idz_table import Idz
@@ -67,6 +68,18 @@ class ControllerSpec:
     oscillation : tuple[float, float] or None
         The link's mode the plant was made from, Hz and damping ratio; ``None``: none.
 
+    See Also
+    --------
+    design_from_model : the controller of a model.
+    load_controller, save_controller : the controller file.
+
+    Examples
+    --------
+    >>> from hydro_sdp import design_from_model, load_model
+    >>> spec = design_from_model(load_model('config/brokk_j2.yaml'))
+    >>> spec.control_period, spec.delay_samples
+    (0.05, 3)
+
     """
 
     joint: str
@@ -92,6 +105,12 @@ class ControllerSpec:
         if np.max(np.abs(poles)) >= 1.0:
             raise ConfigurationError(f'the closed loop is unstable: poles {np.round(poles, 4)}')
         self.settings()  # validates limits against the IDZ
+
+    @property
+    def notes(self) -> tuple[str, ...]:
+        """Return what the design says of the values it took where the data left a choice."""
+        notes = self.design.get('undetermined', ())
+        return tuple(str(note) for note in notes) if isinstance(notes, (list, tuple)) else ()
 
     @property
     def delay_samples(self) -> int:
@@ -222,7 +241,7 @@ def design_from_model(model: JointModel, *, control_period: float = 0.05,
                       beta: float | None = None, mode: IdzMode = 'zero',
                       v_range: tuple[float, float] | None = None,
                       form: IdzForm | None = None,
-                      noise_std: float = DEFAULT_NOISE) -> ControllerSpec:
+                      noise_std: float = DEFAULT_NOISE, fade: float = 0.0) -> ControllerSpec:
     """
     Design a PIP-IDZ controller for a joint model.
 
@@ -246,12 +265,27 @@ def design_from_model(model: JointModel, *, control_period: float = 0.05,
     noise_std : float
         Angle noise the controller will read, degrees: a table's default chatter
         band covers it (default 0.03, the online identifier's default).
+    fade : float
+        Fade-in band of the IDZ beyond its chatter band, degrees per control sample
+        (0: none; docs/methods.md section 5.2).
 
     Returns
     -------
     ControllerSpec
         The controller, designed on the integrator with the model's delay, valve lag and
         link mode.
+
+    See Also
+    --------
+    ControllerSpec : the controller and its file.
+    calibrate : identification, diagnosis, design and the closed-loop check in one call.
+
+    Examples
+    --------
+    >>> from hydro_sdp import design_from_model, load_model
+    >>> spec = design_from_model(load_model('config/brokk_j2.yaml'))
+    >>> spec.gains.k_i > 0
+    True
 
     """
     period = check_sample_period(control_period)
@@ -269,6 +303,11 @@ def design_from_model(model: JointModel, *, control_period: float = 0.05,
                                               'w_e': weights.w_e}}
     idz = idz_for_model(model, period, form=form, beta=beta, mode=mode, v_range=v_range,
                         design=(plant, gains, lag), noise_std=noise_std)
+    notes = design_notes(model)
+    if notes:
+        design['undetermined'] = list(notes)
+    if fade:
+        idz = replace(idz, fade=fade)
     if u_limits is None:
         u_limits = default_u_limits(model, idz, period)
     return ControllerSpec(joint=model.joint, control_period=period, plant=plant, gains=gains,

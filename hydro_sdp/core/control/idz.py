@@ -9,6 +9,9 @@ a pure inverse would flip between the two edges at every sample; three modes
 avoid that (docs/methods.md section 5.2): a zero band (the paper's, ``v = rest`` while
 ``|u| <= beta``), a smooth blend of the two branches over ``beta``, and a
 hysteresis (Schmitt) band that switches branch only when ``u`` crosses ``+-beta``.
+With a fade-in band (``fade > 0``, ``zero`` mode) the compensation does not jump
+across the dead-zone as ``u`` leaves the band: it fades in from rest
+(section 5.2), so that the valve does not pulse at hold.
 
 """
 
@@ -51,6 +54,17 @@ def idz_mode(value: object) -> IdzMode:
     raise ConfigurationError(f"IDZ mode must be one of {', '.join(IDZ_MODES)}, got {value!r}")
 
 
+def check_fade(fade: float, mode: str) -> float:
+    """Return the fade-in band ``fade`` as a float, or raise if it is invalid for ``mode``."""
+    fade = float(fade)
+    if not (math.isfinite(fade) and fade >= 0.0):
+        raise ConfigurationError(f'IDZ fade-in band must be finite and >= 0, got {fade}')
+    if fade > 0.0 and mode != 'zero':
+        raise ConfigurationError(f'the IDZ fade-in band ({fade:g}) works with mode zero, '
+                                 f'not {mode}: set the fade to 0 or the mode to zero')
+    return fade
+
+
 def smooth_weight(u: float, beta: float) -> float:
     """Return the positive branch's weight in the ``smooth`` mode (Zhou, Wen & Zhang 2006)."""
     # The weights e^{u/eps} / (e^{u/eps} + e^{-u/eps}).
@@ -69,6 +83,7 @@ class TwoBranchInverse:
     beta: float
     mode: IdzMode
     rest: float
+    fade: float
 
     def branch_command(self, u: float, side: int) -> float:
         """Return the command of the positive (``side > 0``) or negative branch for ``u``."""
@@ -108,7 +123,11 @@ class TwoBranchInverse:
             branch = 0
         if branch == 0:
             return self.rest, 0
-        return self.branch_command(u, branch), branch
+        v = self.branch_command(u, branch)
+        if self.fade > 0.0:
+            # The compensation fades in from rest beyond the band (methods.md 5.2).
+            v = self.rest + math.tanh((abs(u) - beta) / self.fade) * (v - self.rest)
+        return v, branch
 
 
 @dataclass(frozen=True)
@@ -128,6 +147,8 @@ class InverseDeadZone(TwoBranchInverse):
         ``zero``, ``smooth`` or ``hysteresis``.
     rest : float
         Command that holds the valve closed (inside the dead-zone).
+    fade : float
+        Fade-in band beyond ``beta``, angle per control sample (0: none; ``zero`` mode).
 
     """
 
@@ -136,6 +157,7 @@ class InverseDeadZone(TwoBranchInverse):
     beta: float = 0.05
     mode: IdzMode = 'zero'
     rest: float = 0.0
+    fade: float = 0.0
 
     def __post_init__(self) -> None:
         low, high = (float(x) for x in self.dead_zone)
@@ -150,6 +172,7 @@ class InverseDeadZone(TwoBranchInverse):
         if self.beta < 0.0:
             raise ConfigurationError(f'IDZ chatter band beta must be >= 0, got {self.beta}')
         idz_mode(self.mode)
+        object.__setattr__(self, 'fade', check_fade(self.fade, self.mode))
         if not low <= self.rest <= high:
             raise ConfigurationError(f'IDZ rest command {self.rest} lies outside the dead-zone '
                                      f'[{low}, {high}]')

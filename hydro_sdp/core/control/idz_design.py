@@ -45,6 +45,8 @@ CHORD_BETA = 0.05
 #: Speed, as a fraction of the speed at the end of the span, that the chord of a
 #: convex map passes through on its way to the two-thirds point.
 CREEP_SPEED_FRACTION = 0.02
+#: Fade-in band a design takes when its IDZ pulses at hold, in chatter bands.
+FADE_MULTIPLE = 2.0
 
 
 def idz_form(value: object) -> IdzForm:
@@ -204,6 +206,26 @@ def idz_for_model(model: JointModel, control_period: float, *, form: IdzForm | N
         beta = table_beta(table.dead_zone, design[0], design[1], design[2], control_period,
                           noise_std)
     return replace(table, beta=beta)
+
+
+def faded(idz: Idz) -> Idz:
+    """
+    Return the IDZ with the fade-in band a design takes when it pulses at hold (methods.md 5.2).
+
+    The band is :data:`FADE_MULTIPLE` chatter bands wide, in the ``zero`` mode.
+
+    Parameters
+    ----------
+    idz : InverseDeadZone or TableInverseDeadZone
+        The IDZ that pulses.
+
+    Returns
+    -------
+    InverseDeadZone or TableInverseDeadZone
+        The same IDZ with ``fade = 2 beta`` (unchanged without a band).
+
+    """
+    return replace(idz, mode='zero', fade=FADE_MULTIPLE * idz.beta)
 
 
 def default_u_limits(model: JointModel, idz: Idz,

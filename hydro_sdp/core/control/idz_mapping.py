@@ -3,7 +3,8 @@ The ``idz`` mapping of a controller file, in either form (docs/interfaces.md sec
 
 A chord IDZ is ``{mode, beta, dead_zone, slopes, rest}``; a table IDZ is
 ``{mode, beta, table: {u: [...], v: [...]}, rest}`` (its edges and chord slopes
-follow from the table and are not written).
+follow from the table and are not written). Either may have ``fade``, the
+fade-in band, written when it is not 0.
 
 """
 
@@ -17,18 +18,19 @@ from hydro_sdp.core.errors import ConfigurationError, ModelFileError
 from hydro_sdp.core.validation import (
     require_float, require_float_list, require_ordered_pair, require_pair)
 
-_CHORD_KEYS = {'mode', 'beta', 'dead_zone', 'slopes', 'rest'}
-_TABLE_KEYS = {'mode', 'beta', 'table', 'rest'}
+_CHORD_KEYS = {'mode', 'beta', 'dead_zone', 'slopes', 'rest', 'fade'}
+_TABLE_KEYS = {'mode', 'beta', 'table', 'rest', 'fade'}
 
 
 def idz_to_mapping(idz: Idz | None) -> dict[str, object] | None:
     """Return the ``idz`` value of a controller file (``None`` for no IDZ)."""
     if idz is None:
         return None
+    faded: dict[str, object] = {'fade': idz.fade} if idz.fade > 0.0 else {}
     if isinstance(idz, TableInverseDeadZone):
-        return {'mode': idz.mode, 'beta': idz.beta, 'rest': idz.rest,
+        return {'mode': idz.mode, 'beta': idz.beta, **faded, 'rest': idz.rest,
                 'table': {'u': list(idz.u), 'v': list(idz.v)}}
-    return {'mode': idz.mode, 'beta': idz.beta, 'dead_zone': list(idz.dead_zone),
+    return {'mode': idz.mode, 'beta': idz.beta, **faded, 'dead_zone': list(idz.dead_zone),
             'slopes': list(idz.slopes), 'rest': idz.rest}
 
 
@@ -68,6 +70,7 @@ def idz_from_mapping(data: object) -> Idz | None:
                              f'got {mode!r}')
     beta = require_float(data.get('beta', 0.05), 'idz.beta')
     rest = require_float(data.get('rest', 0.0), 'idz.rest')
+    fade = require_float(data.get('fade', 0.0), 'idz.fade')
     try:
         if table:
             points = data['table']
@@ -75,12 +78,13 @@ def idz_from_mapping(data: object) -> Idz | None:
                 raise ModelFileError("key 'idz.table': expected a mapping with keys 'u' and 'v'")
             return TableInverseDeadZone(u=require_float_list(points['u'], 'idz.table.u'),
                                         v=require_float_list(points['v'], 'idz.table.v'),
-                                        beta=beta, mode=mode, rest=rest)
+                                        beta=beta, mode=mode, rest=rest, fade=fade)
         for key in ('dead_zone', 'slopes'):
             if key not in data:
                 raise ModelFileError(f"key 'idz': missing key {key!r}")
         return InverseDeadZone(
             dead_zone=require_ordered_pair(data['dead_zone'], 'idz.dead_zone', strict=False),
-            slopes=require_pair(data['slopes'], 'idz.slopes'), beta=beta, mode=mode, rest=rest)
+            slopes=require_pair(data['slopes'], 'idz.slopes'), beta=beta, mode=mode, rest=rest,
+            fade=fade)
     except ConfigurationError as error:
         raise ModelFileError(f"key 'idz': {error}") from None

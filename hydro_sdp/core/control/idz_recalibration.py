@@ -10,7 +10,10 @@ and when that standard deviation is small next to the dead-zone's width
 (``confidence``). Every threshold is relative to the noise and the data but
 ``min_change``, the smallest change worth acting on. Edges that did not change
 keep the reference. The decision is pure: the caller gives the time of each
-estimate and reports what the controller accepted.
+estimate and reports what the controller accepted. It reads only the edges and
+their standard deviations, so it serves the estimate of any map family
+(:mod:`hydro_sdp.core.identification.online_edges`); :func:`recalibrated_idz`
+gives the IDZ to set, a chord or a table.
 
 """
 
@@ -19,14 +22,27 @@ from __future__ import annotations
 from collections import deque
 from dataclasses import dataclass, replace
 import math
+from typing import Protocol
 
-from hydro_sdp.core.control.idz import InverseDeadZone
-from hydro_sdp.core.control.idz_design import chord_idz
+from hydro_sdp.core.control.idz_design import chord_idz, default_form, IdzForm
+from hydro_sdp.core.control.idz_table import Idz
+from hydro_sdp.core.control.idz_table_design import table_idz
 from hydro_sdp.core.errors import ConfigurationError
-from hydro_sdp.core.identification.online import SdpEstimate
 from hydro_sdp.core.model.joint_model import JointModel
-from hydro_sdp.core.model.static_maps import SdpMap
+from hydro_sdp.core.model.static_maps import PowerSatMap, PwlMap, SdpDzMap, SdpMap
 from hydro_sdp.core.validation import require_positive_fields
+
+
+class EdgesEstimate(Protocol):
+    """What the decision reads of an estimate: the edges and their standard deviations."""
+
+    @property
+    def edges(self) -> tuple[float, float]:
+        """Return the dead-zone edges, input units."""
+
+    @property
+    def edges_std(self) -> tuple[float, float]:
+        """Return their standard deviations, input units."""
 
 
 @dataclass(frozen=True)
@@ -114,7 +130,7 @@ class Recalibration:
         values = [entry[1 + edge] for entry in self._history]
         return max(values) - min(values) <= std
 
-    def observe(self, time: float, estimate: SdpEstimate) -> Decision:
+    def observe(self, time: float, estimate: EdgesEstimate) -> Decision:
         """
         Take the estimate at ``time`` and decide.
 
@@ -122,7 +138,7 @@ class Recalibration:
         ----------
         time : float
             Time of the estimate, s (any origin; increasing).
-        estimate : SdpEstimate
+        estimate : SdpEstimate or EdgeEstimate
             The online estimate.
 
         Returns
@@ -165,28 +181,69 @@ class Recalibration:
         self.reference = (float(edges[0]), float(edges[1]))
 
 
-def recalibrated_idz(estimate: JointModel, edges: tuple[float, float],
-                     control_period: float) -> InverseDeadZone:
+def with_dead_zone(model: JointModel, edges: tuple[float, float]) -> JointModel:
+    """
+    Return the model with its dead-zone edges at ``edges``, each side moved with its edge.
+
+    Parameters
+    ----------
+    model : JointModel
+        A model whose map has explicit edges (``sdp``, ``sdp_dz``, ``power_sat``, or a
+        ``pwl`` with a zero plateau).
+    edges : tuple[float, float]
+        The new ``(a3, a6)``, input units.
+
+    Returns
+    -------
+    JointModel
+        The moved model.
+
+    """
+    low, high = (float(x) for x in edges)
+    if not (math.isfinite(low) and math.isfinite(high) and low <= high):
+        raise ConfigurationError(f'dead-zone edges must be finite and ordered, got {[low, high]}')
+    static_map = model.static_map
+    if isinstance(static_map, (SdpMap, SdpDzMap, PowerSatMap)):
+        return replace(model, static_map=replace(static_map, dead_zone=(low, high)))
+    if isinstance(static_map, PwlMap) and static_map.dead_zone is not None:
+        old_low, old_high = static_map.dead_zone
+        below = [(k + low - old_low, s) for k, s in zip(static_map.knots, static_map.speeds)
+                 if k <= old_low]
+        above = [(k + high - old_high, s) for k, s in zip(static_map.knots, static_map.speeds)
+                 if k >= old_high]
+        if below[-1][0] == above[0][0]:
+            above = above[1:]
+        points = below + above
+        return replace(model, static_map=PwlMap(knots=tuple(p[0] for p in points),
+                                                speeds=tuple(p[1] for p in points)))
+    raise ConfigurationError(f'the edges of a {model.kind} map without a dead-zone cannot move')
+
+
+def recalibrated_idz(estimate: JointModel, edges: tuple[float, float], control_period: float,
+                     form: IdzForm | None = None) -> Idz:
     """
     IDZ of the estimated model with the decided edges, at the control period.
 
     Parameters
     ----------
     estimate : JointModel
-        The online estimate as a model (kind ``sdp``).
+        The online estimate as a model (any family with explicit edges).
     edges : tuple[float, float]
         Dead-zone edges to use (:attr:`Decision.edges`), input units.
     control_period : float
         Control period of the controller, s.
+    form : str or None
+        ``chord`` or ``table``: the controller's IDZ form, whose ``idz.slopes`` the
+        result's slopes are (default: the family's, :func:`.idz_design.default_form`).
 
     Returns
     -------
-    InverseDeadZone
-        Edges and chord slopes (deg per control sample per input unit).
+    InverseDeadZone or TableInverseDeadZone
+        Edges and slopes (deg per control sample per input unit) to set.
 
     """
-    static_map = estimate.static_map
-    if not isinstance(static_map, SdpMap):
-        raise ConfigurationError(f'recalibration needs a kind sdp estimate, not {estimate.kind}')
-    model = replace(estimate, static_map=replace(static_map, dead_zone=edges))
-    return chord_idz(model, control_period)
+    model = with_dead_zone(estimate, edges)
+    form = default_form(estimate) if form is None else form
+    if form == 'chord':
+        return chord_idz(model, control_period)
+    return table_idz(model, control_period, beta=0.0)

@@ -29,7 +29,8 @@ from dataclasses import dataclass, field
 import math
 from typing import Sequence
 
-from hydro_sdp.core.control.idz import idz_mode, IdzMode, InverseDeadZone, TwoBranchInverse
+from hydro_sdp.core.control.idz import (
+    check_fade, idz_mode, IdzMode, InverseDeadZone, TwoBranchInverse)
 from hydro_sdp.core.errors import ConfigurationError
 from hydro_sdp.core.model.static_maps import CHORD_SPEED_FRACTION
 import numpy as np
@@ -53,6 +54,8 @@ class TableInverseDeadZone(TwoBranchInverse):
         ``zero``, ``smooth`` or ``hysteresis``.
     rest : float
         Command that holds the valve closed: between the edges.
+    fade : float
+        Fade-in band beyond ``beta``, degrees per control sample (0: none; ``zero`` mode).
 
     """
 
@@ -61,6 +64,7 @@ class TableInverseDeadZone(TwoBranchInverse):
     beta: float = 0.05
     mode: IdzMode = 'zero'
     rest: float = 0.0
+    fade: float = 0.0
     _negative_u: tuple[float, ...] = field(init=False, repr=False, compare=False)
     _negative_v: tuple[float, ...] = field(init=False, repr=False, compare=False)
     _positive_u: tuple[float, ...] = field(init=False, repr=False, compare=False)
@@ -89,6 +93,7 @@ class TableInverseDeadZone(TwoBranchInverse):
         if self.beta < 0.0:
             raise ConfigurationError(f'IDZ chatter band beta must be >= 0, got {self.beta}')
         idz_mode(self.mode)
+        object.__setattr__(self, 'fade', check_fade(self.fade, self.mode))
         if not v[first] <= self.rest <= v[last]:
             raise ConfigurationError(f'IDZ rest command {self.rest} lies outside the dead-zone '
                                      f'[{v[first]}, {v[last]}]')
@@ -103,7 +108,7 @@ class TableInverseDeadZone(TwoBranchInverse):
     def from_branches(cls, negative: tuple[Sequence[float], Sequence[float]],
                       positive: tuple[Sequence[float], Sequence[float]], *,
                       beta: float = 0.05, mode: IdzMode = 'zero',
-                      rest: float = 0.0) -> TableInverseDeadZone:
+                      rest: float = 0.0, fade: float = 0.0) -> TableInverseDeadZone:
         """
         Build the table from its two branches, each ``(u, v)`` from its outer end to its edge.
 
@@ -116,7 +121,7 @@ class TableInverseDeadZone(TwoBranchInverse):
             raise ConfigurationError('each IDZ table branch must reach u = 0 at its edge')
         if nv[-1] == pv[0]:
             pu, pv = pu[1:], pv[1:]
-        return cls(nu + pu, nv + pv, beta=beta, mode=mode, rest=rest)
+        return cls(nu + pu, nv + pv, beta=beta, mode=mode, rest=rest, fade=fade)
 
     @property
     def dead_zone(self) -> tuple[float, float]:
@@ -204,7 +209,7 @@ class TableInverseDeadZone(TwoBranchInverse):
         return TableInverseDeadZone.from_branches(
             (self._negative_u, [x + shift_n for x in self._negative_v]),
             (self._positive_u, [x + shift_p for x in self._positive_v]),
-            beta=self.beta, mode=self.mode, rest=self.rest)
+            beta=self.beta, mode=self.mode, rest=self.rest, fade=self.fade)
 
     def with_slopes(self, slopes: tuple[float, float]) -> TableInverseDeadZone:
         """
@@ -228,7 +233,7 @@ class TableInverseDeadZone(TwoBranchInverse):
         return TableInverseDeadZone.from_branches(
             ([x * new_n / old_n for x in self._negative_u], self._negative_v),
             ([x * new_p / old_p for x in self._positive_u], self._positive_v),
-            beta=self.beta, mode=self.mode, rest=self.rest)
+            beta=self.beta, mode=self.mode, rest=self.rest, fade=self.fade)
 
 
 #: An inverse dead-zone of either form.
@@ -249,4 +254,4 @@ def chord_as_table(idz: InverseDeadZone, v_range: tuple[float, float]) -> TableI
     return TableInverseDeadZone.from_branches(
         ((idz.increment(v_range[0]), 0.0), (v_range[0], low)),
         ((0.0, idz.increment(v_range[1])), (high, v_range[1])),
-        beta=idz.beta, mode=idz.mode, rest=idz.rest)
+        beta=idz.beta, mode=idz.mode, rest=idz.rest, fade=idz.fade)

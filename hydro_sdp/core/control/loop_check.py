@@ -5,8 +5,9 @@ The closed-loop check of a designed controller on a joint model, and slower re-d
 an angle factor...) over set-point steps across the stroke, up and down, and a
 ramp, and judges it: every step settles into the band within a bound, overshoots
 by at most 10 %, and no hold ends in a limit cycle (the valve hunting across
-rest, or the angle wandering more than the band), with the angle read through
-the noise the settings give. :func:`slower_poles` moves a
+rest, or the angle wandering more than the band) and the valve does not pulse
+at hold (:mod:`.loop_chatter`), with the angle read through the noise the
+settings give. :func:`slower_poles` moves a
 design's dominant poles toward 1, for the re-design when the check fails.
 
 """
@@ -18,6 +19,7 @@ import math
 from typing import Callable, Sequence
 
 from hydro_sdp.core.control.controller_spec import ControllerSpec
+from hydro_sdp.core.control.loop_chatter import Chatter, loop_chatter
 from hydro_sdp.core.control.loop_simulation import (
     LoopJoint, LoopTrace, run_closed_loop, step_metrics, StepMetrics, valve_reversals)
 from hydro_sdp.core.errors import ConfigurationError
@@ -89,6 +91,8 @@ class LoopCheck:
         Why it failed, one line each (empty when it passed).
     steps_trace, ramp_trace : LoopTrace
         The two runs, for the report.
+    chatter : Chatter
+        The valve's pulses and travel at hold over both runs.
 
     """
 
@@ -101,6 +105,13 @@ class LoopCheck:
     failures: tuple[str, ...]
     steps_trace: LoopTrace
     ramp_trace: LoopTrace
+    chatter: Chatter
+
+    @property
+    def settling_range(self) -> tuple[float, float]:
+        """Return the shortest and longest settling time of the steps, s."""
+        times = [float(m.settling_time) for m in self.steps] or [math.nan]
+        return min(times), max(times)
 
 
 def stroke_levels(stroke: tuple[float, float]) -> tuple[float, ...]:
@@ -235,8 +246,11 @@ def check_loop(model: JointModel, spec: ControllerSpec, stroke: tuple[float, flo
         failures.append(f'the ramp does not settle within {ramp_bound:.1f} s of its end')
     if cycles:
         failures.append(f'{cycles} hold{"s" if cycles != 1 else ""} end in a limit cycle')
+    chatter = loop_chatter([steps_trace, ramp_trace], model, spec.idz,
+                           spec.v_limits or model.input_limits, band=settings.band)
+    failures.extend(chatter.failures)
     return LoopCheck(not failures, metrics, bounds, float(np.max(error[~ended])),
-                     ramp_settling, cycles, tuple(failures), steps_trace, ramp_trace)
+                     ramp_settling, cycles, tuple(failures), steps_trace, ramp_trace, chatter)
 
 
 def slower_poles(poles: Sequence[complex], factor: float = 0.7,

@@ -25,6 +25,7 @@ from hydro_sdp.core.control.pip_controller import PipIdzController
 from hydro_sdp.core.control.scheduling import ControlSchedule, seconds_to_ns
 from hydro_sdp.core.errors import ConfigurationError
 from hydro_sdp.core.model.joint_model import JointModel
+from hydro_sdp.core.model.sample_period import control_steps
 from hydro_sdp.core.model.simulation import JointSimulator
 from hydro_sdp.core.model.timing import check_sample_period, command_in_force
 import numpy as np
@@ -106,7 +107,9 @@ def run_closed_loop(joints: Sequence[LoopJoint], *, dt: float, control_period: f
     dt : float
         Plant sample period, s.
     control_period : float
-        Controller period, s: a whole multiple of ``dt``.
+        Controller period, s: a whole multiple of ``dt`` (within
+        :data:`~hydro_sdp.core.model.sample_period.PERIOD_TOLERANCE`: the controller
+        steps every that many samples).
     noise_std : float
         Standard deviation of the angle measurement noise, degrees.
     seed : int
@@ -121,11 +124,7 @@ def run_closed_loop(joints: Sequence[LoopJoint], *, dt: float, control_period: f
 
     """
     dt = check_sample_period(dt)
-    ratio = check_sample_period(control_period) / dt
-    every = int(round(ratio))
-    if every < 1 or abs(ratio - every) > 1e-9 * max(ratio, 1.0):
-        raise ConfigurationError(f'the control period {control_period} s must be a whole '
-                                 f'multiple of the plant period {dt} s')
+    every = control_steps(check_sample_period(control_period), dt)
     if not joints:
         raise ConfigurationError('no joints to simulate')
     samples = len(joints[0].setpoint)

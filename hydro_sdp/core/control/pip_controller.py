@@ -241,6 +241,24 @@ class PipIdzController:
         self.last_u, self.last_v = u, v
         self.steps += 1
 
+    def pending(self, delay: int) -> float:
+        """
+        Return the increments issued that the angle cannot show yet, degrees.
+
+        Parameters
+        ----------
+        delay : int
+            The plant's delay, control samples: the last ``delay - 1`` increments are
+            still on their way (the design plant's ``y_k = y_{k-1} + u_{k-delay}``).
+
+        Returns
+        -------
+        float
+            Their sum: where the joint is headed beyond where it is.
+
+        """
+        return float(sum(self._u[:max(delay - 1, 0)]))
+
     def update_idz(self, idz: Idz) -> None:
         """
         Change the IDZ at run time without a jump in the valve command.

@@ -7,6 +7,10 @@ Safety rules shared by the controller node and ``hydro-sdp closed-loop``.
   the range of the model in use, is refused with the reason and the fix. A range
   known on one side only is the range: a controller made from a model without
   one runs within the model's, and one made with a range runs a model without one.
+* An IDZ set at run time must fit the model: its edges inside the valve range, its
+  slopes within the physical bounds of the model's map (:func:`check_idz_fits`,
+  docs/methods.md section 4.11).
+* Near a stop the valve does not push (:class:`StopHold`).
 
 """
 
@@ -16,11 +20,19 @@ from dataclasses import replace
 import math
 
 from hydro_sdp.core.control.controller_spec import ControllerSpec
+from hydro_sdp.core.control.idz_table import Idz
 from hydro_sdp.core.errors import ConfigurationError
 from hydro_sdp.core.model.joint_model import JointModel
+import numpy as np
 
 #: Default distance of set-points from the end stops, degrees.
 SETPOINT_MARGIN = 0.5
+#: Default band of the stop-side hold, degrees (:class:`StopHold`).
+STOP_BAND = 0.5
+#: How far an IDZ slope may lie outside the model's physical slopes (a factor either way).
+SLOPE_TOLERANCE = 2.0
+#: Commands per side at which the model's map is read for its slopes.
+_SLOPE_POINTS = 200
 
 
 def setpoint_range(angle_limits: tuple[float, float] | None,
@@ -143,3 +155,178 @@ def controller_within_model(spec: ControllerSpec, model: JointModel) -> Controll
     if spec.v_limits is None and model.input_limits is not None:
         return replace(spec, v_limits=model.input_limits)
     return spec
+
+
+def top_speeds(model: JointModel) -> tuple[float, float] | None:
+    """
+    Return the joint's identified top speeds down and up, deg/s, over its valve range.
+
+    Parameters
+    ----------
+    model : JointModel
+        The joint.
+
+    Returns
+    -------
+    tuple[float, float] or None
+        ``(down, up)``: the lowest (<= 0) and highest (>= 0) speed of the map over
+        ``input_limits``; None without a valve range (the map alone has no top speed).
+
+    """
+    if model.input_limits is None:
+        return None
+    rates = model.rate(np.linspace(*model.input_limits, 2 * _SLOPE_POINTS + 1))
+    return min(float(np.min(rates)), 0.0), max(float(np.max(rates)), 0.0)
+
+
+def slope_bounds(model: JointModel, control_period: float,
+                 v_limits: tuple[float, float] | None) -> list[tuple[float, float] | None]:
+    """
+    Return the physical IDZ slopes of each side of the model's map, (low, high) each.
+
+    On each side: low, the chord from the model's edge to the valve's end (a lower IDZ
+    slope would need more than the whole range to reach the top speed); high, the
+    steepest chord from the edge to any command up to the end. In degrees per control
+    sample per input unit.
+
+    Parameters
+    ----------
+    model : JointModel
+        The joint.
+    control_period : float
+        Control period, s.
+    v_limits : tuple[float, float] or None
+        Valve range, input units (default: the model's).
+
+    Returns
+    -------
+    list of (float, float) or None
+        Negative side, positive side; None for a side without a range or without motion.
+
+    """
+    limits = v_limits if v_limits is not None else model.input_limits
+    if limits is None:
+        return [None, None]
+    rest = model.rest_command
+    edges = model.dead_zone or (rest, rest)
+    bounds: list[tuple[float, float] | None] = []
+    for edge, end in ((edges[0], limits[0]), (edges[1], limits[1])):
+        if abs(end - edge) <= 1e-9 * max(abs(end), 1.0):
+            bounds.append(None)
+            continue
+        v = edge + (end - edge) * np.linspace(1.0 / _SLOPE_POINTS, 1.0, _SLOPE_POINTS)
+        chords = control_period * model.rate(v) / (v - edge)
+        bounds.append((float(chords[-1]), float(np.max(chords))) if chords[-1] > 0.0
+                      else None)
+    return bounds
+
+
+def check_idz_fits(idz: Idz, model: JointModel, control_period: float,
+                   v_limits: tuple[float, float] | None) -> None:
+    """
+    Refuse an IDZ whose edges leave the valve range or whose slopes the joint cannot have.
+
+    Parameters
+    ----------
+    idz : InverseDeadZone or TableInverseDeadZone
+        The IDZ (from run-time parameters).
+    model : JointModel
+        The joint the controller runs.
+    control_period : float
+        Control period, s.
+    v_limits : tuple[float, float] or None
+        Valve range, input units (default: the model's).
+
+    Raises
+    ------
+    ConfigurationError
+        Naming the edge or slope, its bound and where the bound comes from.
+
+    """
+    limits = v_limits if v_limits is not None else model.input_limits
+    low, high = idz.dead_zone
+    if limits is not None and not limits[0] < low <= high < limits[1]:
+        raise ConfigurationError(f'IDZ edges {[low, high]} must lie inside the valve range '
+                                 f'{list(limits)}')
+    for side, slope, bound in zip(('negative', 'positive'), idz.slopes,
+                                  slope_bounds(model, control_period, limits)):
+        if bound is None:
+            continue
+        least, most = bound[0] / SLOPE_TOLERANCE, bound[1] * SLOPE_TOLERANCE
+        if not least <= slope <= most:
+            raise ConfigurationError(
+                f'IDZ {side} slope {slope:.6g} lies outside [{least:.4g}, {most:.4g}] deg per '
+                f"control sample per input unit: the model's map gives {bound[0]:.4g} (its chord "
+                f'to the valve end) to {bound[1]:.4g} (its steepest chord), and a factor '
+                f'{SLOPE_TOLERANCE:g} either way is allowed')
+
+
+class StopHold:
+    """
+    Hold the valve in its dead-zone once the joint is near a set-point at a stop.
+
+    A set-point is stop-side when it lies within ``band`` of an end of the allowed
+    set-point range (so within ``margin + band`` of a stop). The hold starts when the
+    joint comes within ``band`` of a stop-side set-point or passes it towards the stop,
+    and ends when the set-point leaves the stop side or the joint falls back more than
+    twice ``band`` from it (docs/methods.md section 4.11).
+
+    Parameters
+    ----------
+    band : float
+        Band, degrees (>= 0; 0 never holds).
+
+    """
+
+    def __init__(self, band: float = STOP_BAND) -> None:
+        self.band = band
+        self.holding = False
+
+    @property
+    def band(self) -> float:
+        """Return the band, degrees (settable)."""
+        return self._band
+
+    @band.setter
+    def band(self, value: float) -> None:
+        if not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0.0):
+            raise ConfigurationError(f'stop_band must be a finite number >= 0 deg, '
+                                     f'got {value!r}')
+        self._band = float(value)
+
+    def decide(self, setpoint: float, angle: float,
+               allowed: tuple[float, float] | None) -> bool:
+        """
+        Return whether the valve holds at this control step.
+
+        Parameters
+        ----------
+        setpoint : float
+            Set-point in force, degrees.
+        angle : float
+            The angle, degrees: measured, or where the commands already sent take the joint.
+        allowed : tuple[float, float] or None
+            Allowed set-point range (:func:`setpoint_range`); None: no stops, no hold.
+
+        Returns
+        -------
+        bool
+            True: send the rest command.
+
+        """
+        band = self._band
+        side = 0.0
+        if allowed is not None and band > 0.0:
+            if setpoint >= allowed[1] - band:
+                side = 1.0
+            elif setpoint <= allowed[0] + band:
+                side = -1.0
+        if side == 0.0:
+            self.holding = False
+            return False
+        ahead = side * (angle - setpoint)      # > 0: past the set-point, towards the stop
+        if self.holding:
+            self.holding = ahead >= -2.0 * band
+        else:
+            self.holding = ahead >= -band
+        return self.holding

@@ -6,10 +6,12 @@ The controller node and the offline closed loop share these rules
 integer nanoseconds as arguments and returns a decision, so the rules are tested
 without a clock or ROS:
 
-* :class:`FeedbackGate`: stamps must increase (a duplicate or a sample overtaken
-  by a newer one is ignored, the command in force came from fresher feedback); a
-  stamp further than the timeout from the reader's clock is refused (stale, or a
-  clock mix-up); the watchdog says when nothing valid came for the timeout.
+* :class:`FeedbackGate`: a stamp further than the timeout behind the reader's clock,
+  or more than one control period ahead of it, is refused (stale, or a clock
+  mix-up); then stamps must increase (a duplicate or a sample overtaken by a newer
+  one is ignored, the command in force came from fresher feedback); the watchdog
+  says when nothing valid came for the timeout, on the reader's clock or on a
+  steady one, whichever passes first.
 * :class:`ControlSchedule`: control instants every period from the first sample;
   the first sample at or after an instant is the one controlled, missed instants
   are skipped; after the valve was closed the next step starts from rest
@@ -65,17 +67,22 @@ class FeedbackGate:
     Parameters
     ----------
     timeout_ns : int
-        Longest accepted distance of a stamp from the clock, and longest silence
-        before the watchdog fires, ns.
+        Longest accepted age of a stamp, and longest silence before the watchdog
+        fires, ns.
     now_ns : int
         Clock reading at creation, ns (the silence is counted from here).
+    lead_ns : int or None
+        Longest accepted lead of a stamp over the clock, ns (default ``timeout_ns``).
 
     """
 
-    def __init__(self, timeout_ns: int, now_ns: int) -> None:
+    def __init__(self, timeout_ns: int, now_ns: int, lead_ns: int | None = None) -> None:
         self._timeout_ns = _positive_ns(timeout_ns, 'timeout_ns')
+        self.lead_ns = self._timeout_ns if lead_ns is None else _positive_ns(lead_ns, 'lead_ns')
         self.last_stamp: int | None = None
         self.last_valid_ns = int(now_ns)
+        #: Steady-clock reading of the last valid sample (None: none since creation).
+        self.last_valid_steady_ns: int | None = None
         self.blind = False
 
     @property
@@ -87,7 +94,7 @@ class FeedbackGate:
     def timeout_ns(self, value: int) -> None:
         self._timeout_ns = _positive_ns(value, 'timeout_ns')
 
-    def admit(self, stamp_ns: int, now_ns: int) -> Admission:
+    def admit(self, stamp_ns: int, now_ns: int, steady_ns: int | None = None) -> Admission:
         """
         Decide on one sample stamped ``stamp_ns`` arriving at clock reading ``now_ns``.
 
@@ -98,6 +105,8 @@ class FeedbackGate:
         now_ns : int
             Reader's clock, ns; 0 means simulated time has not started, and the
             freshness check is skipped.
+        steady_ns : int or None
+            A steady clock's reading, ns, for the watchdog (None: not kept).
 
         Returns
         -------
@@ -108,39 +117,53 @@ class FeedbackGate:
         Raises
         ------
         DataError
-            If the stamp is further than the timeout from the clock, behind or
-            ahead (one from the future would make every later sample look old);
-            the caller closes the valve.
+            If the stamp is more than the timeout behind the clock, or more than
+            ``lead_ns`` ahead of it (one from the future would make every later sample
+            look old); the caller closes the valve.
 
         """
-        if self.last_stamp is not None and stamp_ns <= self.last_stamp:
-            return 'ignored'
         if now_ns != 0:
             lead = stamp_ns - now_ns
-            if abs(lead) > self._timeout_ns:
-                where = 'ahead of' if lead > 0 else 'behind'
+            if lead > self.lead_ns or -lead > self._timeout_ns:
+                ahead = lead > 0
+                limit = self.lead_ns if ahead else self._timeout_ns
+                where = 'ahead of' if ahead else 'behind'
                 raise DataError(f'JointState stamp is {abs(lead) * 1e-9:.3f} s {where} the node '
-                                f'clock (more than feedback_timeout {self._timeout_ns * 1e-9:g} '
-                                's; check use_sim_time on every node)')
+                                f'clock (more than {limit * 1e-9:g} s; check the clocks and '
+                                'use_sim_time on every node)')
+            if self.last_stamp is not None and self.last_stamp > now_ns + self.lead_ns:
+                self.last_stamp = None     # the clock went back (a simulation restarted)
+        if self.last_stamp is not None and stamp_ns <= self.last_stamp:
+            return 'ignored'
         self.last_stamp = stamp_ns
         self.last_valid_ns = now_ns
+        if steady_ns is not None:
+            self.last_valid_steady_ns = steady_ns
         if self.blind:
             self.blind = False
             return 'resumed'
         return 'accepted'
 
-    def silence_ns(self, now_ns: int) -> int:
-        """Return the time since the last valid sample (or creation), ns."""
-        return now_ns - self.last_valid_ns
+    def silence_ns(self, now_ns: int, steady_ns: int | None = None) -> int:
+        """Return the time since the last valid sample (or creation), ns: the longer clock's."""
+        silence = now_ns - self.last_valid_ns
+        if steady_ns is not None and self.last_valid_steady_ns is not None:
+            silence = max(silence, steady_ns - self.last_valid_steady_ns)
+        return silence
 
-    def watchdog(self, now_ns: int) -> WatchdogState:
+    def watchdog(self, now_ns: int, steady_ns: int | None = None) -> WatchdogState:
         """
-        Check the silence at clock reading ``now_ns``.
+        Check the silence at clock reading ``now_ns`` (and steady reading ``steady_ns``).
 
         Parameters
         ----------
         now_ns : int
-            Clock reading, ns.
+            Clock reading, ns. A reading before the last valid sample's (a clock that
+            went back) counts the silence from now.
+        steady_ns : int or None
+            Steady clock reading, ns: once a sample was accepted with a steady reading,
+            the silence is the longer of the two clocks' (a simulated clock that stops
+            does not stop the watchdog).
 
         Returns
         -------
@@ -149,7 +172,9 @@ class FeedbackGate:
             ``blind`` while it lasts. The caller keeps the valve closed on both.
 
         """
-        if self.silence_ns(now_ns) <= self._timeout_ns:
+        if now_ns < self.last_valid_ns:
+            self.last_valid_ns = now_ns
+        if self.silence_ns(now_ns, steady_ns) <= self._timeout_ns:
             return 'fed'
         if self.blind:
             return 'blind'

@@ -13,7 +13,10 @@ Joint trajectories as a ROS ``JointTrajectoryController`` user expects them.
   for the joints it names; the other joints go on as before.
 * A trajectory naming a joint not controlled, or with a position beyond the
   end stops less the set-point margin, is refused whole, with one message
-  naming every offender (:func:`check_trajectory`).
+  naming every offender (:func:`check_trajectory`); so is one whose set-point
+  would move faster than a joint's top speed, its first segment from the
+  set-point in force included (:meth:`TrajectorySampler.planned_rates`,
+  :func:`check_trajectory_speeds`).
 
 """
 
@@ -145,6 +148,38 @@ def check_trajectory(trajectory: JointTrajectory,
         raise DataError(f"trajectory refused: {'; '.join(problems)}")
 
 
+def check_trajectory_speeds(rates: Mapping[str, tuple[float, float]],
+                            top_speeds: Mapping[str, tuple[float, float] | None]) -> None:
+    """
+    Refuse a trajectory whose set-point would move faster than a joint's top speed.
+
+    Parameters
+    ----------
+    rates : mapping of str to (float, float)
+        Lowest and highest set-point rate of each joint it names, deg/s
+        (:meth:`TrajectorySampler.planned_rates`).
+    top_speeds : mapping of str to (float, float) or None
+        Each joint's identified top speeds down (<= 0) and up, deg/s (None: unknown).
+
+    Raises
+    ------
+    DataError
+        One message naming every joint too fast, its rate and its top speed.
+
+    """
+    fast = []
+    for name, (low, high) in rates.items():
+        top = top_speeds.get(name)
+        if top is None:
+            continue
+        if low < top[0]:
+            fast.append(f'{name} at {low:.4g} deg/s (top speed down {top[0]:.4g})')
+        if high > top[1]:
+            fast.append(f'{name} at {high:.4g} deg/s (top speed up {top[1]:.4g})')
+    if fast:
+        raise DataError(f"trajectory refused: faster than the joint can move: {'; '.join(fast)}")
+
+
 def start_time(stamp: float, now: float) -> float:
     """
     Return when a trajectory starts: its stamp, or ``now`` when the stamp is zero.
@@ -176,6 +211,27 @@ class _Piece:
     @property
     def start(self) -> float:
         return self.times[0]
+
+    def rate_range(self) -> tuple[float, float]:
+        # The lowest and highest set-point rate over the piece, deg/s: per segment the
+        # chord, or the extremes of the cubic's derivative (a quadratic in s on [0, 1]).
+        times, positions = self.times, self.positions
+        low = high = 0.0
+        for i in range(len(times) - 1):
+            span = times[i + 1] - times[i]
+            change = positions[i + 1] - positions[i]
+            if self.velocities is None:
+                rates = [change / span]
+            else:
+                m0, m1 = self.velocities[i] * span, self.velocities[i + 1] * span
+                a, b = -6.0 * change + 3.0 * (m0 + m1), 6.0 * change - 4.0 * m0 - 2.0 * m1
+                slopes = [m0, m1]
+                if a != 0.0 and 0.0 < -b / (2.0 * a) < 1.0:
+                    s = -b / (2.0 * a)
+                    slopes.append(a * s * s + b * s + m0)
+                rates = [slope / span for slope in slopes]
+            low, high = min(low, *rates), max(high, *rates)
+        return low, high
 
     def sample(self, t: float) -> tuple[float, float]:
         times, positions = self.times, self.positions
@@ -327,12 +383,40 @@ class TrajectorySampler:
             If it names a joint not controlled here, or ``start`` is not finite.
 
         """
+        for name, piece in self._planned(trajectory, start).items():
+            kept = [old for old in self._pieces[name] if old.start < start]
+            kept.append(piece)
+            self._pieces[name] = kept
+
+    def planned_rates(self, trajectory: JointTrajectory,
+                      start: float) -> dict[str, tuple[float, float]]:
+        """
+        Return the lowest and highest set-point rate (deg/s) ``trajectory`` would give each joint.
+
+        Parameters
+        ----------
+        trajectory : JointTrajectory
+            The trajectory.
+        start : float
+            Its start time, s.
+
+        Returns
+        -------
+        dict of str to (float, float)
+            By joint, from the set-point in force at ``start`` on (nothing changes here).
+
+        """
+        return {name: piece.rate_range()
+                for name, piece in self._planned(trajectory, start).items()}
+
+    def _planned(self, trajectory: JointTrajectory, start: float) -> dict[str, _Piece]:
         if not math.isfinite(start):
             raise DataError(f'the start time must be finite, got {start}')
         unknown = [name for name in trajectory.joint_names if name not in self._hold]
         if unknown:
             raise DataError(f"trajectory refused: joints not controlled: {', '.join(unknown)}")
         times = [start + float(t) for t in trajectory.times]
+        planned = {}
         for column, name in enumerate(trajectory.joint_names):
             anchor, rate = self.sample(name, start)
             positions = [float(p) for p in trajectory.positions[:, column]]
@@ -344,10 +428,9 @@ class TrajectorySampler:
                 positions.insert(0, anchor)
                 if velocities is not None:
                     velocities.insert(0, rate)
-            kept = [piece for piece in self._pieces[name] if piece.start < start]
-            kept.append(_Piece(tuple(piece_times), tuple(positions),
-                               None if velocities is None else tuple(velocities)))
-            self._pieces[name] = kept
+            planned[name] = _Piece(tuple(piece_times), tuple(positions),
+                                   None if velocities is None else tuple(velocities))
+        return planned
 
     def prune(self, now: float) -> None:
         """Forget the pieces no sample at or after ``now`` (s) can reach."""

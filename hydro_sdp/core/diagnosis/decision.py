@@ -34,11 +34,11 @@ from dataclasses import replace
 from typing import Sequence
 
 from hydro_sdp.core.arrays import FloatArray
-from hydro_sdp.core.diagnosis.held_out import WindowErrors
 from hydro_sdp.core.diagnosis.naming import Naming
 from hydro_sdp.core.diagnosis.reduction import reduction_test
 from hydro_sdp.core.diagnosis.residuals import MIN_GAIN, Run, velocity_residuals
 from hydro_sdp.core.diagnosis.results import Candidate, Trial
+from hydro_sdp.core.identification.held_out import WindowErrors
 from hydro_sdp.core.model.joint_model import JointModel
 
 #: The windowed simulation error on held-out data must fall by at least this share.

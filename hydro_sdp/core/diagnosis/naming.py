@@ -199,7 +199,9 @@ def name_states(records: Sequence[Record], model: JointModel, *, seed: int = 0) 
         alone = max(analysis.alone.get(state, 0.0),
                     analysis.alone.get(f'residual {state}', 0.0))
         shares[state] = min(1.0, max(weighed, alone))
-    rows = rows_of(records, analysis.delay, analysis.rest, model, analysis.sample_period)
+    # The analysis's rows: those where the joint is held at a stop or stalled left out.
+    rows = rows_of(records, analysis.delay, analysis.rest, model, analysis.sample_period,
+                   holds=True).free()[0]
     shares['command'] = min(1.0, max(shares.get('command', 0.0), scale_share(rows)))
     up = next((e for e in analysis.dependence('angle', 'positive', 'ratio')), None)
     down = next((e for e in analysis.dependence('angle', 'negative', 'ratio')), None)

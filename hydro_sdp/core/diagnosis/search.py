@@ -19,7 +19,6 @@ from typing import Callable, Sequence
 from hydro_sdp.core.diagnosis.context import Context
 from hydro_sdp.core.diagnosis.decision import judge, on_common_samples, rank
 from hydro_sdp.core.diagnosis.detectors import detector, DETECTORS
-from hydro_sdp.core.diagnosis.held_out import WindowErrors
 from hydro_sdp.core.diagnosis.naming import name_states, Naming
 from hydro_sdp.core.diagnosis.reduction import bootstrap_block
 from hydro_sdp.core.diagnosis.residuals import (
@@ -28,6 +27,7 @@ from hydro_sdp.core.diagnosis.results import (
     Candidate, Diagnosis, Gap, LedgerStep, Signature, StateEvidence)
 from hydro_sdp.core.errors import DataError, HydroSdpError
 from hydro_sdp.core.identification.evaluation import simulated_record
+from hydro_sdp.core.identification.held_out import WindowErrors
 from hydro_sdp.core.identification.sdp import analyse
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.records import Record
@@ -205,6 +205,17 @@ def diagnose(records: Sequence[Record], model: JointModel, *,
         evidence for the report (the gap on the first validation record, the
         signature of the first effect on the first estimation record, the SDP
         estimate along its state).
+
+    See Also
+    --------
+    identify : the model diagnosed.
+    calibrate : identification, diagnosis and design in one call.
+
+    Examples
+    --------
+    >>> from hydro_sdp import diagnose
+    >>> found = diagnose(records, model)  # doctest: +SKIP
+    >>> found.effect, found.model.effects  # doctest: +SKIP
 
     """
     if not records:

@@ -60,6 +60,9 @@ class DelayEstimate:
         First-order valve lag time constant found with the delay, s (0: none).
     pure : int or None
         Dead time that explains the increments best without a lag (None: ``fit``).
+    fitted_lag : float
+        The lag the increments showed, kept or not, s: how long the valve's transient
+        lasts.
 
     """
 
@@ -71,6 +74,12 @@ class DelayEstimate:
     explained: FloatArray
     lag: float = 0.0
     pure: int | None = None
+    fitted_lag: float = 0.0
+
+    @property
+    def transient(self) -> float:
+        """Return how long after a command change the valve's transient lasts, s (5 lags)."""
+        return 5.0 * max(self.lag, self.fitted_lag)
 
     def without_lag(self, dt: float) -> DelayEstimate:
         """Return the estimate with the best pure delay and no lag."""
@@ -175,7 +184,7 @@ def estimate_delay(experiments: Sequence[Experiment], dt: float, *, max_delay: i
     return DelayEstimate(samples=best, seconds=whole_samples_seconds(best, dt), fit=best,
                          onset=_onset(experiments, noise, max_delay, lag_pole(lag, dt)),
                          xcorr=_xcorr(experiments, max_delay, lag_pole(lag, dt)),
-                         explained=explained, lag=lag, pure=pure)
+                         explained=explained, lag=lag, pure=pure, fitted_lag=lag)
 
 
 @dataclass(frozen=True)

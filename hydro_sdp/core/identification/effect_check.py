@@ -1,24 +1,12 @@
 """
 Whether an effect ``identify`` adds on its own earns its place, on held-out experiments.
 
-``identify`` proposes two effects by itself: a first-order ``valve_lag`` found
-with the dead time, and a ``stroke_geometry`` factor when the runs span the
-stroke. Either fits *something* on any data: a lag soaks up the timing scatter
-of commands received between samples, a stroke factor bends to whatever is
-left at the ends of the travel. So each is kept only when it predicts
-experiments it was not fitted on better, by a clear margin (docs/methods.md
-section 4.6): over the folds of :func:`~.family_choice.folds` (whose test parts
-never ask the fit to extrapolate), the model with the effect, fitted on the
-training part, must lower the pooled error of the test parts by a margin
-(:data:`HELD_OUT_GAIN` of the simulation error for the stroke factor,
-:data:`INCREMENT_GAIN` of the error of the increments around command changes
-for the lag) and lower it on more than half of the folds (one level left out
-may still be predicted worse: full-stroke runs hold each duty once).
-
-Neither is fitted on samples where the joint sits at an end stop (:func:`at_stop`):
-there the command drives the joint and the joint cannot move, which says
-nothing of the valve or the linkage and would read as a slow valve or a slow
-end of the stroke.
+``identify`` proposes a ``valve_lag`` with the dead time and a ``stroke_geometry``
+factor when the runs span the stroke. Either fits *something* on any data, so each
+is kept only when the model with it, fitted on each fold's training part, predicts
+the test parts better by the one rule of :mod:`.held_out`
+(docs/methods.md section 13.8). Neither is fitted on samples where the joint sits at
+an end stop (:func:`at_stop`): there the command drives a joint that cannot move.
 
 """
 
@@ -30,16 +18,10 @@ from typing import Callable, Sequence
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import HydroSdpError
 from hydro_sdp.core.identification.experiment import Experiment
+from hydro_sdp.core.identification.held_out import judge, Judgement
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.simulation import simulate
 import numpy as np
-
-#: Share of the held-out simulation error an effect must take away to be kept.
-HELD_OUT_GAIN = 0.1
-#: The same for errors of the increments around command changes (a lag's check): twice
-#: the sensor noise's variance is in every increment and no timing removes it, so a lag
-#: that halves the rest shows as a few percent.
-INCREMENT_GAIN = 0.05
 
 #: Fits a model to the training experiments of a fold (None: the effect cannot be fitted).
 Fitter = Callable[[Sequence[Experiment]], JointModel | None]
@@ -48,50 +30,49 @@ Fitter = Callable[[Sequence[Experiment]], JointModel | None]
 @dataclass(frozen=True)
 class HeldOut:
     """
-    Held-out simulation errors of a model without and with an effect.
+    Held-out errors of a model without and with an effect, judged by the one rule.
 
     Parameters
     ----------
     effect : str
         The effect's name.
-    without, with_effect : float
-        Mean absolute simulation error pooled over the test parts, degrees.
-    folds : tuple[tuple[float, float], ...]
-        Per fold, the two errors.
-    margin : float
-        Share of the error the effect must take away (:data:`HELD_OUT_GAIN`).
+    judgement : Judgement
+        The candidates ``without`` and the effect, fold by fold.
 
     """
 
     effect: str
-    without: float
-    with_effect: float
-    folds: tuple[tuple[float, float], ...]
-    margin: float = HELD_OUT_GAIN
+    judgement: Judgement
+
+    @property
+    def without(self) -> float:
+        """Return the pooled held-out error without the effect, degrees."""
+        return self.judgement.pooled[0] if self.judgement.weights else 0.0
+
+    @property
+    def with_effect(self) -> float:
+        """Return the pooled held-out error with the effect, degrees."""
+        return self.judgement.pooled[1] if self.judgement.weights else 0.0
 
     @property
     def gain(self) -> float:
         """Share of the held-out error the effect takes away (negative: it adds error)."""
-        return 1.0 - self.with_effect / self.without if self.without > 0.0 else 0.0
+        return self.judgement.gain(1) if self.judgement.weights else 0.0
 
     @property
     def kept(self) -> bool:
-        """
-        Whether the effect lowers the pooled error by :attr:`margin`, and most folds clearly.
-
-        Clearly: by half the margin at least. One fold much improved must not carry the
-        pooled figure alone (an effect that fixes what a few experiments share, such as
-        the transients at the angle where the recording started, is no property of the
-        joint).
-        """
-        clearly = sum(after < (1.0 - 0.5 * self.margin) * before for before, after in self.folds)
-        return self.gain >= self.margin and 2 * clearly > len(self.folds)
+        """Whether the one rule chooses the model with the effect."""
+        return self.judgement.chosen == 1
 
     def describe(self) -> str:
-        """One line for reports."""
+        """One line for reports: the errors, the band and the verdict."""
+        if not self.judgement.weights:
+            return f'{self.effect}: nothing held out to judge it on, left out'
         verdict = 'kept' if self.kept else 'left out'
-        return (f'{self.effect}: held-out error {self.without:.4g} -> {self.with_effect:.4g} deg '
-                f'({100.0 * self.gain:+.1f} %), {verdict}')
+        folds = len(self.judgement.weights)
+        return (f'{self.effect}: held-out error {self.without:.4g} -> {self.with_effect:.4g} '
+                f'deg ({100.0 * self.gain:+.1f} %, lower on {self.judgement.lower_on(1)} of '
+                f'{folds} folds; tie band {self.judgement.bands[0]:.3g} deg), {verdict}')
 
 
 def simulation_errors(model: JointModel, experiments: Sequence[Experiment],
@@ -112,10 +93,16 @@ def simulation_errors(model: JointModel, experiments: Sequence[Experiment],
     return total, count
 
 
+def compared(effect: str, rows: Sequence[tuple[float, float]],
+             weights: Sequence[float]) -> HeldOut:
+    """Return the judgement of a model without and with ``effect`` from per-fold errors."""
+    return HeldOut(effect, judge(('without', effect), rows, weights))
+
+
 def held_out(effect: str, parts: Sequence[tuple[list[Experiment], list[Experiment]]],
              without: Fitter, with_effect: Fitter, dt: float) -> HeldOut:
     """
-    Compare a model without and with an effect on the test part of every fold.
+    Compare a model without and with an effect on the experiments of every fold's test part.
 
     Parameters
     ----------
@@ -132,12 +119,10 @@ def held_out(effect: str, parts: Sequence[tuple[list[Experiment], list[Experimen
     Returns
     -------
     HeldOut
-        Pooled and per-fold errors.
+        The judgement.
 
     """
-    pooled = np.zeros(2)
-    count = 0
-    per_fold = []
+    rows, weights = [], []
     for train, test in parts:
         try:
             plain = without(train)
@@ -153,12 +138,9 @@ def held_out(effect: str, parts: Sequence[tuple[list[Experiment], list[Experimen
         after = before if shaped is None else simulation_errors(shaped, test, dt)[0]
         if samples == 0:
             continue
-        pooled += (before, after)
-        count += samples
-        per_fold.append((before / samples, after / samples))
-    if count == 0:
-        return HeldOut(effect, 0.0, 0.0, ())
-    return HeldOut(effect, float(pooled[0] / count), float(pooled[1] / count), tuple(per_fold))
+        rows.append((before / samples, after / samples))
+        weights.append(float(samples))
+    return compared(effect, rows, weights)
 
 
 def at_stop(previous: FloatArray, speed: FloatArray,

@@ -22,6 +22,7 @@ from typing import Sequence
 
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.identification.segmentation import check_record
+from hydro_sdp.core.identification.stalls import pieces_between, stalled
 from hydro_sdp.core.model.effects import Backlash, ValveLag
 from hydro_sdp.core.model.exogenous_signals import Exogenous, exogenous_of
 from hydro_sdp.core.model.joint_model import JointModel
@@ -52,6 +53,9 @@ class RecordScore:
         MAE of the linear model with its best gain.
     linear_gain : float
         That gain, deg/s per input unit.
+    stalled : float
+        Time the joint stalled and that is left out of the scores, s
+        (:mod:`.stalls`).
 
     """
 
@@ -61,6 +65,7 @@ class RecordScore:
     sdp_dz: float
     linear: float
     linear_gain: float
+    stalled: float = 0.0
 
 
 def sdp_dz_benchmark(model: JointModel) -> JointModel | None:
@@ -175,7 +180,8 @@ def simulated_record(model: JointModel, record: Record, dt: float | None = None,
 
 
 def record_mae(model: JointModel, record: Record, dt: float | None = None,
-               exogenous: Exogenous | None = None) -> float:
+               exogenous: Exogenous | None = None,
+               left_out: np.ndarray | None = None) -> float:
     """
     Return the model's mean absolute simulation error over one record, degrees.
 
@@ -192,6 +198,9 @@ def record_mae(model: JointModel, record: Record, dt: float | None = None,
         Its sample period, s (default: checked from the record).
     exogenous : Exogenous or None
         Its load and other joints' speeds, if already built.
+    left_out : numpy.ndarray or None
+        Samples not scored (a stall): the simulation starts again from the measured
+        angle after each such stretch.
 
     Returns
     -------
@@ -200,7 +209,15 @@ def record_mae(model: JointModel, record: Record, dt: float | None = None,
 
     """
     start, simulated = simulated_record(model, record, dt, exogenous)
-    return float(np.mean(np.abs(record.y[start:] - simulated[start:])))
+    if left_out is None or not np.any(left_out[start:]):
+        return float(np.mean(np.abs(record.y[start:] - simulated[start:])))
+    dt = check_record(record, min_samples=2) if dt is None else dt
+    total, count = 0.0, 0
+    for first, end in pieces_between(left_out, start):
+        again = simulated if first == start else _simulated(model, record, dt, first, exogenous)
+        total += float(np.sum(np.abs(record.y[first:end] - again[first:end])))
+        count += end - first
+    return total / count if count else math.nan
 
 
 def best_linear_gain(record: Record, model: JointModel, dt: float) -> tuple[float, float]:
@@ -257,18 +274,39 @@ def evaluate(records: Sequence[Record], model: JointModel) -> list[RecordScore]:
     list of RecordScore
         One row per record.
 
+    See Also
+    --------
+    identify : the model to evaluate.
+    simulate : the simulation each score compares.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from hydro_sdp import evaluate, load_model, Record, simulate
+    >>> model = load_model('config/brokk_j2.yaml')
+    >>> t = np.arange(0.0, 5.0, 0.01)
+    >>> v = np.where(t < 1.0, 0.0, 4.0)
+    >>> scores = evaluate([Record(t, v, simulate(model, v, 0.01, 30.0), joint='j2')], model)
+    >>> round(scores[0].model, 6)
+    0.0
+
     """
     benchmark = sdp_dz_benchmark(model)
     scores = []
+    travel = (min(float(np.min(r.y)) for r in records),
+              max(float(np.max(r.y)) for r in records)) if records else None
     for record in records:
         dt = check_record(record, min_samples=2)
         start = first_compared(model, dt, record)
         gain, linear = best_linear_gain(record, model, dt)
+        # A stall is the load's, not the valve's: left out, and said.
+        left_out = stalled(model, record, dt, travel)
         scores.append(RecordScore(
-            source=record.source, samples=len(record) - start,
-            model=record_mae(model, record, dt),
-            sdp_dz=record_mae(benchmark, record, dt) if benchmark is not None else math.nan,
-            linear=linear, linear_gain=gain))
+            source=record.source, samples=len(record) - start - int(np.sum(left_out[start:])),
+            model=record_mae(model, record, dt, left_out=left_out),
+            sdp_dz=record_mae(benchmark, record, dt, left_out=left_out)
+            if benchmark is not None else math.nan,
+            linear=linear, linear_gain=gain, stalled=float(np.sum(left_out)) * dt))
     return scores
 
 

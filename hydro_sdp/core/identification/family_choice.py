@@ -1,27 +1,22 @@
 """
-The map families, and choosing one on held-out experiments with folds that never extrapolate.
+The map families, and choosing one on held-out experiments (docs/methods.md section 13.4).
 
-A held-out score is fair only when every fold's training part spans the
-commands its test part holds: both directions, and the levels on either side.
-Step experiments are stratified by direction and level: a level held several
-times is dealt out over the folds; a level held once (full-stroke runs at one
-duty each) is left out in turn only when it lies strictly inside its
-direction's range, so the fit interpolates it (leave-one-level-out), and the
-outermost levels always train. Runs of changing commands, whose levels
-spread over the range anyway, alternate between the folds in pairs.
+Each family is fitted on every fold's training part and scored on the experiments of its
+test part, each simulated from its measured start; the one rule of :mod:`.held_out`
+chooses.
 
 """
 
 from __future__ import annotations
 
-from collections import defaultdict
 from dataclasses import dataclass
 import math
-from typing import Callable, get_args, Literal, Sequence
+from typing import Callable, cast, get_args, Literal, Sequence
 
 from hydro_sdp.core.errors import DataError, HydroSdpError
 from hydro_sdp.core.identification.delay import level_speeds, LevelSpeed
 from hydro_sdp.core.identification.experiment import Experiment
+from hydro_sdp.core.identification.held_out import deal, judge, Judgement, Unit
 from hydro_sdp.core.identification.map_fit import (
     fit_poly, fit_pwl, fit_sdp, FitData, FitMethod, MapFit)
 from hydro_sdp.core.identification.map_fit.power_sat import fit_power_sat
@@ -34,13 +29,9 @@ KindChoice = Literal[FittedKind, 'auto']
 KINDS: tuple[FittedKind, ...] = get_args(FittedKind)
 #: Families ``auto`` compares first; ``power_sat`` joins them when ``sdp`` loses.
 FIRST_KINDS: tuple[FittedKind, ...] = ('sdp', 'pwl', 'poly')
-#: ``auto`` keeps ``sdp`` when its held-out error is within this factor of the best.
-PARSIMONY = 1.05
-#: Families of a physical shape, and the factor a free-form family must beat them by.
-SMOOTH_KINDS = ('sdp', 'power_sat')
-FREE_FORM_MARGIN = 1.5
-#: Most folds of the leave-one-level-out scheme.
-MAX_FOLDS = 4
+#: The families from the fewest parameters to the most: the one rule prefers the first
+#: of those within their tie band (:func:`~.held_out.judge`).
+SIMPLER_FIRST: tuple[FittedKind, ...] = ('sdp', 'power_sat', 'poly', 'pwl')
 
 
 def _key(experiment: Experiment) -> tuple[str, float, int, float]:
@@ -50,7 +41,10 @@ def _key(experiment: Experiment) -> tuple[str, float, int, float]:
 def folds(experiments: Sequence[Experiment], rest: float
           ) -> list[tuple[list[Experiment], list[Experiment]]]:
     """
-    Training and test parts of each fold.
+    Training and test parts of each fold (:func:`~.held_out.deal`).
+
+    Steps are dealt by their level; runs alternate between the folds in pairs. Too few
+    experiments to deal: each is cut in two halves in time, each half a fold.
 
     Parameters
     ----------
@@ -62,43 +56,21 @@ def folds(experiments: Sequence[Experiment], rest: float
     Returns
     -------
     list of (train, test)
-        Two or more folds; every test part non-empty, no test level outside the
-        range of its training part's levels on the same side of rest.
+        Two or more folds; no test level outside its training part's levels on its side.
 
     """
     ordered = sorted(experiments, key=_key)
-    steps = [e for e in ordered if e.kind == 'step' and math.isfinite(e.level)]
-    runs = [e for e in ordered if not (e.kind == 'step' and math.isfinite(e.level))]
-    strata: dict[float, list[Experiment]] = defaultdict(list)
-    for experiment in steps:
-        strata[experiment.level].append(experiment)
-    repeated = {level: members for level, members in strata.items() if len(members) >= 2}
-    single = sorted(level for level, members in strata.items() if len(members) == 1)
-    interior: list[list[float]] = []
-    for sign in (-1.0, 1.0):
-        side = sorted((level for level in strata if sign * (level - rest) > 0),
-                      key=lambda level: abs(level - rest))
-        inner = set(side[1:-1])
-        interior.append([level for level in single if level in inner])
-    count = max(2, min(MAX_FOLDS, max(len(levels) for levels in interior)))
-    assignment: dict[int, int] = {}
-    for members in repeated.values():
-        for index, experiment in enumerate(members):
-            assignment[id(experiment)] = index % count
-    for levels in interior:
-        for index, level in enumerate(levels):
-            assignment[id(strata[level][0])] = index % count
-    for index, experiment in enumerate(runs):
-        assignment[id(experiment)] = index // 2 % count
-    out = []
-    for fold in range(count):
-        test = [e for e in ordered if assignment.get(id(e)) == fold]
-        train = [e for e in ordered if assignment.get(id(e)) != fold]
-        if test and train:
-            out.append((train, test))
-    if out:
-        return out
-    return _halves(ordered)
+    units, runs = [], 0
+    for experiment in ordered:
+        if experiment.kind == 'step' and math.isfinite(experiment.level):
+            units.append(Unit(id(experiment), experiment.level,
+                              int(np.sign(experiment.level - rest))))
+        else:
+            units.append(Unit(('run', runs // 2)))
+            runs += 1
+    out = [([ordered[i] for i in train], [ordered[i] for i in test])
+           for train, test in deal(units)]
+    return out if out else _halves(ordered)
 
 
 def _halves(experiments: Sequence[Experiment]) -> list[tuple[list[Experiment], list[Experiment]]]:
@@ -124,8 +96,8 @@ class KindScore:
     kind : str
         Map family (one of :data:`KINDS`).
     mae : float
-        Mean absolute simulation error on held-out experiments, degrees (NaN if it
-        could not be fitted).
+        Mean absolute simulation error over the held-out experiments, pooled over the
+        folds, degrees (NaN if it could not be fitted).
     note : str
         Why it could not be fitted, if so.
 
@@ -138,7 +110,7 @@ class KindScore:
 
 class FoldErrors:
     """
-    Each family's held-out simulation errors, fold by fold, and why any failed.
+    Each family's held-out errors, fold by fold, and why any failed.
 
     A failure of the fit every family starts from (:meth:`fail`) ends the
     comparison of all of them; a family's own failure ends that family's.
@@ -153,6 +125,7 @@ class FoldErrors:
     def __init__(self, kinds: Sequence[FittedKind]) -> None:
         self.kinds = tuple(kinds)
         self.errors: dict[str, list[float]] = {kind: [] for kind in kinds}
+        self.weights: list[float] = []
         self.notes: dict[str, str] = {}
 
     def fail(self, error: HydroSdpError) -> None:
@@ -161,6 +134,7 @@ class FoldErrors:
 
     def add_fold(self, held_out: FitData, fit_map: Callable[[FittedKind], StaticMap]) -> None:
         """Add the error on ``held_out`` of each family still scored, fitted by ``fit_map``."""
+        self.weights.append(float(held_out.samples))
         for kind in self.kinds:
             if kind in self.notes:
                 continue
@@ -169,15 +143,35 @@ class FoldErrors:
             except HydroSdpError as error:
                 self.notes[kind] = str(error)
 
-    def scores(self) -> list[KindScore]:
-        """Return each family's mean error over the folds (NaN, with the note, if it failed)."""
-        return [KindScore(kind, float(np.mean(self.errors[kind]))
-                          if kind not in self.notes and self.errors[kind] else math.nan,
-                          self.notes.get(kind, '')) for kind in self.kinds]
+    def merged(self, other: FoldErrors) -> FoldErrors:
+        """Return the errors of both comparisons, made on the same folds."""
+        both = FoldErrors(self.kinds + other.kinds)
+        both.errors = {**self.errors, **other.errors}
+        both.weights = self.weights or other.weights
+        both.notes = {**self.notes, **other.notes}
+        return both
 
-    def fold_errors(self) -> dict[str, list[float]]:
-        """Return the errors fold by fold of the families that were fitted on every fold."""
-        return {kind: self.errors[kind] for kind in self.kinds if kind not in self.notes}
+    def judgement(self) -> Judgement:
+        """Return the families judged by the one rule, simplest first (:data:`SIMPLER_FIRST`)."""
+        kinds = sorted(self.kinds, key=SIMPLER_FIRST.index)
+        columns = [self.errors[kind] if kind not in self.notes
+                   and len(self.errors[kind]) == len(self.weights)
+                   else [math.nan] * len(self.weights) for kind in kinds]
+        return judge(kinds, list(zip(*columns)) if self.weights else [], self.weights)
+
+    def scores(self) -> list[KindScore]:
+        """Return each family's pooled error (NaN, with the note, if it failed)."""
+        pooled = dict(zip(self.judgement().names, self.judgement().pooled))
+        return [KindScore(kind, pooled.get(kind, math.nan), self.notes.get(kind, ''))
+                for kind in self.kinds]
+
+    def chosen(self) -> FittedKind:
+        """Return the family the one rule chooses, or raise naming why none could be fitted."""
+        judgement = self.judgement()
+        if judgement.chosen < 0:
+            raise DataError('no map family could be fitted: ' +
+                            '; '.join(f'{s.kind}: {s.note}' for s in self.scores()))
+        return cast(FittedKind, judgement.names[judgement.chosen])
 
 
 def fit_family(kind: FittedKind, data: FitData, points: Sequence[LevelSpeed], rest: float,
@@ -269,6 +263,7 @@ class FoldFits:
     def __init__(self, experiments: Sequence[Experiment], delay: int, dt: float, rest: float,
                  method: FitMethod, lag: float = 0.0) -> None:
         self.rest = rest
+        self.dt = dt
         self.method = method
         self.folds: list[Fold] = []
         #: Why a fold's ``sdp`` fit failed (then no family can be scored), if one did.
@@ -287,9 +282,9 @@ class FoldFits:
 def compare_kinds(experiments: Sequence[Experiment], delay: int, dt: float, rest: float,
                   method: FitMethod, kinds: Sequence[FittedKind] = KINDS,
                   dead_zone: tuple[float, float] | None = None,
-                  lag: float = 0.0, fold_fits: FoldFits | None = None) -> list[KindScore]:
+                  lag: float = 0.0, fold_fits: FoldFits | None = None) -> FoldErrors:
     """
-    Held-out simulation error of each map family, over folds that never extrapolate.
+    Held-out error of each map family, over folds that never extrapolate.
 
     Parameters
     ----------
@@ -315,8 +310,8 @@ def compare_kinds(experiments: Sequence[Experiment], delay: int, dt: float, rest
 
     Returns
     -------
-    list of KindScore
-        One score per family: the mean over folds of the held-out MAE.
+    FoldErrors
+        Each family's mean absolute simulation error over each fold's test part.
 
     """
     if fold_fits is None:
@@ -333,30 +328,4 @@ def compare_kinds(experiments: Sequence[Experiment], delay: int, dt: float, rest
         tally.add_fold(fold.held_out, fit_map)
     if fold_fits.error is not None:
         tally.fail(fold_fits.error)
-    return tally.scores()
-
-
-def choose_kind(scores: Sequence[KindScore]) -> FittedKind:
-    """
-    Pick the family with the least held-out error, preferring the smooth families.
-
-    ``sdp`` is kept when it is within :data:`PARSIMONY` of the best smooth
-    family (``sdp``, ``power_sat``), and a smooth family within
-    :data:`FREE_FORM_MARGIN` of a free-form one (``pwl``, ``poly``): folds can
-    only leave out levels between measured ones, where an interpolant is at its
-    best, so a free-form shape must win clearly.
-    """
-    usable = [s for s in scores if math.isfinite(s.mae)]
-    if not usable:
-        raise DataError('no map family could be fitted: ' +
-                        '; '.join(f'{s.kind}: {s.note}' for s in scores))
-    best = min(usable, key=lambda s: s.mae)
-    smooth = [s for s in usable if s.kind in SMOOTH_KINDS]
-    if not smooth:
-        return best.kind
-    best_smooth = min(smooth, key=lambda s: s.mae)
-    sdp = next((s for s in smooth if s.kind == 'sdp'), None)
-    if sdp is not None and sdp.mae <= PARSIMONY * best_smooth.mae:
-        best_smooth = sdp
-    margin = PARSIMONY if best_smooth.kind == 'sdp' else FREE_FORM_MARGIN
-    return best_smooth.kind if best_smooth.mae <= margin * best.mae else best.kind
+    return tally

@@ -16,6 +16,7 @@ from typing import get_args, Literal
 from hydro_sdp.core.identification.delay import DelayEstimate, LevelSpeed
 from hydro_sdp.core.identification.effect_check import HeldOut
 from hydro_sdp.core.identification.family_choice import KindScore
+from hydro_sdp.core.identification.held_out import Judgement
 from hydro_sdp.core.identification.limits import CommandRange
 from hydro_sdp.core.identification.map_fit import MapFit
 from hydro_sdp.core.identification.segmentation import Segmentation
@@ -74,6 +75,8 @@ class Identification:
         ``experiments`` or ``routine`` (:data:`ROUTES`).
     commands : CommandRange or None
         The commands seen and where the model's limits come from.
+    family : Judgement or None
+        How the family was chosen (None when it was asked for by name).
 
     """
 
@@ -88,6 +91,7 @@ class Identification:
     effect_checks: tuple[HeldOut, ...] = ()
     route: Route = 'experiments'
     commands: CommandRange | None = None
+    family: Judgement | None = None
 
     @property
     def alpha(self) -> tuple[float, ...] | None:

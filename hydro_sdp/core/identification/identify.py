@@ -10,9 +10,9 @@ the raw angles by regret-regression (or their output-error fit). Besides eq.
 polynomial gain (``poly``) and a saturating power law (``power_sat``, convex
 from the dead-zone) are fitted, and the family that predicts held-out
 experiments best is chosen (``kind='auto'``, folds that never extrapolate:
-:mod:`hydro_sdp.core.identification.family_choice`), preferring the simpler ``sdp`` when it is
-within 5 % of the best. When the data span the stroke, a ``stroke_geometry``
-factor of the angle is fitted on top. The result is a
+:mod:`hydro_sdp.core.identification.family_choice`), by the one rule of
+:mod:`~hydro_sdp.core.identification.held_out`. When the data span the stroke, a
+``stroke_geometry`` factor of the angle is fitted on top. The result is a
 :class:`~hydro_sdp.core.model.joint_model.JointModel` whose effects carry the lag and the
 geometry found. Records of routine operation (a closed loop, an operator: few
 held levels) take their own route, the map from the one-step increments
@@ -22,20 +22,23 @@ held levels) take their own route, the map from the one-step increments
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+import math
 from typing import Callable, Sequence
 
 from hydro_sdp.core.errors import DataError
 from hydro_sdp.core.identification.change_windows import ChangeWindows
 from hydro_sdp.core.identification.delay import (
-    DelayEstimate, estimate_delay, level_speeds)
+    DelayEstimate, estimate_delay, level_speeds, LevelSpeed)
+from hydro_sdp.core.identification.determined import (
+    moving_levels_a_side, parameters, undetermined_edges, unpinned)
 from hydro_sdp.core.identification.effect_check import HeldOut, simulation_errors
 from hydro_sdp.core.identification.end_stops import stop_reach
 from hydro_sdp.core.identification.experiment import (
     Experiment, split_long, thin, thin_evenly)
 from hydro_sdp.core.identification.family_choice import (
-    choose_kind, compare_kinds, FIRST_KINDS, fit_family, FittedKind, FoldFits, KindChoice,
-    KINDS, KindScore)
+    compare_kinds, FIRST_KINDS, fit_family, FittedKind, FoldErrors, FoldFits, KindChoice, KINDS,
+    KindScore)
 from hydro_sdp.core.identification.identified import Identification, IdentifyStage
 from hydro_sdp.core.identification.limits import model_limits
 from hydro_sdp.core.identification.map_fit import FIT_METHODS, fit_sdp, FitData, FitMethod, MapFit
@@ -49,7 +52,7 @@ from hydro_sdp.core.model.effects import Effect, ValveLag
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.records import Record
 from hydro_sdp.core.model.sample_period import whole_samples_seconds
-from hydro_sdp.core.model.static_maps import StaticMap
+from hydro_sdp.core.model.static_maps import SdpMap, StaticMap
 
 __all__ = ['experiments_mae', 'Identification', 'identify', 'IdentifyStage', 'KindChoice',
            'KINDS', 'KindScore', 'PIECE_SAMPLES']
@@ -114,23 +117,55 @@ def _delay(segmentation: Segmentation, pieces: _Pieces, dt: float, max_delay: in
     return (delay if lag_check.kept else delay.without_lag(dt)), [lag_check]
 
 
+@dataclass(frozen=True, eq=False)
+class _MapStage:
+    """The map fitted at one timing: the level speeds, the data, eq. (5) and the family."""
+
+    points: tuple[LevelSpeed, ...]
+    data: FitData
+    sdp_fit: MapFit[SdpMap]
+    fit: MapFit[StaticMap]
+
+
+def _fit_sdp(pieces: _Pieces, delay: DelayEstimate, dt: float, rest: float,
+             method: FitMethod, answer: bool) -> _MapStage:
+    """Fit eq. (5) at this timing: the answer, or where another family starts."""
+    points = tuple(level_speeds(pieces.every, delay.samples, dt, rest=rest))
+    data = FitData(pieces.every, delay.samples, dt, delay.lag)
+    search = data if len(pieces.search) == len(pieces.every) else FitData(
+        pieces.search, delay.samples, dt, delay.lag)
+    # Eq. (5) by the method asked when it may be the answer; for another family asked
+    # for by name it is only a start (its dead-zone, its curvature): one regret fit.
+    sdp_fit = fit_sdp(search, points, rest, method=method if answer else 'rr',
+                      starts=4 if answer else 1, polish=None if search is data else data)
+    return _MapStage(points, data, sdp_fit, sdp_fit)
+
+
+def _fit_family(stage: _MapStage, kind: FittedKind, rest: float,
+                method: FitMethod) -> _MapStage:
+    """Fit the family chosen, from eq. (5)'s fit at the same timing."""
+    if kind == 'sdp':
+        return stage
+    return replace(stage, fit=fit_family(kind, stage.data, stage.points, rest, method,
+                                         stage.sdp_fit.static_map))
+
+
 def _family(kind: KindChoice, pieces: _Pieces, delay: DelayEstimate, dt: float, rest: float,
             method: FitMethod, step: Callable[[IdentifyStage], None]
-            ) -> tuple[FittedKind, tuple[KindScore, ...]]:
-    """Return the map family asked for, or the one that predicts held-out experiments best."""
+            ) -> tuple[FittedKind, FoldErrors | None]:
+    """Return the map family asked for, or the one the held-out rule chooses."""
     if kind != 'auto':
-        return kind, ()
+        return kind, None
     step(IdentifyStage.FAMILIES)
     fold_fits = FoldFits(pieces.trial, delay.samples, dt, rest, method, delay.lag)
-    comparison = tuple(compare_kinds(pieces.trial, delay.samples, dt, rest, method,
-                                     FIRST_KINDS, lag=delay.lag, fold_fits=fold_fits))
-    chosen = choose_kind(comparison)
-    if chosen != 'sdp':
+    comparison = compare_kinds(pieces.trial, delay.samples, dt, rest, method, FIRST_KINDS,
+                               lag=delay.lag, fold_fits=fold_fits)
+    if comparison.chosen() != 'sdp':
         # Eq. (5) lost: try its generalisation, convex from the dead-zone, on the same folds.
-        comparison += tuple(compare_kinds(pieces.trial, delay.samples, dt, rest, method,
-                                          ('power_sat',), lag=delay.lag, fold_fits=fold_fits))
-        chosen = choose_kind(comparison)
-    return chosen, comparison
+        comparison = comparison.merged(compare_kinds(
+            pieces.trial, delay.samples, dt, rest, method, ('power_sat',), lag=delay.lag,
+            fold_fits=fold_fits))
+    return comparison.chosen(), comparison
 
 
 def identify(records: Sequence[Record], *, method: FitMethod = 'rr', kind: KindChoice = 'auto',
@@ -167,6 +202,22 @@ def identify(records: Sequence[Record], *, method: FitMethod = 'rr', kind: KindC
     Identification
         The model and the evidence.
 
+    See Also
+    --------
+    Record : a record from arrays.
+    evaluate, diagnose, design_from_model : what follows identification.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from hydro_sdp import identify, load_model, Record, simulate
+    >>> truth = load_model('config/brokk_j2.yaml')
+    >>> t = np.arange(0.0, 8.0, 0.01)
+    >>> steps = [np.where(t < 1.0, 0.0, level) for level in (-6, -4, -2.5, 2.5, 4, 6)]
+    >>> found = identify([Record(t, v, simulate(truth, v, 0.01, 30.0), joint='j2') for v in steps])
+    >>> found.model.delay, found.model.static_map.kind
+    (0.15, 'sdp')
+
     """
     if kind not in KINDS + ('auto',):
         raise DataError(f"kind must be auto, {', '.join(KINDS)}; got {kind!r}")
@@ -186,19 +237,12 @@ def identify(records: Sequence[Record], *, method: FitMethod = 'rr', kind: KindC
                                 input_limits=input_limits, progress=step)
     step(IdentifyStage.DELAY)
     delay, checks = _delay(segmentation, pieces, dt, max_delay_samples)
-    points = tuple(level_speeds(pieces.every, delay.samples, dt, rest=rest_command))
-    data = FitData(pieces.every, delay.samples, dt, delay.lag)
-    search = data if len(pieces.search) == len(pieces.every) else FitData(
-        pieces.search, delay.samples, dt, delay.lag)
     step(IdentifyStage.MAP)
-    # Eq. (5) by the method asked when it may be the answer; for another family asked
-    # for by name it is only a start (its dead-zone, its curvature): one regret fit.
-    answer = kind in ('auto', 'sdp')
-    sdp_fit = fit_sdp(search, points, rest_command, method=method if answer else 'rr',
-                      starts=4 if answer else 1, polish=None if search is data else data)
+    # Eq. (5) first: it refuses data that never moved the joint one way, naming why.
+    stage = _fit_sdp(pieces, delay, dt, rest_command, method, kind in ('auto', 'sdp'))
     chosen, comparison = _family(kind, pieces, delay, dt, rest_command, method, step)
-    fit: MapFit[StaticMap] = sdp_fit if chosen == 'sdp' else fit_family(
-        chosen, data, points, rest_command, method, sdp_fit.static_map)
+    stage = _fit_family(stage, chosen, rest_command, method)
+    points, data, sdp_fit, fit = stage.points, stage.data, stage.sdp_fit, stage.fit
     low_stop, high_stop = segmentation.end_stops
     bounds = model_limits(records, segmentation.end_stops, rest_command,
                           angle_limits=angle_limits, input_limits=input_limits)
@@ -223,5 +267,12 @@ def identify(records: Sequence[Record], *, method: FitMethod = 'rr', kind: KindC
                 fit, pieces.every, pieces.search, delay, dt, stops, reach)
             if shaped is not None:
                 model, fit, mae = shaped, refit, experiments_mae(shaped, pieces.every, dt)
-    return Identification(model, dt, delay, segmentation, points, fit, comparison, mae,
-                          tuple(checks), commands=bounds.commands)
+    # Which edges the data bound, from speeds past the valve's transient.
+    settled = level_speeds(pieces.every, delay.samples, dt, rest=rest_command,
+                           skip=int(math.ceil(delay.transient / dt)))
+    model = replace(model, undetermined=undetermined_edges(settled, rest_command) + unpinned(
+        dict(parameters(model)), fit.standard_errors, moving_levels_a_side(settled, rest_command)))
+    scores = () if comparison is None else tuple(comparison.scores())
+    return Identification(model, dt, delay, segmentation, points, fit, scores, mae,
+                          tuple(checks), commands=bounds.commands,
+                          family=None if comparison is None else comparison.judgement())

@@ -2,8 +2,8 @@
 The end stops and the valve range an identified model is given, and where each comes from.
 
 A model says only what was given or seen: end stops passed in are written as
-given, else the angles where the joint was seen held against a stop (none when
-it never was); the valve range passed in is written as given, else the range
+given, else the angles where the joint was seen held against a stop (a side where
+it never was has none); the valve range passed in is written as given, else the range
 of commands the records used (with the rest command inside it), which is all
 the data show of the valve.
 
@@ -12,6 +12,7 @@ the data show of the valve.
 from __future__ import annotations
 
 from dataclasses import dataclass
+import math
 from typing import Literal, Sequence
 
 from hydro_sdp.core.model.records import Record
@@ -51,7 +52,7 @@ class ModelLimits:
     Parameters
     ----------
     angle_limits : tuple[float, float] or None
-        End stops, degrees.
+        End stops, degrees (infinite on a side where none was seen).
     input_limits : tuple[float, float]
         Valve range, input units.
     commands : CommandRange
@@ -100,8 +101,11 @@ def model_limits(records: Sequence[Record], end_stops: tuple[float | None, float
     angles_from: LimitsSource
     if angle_limits is not None:
         angles, angles_from = angle_limits, 'given'
-    elif end_stops[0] is not None and end_stops[1] is not None:
-        angles, angles_from = (end_stops[0], end_stops[1]), 'data'
+    elif end_stops[0] is not None or end_stops[1] is not None:
+        # A stop seen on one side stays in the model; the other side has none.
+        angles = (-math.inf if end_stops[0] is None else end_stops[0],
+                  math.inf if end_stops[1] is None else end_stops[1])
+        angles_from = 'data'
     else:
         angles, angles_from = None, 'none'
     if input_limits is not None:

@@ -7,8 +7,12 @@ Its gradient is taken from a soft-edged copy of ``q`` so that a dead-zone edge
 that has moved inwards can still be learned (inside the estimated dead-zone the
 exact gradient is zero). Samples are skipped while the static model does not
 hold: just after a command change (valve transients), near an end stop, for
-non-finite data and for outliers. The estimator is what lets a PIP-IDZ loop
-recalibrate itself after wear or a part replacement, the first paper's promise.
+non-finite data and for outliers. A model's valve lag is followed: the
+prediction and its gradient pass through it, and samples where the valve has
+not settled are skipped. The estimator is what lets a PIP-IDZ loop recalibrate
+itself after wear or a part replacement, the first paper's promise.
+:class:`OnlineMapFilter` is the filter on any six map coefficients; the other
+map families' is :mod:`.online_edges`.
 
 """
 
@@ -21,14 +25,18 @@ from typing import Any
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import ConfigurationError
 from hydro_sdp.core.identification.scalar_kalman import (
-    add_to_diagonal, boxed, diagonal, downdated, packed, times, unpacked)
+    add_to_diagonal, boxed, diagonal, downdated, packed, Six, times, unpacked)
 from hydro_sdp.core.identification.soft_edges import map_and_soft_gradient
+from hydro_sdp.core.model.effects import ValveLag
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.static_maps import SdpMap
 from hydro_sdp.core.model.timing import check_sample_period, DelayLine
 from hydro_sdp.core.validation import require_positive_fields
 import numpy as np
 
+#: With a valve lag, a sample counts only while the command lagged by it is within this
+#: share of ``change_gate`` of the command (the valve has nearly settled).
+STEADY = 0.5
 #: Process noise of the random walk, as a ratio to the measurement noise variance.
 NOISE_VARIANCE_RATIOS = (1e-6, 1e-5, 1e-5, 1e-6, 1e-5, 1e-5)
 
@@ -185,14 +193,18 @@ saturation_positive_std, curvature_negative_std, curvature_positive_std : float
         return self.dead_zone_lower_std, self.dead_zone_upper_std
 
 
-class OnlineSdpIdentifier:
+class OnlineMapFilter:
     """
-    Random-walk Kalman filter on the six coefficients of eq. (5).
+    The random-walk Kalman filter of docs/methods.md 7.2-7.4 on six map coefficients.
+
+    Three per side, below and above the dead-zone, the edges third and sixth; the
+    subclasses give the map, its soft-edged gradient, the starting point, the
+    start variances and the box (:meth:`_start`).
 
     Parameters
     ----------
     model : JointModel
-        Starting point (kind ``sdp``) and the delay and end stops to use.
+        Starting point, and the delay and end stops to use.
     dt : float
         Sample period of the incoming samples, s.
     settings : OnlineSettings
@@ -202,20 +214,15 @@ class OnlineSdpIdentifier:
 
     def __init__(self, model: JointModel, dt: float,
                  settings: OnlineSettings = OnlineSettings()) -> None:
-        if not isinstance(model.static_map, SdpMap):
-            raise ConfigurationError(f'the online identifier tracks kind sdp models, not '
-                                     f'{model.kind}')
         self.model = model
         self.dt = check_sample_period(dt)
         self.settings = settings
         self.delay = model.delay_samples(self.dt)
-        s = settings.input_scale
         # theta and the upper triangle of P as Python floats: the per-sample arithmetic on
         # six numbers is cheaper written out than as numpy calls (docs/methods.md 7.2).
-        self._theta = [float(a) for a in model.alpha(self.dt)]
-        speed = (self.dt / 0.01) ** 2
-        self._start_variances = (0.01 * speed, 1.0 / s ** 2, 0.5 * s ** 2,
-                                 0.01 * speed, 1.0 / s ** 2, 0.5 * s ** 2)
+        theta, variances, ratios, lower, upper = self._start()
+        self._theta = list(theta)
+        self._start_variances = variances
         self._p = packed(np.diag(self._start_variances))
         # Mean normalised innovation squared: about 1 while the model holds.
         self.nis = 1.0
@@ -224,14 +231,20 @@ class OnlineSdpIdentifier:
         self._cusum = [0.0, 0.0, 0.0, 0.0]
         self.resets = 0
         self._since_reset = 0
-        scales = (speed, 1.0 / s ** 2, s ** 2, speed, 1.0 / s ** 2, s ** 2)
-        self._ratios = tuple(ratio * scale for ratio, scale in zip(NOISE_VARIANCE_RATIOS, scales))
+        self._ratios = ratios
         self.r = 2.0 * settings.noise_std ** 2
         self._r_min = 0.25 * self.r
-        a1, a4 = self._theta[0], self._theta[3]
-        low, high = model.static_map.dead_zone
-        self._lower = (5.0 * a1, 0.1 / s, -4.0 * s * max(1.0, abs(low)), 0.0, 0.1 / s, low)
-        self._upper = (0.0, 10.0 / s, high, 5.0 * a4, 10.0 / s, 4.0 * s * max(1.0, abs(high)))
+        self._lower, self._upper = lower, upper
+        # The model's valve lag, if any: the joint's speed follows the map through it, so the
+        # prediction and its gradient do too (their states, one sample old).
+        lag = model.effect(ValveLag.name)
+        self._lag_pole = (math.exp(-self.dt / lag.time_constant)
+                          if isinstance(lag, ValveLag) else None)
+        self._lag_speed = 0.0
+        self._lag_command = math.nan
+        # A command the delay may be off by: a quarter of it, newer than the delayed one.
+        self._ahead = self.delay - (self.delay + 3) // 4
+        self._lag_gradient: Six = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
         # v_{k-tau} and v_{k-tau-1}: the gate needs the command before the delayed one too.
         self._commands = DelayLine(self.delay + 1, before=math.nan)
         self._pushed = 0
@@ -240,9 +253,18 @@ class OnlineSdpIdentifier:
         self.samples = 0
         self.updates = 0
 
+    def _start(self) -> tuple[Six, Six, Six, Six, Six]:
+        """Return the starting ``theta``, start variances, random-walk ratios and the box."""
+        raise NotImplementedError
+
+    def _map_and_gradient(self, u: float, theta: list[float],
+                          kappa: float) -> tuple[float, Six]:
+        """Return the map at ``u`` and the gradient of its soft-edged form (section 7.2)."""
+        raise NotImplementedError
+
     @property
     def theta(self) -> FloatArray:
-        """Return the estimate ``(a1 .. a6)`` of eq. (5), per-sample units (a new array)."""
+        """Return the six coefficients, the edges third and sixth (a new array)."""
         return np.array(self._theta)
 
     @property
@@ -254,21 +276,6 @@ class OnlineSdpIdentifier:
     def standard_errors(self) -> FloatArray:
         """Return the standard deviations of ``theta``."""
         return np.sqrt(np.maximum(diagonal(self._p), 0.0))
-
-    def static_map(self) -> SdpMap:
-        """Return the current estimate as a rate-based map."""
-        return SdpMap.from_alpha(tuple(self._theta), self.dt)
-
-    def estimate(self) -> JointModel:
-        """Return the model with the current estimate of its map."""
-        return replace(self.model, static_map=self.static_map())
-
-    def named_estimate(self) -> SdpEstimate:
-        """Return the current estimate and its standard deviations by name."""
-        a1, a2, a3, a4, a5, a6 = self._theta
-        s1, s2, s3, s4, s5, s6 = (float(s) for s in self.standard_errors)
-        dt = self.dt
-        return SdpEstimate(a3, a6, a1 / dt, a4 / dt, a2, a5, s3, s6, s1 / dt, s4 / dt, s2, s5)
 
     def update(self, v: float, y: float) -> bool:
         """
@@ -302,6 +309,14 @@ class OnlineSdpIdentifier:
         if previous is None or self._pushed < delay + 2:
             return False
         u = commands.delayed(delay)
+        lagged = self._lag_pole is not None
+        if lagged:
+            # The valve lag's state runs on every sample, the gated ones too.
+            q, psi = self._lagged(u)
+            steady = STEADY * settings.change_gate
+            if (abs(u - self._lag_command) > steady
+                    or abs(u - commands.delayed(self._ahead)) > steady):
+                return False
         if abs(u - commands.delayed(delay + 1)) > settings.change_gate:
             self._quiet = settings.hold_off
             return False
@@ -319,7 +334,8 @@ class OnlineSdpIdentifier:
         n0, n1, n2, n3, n4, n5 = self._ratios
         add_to_diagonal(p, (n0 * r, n1 * r, n2 * r, n3 * r, n4 * r, n5 * r))
         theta = self._theta
-        q, psi = map_and_soft_gradient(u, theta, settings.kappa)
+        if not lagged:
+            q, psi = self._map_and_gradient(u, theta, settings.kappa)
         innovation = (y - previous) - q
         Ppsi, spread = times(p, psi)
         S = r + spread
@@ -361,6 +377,21 @@ class OnlineSdpIdentifier:
         self.updates += 1
         return True
 
+    def _lagged(self, u: float) -> tuple[float, Six]:
+        """Advance the valve lag on the map at ``u``: the increment and gradient it predicts."""
+        q, psi = self._map_and_gradient(u, self._theta, self.settings.kappa)
+        p = self._lag_pole
+        assert p is not None
+        c = 1.0 - p
+        g0, g1, g2, g3, g4, g5 = self._lag_gradient
+        d0, d1, d2, d3, d4, d5 = psi
+        self._lag_speed = p * self._lag_speed + c * q
+        command = self._lag_command
+        self._lag_command = u if command != command else p * command + c * u   # NaN: first
+        self._lag_gradient = (p * g0 + c * d0, p * g1 + c * d1, p * g2 + c * d2,
+                              p * g3 + c * d3, p * g4 + c * d4, p * g5 + c * d5)
+        return self._lag_speed, self._lag_gradient
+
     def _reset_covariance(self, lower: bool, upper: bool) -> None:
         """
         Add part of the start covariance back on the side(s) that changed (section 7.4).
@@ -378,3 +409,61 @@ class OnlineSdpIdentifier:
         self._cusum[:] = [0.0, 0.0, 0.0, 0.0]
         self._since_reset = 0
         self.resets += 1
+
+
+class OnlineSdpIdentifier(OnlineMapFilter):
+    """
+    Random-walk Kalman filter on the six coefficients ``(a1 .. a6)`` of eq. (5).
+
+    Parameters
+    ----------
+    model : JointModel
+        Starting point (kind ``sdp``) and the delay and end stops to use.
+    dt : float
+        Sample period of the incoming samples, s.
+    settings : OnlineSettings
+        Tuning.
+
+    """
+
+    def __init__(self, model: JointModel, dt: float,
+                 settings: OnlineSettings = OnlineSettings()) -> None:
+        if not isinstance(model.static_map, SdpMap):
+            raise ConfigurationError(f'OnlineSdpIdentifier tracks kind sdp models, not '
+                                     f'{model.kind}: use online_identifier')
+        super().__init__(model, dt, settings)
+
+    def _start(self) -> tuple[Six, Six, Six, Six, Six]:
+        s = self.settings.input_scale
+        a1, a2, a3, a4, a5, a6 = (float(a) for a in self.model.alpha(self.dt))
+        speed = (self.dt / 0.01) ** 2
+        variances = (0.01 * speed, 1.0 / s ** 2, 0.5 * s ** 2,
+                     0.01 * speed, 1.0 / s ** 2, 0.5 * s ** 2)
+        scales = (speed, 1.0 / s ** 2, s ** 2, speed, 1.0 / s ** 2, s ** 2)
+        r0, r1, r2, r3, r4, r5 = (ratio * scale
+                                  for ratio, scale in zip(NOISE_VARIANCE_RATIOS, scales))
+        lower = (5.0 * a1, 0.1 / s, -4.0 * s * max(1.0, abs(a3)), 0.0, 0.1 / s, a3)
+        upper = (0.0, 10.0 / s, a6, 5.0 * a4, 10.0 / s, 4.0 * s * max(1.0, abs(a6)))
+        return (a1, a2, a3, a4, a5, a6), variances, (r0, r1, r2, r3, r4, r5), lower, upper
+
+    def _map_and_gradient(self, u: float, theta: list[float],
+                          kappa: float) -> tuple[float, Six]:
+        return map_and_soft_gradient(u, theta, kappa)
+
+    def static_map(self) -> SdpMap:
+        """Return the current estimate as a rate-based map."""
+        return SdpMap.from_alpha(tuple(self._theta), self.dt)
+
+    def estimate(self, edges: tuple[float, float] | None = None) -> JointModel:
+        """Return the model with the current estimate of its map (optionally other edges)."""
+        static_map = self.static_map()
+        if edges is not None:
+            static_map = replace(static_map, dead_zone=(float(edges[0]), float(edges[1])))
+        return replace(self.model, static_map=static_map)
+
+    def named_estimate(self) -> SdpEstimate:
+        """Return the current estimate and its standard deviations by name."""
+        a1, a2, a3, a4, a5, a6 = self._theta
+        s1, s2, s3, s4, s5, s6 = (float(s) for s in self.standard_errors)
+        dt = self.dt
+        return SdpEstimate(a3, a6, a1 / dt, a4 / dt, a2, a5, s3, s6, s1 / dt, s4 / dt, s2, s5)

@@ -12,7 +12,6 @@ of experiments it was not fitted on by a clear margin (:mod:`.effect_check`);
 from __future__ import annotations
 
 from dataclasses import replace
-import math
 from typing import Callable, Sequence
 
 from hydro_sdp.core.errors import HydroSdpError
@@ -20,7 +19,7 @@ from hydro_sdp.core.identification.change_windows import (
     ChangeWindows, fit_delay_lag_and_pure, lag_pole)
 from hydro_sdp.core.identification.delay import DelayEstimate
 from hydro_sdp.core.identification.effect_check import (
-    held_out, HeldOut, INCREMENT_GAIN, simulation_errors)
+    compared, held_out, HeldOut, simulation_errors)
 from hydro_sdp.core.identification.experiment import Experiment
 from hydro_sdp.core.identification.family_choice import folds
 from hydro_sdp.core.identification.map_fit import FitData, MapFit
@@ -28,7 +27,6 @@ from hydro_sdp.core.identification.stroke_fit import fit_stroke_geometry, speed_
 from hydro_sdp.core.model.effects import StrokeGeometry
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.static_maps import StaticMap
-import numpy as np
 
 #: The stroke factor refitted with the map is kept when it lowers the simulation error of
 #: the experiments by this share at least (after its held-out check).
@@ -43,14 +41,13 @@ MapRefit = Callable[[FitData], MapFit[StaticMap]]
 def check_lag(experiments: Sequence[Experiment], delay: DelayEstimate, dt: float, rest: float,
               max_delay: int, windows: ChangeWindows | None = None) -> HeldOut:
     """
-    Held-out error of the increments around command changes, with and without a lag.
+    Held-out angle error around the command changes, with the lag and with the best pure delay.
 
-    On each fold the dead time and lag are fitted on the training part
-    (:func:`~.change_windows.fit_delay_lag_and_pure`), and the test part's
-    increments around its command changes are explained with them and with the
-    training part's best pure delay; the errors are the root mean square of what is
-    left, degrees per sample. Like the fit itself this is free of any map shape,
-    so a map family that fits the joint poorly cannot hide the lag or invent it.
+    On each fold the dead time and lag, and the best pure delay, are fitted on the
+    training part (:func:`~.change_windows.fit_delay_lag_and_pure`); the test part's
+    windows around its command changes are integrated from their measured first angles
+    with each timing, the speeds before and after each change fitted in the window, so
+    that no map shape enters (docs/methods.md section 13.8).
 
     Parameters
     ----------
@@ -70,33 +67,25 @@ def check_lag(experiments: Sequence[Experiment], delay: DelayEstimate, dt: float
     Returns
     -------
     HeldOut
-        The comparison (:mod:`.effect_check`).
+        The judgement (:mod:`.effect_check`).
 
     """
-    pooled = np.zeros(2)
-    count = 0.0
-    per_fold = []
-    # The folds score the same windows with the same pairs: each window is fitted once.
+    rows, weights = [], []
     every = ChangeWindows(experiments, max_delay) if windows is None else \
         windows.part(experiments, max_delay)
     for train, test in folds(experiments, rest):
         windows = every.part(test)
-        if windows.windows == 0:
+        if windows.windows == 0 or delay.lag <= 0.0:
             continue
         try:
             dead, lag, _, pure = fit_delay_lag_and_pure(train, dt, max_delay, every.part(train))
         except HydroSdpError:
             continue
-        before = windows.residual(pure, 0.0)
-        after = windows.residual(dead, lag_pole(lag, dt)) if lag > 0.0 else before
-        samples = float(np.sum(windows.length))
-        pooled += (before, after)
-        count += samples
-        per_fold.append((math.sqrt(before / samples), math.sqrt(after / samples)))
-    if count == 0.0 or delay.lag <= 0.0:
-        return HeldOut('valve_lag', 0.0, 0.0, tuple(per_fold), INCREMENT_GAIN)
-    return HeldOut('valve_lag', math.sqrt(pooled[0] / count), math.sqrt(pooled[1] / count),
-                   tuple(per_fold), INCREMENT_GAIN)
+        before, samples = windows.angle_error(pure, 0.0)
+        after = windows.angle_error(dead, lag_pole(lag, dt))[0] if lag > 0.0 else before
+        rows.append((before / samples, after / samples))
+        weights.append(float(samples))
+    return compared('valve_lag', rows, weights)
 
 
 def check_geometry(experiments: Sequence[Experiment], model: JointModel, delay: DelayEstimate,

@@ -16,14 +16,14 @@ reason.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 import math
 from typing import Sequence
 
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import DataError
 from hydro_sdp.core.identification.end_stops import (
-    arrival_at_stop, clamp_start, pushes_into_stop, stop_reach, stop_window)
+    arrival_at_stop, clamp_start, pushes_into_stop, stop_reach, stop_tolerance, stop_window)
 from hydro_sdp.core.identification.experiment import Experiment, MIN_SAMPLES
 from hydro_sdp.core.identification.rest import estimate_rest_command
 from hydro_sdp.core.model.records import Record
@@ -46,6 +46,8 @@ class Dropped:
         Where the record came from.
     since_start : float
         The same time counted from the start of the record's bag, s (for messages).
+    angle : float
+        Where the joint was held, degrees (NaN unless it was).
 
     """
 
@@ -53,6 +55,16 @@ class Dropped:
     reason: str
     source: str = ''
     since_start: float = math.nan
+    angle: float = math.nan
+
+    @property
+    def stalled(self) -> bool:
+        """Whether the segment stalled: driven, not moving, not at a stop."""
+        return self.reason.startswith(STALLED)
+
+
+#: How a stalled segment's reason starts.
+STALLED = 'stalled'
 
 
 @dataclass(frozen=True, eq=False)
@@ -273,7 +285,8 @@ def segment_record(record: Record, *, max_delay: int, rest: float | None = None,
                 if changed.size else block_stop
             stops[clamp[2]].append(clamp[1])
             dropped.append(Dropped(float(record.t[stop]), 'clamped by an end stop',
-                                   record.source, record.since_start(record.t[stop])))
+                                   record.source, record.since_start(record.t[stop]),
+                                   clamp[1]))
             start = released
     # A joint cannot be held beyond its stop: the outermost angle held is the stop.
     end_stops = (float(np.min(stops[0])) if stops[0] else None,
@@ -363,13 +376,66 @@ def segment_records(records: Sequence[Record], *, max_delay: int,
     lows = [p.end_stops[0] for p in parts if p.end_stops[0] is not None]
     highs = [p.end_stops[1] for p in parts if p.end_stops[1] is not None]
     stops = (min(lows) if lows else None, max(highs) if highs else None)
+    if angle_limits is None:
+        stops = _never_passed(stops, ordered)
     # A stop seen in one record holds in the others.
     held = [_drop_held(p.experiments, stops, rest, r, p.noise_std)
             for p, r in zip(parts, ordered)]
-    return Segmentation(
-        tuple(e for kept, _ in held for e in kept),
-        tuple(d for p, (_, more) in zip(parts, held) for d in p.dropped + more), rest,
-        float(np.median([p.noise_std for p in parts])), stops)
+    noise = float(np.median([p.noise_std for p in parts]))
+    experiments, stalled = _drop_stalled([e for kept, _ in held for e in kept], rest, noise)
+    dropped = [_stall_or_stop(d, stops) for p, (_, more) in zip(parts, held)
+               for d in p.dropped + more]
+    return Segmentation(tuple(experiments), tuple(dropped) + stalled, rest, noise, stops)
+
+
+def _never_passed(stops: tuple[float | None, float | None],
+                  records: Sequence[Record]) -> tuple[float | None, float | None]:
+    # A stop is the far end of the travel: an angle some record passes is a stall.
+    tolerance = stop_tolerance(stops)
+    low = min(float(np.min(r.y)) for r in records)
+    high = max(float(np.max(r.y)) for r in records)
+    return (stops[0] if stops[0] is not None and stops[0] - low <= tolerance else None,
+            stops[1] if stops[1] is not None and high - stops[1] <= tolerance else None)
+
+
+def _stall_or_stop(dropped: Dropped, stops: tuple[float | None, float | None]) -> Dropped:
+    """Relabel a segment held short of the stop on its side as stalled."""
+    if not math.isfinite(dropped.angle):
+        return dropped
+    tolerance = stop_tolerance(stops)
+    low, high = stops
+    if (low is not None and abs(dropped.angle - low) <= tolerance) or \
+            (high is not None and abs(dropped.angle - high) <= tolerance):
+        return dropped
+    return replace(dropped, reason=f'{STALLED}: held at {dropped.angle:.4g} deg while driven, '
+                                   'short of any end stop')
+
+
+def _drop_stalled(experiments: Sequence[Experiment], rest: float, noise: float
+                  ) -> tuple[list[Experiment], tuple[Dropped, ...]]:
+    """
+    Leave out steps that did not move where a command no larger moved the joint elsewhere.
+
+    Every map is monotone: a command that moves the joint in one run moves it at least
+    as fast in any run, unless a load holds it (a stall).
+    """
+    steps = [e for e in experiments if e.kind == 'step' and e.level != rest and e.samples > 0]
+    net = {id(e): float(e.y[-1] - e.y[e.start]) / e.samples for e in steps}
+    fastest = max((abs(speed) for speed in net.values()), default=0.0)
+
+    def moves(e: Experiment) -> bool:
+        speed = net[id(e)]
+        return bool(np.sign(speed) == np.sign(e.level - rest)
+                    and abs(speed) > max(10.0 * noise / e.samples, 0.02 * fastest))
+    moving = [e for e in steps if moves(e)]
+    stalled = [e for e in steps if not moves(e) and any(
+        np.sign(m.level - rest) == np.sign(e.level - rest)
+        and abs(m.level - rest) <= abs(e.level - rest) for m in moving)]
+    gone = {id(e) for e in stalled}
+    return [e for e in experiments if id(e) not in gone], tuple(
+        Dropped(e.t0, f'{STALLED}: commanded {e.level:.4g} and did not move, where a command '
+                      'no larger moved the joint in another run', e.source)
+        for e in stalled)
 
 
 def _record_key(record: Record) -> tuple[str, float, int, float, float]:

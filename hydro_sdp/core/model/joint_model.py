@@ -20,6 +20,7 @@ from hydro_sdp.core.model.effects import (
     DirectionDependentDelay, Effect, effect_from_mapping, effect_to_mapping, EFFECT_TYPES)
 from hydro_sdp.core.model.static_maps import MAP_KINDS, MapKind, SdpMap, StaticMap
 from hydro_sdp.core.model.timing import check_sample_period, delay_samples
+from hydro_sdp.core.model.undetermined import Undetermined
 from hydro_sdp.core.validation import (
     Document, read_document, require_float, require_ordered_pair)
 import numpy as np
@@ -27,7 +28,7 @@ import numpy as np
 MODEL_FORMAT = 'hydro_sdp/model/v1'
 
 _COMMON_KEYS = ('format', 'joint', 'command_topic', 'load_topic', 'kind', 'delay',
-                'angle_limits', 'input_limits')
+                'angle_limits', 'input_limits', 'undetermined')
 _ALL_MAP_KEYS = tuple(dict.fromkeys(key for cls in MAP_KINDS.values() for key in cls.keys))
 
 
@@ -45,7 +46,8 @@ class JointModel:
     delay : float
         Pure time delay between command and motion, s.
     angle_limits : tuple[float, float] | None
-        Hardware end stops, degrees, or ``None``.
+        Hardware end stops, degrees (an infinite side where only one was seen; null in
+        the file), or ``None``.
     input_limits : tuple[float, float] | None
         Command range accepted by the valve interface, input units, or ``None``.
     effects : tuple[Effect, ...]
@@ -60,6 +62,22 @@ class JointModel:
         Float64 topic of the measured load a ``load_dependence`` effect was fitted
         on (key ``load_topic``, written by ``diagnose --load-topic``), or ``None``.
         ``evaluate`` and ``diagnose`` read it when no ``--load-topic`` is given.
+    undetermined : tuple[Undetermined, ...]
+        Parameters the data it was identified from bound but do not pin (key
+        ``undetermined``): for a map without a dead-zone (``poly``), where its speed
+        leaves zero.
+
+    See Also
+    --------
+    load_model, save_model : the model file.
+    identify : a model from records.
+
+    Examples
+    --------
+    >>> from hydro_sdp import load_model
+    >>> model = load_model('config/brokk_j2.yaml')
+    >>> model.joint, model.static_map.kind, model.delay
+    ('j2', 'sdp', 0.15)
 
     """
 
@@ -71,6 +89,7 @@ class JointModel:
     effects: tuple[Effect, ...] = field(default=())
     command_topic: str | None = None
     load_topic: str | None = None
+    undetermined: tuple[Undetermined, ...] = field(default=())
 
     def __post_init__(self) -> None:
         if not isinstance(self.joint, str) or not self.joint.strip():
@@ -187,11 +206,15 @@ class JointModel:
         data.update({
             'kind': self.kind,
             'delay': self.delay,
-            'angle_limits': None if self.angle_limits is None else list(self.angle_limits),
+            'angle_limits': None if self.angle_limits is None else [
+                value if math.isfinite(value) else None for value in self.angle_limits],
             'input_limits': None if self.input_limits is None else list(self.input_limits),
         })
         data.update(self.static_map.to_mapping())
         data['effects'] = {effect.name: effect_to_mapping(effect) for effect in self.effects}
+        if self.undetermined:
+            data['undetermined'] = {entry.parameter: entry.to_mapping()
+                                    for entry in self.undetermined}
         return data
 
     @classmethod
@@ -232,6 +255,9 @@ class JointModel:
         effects = data.get('effects') or {}
         if not isinstance(effects, Mapping):
             raise ModelFileError("key 'effects': expected a mapping of effect name to parameters")
+        bounds = data.get('undetermined') or {}
+        if not isinstance(bounds, Mapping):
+            raise ModelFileError("key 'undetermined': expected a mapping of parameter to bound")
         joint = data['joint']
         if not isinstance(joint, str):
             raise ModelFileError(f"key 'joint': expected a name, got {joint!r}")
@@ -241,17 +267,31 @@ class JointModel:
             if topic is not None and not isinstance(topic, str):
                 raise ModelFileError(f"key '{key}': expected a topic name, got {topic!r}")
             topics[key] = topic
-        return cls(
+        model = cls(
             joint=joint,
             static_map=map_cls.from_mapping(data),
             delay=require_float(data['delay'], 'delay'),
-            angle_limits=_optional_limits(data, 'angle_limits'),
+            angle_limits=_stops(data),
             input_limits=_optional_limits(data, 'input_limits'),
             effects=tuple(effect_from_mapping(str(name), params)
                           for name, params in effects.items()),
             command_topic=topics['command_topic'],
             load_topic=topics['load_topic'],
+            undetermined=tuple(Undetermined.from_mapping(str(name), entry)
+                               for name, entry in bounds.items()),
         )
+        return model
+
+
+def _stops(data: Document) -> tuple[float, float] | None:
+    # A stop seen on one side only: the other is null in the file, infinite here.
+    value = data.get('angle_limits')
+    if isinstance(value, (list, tuple)) and len(value) == 2 and None in value:
+        if value == [None, None] or value == (None, None):
+            return None
+        known = require_float(value[1] if value[0] is None else value[0], 'angle_limits')
+        return (-math.inf, known) if value[0] is None else (known, math.inf)
+    return _optional_limits(data, 'angle_limits')
 
 
 def _optional_limits(data: Document, key: str) -> tuple[float, float] | None:

@@ -62,6 +62,20 @@ class Record:
     other_joints : tuple[str, ...]
         Names of the columns of ``others``.
 
+    See Also
+    --------
+    identify : a model from records.
+    evaluate : a model's simulation error on records.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from hydro_sdp import Record
+    >>> t = np.arange(0.0, 2.0, 0.01)
+    >>> record = Record(t, np.where(t < 0.5, 0.0, 4.0), np.zeros(t.size), joint='j2')
+    >>> len(record), record.sample_period
+    (200, 0.01)
+
     """
 
     t: FloatArray

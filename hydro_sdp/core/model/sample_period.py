@@ -20,14 +20,21 @@ A 100 Hz stream with +-0.5 ms jitter gives 0.01 s; one written every 12.5 ms
 gives 0.0125 s, whatever its jitter, once it has a few hundred samples.
 Periods are only ever compared with a tolerance, never exactly.
 
+A controller acts every whole number of plant samples: the control period is
+the nearest whole multiple of the period the records give
+(:func:`control_period_on`), so a recording whose clock runs a fraction of a
+percent off a round period (0.0099909 s on a 10 ms raster, 0.00998 s from a
+DDS timer) gets the controller of the round one.
+
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 import math
 
 from hydro_sdp.core.arrays import FloatArray, IntArray
-from hydro_sdp.core.errors import DataError
+from hydro_sdp.core.errors import ConfigurationError, DataError
 import numpy as np
 
 #: Uncertainty of a period below which it is taken as exact, relative (100 ppm).
@@ -36,6 +43,9 @@ RELATIVE_FLOOR = 1e-4
 STANDARD_ERRORS = 3.0
 #: Most significant digits a nominal period keeps.
 MOST_DIGITS = 12
+#: Largest relative distance of a controller's period from a whole number of plant
+#: samples, when both are given (1 %: timers and clocks are far closer).
+PERIOD_TOLERANCE = 0.01
 
 
 def nominal_period(steps: FloatArray | IntArray) -> float:
@@ -133,3 +143,76 @@ def whole_samples_seconds(samples: int, dt: float) -> float:
     """
     digits = len(f'{dt:.{MOST_DIGITS}g}'.replace('.', '').lstrip('0').split('e')[0])
     return float(f'{samples * dt:.{digits + len(str(abs(int(samples))))}g}')
+
+
+@dataclass(frozen=True)
+class ControlPeriod:
+    """
+    A control period as a whole number of plant samples.
+
+    Parameters
+    ----------
+    samples : int
+        Plant samples per control step, >= 1.
+    seconds : float
+        The period, ``samples`` plant periods (written cleanly), s.
+    asked : float
+        The period asked for, s.
+
+    """
+
+    samples: int
+    seconds: float
+    asked: float
+
+
+def control_period_on(asked: float, dt: float) -> ControlPeriod:
+    """
+    Return the whole multiple of the plant period nearest the control period asked for.
+
+    Parameters
+    ----------
+    asked : float
+        Control period asked for, s, > 0.
+    dt : float
+        Plant (records') sample period, s, > 0.
+
+    Returns
+    -------
+    ControlPeriod
+        At least one sample; ties go up, as delays do.
+
+    """
+    samples = max(1, int(math.floor(asked / dt + 0.5 + 1e-9)))
+    return ControlPeriod(samples, whole_samples_seconds(samples, dt), float(asked))
+
+
+def control_steps(control_period: float, dt: float) -> int:
+    """
+    Return the plant samples per control step of a controller run on a plant.
+
+    Parameters
+    ----------
+    control_period : float
+        The controller's period, s.
+    dt : float
+        The plant's sample period, s.
+
+    Returns
+    -------
+    int
+        The nearest whole number of samples.
+
+    Raises
+    ------
+    ConfigurationError
+        When the ratio is more than :data:`PERIOD_TOLERANCE` from a whole number.
+
+    """
+    period = control_period_on(control_period, dt)
+    ratio = control_period / dt
+    if abs(ratio - period.samples) > PERIOD_TOLERANCE * period.samples:
+        raise ConfigurationError(
+            f'the control period {control_period:.9g} s must be a whole multiple of the plant '
+            f'period {dt:.9g} s (within {PERIOD_TOLERANCE:.0%}; it is {ratio:.4g} periods)')
+    return period.samples

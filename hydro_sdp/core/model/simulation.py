@@ -98,6 +98,19 @@ def simulate(model: JointModel, v: FloatArray, dt: float, y0: float,
         Angle at each sample, degrees; ``y[start]`` is ``y0`` and the samples
         before ``start`` repeat it.
 
+    See Also
+    --------
+    evaluate : simulation against measured records.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from hydro_sdp import load_model, simulate
+    >>> model = load_model('config/brokk_j2.yaml')
+    >>> y = simulate(model, np.full(200, 4.0), 0.01, 30.0)
+    >>> bool(y[-1] > y[0])
+    True
+
     """
     dt = check_sample_period(dt)
     v = _check_commands(v)

@@ -83,8 +83,9 @@ def _scale(limits: tuple[float, float] | None) -> float:
 
 
 def _travel_band(model: JointModel, y0: float) -> tuple[float, float]:
-    if model.angle_limits is None:
-        return y0 - 30.0, y0 + 30.0
+    if model.angle_limits is None or not all(map(math.isfinite, model.angle_limits)):
+        low, high = model.angle_limits or (-math.inf, math.inf)
+        return max(y0 - 30.0, low), min(y0 + 30.0, high)
     low, high = model.angle_limits
     margin = 0.5 * (1.0 - _USABLE_RANGE) * (high - low)
     return low + margin, high - margin
@@ -243,4 +244,8 @@ def start_angle(model: JointModel) -> float:
     """
     if model.angle_limits is None:
         return 0.0
-    return 0.5 * (model.angle_limits[0] + model.angle_limits[1])
+    low, high = model.angle_limits
+    if not (math.isfinite(low) and math.isfinite(high)):
+        return min(max(0.0, low + 30.0 if math.isfinite(low) else 0.0),
+                   high - 30.0 if math.isfinite(high) else math.inf)
+    return 0.5 * (low + high)

@@ -2,11 +2,11 @@
 CSV logs of one joint, read as records ready to be written as bags.
 
 A logger writes one row per sample: the time (s), the measured angle and the
-command it applied at that time. Columns are chosen by header name or by
-0-based index; the header is the row above the first row of numbers when none
-of its cells is a number (lines of the logger's own above it are skipped;
-:mod:`.csv_table`). Row numbers in messages are those a spreadsheet shows: the
-file's line.
+command it applied at that time. Columns are chosen by name or by 0-based
+index; the header block is found above the first row of numbers (lines of the
+logger's own above it are skipped; :mod:`.csv_table`), and a ControlDesk
+export is read by its own layout. Row numbers in messages are those a
+spreadsheet shows: the file's line.
 
 Timing (docs/methods.md section 3.4). A record's ``v_k`` is the command in
 force over the interval ``(t_{k-1}, t_k]`` that ends at sample ``t_k``. The
@@ -37,10 +37,10 @@ from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import DataError
 from hydro_sdp.core.model.records import Record
 from hydro_sdp.core.model.timing import delayed
-from hydro_sdp.io.documents import read_text
-from hydro_sdp.io.logs.csv_table import CsvTable
+from hydro_sdp.io.logs.csv_table import text_table
 from hydro_sdp.io.logs.machine_log import machine_log
 from hydro_sdp.io.logs.signals_file import single_joint_spec
+from hydro_sdp.io.logs.text_rows import read_log_text
 import numpy as np
 
 
@@ -101,7 +101,7 @@ def record_from_log(t: FloatArray, y: FloatArray, command: FloatArray, *, joint:
 
 def parse_csv_log(text: str, *, joint: str, time: str, angle: str, command: str,
                   command_negative: str | None = None, angle_unit: str = 'deg',
-                  delimiter: str = ',', source: str = 'csv',
+                  delimiter: str | None = None, source: str = 'csv',
                   header_row: int | None = None) -> CsvLog:
     """
     Parse the text of one CSV log.
@@ -120,8 +120,9 @@ def parse_csv_log(text: str, *, joint: str, time: str, angle: str, command: str,
         direction's valve).
     angle_unit : str
         ``deg`` or ``rad``.
-    delimiter : str
-        Cell delimiter, one character (see :func:`.csv_table.delimiter_character`).
+    delimiter : str or None
+        Cell delimiter, one character (see :func:`.text_rows.delimiter_character`);
+        default: sniffed.
     source : str
         Name of the file, for messages.
     header_row : int or None
@@ -135,16 +136,17 @@ def parse_csv_log(text: str, *, joint: str, time: str, angle: str, command: str,
     """
     spec = single_joint_spec(joint, angle, command, time=time,
                              command_negative=command_negative, angle_unit=angle_unit)
-    table = CsvTable(text, time, delimiter=delimiter, source=source, header_row=header_row)
+    table = text_table(text, time, delimiter=delimiter, source=source, header_row=header_row)
     log = machine_log(table, spec)
     return CsvLog(log.records[0], log.time_shift)
 
 
 def read_csv_log(path: str | os.PathLike[str], *, joint: str, time: str, angle: str,
                  command: str, command_negative: str | None = None, angle_unit: str = 'deg',
-                 delimiter: str = ',', header_row: int | None = None) -> CsvLog:
+                 delimiter: str | None = None, header_row: int | None = None,
+                 encoding: str | None = None) -> CsvLog:
     """
-    Read one CSV log file (UTF-8, with or without a byte-order mark).
+    Read one CSV log file (any common encoding, :mod:`.text_rows`).
 
     Parameters
     ----------
@@ -152,6 +154,8 @@ def read_csv_log(path: str | os.PathLike[str], *, joint: str, time: str, angle: 
         The file.
     joint, time, angle, command, command_negative, angle_unit, delimiter, header_row
         As for :func:`parse_csv_log`.
+    encoding : str or None
+        The file's encoding (default: detected).
 
     Returns
     -------
@@ -160,7 +164,7 @@ def read_csv_log(path: str | os.PathLike[str], *, joint: str, time: str, angle: 
 
     """
     source = Path(path)
-    text = read_text(source, DataError, kind='a CSV file', byte_order_mark=True)
+    text = read_log_text(source, encoding).text
     return parse_csv_log(text, joint=joint, time=time, angle=angle, command=command,
                          command_negative=command_negative, angle_unit=angle_unit,
                          delimiter=delimiter, source=str(source), header_row=header_row)

@@ -1,31 +1,37 @@
 """
-CSV logs as channels: one time column, columns by header name or 0-based index.
+CSV logs as channels: one time column, columns by name or 0-based index.
 
 Loggers write lines of their own above the table (the logger's name, the date,
-the sample rate). The header is the last row that names the columns before the
-numbers start: the row just above the first row of numbers, when none of its
-cells is a number (``--header-row N`` names it instead, numbered as a
-spreadsheet numbers rows). Every row after it is a sample. Row numbers in
-messages are those a spreadsheet shows: the file's line.
+the sample rate) and a header block of several rows: the names, then units or
+descriptions, then the numbers. The header block is the run of rows just above
+the first row of numbers that have at least two cells and no number (a blank
+row, a one-cell line or a line with a number ends it going up); its names row
+is the one with the most filled cells, the highest on a tie. ``--header-row N``
+names the names row instead (numbered as a spreadsheet numbers rows); the rows
+between it and the numbers are the rest of the block. A column is found by its
+cell in the names row, else by its cell in another row of the block (a
+description), else by its 0-based index. Every row after the block is a
+sample. Row numbers in messages are those a spreadsheet shows: the file's line.
+
+A dSPACE ControlDesk export (a row keyed ``trace_values``) is read by its own
+layout (:mod:`.controldesk`); :func:`text_table` chooses.
 
 """
 
 from __future__ import annotations
 
-import csv
 from dataclasses import dataclass
-import io
 
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import ConfigurationError, DataError
-from hydro_sdp.io.logs.table import Channel, first_time_fault
-import numpy as np
+from hydro_sdp.io.logs.controldesk import ControlDeskTable, is_controldesk
+from hydro_sdp.io.logs.table import Channel, LogTable
+from hydro_sdp.io.logs.text_rows import (
+    check_time_column, column_values, delimiter_character, is_number, numbers_row, read_rows,
+    Rows, sniff_delimiter)
 
-#: Delimiters that are awkward to type in a shell, by name.
-DELIMITER_NAMES = {'tab': '\t', '\\t': '\t', 'space': ' '}
-
-#: Rows as ``(spreadsheet row number, stripped cells)``.
-Rows = list[tuple[int, list[str]]]
+#: A row and its spreadsheet number.
+Row = tuple[int, list[str]]
 
 
 @dataclass(frozen=True)
@@ -34,91 +40,72 @@ class _Column:
     label: str
 
 
-def delimiter_character(text: str) -> str:
+@dataclass(frozen=True)
+class Header:
     """
-    Return the one-character delimiter that ``text`` names.
+    The header block of a CSV log.
 
     Parameters
     ----------
-    text : str
-        A single character, or ``tab`` (also a backslash and ``t``) or ``space``.
-
-    Returns
-    -------
-    str
-        The character.
+    names : Row
+        The names row.
+    others : tuple[Row, ...]
+        The block's other rows (units, descriptions), top to bottom.
 
     """
-    character = DELIMITER_NAMES.get(text, text)
-    if len(character) != 1 or character in '"\r\n':
-        raise ConfigurationError(f'delimiter must be one character (or tab, space), '
-                                 f'got {text!r}')
-    return character
+
+    names: Row
+    others: tuple[Row, ...] = ()
 
 
-def is_number(cell: str) -> bool:
-    """Whether a cell reads as a number."""
-    try:
-        float(cell)
-    except ValueError:
-        return False
-    return True
+def _header_row(cells: list[str], decimal_comma: bool) -> bool:
+    return len(cells) >= 2 and not any(is_number(cell, decimal_comma) for cell in cells)
 
 
-def _rows(text: str, delimiter: str, source: str) -> Rows:
-    """Rows as ``(spreadsheet row number, stripped cells)``, blank rows left out."""
-    reader = csv.reader(io.StringIO(text, newline=''), delimiter=delimiter)
-    rows = []
-    try:
-        for cells in reader:
-            stripped = [cell.strip() for cell in cells]
-            if any(stripped):
-                rows.append((reader.line_num, stripped))
-    except csv.Error as error:
-        raise DataError(f'{source}: row {reader.line_num}: not CSV ({error})') from None
-    return rows
-
-
-def _numbers(cells: list[str]) -> bool:
-    filled = [cell for cell in cells if cell != '']
-    return len(filled) >= 2 and all(is_number(cell) for cell in filled)
-
-
-def split_header(rows: Rows, header_row: int | None,
-                 source: str) -> tuple[tuple[int, list[str]] | None, Rows]:
+def split_header(rows: Rows, header_row: int | None, source: str,
+                 decimal_comma: bool = False) -> tuple[Header | None, Rows]:
     """
-    Find the header and the sample rows.
+    Find the header block and the sample rows.
 
     Parameters
     ----------
     rows : Rows
-        The file's non-blank rows.
+        The file's rows, blank ones empty.
     header_row : int or None
-        Spreadsheet number of the header row; default: the row above the first
-        row of numbers, when none of its cells is a number.
+        Spreadsheet number of the names row; default: found (module docstring).
     source : str
         The file, for messages.
+    decimal_comma : bool
+        Whether a comma in a number is its decimal point.
 
     Returns
     -------
     tuple
-        ``(header, data)``: the header row (None without one) and the rows after it.
+        ``(header, data)``: the header block (None without one) and the non-blank
+        rows from the first row of numbers on.
 
     """
+    start = 0
     if header_row is not None:
-        at = [i for i, (line, _) in enumerate(rows) if line == header_row]
+        at = [i for i, (line, cells) in enumerate(rows) if line == header_row and cells]
         if not at:
             raise DataError(f'{source}: --header-row {header_row}: the file has no such '
                             f'row (or it is blank)')
-        return rows[at[0]], rows[at[0] + 1:]
-    first = next((i for i, (_, cells) in enumerate(rows) if _numbers(cells)), len(rows))
-    if first == 0:
-        return None, rows
-    above = rows[first - 1]
-    if any(is_number(cell) for cell in above[1]):
-        # A line of the logger's (a rate, a date) right above the numbers: no header.
-        return None, rows[first:]
-    return above, rows[first:]
+        start = at[0] + 1
+    first = next((i for i in range(start, len(rows)) if numbers_row(rows[i][1], decimal_comma)),
+                 len(rows))
+    data = [row for row in rows[first:] if row[1]]
+    if header_row is not None:
+        block = [row for row in rows[start - 1:first] if row[1]]
+        return Header(block[0], tuple(block[1:])), data
+    top = first
+    while top > 0 and _header_row(rows[top - 1][1], decimal_comma):
+        top -= 1
+    block = rows[top:first]
+    if not block:
+        return None, data
+    widest = max(range(len(block)), key=lambda i: (sum(c != '' for c in block[i][1]), -i))
+    return Header(block[widest], tuple(row for i, row in enumerate(block) if i != widest)), data
 
 
 class CsvTable:
@@ -127,37 +114,42 @@ class CsvTable:
 
     Parameters
     ----------
-    text : str
-        The file's content.
+    rows : Rows
+        The file's rows (:func:`.text_rows.read_rows`).
     time : str or None
-        Time column (header name or 0-based index), s; required.
-    delimiter : str
-        Cell delimiter (see :func:`delimiter_character`).
+        Time column (name or 0-based index), s; required.
     source : str
         The file, for messages.
     header_row : int or None
-        Spreadsheet number of the header row (default: found, see the module).
+        Spreadsheet number of the names row (default: found, see the module).
     time_role : str
         How messages name the time option.
+    decimal_comma : bool
+        Whether a comma in a number is its decimal point.
+    notes : tuple[str, ...]
+        What the user should know of how the file was read.
 
     """
 
-    def __init__(self, text: str, time: str | None, *, delimiter: str = ',',
-                 source: str = 'csv', header_row: int | None = None,
-                 time_role: str = '--time') -> None:
+    def __init__(self, rows: Rows, time: str | None, *, source: str = 'csv',
+                 header_row: int | None = None, time_role: str = '--time',
+                 decimal_comma: bool = False, notes: tuple[str, ...] = ()) -> None:
         self.source = source
-        rows = _rows(text, delimiter_character(delimiter), source)
-        if not rows:
+        self.notes = notes
+        self.decimal_comma = decimal_comma
+        filled = [row for row in rows if row[1]]
+        if not filled:
             raise DataError(f'{source}: file is empty')
-        header, self.data = split_header(rows, header_row, source)
-        self.first_line = rows[0][0]
-        self.header = None if header is None else header[1]
-        self.header_line = rows[0][0] if header is None else header[0]
+        header, self.data = split_header(rows, header_row, source, decimal_comma)
+        self.first_line = filled[0][0]
+        self.header = None if header is None else header.names[1]
+        self.others = () if header is None else header.others
+        self.header_line = self.first_line if header is None else header.names[0]
         if len(self.data) < 2:
             plural = '' if len(self.data) == 1 else 's'
             raise DataError(f'{source}: {len(self.data)} data row{plural}; a log needs at '
                             'least 2')
-        self.width = len(self.header if self.header is not None else self.data[0][1])
+        self.width = max(len(self.header or ()), len(self.data[0][1]))
         if time is None:
             raise ConfigurationError(f'{source}: a CSV log needs its time column ({time_role})')
         column = self._resolve(time, time_role)
@@ -165,7 +157,7 @@ class CsvTable:
         self._check_time(column)
 
     def channel(self, name: str, role: str) -> Channel:
-        """Return column ``name`` (header name or 0-based index), timed by the time column."""
+        """Return column ``name`` (name or 0-based index), timed by the time column."""
         column = self._resolve(name, role)
         return Channel(name, self.t, self._values(column), f'column {column.label}')
 
@@ -182,46 +174,73 @@ class CsvTable:
             if index >= self.width:
                 raise DataError(f'{source}: no column {index} ({option}): the file has '
                                 f'{self.width} columns, 0 to {self.width - 1}')
-            return _Column(index, f"'{header[index]}'" if header is not None else f'{index}')
+            named = header[index] if header is not None and index < len(header) else ''
+            return _Column(index, f"'{named}'" if named else f'{index}')
+        found = sorted({index for _, cells in self.others
+                        for index, cell in enumerate(cells) if cell == spec})
+        if len(found) == 1:
+            return _Column(found[0], f'{spec!r}')
+        if found:
+            rows = ', '.join(str(line) for line, cells in self.others if spec in cells)
+            raise DataError(f'{source}: row {rows}: {len(found)} columns are named {spec!r} '
+                            f'({option}); choose one by its name on row {self.header_line} or '
+                            'by 0-based index')
         if header is None:
             raise DataError(f'{source}: no column {spec!r} ({option}): the file has no header '
                             'row, choose columns by 0-based index')
         hint = '' if self.header_line == self.first_line else \
-            ' (the header is taken from the row above the numbers; name another with ' \
+            ' (the names are read from the row above the numbers; name another with ' \
             '--header-row N)'
+        encoding = ''.join(f'; {note}' for note in self.notes)
         raise DataError(f'{source}: row {self.header_line}: no column {spec!r} ({option}); '
-                        f"columns: {', '.join(header)}{hint}")
+                        f"columns: {', '.join(header)}{hint}{encoding}")
 
     def _values(self, column: _Column) -> FloatArray:
         """Return the numbers of one column, naming the row and column of a bad cell."""
-        cells = []
-        for line, row in self.data:
-            if column.index >= len(row) or row[column.index] == '':
-                raise DataError(f'{self.source}: row {line}, column {column.label}: empty '
-                                f'(the row has {len(row)} cells)')
-            cells.append(row[column.index])
-        try:
-            values = np.asarray(cells, dtype=np.float64)
-        except ValueError:
-            for (line, _), cell in zip(self.data, cells):
-                if not is_number(cell):
-                    raise DataError(f'{self.source}: row {line}, column {column.label}: '
-                                    f'{cell!r} is not a number') from None
-            raise
-        bad = np.flatnonzero(~np.isfinite(values))
-        if bad.size:
-            k = int(bad[0])
-            more = f' ({bad.size} such cells in the column)' if bad.size > 1 else ''
-            raise DataError(f'{self.source}: row {self.data[k][0]}, column {column.label}: '
-                            f'{cells[k]!r} is not a finite number{more}')
-        return values
+        return column_values(self.data, column.index, f'column {column.label}', self.source,
+                             self.decimal_comma)
 
     def _check_time(self, column: _Column) -> None:
-        t = self.t
-        fault = first_time_fault(t)
-        if fault is not None:
-            k = fault.index
-            more = f' ({fault.count} such rows in all)' if fault.count > 1 else ''
-            raise DataError(f'{self.source}: row {self.data[k + 1][0]}, column {column.label}: '
-                            f'time {t[k + 1]:.9g} s {fault.kind} {t[k]:.9g} s on row '
-                            f'{self.data[k][0]}{more}')
+        check_time_column(self.t, self.data, f'column {column.label}', self.source)
+
+
+def text_table(text: str, time: str | None, *, delimiter: str | None = None,
+               source: str = 'csv', header_row: int | None = None, time_role: str = '--time',
+               notes: tuple[str, ...] = ()) -> LogTable:
+    """
+    Read a CSV log's text as a ControlDesk export or a plain table, whichever it is.
+
+    Parameters
+    ----------
+    text : str
+        The file's content.
+    time : str or None
+        Time column (optional for a ControlDesk export, which names its own).
+    delimiter : str or None
+        Cell delimiter (see :func:`.text_rows.delimiter_character`); default: sniffed.
+    source : str
+        The file, for messages.
+    header_row : int or None
+        Spreadsheet number of a plain table's names row.
+    time_role : str
+        How messages name the time option.
+    notes : tuple[str, ...]
+        How the text was read (its encoding), passed on.
+
+    Returns
+    -------
+    LogTable
+        The file's channels.
+
+    """
+    character = sniff_delimiter(text) if delimiter is None else delimiter_character(delimiter)
+    rows = read_rows(text, character, source)
+    decimal_comma = character != ','
+    if is_controldesk(rows):
+        if header_row is not None:
+            raise ConfigurationError(f'{source}: a ControlDesk export names its columns in its '
+                                     'trace_names and path rows; leave out --header-row')
+        return ControlDeskTable(rows, time, source=source, time_role=time_role,
+                                decimal_comma=decimal_comma, notes=notes)
+    return CsvTable(rows, time, source=source, header_row=header_row, time_role=time_role,
+                    decimal_comma=decimal_comma, notes=notes)

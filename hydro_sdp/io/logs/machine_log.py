@@ -21,12 +21,12 @@ from typing import Iterator, Mapping
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import DataError
 from hydro_sdp.core.model.records import Record
-from hydro_sdp.io.documents import read_text
-from hydro_sdp.io.logs.csv_table import CsvTable
+from hydro_sdp.io.logs.csv_table import text_table
 from hydro_sdp.io.logs.mat_table import MAT_SUFFIXES, MatTable
 from hydro_sdp.io.logs.mdf_table import MDF_SUFFIXES, MdfTable
 from hydro_sdp.io.logs.signals_file import MachineSpec
 from hydro_sdp.io.logs.table import check_channel, held_at, LogTable, nanoseconds
+from hydro_sdp.io.logs.text_rows import read_log_text
 import numpy as np
 
 
@@ -47,6 +47,8 @@ class MachineLog:
         Each signal's value at each sample, by topic.
     time_shift : float
         Seconds added to the file's time.
+    notes : tuple[str, ...]
+        How the file was read, when the user should know (its layout, its encoding).
 
     """
 
@@ -54,6 +56,7 @@ class MachineLog:
     commanded: tuple[str, ...]
     signals: Mapping[str, FloatArray]
     time_shift: float
+    notes: tuple[str, ...] = ()
 
     @property
     def samples(self) -> int:
@@ -73,7 +76,8 @@ def log_kind(path: str | os.PathLike[str]) -> str:
 
 @contextmanager
 def open_table(path: str | os.PathLike[str], time: str | None, *, time_role: str = '--time',
-               header_row: int | None = None, delimiter: str = ',') -> Iterator[LogTable]:
+               header_row: int | None = None, delimiter: str | None = None,
+               encoding: str | None = None) -> Iterator[LogTable]:
     """
     Open a logger's file by its kind (:func:`log_kind`); closed on leaving.
 
@@ -86,9 +90,11 @@ def open_table(path: str | os.PathLike[str], time: str | None, *, time_role: str
     time_role : str
         How messages name the time option.
     header_row : int or None
-        CSV header row (spreadsheet number).
-    delimiter : str
-        CSV cell delimiter.
+        CSV names row (spreadsheet number).
+    delimiter : str or None
+        CSV cell delimiter (default: sniffed).
+    encoding : str or None
+        CSV text encoding (default: detected, :mod:`.text_rows`).
 
     Yields
     ------
@@ -104,9 +110,10 @@ def open_table(path: str | os.PathLike[str], time: str | None, *, time_role: str
         with closing(MatTable(path, time, time_role=time_role)) as mat:
             yield mat
     else:
-        text = read_text(path, DataError, kind='a CSV file', byte_order_mark=True)
-        yield CsvTable(text, time, delimiter=delimiter, source=str(path), header_row=header_row,
-                       time_role=time_role)
+        text = read_log_text(path, encoding)
+        yield text_table(text.text, time, delimiter=delimiter, source=str(path),
+                         header_row=header_row, time_role=time_role,
+                         notes=(text.note,) if text.note else ())
 
 
 def _role(spec: MachineSpec, joint: str, key: str) -> str:
@@ -165,11 +172,12 @@ def machine_log(table: LogTable, spec: MachineSpec) -> MachineLog:
     return MachineLog(tuple(Record(t, v, y, joint=name, source=source)
                             for name, v, y in records),
                       tuple(name for name in names if spec.joints[name].command is not None),
-                      signals, float(t[0] - origin))
+                      signals, float(t[0] - origin), tuple(getattr(table, 'notes', ())))
 
 
 def read_machine_log(path: str | os.PathLike[str], spec: MachineSpec, *,
-                     header_row: int | None = None, delimiter: str = ',') -> MachineLog:
+                     header_row: int | None = None, delimiter: str | None = None,
+                     encoding: str | None = None) -> MachineLog:
     """
     Read a logger's file (CSV, MDF4 or MATLAB) as a machine's records.
 
@@ -180,9 +188,11 @@ def read_machine_log(path: str | os.PathLike[str], spec: MachineSpec, *,
     spec : MachineSpec
         Which channels are which.
     header_row : int or None
-        CSV header row (spreadsheet number; default: found).
-    delimiter : str
-        CSV cell delimiter.
+        CSV names row (spreadsheet number; default: found).
+    delimiter : str or None
+        CSV cell delimiter (default: sniffed).
+    encoding : str or None
+        CSV text encoding (default: detected).
 
     Returns
     -------
@@ -192,5 +202,5 @@ def read_machine_log(path: str | os.PathLike[str], spec: MachineSpec, *,
     """
     role = '--time' if spec.source == 'command line' else 'time'
     with open_table(path, spec.time, time_role=role, header_row=header_row,
-                    delimiter=delimiter) as table:
+                    delimiter=delimiter, encoding=encoding) as table:
         return machine_log(table, spec)

@@ -10,7 +10,8 @@ defaults, as ros2_controllers' ``__map_joints`` declares a controller's per-join
 """
 
 from hydro_sdp.core.control.idz import IDZ_MODES
-from hydro_sdp.core.control.safety import SETPOINT_MARGIN
+from hydro_sdp.core.control.plausibility import FEEDBACK_MARGIN
+from hydro_sdp.core.control.safety import SETPOINT_MARGIN, STOP_BAND
 from hydro_sdp.ros.parameters.spec import ParameterSpec, ParameterTable
 
 CONTROLLER_PARAMETERS = ParameterTable('controller_node', 'pip_controller', (
@@ -36,12 +37,22 @@ CONTROLLER_PARAMETERS = ParameterTable('controller_node', 'pip_controller', (
                   on_demand=True),
     ParameterSpec('feedback_timeout', 'double',
                   'watchdog and stamp-freshness limit: the valve closes after this long '
-                  'without valid feedback (a new value applies from the next sample and '
-                  'watchdog tick)', default=0.5, unit='s', low=1e-3, high=60.0),
+                  'without valid feedback, on the node clock or a steady clock, whichever '
+                  'passes first (a new value applies from the next sample and watchdog tick)',
+                  default=0.5, unit='s', low=1e-3, high=60.0),
     ParameterSpec('setpoint_margin', 'double',
                   "set-points are kept this far inside the model's end stops (refused if no "
                   'set-point would be left between them)', default=SETPOINT_MARGIN, unit='deg',
                   low=0.0, high=90.0),
+    ParameterSpec('stop_band', 'double',
+                  'a set-point this close to the end of its range (setpoint_margin inside a '
+                  'stop) is stop-side: once the joint is this close to it, or past it towards '
+                  'the stop, the valve holds at rest (0: never)', default=STOP_BAND, unit='deg',
+                  low=0.0, high=90.0),
+    ParameterSpec('feedback_margin', 'double',
+                  'feedback more than this beyond the end stops, or changing faster than twice '
+                  "the joint's top speed plus this, is refused and the valve closed",
+                  default=FEEDBACK_MARGIN, unit='deg', low=0.0, high=90.0),
     ParameterSpec('feedforward', 'bool',
                   'feed the set-point rate of trajectories forward through the IDZ (methods.md '
                   'section 4.9)', default=True),
@@ -59,12 +70,13 @@ CONTROLLER_PARAMETERS = ParameterTable('controller_node', 'pip_controller', (
                   'PIP integral gain kI, (deg per control sample) per deg of error',
                   default_text='designed', low=0.0, high=10.0, per_joint=True),
     ParameterSpec('idz.dead_zone', 'double_array',
-                  'IDZ edges (only when the controller has an IDZ); with a table, the '
-                  'commands where its increments leave 0: a new edge shifts that branch by '
-                  'the change', default_text='designed', unit='input units', length=2,
-                  per_joint=True),
+                  'IDZ edges, inside the valve range (only when the controller has an IDZ); '
+                  'with a table, the commands where its increments leave 0: a new edge shifts '
+                  'that branch by the change', default_text='designed', unit='input units',
+                  length=2, per_joint=True),
     ParameterSpec('idz.slopes', 'double_array',
-                  "IDZ slopes; with a table, each branch's chord from its edge to two thirds "
+                  "IDZ slopes, within a factor 2 of the model's (its chord to the valve end to "
+                  "its steepest); with a table, each branch's chord from its edge to two thirds "
                   "of its largest increment: a new slope scales that branch's increments by "
                   'new / old', default_text='designed',
                   unit='deg per control sample per input unit', length=2, per_joint=True),
@@ -72,4 +84,9 @@ CONTROLLER_PARAMETERS = ParameterTable('controller_node', 'pip_controller', (
                   unit='deg per control sample', low=0.0, high=100.0, per_joint=True),
     ParameterSpec('idz.mode', 'string', 'IDZ mode', default_text='designed (zero)',
                   choices=IDZ_MODES, per_joint=True),
+    ParameterSpec('idz.fade', 'double',
+                  'IDZ fade-in band beyond the chatter band: the compensation leaves rest as '
+                  'tanh((|u| - beta) / fade) instead of jumping to the edge (mode zero only; '
+                  '0: none; methods.md section 5.2)', default_text='designed (0)',
+                  unit='deg per control sample', low=0.0, high=100.0, per_joint=True),
 ))

@@ -18,7 +18,7 @@ _POLICY = RecalibrationPolicy()
 POLICY_PARAMETERS = ('significance', 'settle', 'confidence', 'min_change', 'cooldown')
 
 IDENTIFIER_PARAMETERS = ParameterTable('identifier_node', 'sdp_identifier', (
-    ParameterSpec('model_file', 'string', 'starting model (kind sdp)',
+    ParameterSpec('model_file', 'string', 'starting model (any map family)',
                   default_text='shipped J2 model', unit='path', read_only=True),
     ParameterSpec('joints', 'string_array',
                   'several joints, as named in JointState (overrides model_file and joint)',

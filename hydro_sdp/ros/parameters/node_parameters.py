@@ -16,23 +16,45 @@ ros2_controllers controller: the node owns one, built from its
 * checks a set request whole (the table's checks of each value, then the node's own check
   of the request) before anything is applied, and applies an accepted request whole in the
   post-set callback, through one handler per writable parameter: a table whose writable
-  parameter has no handler is refused when the node is built.
+  parameter has no handler is refused when the node is built;
+* refuses an array or string larger than the table allows on its length alone, before
+  any of its values is read: a request to the parameter services is answered from its
+  message, before rclpy turns it into parameters (a million gains would otherwise hold
+  the node, and its control loop, for seconds), and a request set in the process in the
+  pre-set callback; a request naming more than :data:`~.spec.MAX_NAMES` parameters is
+  answered with nothing (reading services) or refused (set services);
+* refuses ``use_sim_time`` once the node runs: a clock switched at run time (to a
+  ``/clock`` nobody publishes) would stop the node's timers and its watchdog.
 
 """
 
 from __future__ import annotations
 
-from typing import Callable, cast, Iterable, Mapping
+from functools import partial
+from typing import Callable, cast, Iterable, Mapping, Union
 
 from hydro_sdp.core.errors import ConfigurationError, HydroSdpError
 from hydro_sdp.ros.parameters.descriptors import as_double, descriptor, ROS_TYPES
 from hydro_sdp.ros.parameters.request import array_items, ParameterRequest
-from hydro_sdp.ros.parameters.spec import ParameterSpec, ParameterTable, ParameterValue
+from hydro_sdp.ros.parameters.spec import (
+    MAX_CHARACTERS, MAX_NAMES, ParameterSpec, ParameterTable, ParameterValue, size_error)
 from rcl_interfaces.msg import SetParametersResult
+from rcl_interfaces.srv import (
+    DescribeParameters, GetParameters, GetParameterTypes, ListParameters, SetParameters,
+    SetParametersAtomically)
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 
 __all__ = ['NodeParameters', 'ParameterRequest']
+
+#: A set request of the parameter services, and its answer.
+Request = Union[SetParameters.Request, SetParametersAtomically.Request]
+Response = Union[SetParameters.Response, SetParametersAtomically.Response]
+#: A request of the reading services, and its answer.
+Queried = Union[GetParameters.Request, DescribeParameters.Request, GetParameterTypes.Request,
+                ListParameters.Request]
+Answered = Union[GetParameters.Response, DescribeParameters.Response,
+                 GetParameterTypes.Response, ListParameters.Response]
 
 
 class NodeParameters:
@@ -82,9 +104,17 @@ class NodeParameters:
         self._twins: dict[str, str] = {}
         # Until start(): declarations, checked against the table only.
         self._started = False
+        # Why the pre-set callback refused the request being set ('' for none).
+        self._oversized = ''
         node.add_pre_set_parameters_callback(self._before_set)
         node.add_on_set_parameters_callback(self._on_set)
         node.add_post_set_parameters_callback(self._after_set)
+        for service in node.services:
+            if service.srv_type in (SetParameters, SetParametersAtomically):
+                service.callback = partial(self._sized, service.callback)
+            elif service.srv_type in (GetParameters, DescribeParameters, GetParameterTypes,
+                                      ListParameters):
+                service.callback = partial(self._listed, service.callback)
 
     # Declaration.
     def declare(self, names: Iterable[str] | None = None,
@@ -272,13 +302,72 @@ class NodeParameters:
             handler()
         self._started = True
 
+    def _sized(self, answer: Callable[[Request, Response], Response], request: Request,
+               response: Response) -> Response:
+        # A set request of the services, refused on the sizes its message gives, before
+        # rclpy reads a value of it; else answered as rclpy answers it.
+        if len(request.parameters) > MAX_NAMES:
+            reason = f'a request names at most {MAX_NAMES} parameters, got ' \
+                     f'{len(request.parameters)}'
+            if isinstance(response, SetParametersAtomically.Response):
+                response.result = SetParametersResult(successful=False, reason=reason)
+            else:
+                response.results = [SetParametersResult(successful=False, reason=reason)]
+            return response
+        reasons: list[str | None] = []
+        for message in request.parameters:
+            if len(message.name) > MAX_CHARACTERS:
+                reasons.append(f'a parameter name takes at most {MAX_CHARACTERS} characters, '
+                               f'got {len(message.name)}')
+                continue
+            spec = self.table.find(message.name)
+            value = message.value
+            sized = value.string_value if spec is not None and spec.kind == 'string' else \
+                max((value.double_array_value, value.integer_array_value, value.bool_array_value,
+                     value.byte_array_value, value.string_array_value), key=len)
+            reasons.append(None if spec is None else size_error(spec, sized, message.name))
+        if not any(reasons):
+            return answer(request, response)
+        if isinstance(response, SetParametersAtomically.Response):
+            response.result = SetParametersResult(
+                successful=False, reason=next(reason for reason in reasons if reason))
+            return response
+        # One by one, as rclpy sets them: the others are set, or refused, on their own.
+        kept = SetParameters.Request(parameters=[message for message, reason
+                                                 in zip(request.parameters, reasons)
+                                                 if not reason])
+        results = iter(answer(kept, SetParameters.Response()).results)
+        response.results = [SetParametersResult(successful=False, reason=reason) if reason
+                            else next(results) for reason in reasons]
+        return response
+
+    @staticmethod
+    def _listed(answer: Callable[[Queried, Answered], Answered], request: Queried,
+                response: Answered) -> Answered:
+        # A request of the reading services naming more parameters than a node has, or names
+        # longer than any, is answered with nothing, as rclpy answers for names it lacks.
+        names = request.prefixes if isinstance(request, ListParameters.Request) else request.names
+        if len(names) > MAX_NAMES or any(len(name) > MAX_CHARACTERS for name in names):
+            return response
+        return answer(request, response)
+
     def _before_set(self, parameters: list[Parameter]) -> list[Parameter]:
-        # Pre-set: integers of double parameters as doubles; the twin of every name set.
+        # Pre-set: a value too large is replaced by an empty one of its type (refused in
+        # on-set, read no further); integers of double parameters as doubles; the twin of
+        # every name set.
+        self._oversized = ''
         converted = []
         for parameter in parameters:
             spec = self.table.find(parameter.name)
-            converted.append(parameter if spec is None else
-                             as_double(parameter, ROS_TYPES[spec.kind]))
+            if spec is None:
+                converted.append(parameter)
+                continue
+            reason = size_error(spec, parameter.value, parameter.name)
+            if reason:
+                self._oversized = self._oversized or reason
+                parameter = Parameter(parameter.name, parameter.type_,
+                                      '' if spec.kind == 'string' else [])
+            converted.append(as_double(parameter, ROS_TYPES[spec.kind]))
         named = {p.name for p in converted}
         twins = [Parameter(self._twins[p.name], p.type_, p.value) for p in converted
                  if p.name in self._twins and self._twins[p.name] not in named]
@@ -286,6 +375,16 @@ class NodeParameters:
 
     def _on_set(self, parameters: list[Parameter]) -> SetParametersResult:
         # On-set: check the whole request; nothing is applied here.
+        if self._oversized:
+            return SetParametersResult(successful=False, reason=self._oversized)
+        if self._started:
+            clock = self._node.get_parameter('use_sim_time').value
+            changed = [p for p in parameters if p.name == 'use_sim_time' and p.value != clock]
+            if changed:
+                return SetParametersResult(
+                    successful=False, reason=f'use_sim_time is fixed at start-up (it is '
+                    f'{str(clock).lower()}): a clock switched at run time would stop the '
+                    "node's timers; restart the node with -p use_sim_time:=...")
         try:
             for parameter in parameters:
                 spec = self.table.find(parameter.name)
@@ -304,10 +403,16 @@ class NodeParameters:
         request = ParameterRequest(parameters)
         handlers = dict.fromkeys(self._apply[name] for name in request.names
                                  if name in self._apply)
-        for handler in handlers:
-            handler()
         joint_names = {spec.name for spec in self.table.joint_specs}
         if self._apply_joint is not None and any(
                 name in joint_names or name.split('.', 1)[-1] in joint_names
                 for name in request.names):
-            self._apply_joint(request)
+            handlers[partial(self._apply_joint, request)] = None
+        for handler in handlers:
+            try:
+                handler()
+            except HydroSdpError as error:
+                # The check let through what the handler refuses: a defect, reported, and
+                # no reason to end the node.
+                self._node.get_logger().error(f'a parameter change was accepted but could '
+                                              f'not be applied: {error}')

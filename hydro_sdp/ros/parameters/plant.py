@@ -22,4 +22,17 @@ PLANT_PARAMETERS = ParameterTable('plant_node', 'hydro_plant', (
                   'adds [lower, upper] to every dead-zone edge (wear, new parts; sdp and '
                   'sdp_dz maps); applies from the next tick once the whole request is accepted',
                   default=(0.0, 0.0), unit='input units', length=2),
+    ParameterSpec('command_source', 'string',
+                  'the only node whose valve commands are taken (fully qualified, '
+                  "'/pip_controller'); '' takes any one node's: while a second node publishes "
+                  'a valve_command topic, no command on it is taken and that valve is closed',
+                  default='', read_only=True),
+    ParameterSpec('command_rate_limit', 'double',
+                  'most valve commands per second taken per joint (bursts of 10 allowed); '
+                  'more are dropped, the command in force staying', default=1000.0,
+                  unit='1/s', low=1.0, high=1e6, read_only=True),
+    ParameterSpec('command_timeout', 'double',
+                  'the valve closes when no command was taken for this long (0: never; set it '
+                  "above the controller's control period)", default=0.0, unit='s', low=0.0,
+                  high=60.0, read_only=True),
 ))

@@ -11,6 +11,7 @@ from __future__ import annotations
 from typing import Iterable, Sequence
 
 from hydro_sdp.core.errors import ConfigurationError
+from hydro_sdp.ros.parameters.spec import shown
 from rclpy.parameter import Parameter
 
 
@@ -51,7 +52,7 @@ class ParameterRequest:
         """Return the number the request gives ``name``, or ``current``."""
         value = self._values.get(name, current)
         if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise ConfigurationError(f'parameter {name!r} needs a number, got {value!r}')
+            raise ConfigurationError(f'parameter {name!r} needs a number, got {shown(value)}')
         return float(value)
 
     def numbers(self, name: str, current: Sequence[float]) -> tuple[float, ...]:
@@ -60,14 +61,15 @@ class ParameterRequest:
         if value is None:
             return ()
         if isinstance(value, (str, bytes)) or not isinstance(value, Iterable):
-            raise ConfigurationError(f'parameter {name!r} needs numbers, got {value!r}')
+            raise ConfigurationError(f'parameter {name!r} needs numbers, got {shown(value)}')
         return tuple(float(x) for x in value)
 
     def pair(self, name: str, current: tuple[float, float]) -> tuple[float, float]:
         """Return the two numbers the request gives ``name``, or ``current``."""
         values = self.numbers(name, current)
         if len(values) != 2:
-            raise ConfigurationError(f'parameter {name!r} needs two numbers, got {list(values)}')
+            raise ConfigurationError(f'parameter {name!r} needs two numbers, '
+                                     f'got {shown(list(values))}')
         return values[0], values[1]
 
     def text(self, name: str, current: str) -> str:

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 import math
-from typing import Iterable, Literal, Sequence, Union
+from typing import Iterable, Literal, Sequence, Sized, Union
 
 from hydro_sdp.core.errors import ConfigurationError
 
@@ -27,6 +27,21 @@ ParameterValue = Union[bool, int, float, str, Sequence[float], Sequence[str]]
 _SCALARS: dict[str, tuple[type, ...]] = {'bool': (bool,), 'int': (int,), 'double': (float, int),
                                          'string': (str,)}
 _NUMBER_WORDS = {1: 'one', 2: 'two', 3: 'three'}
+#: Most values an array parameter takes, and most characters a string takes: a request
+#: beyond them is refused on its size alone, before any value is read.
+MAX_ITEMS = 64
+MAX_CHARACTERS = 4096
+#: Most parameters one request to a node's parameter services names.
+MAX_NAMES = 1024
+#: Most characters of a refused value a message shows.
+_SHOWN = 80
+
+
+def shown(value: object) -> str:
+    """Return ``repr(value)``, cut to its start when long (a message quotes it)."""
+    if isinstance(value, Sequence) and len(value) > _SHOWN:
+        return f'{repr(value[:_SHOWN // 4])[:_SHOWN]}... ({len(value)} in all)'
+    return repr(value)
 
 
 @dataclass(frozen=True)
@@ -123,6 +138,10 @@ class ParameterSpec:
         """
         self._check_shape(value, name or self.name)
 
+    def _wrong(self, value: object, label: str) -> ConfigurationError:
+        return ConfigurationError(f'parameter {label} must be {_type_text(self)}, '
+                                  f'got {shown(value)}')
+
     def require(self, value: object) -> None:
         """Refuse an empty value of a required parameter (given nowhere at start-up)."""
         if self.required and value == '':
@@ -139,31 +158,60 @@ class ParameterSpec:
             if self.is_array and self.default is None:
                 return                      # an array left unset
             raise ConfigurationError(f'parameter {label} needs a value')
-        wrong = ConfigurationError(f'parameter {label} must be {_type_text(self)}, '
-                                   f'got {value!r}')
         items: list[object] = [value]
         if self.is_array:
             if isinstance(value, (str, bytes)) or not isinstance(value, Iterable):
-                raise wrong
+                raise self._wrong(value, label)
             items = list(value)
         kinds = _SCALARS['double' if self.kind == 'double_array' else
                          'string' if self.kind == 'string_array' else self.kind]
         if not all(isinstance(item, kinds) and (self.kind == 'bool' or
                                                 not isinstance(item, bool)) for item in items):
-            raise wrong
+            raise self._wrong(value, label)
         if self.length is not None and len(items) != self.length:
             count = _NUMBER_WORDS.get(self.length, str(self.length))
-            raise ConfigurationError(f'parameter {label} needs {count} numbers, got {value!r}')
+            raise ConfigurationError(f'parameter {label} needs {count} numbers, '
+                                     f'got {shown(value)}')
         numbers = [float(item) for item in items if isinstance(item, (int, float))]
         if self.kind in ('double', 'double_array') and not all(map(math.isfinite, numbers)):
-            raise ConfigurationError(f'parameter {label} must be finite, got {value!r}')
+            raise ConfigurationError(f'parameter {label} must be finite, got {shown(value)}')
         if self.low is not None and self.high is not None and not \
                 self.low <= numbers[0] <= self.high:
             raise ConfigurationError(f'parameter {label} must be in [{self.low:g}, '
-                                     f'{self.high:g}], got {value!r}')
+                                     f'{self.high:g}], got {shown(value)}')
         if self.choices and value not in self.choices:
             raise ConfigurationError(f'parameter {label} must be one of '
-                                     f"{', '.join(self.choices)}, got {value!r}")
+                                     f"{', '.join(self.choices)}, got {shown(value)}")
+
+
+def size_error(spec: ParameterSpec, value: object, name: str) -> str | None:
+    """
+    Return why ``value`` is too large for ``spec``, or None; reads its length only.
+
+    Parameters
+    ----------
+    spec : ParameterSpec
+        The table's row.
+    value : object
+        The value as rclpy gives it (a list, an ``array.array``, a string).
+    name : str
+        The name it was given under.
+
+    Returns
+    -------
+    str or None
+        The reason to refuse it.
+
+    """
+    if spec.is_array and isinstance(value, Sized) and not isinstance(value, (str, bytes)):
+        limit, what = max(spec.length or 0, MAX_ITEMS), 'values'
+    elif spec.kind == 'string' and isinstance(value, str):
+        limit, what = MAX_CHARACTERS, 'characters'
+    else:
+        return None
+    if len(value) <= limit:
+        return None
+    return f'parameter {name!r} takes at most {limit} {what}, got {len(value)}'
 
 
 def _type_text(spec: ParameterSpec) -> str:

@@ -1,10 +1,11 @@
-"""Set-points kept inside the end stops; controllers that do not fit the model are refused."""
+"""Set-points inside the stops, controllers and IDZs that fit the model, the hold at a stop."""
 
 from dataclasses import replace
 
 from hydro_sdp.core.control.controller_spec import design_from_model
 from hydro_sdp.core.control.safety import (
-    check_controller_fits, clamp_setpoint, controller_within_model, setpoint_range)
+    check_controller_fits, check_idz_fits, clamp_setpoint, controller_within_model,
+    setpoint_range, slope_bounds, StopHold, top_speeds)
 from hydro_sdp.core.errors import ConfigurationError
 import pytest
 
@@ -57,3 +58,53 @@ def test_a_range_known_on_one_side_is_the_range(j2):
     known = design_from_model(j2)
     assert controller_within_model(known, unknown).v_limits == (-10.0, 10.0)
     assert controller_within_model(spec, unknown).v_limits is None
+
+
+def test_idz_edges_must_lie_inside_the_valve_range_and_slopes_within_the_models(j2):
+    spec = design_from_model(j2)
+    check_idz_fits(spec.idz, j2, 0.05, spec.v_limits)
+    # J2 up: the chord to 10 V is 0.2237 deg per sample per V, the steepest 3.313.
+    bounds = slope_bounds(j2, 0.05, None)
+    assert bounds[1] == pytest.approx((0.2237, 3.313), rel=1e-3)
+    idz = spec.idz
+    with pytest.raises(ConfigurationError, match=r'IDZ edges \[-100.0, 100.0\] must lie inside '
+                                                 r'the valve range \[-10.0, 10.0\]'):
+        check_idz_fits(replace(idz, dead_zone=(-100.0, 100.0)), j2, 0.05, None)
+    with pytest.raises(ConfigurationError, match='inside the valve range'):
+        check_idz_fits(replace(idz, dead_zone=(-1.0, 10.0)), j2, 0.05, None)   # no room above
+    with pytest.raises(ConfigurationError, match=r'IDZ negative slope 1e-300 lies outside '
+                                                 r'\[0\.08509, 3\.886\]'):
+        check_idz_fits(replace(idz, slopes=(1e-300, 1e-300)), j2, 0.05, None)
+    with pytest.raises(ConfigurationError, match='IDZ positive slope 7 lies outside'):
+        check_idz_fits(replace(idz, slopes=(1.2, 7.0)), j2, 0.05, None)
+    check_idz_fits(replace(idz, slopes=(0.1, 6.0), dead_zone=(-1.0, 1.0)), j2, 0.05, None)
+    # A table IDZ scaled to a slope the joint cannot have is refused the same way.
+    table = design_from_model(j2, form='table').idz
+    with pytest.raises(ConfigurationError, match='positive slope'):
+        check_idz_fits(table.with_slopes((table.slopes[0], 1e-6)), j2, 0.05, None)
+
+
+def test_without_a_valve_range_only_the_edges_order_counts(j2):
+    open_valve = replace(j2, input_limits=None)
+    assert top_speeds(open_valve) is None
+    assert slope_bounds(open_valve, 0.05, None) == [None, None]
+    idz = design_from_model(open_valve).idz
+    check_idz_fits(replace(idz, slopes=(1e-3, 1e3)), open_valve, 0.05, None)
+    assert top_speeds(j2) == pytest.approx((-29.51, 38.87), rel=1e-3)
+
+
+def test_the_stop_hold_rests_near_a_stop_side_setpoint_only():
+    allowed = (-13.3, 63.1)
+    hold = StopHold(0.5)
+    assert not hold.decide(30.0, 29.9, allowed)          # mid-range set-point: never
+    assert not hold.decide(63.1, 62.5, allowed)          # stop-side, 0.6 deg short: control
+    assert hold.decide(63.1, 62.7, allowed)              # within the band: hold
+    assert hold.decide(63.1, 63.6, allowed)              # past it, at the stop: hold
+    assert hold.decide(63.1, 62.2, allowed)              # falls back less than twice the band
+    assert not hold.decide(63.1, 62.0, allowed)          # more: control again
+    assert hold.decide(-13.0, -12.6, allowed)            # the lower stop, 0.3 deg from its end
+    assert not hold.decide(-12.7, -12.6, allowed)        # 0.6 deg from it: not stop-side
+    assert not StopHold(0.0).decide(63.1, 63.6, allowed)     # band 0: never
+    assert not StopHold(0.5).decide(63.1, 63.6, None)        # no stops: never
+    with pytest.raises(ConfigurationError, match='stop_band'):
+        StopHold(-1.0)

@@ -109,3 +109,44 @@ def test_the_offline_loop_controls_at_the_schedules_instants(j2):
     changes = np.flatnonzero(np.diff(trace.v)) + 1
     assert changes.size > 5 and np.all((changes - 1) % 3 == 0)
     assert trace.v[0] == 0.0 and trace.v[1] > 1.0       # rest before the first answer
+
+
+def test_a_stamp_ahead_by_more_than_the_lead_is_refused_and_nothing_changes():
+    gate = FeedbackGate(500 * MS, now_ns=0, lead_ns=50 * MS)
+    assert gate.admit(1000 * MS, now_ns=1000 * MS) == 'accepted'
+    assert gate.admit(1050 * MS, now_ns=1010 * MS) == 'accepted'     # 40 ms ahead: a skew
+    with pytest.raises(DataError, match=r'0\.450 s ahead of the node clock \(more than 0\.05 s'):
+        gate.admit(1470 * MS, now_ns=1020 * MS)
+    # The real samples after it are taken: the one from the future did not move the order.
+    assert gate.last_stamp == 1050 * MS
+    assert gate.admit(1060 * MS, now_ns=1060 * MS) == 'accepted'
+
+
+def test_a_stale_stamp_is_refused_before_the_order_is_looked_at():
+    gate = FeedbackGate(500 * MS, now_ns=0, lead_ns=50 * MS)
+    assert gate.admit(100_000 * MS, now_ns=100_000 * MS) == 'accepted'
+    # 100 s behind: older than the last stamp too, but stale first: refused, not ignored.
+    with pytest.raises(DataError, match=r'100\.000 s behind'):
+        gate.admit(0, now_ns=100_000 * MS)
+    assert gate.admit(99_990 * MS, now_ns=100_010 * MS) == 'ignored'  # overtaken, fresh
+
+
+def test_a_clock_that_goes_back_restarts_the_order_and_the_silence():
+    # A simulation restarted: the clock and the stamps start again from 0.
+    gate = FeedbackGate(500 * MS, now_ns=0, lead_ns=50 * MS)
+    assert gate.admit(60_000 * MS, now_ns=60_000 * MS) == 'accepted'
+    assert gate.watchdog(10 * MS) == 'fed'               # silence counted from now
+    assert gate.admit(20 * MS, now_ns=20 * MS) == 'accepted'
+    assert gate.watchdog(600 * MS) == 'lost'
+
+
+def test_the_watchdog_counts_on_a_steady_clock_once_fed():
+    gate = FeedbackGate(500 * MS, now_ns=0)
+    # Before any sample only the node clock counts (a simulated clock not started yet).
+    assert gate.watchdog(0, steady_ns=10_000 * MS) == 'fed'
+    assert gate.admit(100 * MS, now_ns=100 * MS, steady_ns=7_000 * MS) == 'accepted'
+    # The simulated clock stops at 100 ms; steady time goes on.
+    assert gate.watchdog(100 * MS, steady_ns=7_400 * MS) == 'fed'
+    assert gate.watchdog(100 * MS, steady_ns=7_501 * MS) == 'lost'
+    assert gate.silence_ns(100 * MS, steady_ns=7_600 * MS) == 600 * MS
+    assert gate.admit(110 * MS, now_ns=110 * MS, steady_ns=7_700 * MS) == 'resumed'

@@ -7,7 +7,7 @@ from hydro_sdp.core.control.loop_simulation import LoopJoint, run_closed_loop
 from hydro_sdp.core.control.pip_controller import ControllerSettings, PipIdzController
 from hydro_sdp.core.control.pip_design import PipGains
 from hydro_sdp.core.control.trajectory import (
-    check_trajectory, JointTrajectory, start_time, TrajectorySampler)
+    check_trajectory, check_trajectory_speeds, JointTrajectory, start_time, TrajectorySampler)
 from hydro_sdp.core.errors import DataError
 import numpy as np
 import pytest
@@ -224,3 +224,36 @@ def test_feedforward_history_excludes_the_feedforward_and_respects_the_limits():
     assert controller._u[0] == 1.0
     with pytest.raises(DataError, match='feed-forward must be finite'):
         controller.step(0.0, 0.0, math.nan)
+
+
+def test_planned_rates_run_from_the_setpoint_in_force_through_every_segment():
+    sampler = TrajectorySampler({'boom': 10.0, 'dipper': -90.0})
+    plan = trajectory([1.0, 3.0], [[20.0, -90.0], [0.0, -80.0]])
+    # Boom: 10 -> 20 in 1 s, then 20 -> 0 in 2 s; dipper: still, then +5 deg/s.
+    assert sampler.planned_rates(plan, 5.0) == {'boom': (-10.0, 10.0), 'dipper': (0.0, 5.0)}
+    # A first point at time 0 is a jump (as a set-point step), not a rate.
+    jump = trajectory([0.0, 2.0], [[40.0, -90.0], [44.0, -90.0]])
+    assert sampler.planned_rates(jump, 5.0)['boom'] == (0.0, 2.0)
+    # Nothing changed: the sampler still holds its set-points.
+    assert sampler.sample('boom', 100.0) == (10.0, 0.0)
+
+
+def test_the_cubic_peak_rate_is_found_between_the_points():
+    sampler = TrajectorySampler({'boom': 0.0})
+    # From 0 at rest to 10 deg at rest in 1 s: the cubic peaks at 1.5 x the chord, mid-way.
+    plan = trajectory([1.0], [[10.0]], [[0.0]], names=('boom',))
+    low, high = sampler.planned_rates(plan, 0.0)['boom']
+    assert low == 0.0 and high == pytest.approx(15.0)
+    # Velocities themselves count: 1e6 rad/s given at a point.
+    fast = trajectory([1.0, 2.0], [[0.0], [1.0]], [[math.degrees(1e6)], [0.0]], names=('boom',))
+    assert sampler.planned_rates(fast, 0.0)['boom'][1] > 5e7
+
+
+def test_a_trajectory_faster_than_a_joint_is_refused_naming_it():
+    tops = {'boom': (-29.5, 38.9), 'dipper': None}
+    check_trajectory_speeds({'boom': (-29.0, 38.0), 'dipper': (-1e9, 1e9)}, tops)
+    with pytest.raises(DataError, match=r'trajectory refused: faster than the joint can move: '
+                                        r'boom at 6000 deg/s \(top speed up 38\.9\)'):
+        check_trajectory_speeds({'boom': (0.0, 6000.0)}, tops)
+    with pytest.raises(DataError, match=r'boom at -30 deg/s \(top speed down -29\.5\)'):
+        check_trajectory_speeds({'boom': (-30.0, 0.0)}, tops)

@@ -3,9 +3,9 @@
 from dataclasses import replace
 
 from hydro_sdp.core.diagnosis.decision import on_common_samples
-from hydro_sdp.core.diagnosis.held_out import WindowErrors
 from hydro_sdp.core.diagnosis.residuals import runs_of
 from hydro_sdp.core.diagnosis.results import Candidate
+from hydro_sdp.core.identification.held_out import WindowErrors
 from hydro_sdp.core.model.effects import ValveLag
 from hydro_sdp.core.model.joint_model import JointModel
 import numpy as np

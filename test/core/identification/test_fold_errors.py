@@ -11,6 +11,8 @@ import pytest
 class HeldOut:
     """Stands for a fold's held-out data: the error of a map is its rate at command 1."""
 
+    samples = 100
+
     def simulation_mae(self, rate):
         return float(rate(1.0))
 
@@ -39,7 +41,10 @@ def test_a_family_that_fails_on_one_fold_is_dropped_the_others_averaged():
     assert (pwl.kind, pwl.note) == ('pwl', 'too few levels for the knots')
     assert math.isnan(pwl.mae)
     assert (poly.kind, poly.mae) == ('poly', pytest.approx(4.5))
-    assert tally.fold_errors() == {'sdp': [1.0, 2.0], 'poly': [3.0, 6.0]}
+    judgement = tally.judgement()
+    assert judgement.names == ('sdp', 'poly', 'pwl')
+    assert judgement.chosen == 0 and tally.chosen() == 'sdp'
+    assert math.isnan(judgement.pooled[2]) and math.isnan(judgement.bands[2])
 
 
 def test_a_failure_of_the_shared_fit_leaves_no_family_scored():
@@ -49,7 +54,8 @@ def test_a_failure_of_the_shared_fit_leaves_no_family_scored():
     assert [(s.kind, s.note) for s in tally.scores()] == [
         ('sdp', 'no motion in the training part'), ('pwl', 'no motion in the training part')]
     assert all(math.isnan(s.mae) for s in tally.scores())
-    assert tally.fold_errors() == {}
+    with pytest.raises(DataError, match='no map family could be fitted: sdp: no motion'):
+        tally.chosen()
 
 
 def test_no_fold_gives_no_score():

@@ -172,13 +172,12 @@ def test_stroke_geometry_scales_the_speed_by_the_angle_the_same_way_both_ways():
     assert STROKE.factor_at(10.0, 1.0) == pytest.approx(1.4)
     assert STROKE.factor_at(25.0, 1.0) == pytest.approx(1.25 * (1.0 - 0.1))
     assert STROKE.factor_at(25.0, -1.0) == pytest.approx(1.25 * (1.0 + 0.1))
-    # Cushion: heading for the upper end, 2 deg before it, half way from 1 to 0.3.
-    share = 2.0 / 4.0
-    plain = StrokeGeometry(STROKE.knots, STROKE.factors, STROKE.asymmetry)
-    assert STROKE.factor_at(58.0, 1.0) == pytest.approx(
-        plain.factor_at(58.0, 1.0) * (0.3 + 0.7 * share))
+    # At 58 deg, 9/10 of the way from the 40 to the 60 deg knot: factor 1.1 - 0.9 * 0.4 =
+    # 0.74, asymmetry -0.2 + 0.9 * 0.25 = 0.025. Cushion: heading for the upper end, 2 deg
+    # before it, half way from 1 to 0.3.
+    assert STROKE.factor_at(58.0, 1.0) == pytest.approx(0.74 * (1.0 + 0.025) * 0.65)
     # Leaving the upper end is not cushioned; flat beyond the end knots.
-    assert STROKE.factor_at(58.0, -1.0) == pytest.approx(plain.factor_at(58.0, -1.0))
+    assert STROKE.factor_at(58.0, -1.0) == pytest.approx(0.74 * (1.0 - 0.025))
     assert STROKE.factor_at(-30.0, 1.0) == pytest.approx(0.6 * 1.1)
     assert STROKE.factor_at(-30.0, -1.0) == pytest.approx(0.6 * 0.9 * 0.3)
 

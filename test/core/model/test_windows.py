@@ -1,8 +1,8 @@
 """Simulations restarted from the measured angle: each window is the simulation from its start."""
 
-from hydro_sdp.core.diagnosis.held_out import WindowErrors
 from hydro_sdp.core.diagnosis.residuals import runs_of
 from hydro_sdp.core.identification.evaluation import record_mae
+from hydro_sdp.core.identification.held_out import WindowErrors
 from hydro_sdp.core.model.effects import Backlash, StrokeGeometry, ValveLag
 from hydro_sdp.core.model.records import Record
 from hydro_sdp.core.model.simulation import simulate, speed_profile

@@ -171,7 +171,8 @@ def test_json_keys_and_human_output(tmp_path, capsys):
     assert code == 0, err
     payload = json.loads(out)
     assert set(payload) == {'bags', 'samples', 'sources', 'joint', 'joints', 'signals',
-                            'time_shift'}
+                            'time_shift', 'notes'}
+    assert payload['notes'] == [[], []]     # plain UTF-8 tables: nothing to say
     assert payload['bags'] == [str(tmp_path / 'bags' / 'first'), str(tmp_path / 'bags' / 'second')]
     assert payload['samples'] == [5, 5]
     assert payload['sources'] == [str(tmp_path / 'first.csv'), str(tmp_path / 'second.csv')]
@@ -244,9 +245,14 @@ def test_every_file_is_checked_before_any_bag_is_written(tmp_path, capsys):
 def test_unreadable_files_and_clashing_names(tmp_path, capsys):
     code, _, err = run(capsys, 'import', tmp_path / 'absent.csv', '--out', tmp_path, *COLUMNS)
     assert code == 2 and err == f'error: {tmp_path / "absent.csv"}: no such file\n'
+    # A byte that is not UTF-8 never blocks the table; named as UTF-8, the file is refused.
     (tmp_path / 'latin1.csv').write_bytes(b'time,angle\xb0,command\n1,2,3\n2,3,4\n')
-    code, _, err = run(capsys, 'import', tmp_path / 'latin1.csv', '--out', tmp_path, *COLUMNS)
-    assert code == 2 and 'not UTF-8 text (byte 10)' in err
+    code, _, err = run(capsys, 'import', tmp_path / 'latin1.csv', '--out', tmp_path, *COLUMNS,
+                       '--angle', 'angle\u00b0')
+    assert code == 0, err
+    code, _, err = run(capsys, 'import', tmp_path / 'latin1.csv', '--out', tmp_path, *COLUMNS,
+                       '--encoding', 'utf-8')
+    assert code == 2 and err.endswith('latin1.csv: not utf-8 text (byte 10, row 1)\n')
     for folder in ('a', 'b'):
         (tmp_path / folder).mkdir()
         (tmp_path / folder / 'run.csv').write_text(GOOD)

@@ -3,7 +3,7 @@ One table per node: the nodes declare what it says, check by it, and the docs ar
 
 The parameter tables of docs/interfaces.md section 3 and docs/guide/nodes.md and the shipped
 config/hydro_sdp.yaml are checked against the tables here (the same code that writes them,
-in check mode); the declarations are checked on running nodes.
+in check mode); running nodes answer for the tables over the parameter services.
 """
 
 import math
@@ -22,7 +22,7 @@ from hydro_sdp.ros.parameters.descriptors import ROS_TYPES
 from hydro_sdp.ros.parameters.node_parameters import NodeParameters
 from hydro_sdp.ros.parameters.spec import ParameterSpec, ParameterTable
 from hydro_sdp.ros.plant_node import PlantNode
-from hydro_sdp.ros.testing import RosHarness
+from hydro_sdp.ros.testing import ParameterClient, RosHarness
 import numpy as np
 import pytest
 from rclpy.node import Node
@@ -73,13 +73,17 @@ def nodes(tmp_path_factory):
     given = {'bag_recorder': {'output': str(folder / 'recorded')},
              'bag_player': {'bag': str(bag), 'autostart': False}}
     with RosHarness() as ros:
-        yield {executable: ros.add(cls, parameters=given.get(executable))
-               for executable, cls in NODES.items()}
+        nodes = {executable: ros.add(cls, parameters=given.get(executable))
+                 for executable, cls in NODES.items()}
+        yield {**nodes, 'harness': ros}
 
 
 @pytest.mark.parametrize('table', documents.TABLES, ids=lambda table: table.executable)
-def test_every_node_declares_its_table(nodes, table):
+def test_every_node_answers_for_its_table_over_the_services(nodes, table):
+    # What ros2 param list/get/set sees: every name of the table and no other, its default,
+    # a write to a read-only one refused, a value past a range refused and the value kept.
     node = nodes[table.executable]
+    client = ParameterClient(nodes['harness'], node.get_name())
     declared = set(node.list_parameters([], 0).names) - {'use_sim_time',
                                                          'start_type_description_service'}
     joints = getattr(node, 'joints', [])
@@ -87,21 +91,28 @@ def test_every_node_declares_its_table(nodes, table):
     for spec in table.specs:
         names = [f'{joint}.{spec.name}' for joint in joints] + [spec.name] if spec.per_joint \
             else [spec.name]
-        for name in names:
-            if not node.has_parameter(name):
-                assert spec.on_demand or spec.per_joint, name
-                continue
+        for name in [name for name in names if node.has_parameter(name)]:
             expected.add(name)
-            descriptor = node.describe_parameter(name)
-            assert descriptor.description.endswith(spec.documented), name
-            assert descriptor.read_only == spec.read_only, name
-            assert descriptor.type == ROS_TYPES[spec.kind].value, name
-            ranges = [*descriptor.floating_point_range, *descriptor.integer_range]
-            assert [(r.from_value, r.to_value) for r in ranges] == (
-                [] if spec.low is None else [(spec.low, spec.high)]), name
+            key = name.replace('.', '__')
+            answer = client.get(name)
+            if not answer:  # declared without a value (an optional array): rclpy's answer
+                assert spec.default is None and spec.is_array, name
+                continue
+            [(kind, value)] = answer
+            assert kind == ROS_TYPES[spec.kind], name
             if spec.default is not None and name not in ('autostart', 'bag', 'output'):
-                assert node.get_parameter(name).value == pytest.approx(spec.default), name
-    # Nothing is declared that the table does not hold.
+                assert value == pytest.approx(spec.default), name
+            if spec.read_only:
+                [result] = client.set_each(**{key: value})
+                assert not result.successful and 'read-only' in result.reason, name
+            elif spec.low is not None:
+                beyond = spec.high + (spec.high - spec.low) + 1
+                [result] = client.set_each(**{key: int(beyond) if spec.kind == 'int'
+                                              else float(beyond)})
+                assert not result.successful, name
+                assert client.get(name) == [(kind, value)], name
+        assert names and any(node.has_parameter(name) for name in names) or spec.on_demand \
+            or spec.per_joint, spec.name
     assert declared == expected
 
 
@@ -131,6 +142,40 @@ def test_a_value_that_breaks_the_table_is_refused_naming_the_parameter(
     result = controller.set_parameters([Parameter(name, value=value)])[0]
     assert not result.successful and message in result.reason
     assert controller.spec == before
+
+
+def test_a_value_too_large_is_refused_on_its_size_before_it_is_read(nodes):
+    controller = nodes['controller_node']
+    before = controller.spec
+    huge = [0.1] * 10**5
+    # Over the services, answered from the message: the other value of a one-by-one request
+    # is set on its own; an atomic request is refused whole.
+    client = ParameterClient(nodes['harness'], 'pip_controller')
+    first, second = client.set_each(gains__f=huge, idz__beta=before.idz.beta)
+    assert not first.successful and second.successful
+    assert first.reason == "parameter 'gains.f' takes at most 64 values, got 100000"
+    result = client.set_atomically(gains__f=huge, idz__beta=0.06)
+    assert not result.successful and 'at most 64 values' in result.reason
+    # More names than a node has parameters: a reading service answers nothing.
+    assert client.get('idz.beta') == [(Parameter.Type.DOUBLE, before.idz.beta)]
+    assert client.get(*['idz.beta'] * 2000) == []
+    assert client.get('x' * 5000) == []
+    # In the process, refused by the pre-set callback, a string as an array.
+    result = controller.set_parameters([Parameter('idz.mode', value='x' * 5000)])[0]
+    assert result.reason == "parameter 'idz.mode' takes at most 4096 characters, got 5000"
+    assert not controller.set_parameters([Parameter('gains.g', value=huge)])[0].successful
+    assert controller.spec == before and controller.get_parameter('idz.beta').value == \
+        before.idz.beta
+
+
+def test_use_sim_time_is_fixed_once_a_node_runs(nodes):
+    for executable in ('plant_node', 'controller_node', 'bag_recorder'):
+        node = nodes[executable]
+        result = node.set_parameters([Parameter('use_sim_time', value=False)])[0]
+        assert not result.successful, executable
+        assert result.reason.startswith('use_sim_time is fixed at start-up (it is true)')
+        assert node.get_clock().ros_time_is_active
+        assert node.set_parameters([Parameter('use_sim_time', value=True)])[0].successful
 
 
 def test_a_start_up_value_that_breaks_the_table_stops_the_node():

@@ -6,11 +6,11 @@ from dataclasses import replace
 
 from hydro_sdp.core.diagnosis.context import Context
 from hydro_sdp.core.diagnosis.detectors.base import Detector
-from hydro_sdp.core.diagnosis.held_out import WindowErrors
 from hydro_sdp.core.diagnosis.residuals import block_sums
 from hydro_sdp.core.diagnosis.results import Candidate, Trial
 from hydro_sdp.core.identification.delay import estimate_delay
 from hydro_sdp.core.identification.experiment import thin
+from hydro_sdp.core.identification.held_out import WindowErrors
 from hydro_sdp.core.model.effects import DirectionDependentDelay
 from hydro_sdp.core.model.sample_period import whole_samples_seconds
 import numpy as np

@@ -21,8 +21,8 @@ from __future__ import annotations
 from dataclasses import replace
 from typing import Sequence
 
-from hydro_sdp.core.diagnosis.held_out import WindowErrors
 from hydro_sdp.core.diagnosis.residuals import MIN_GAIN, Run
+from hydro_sdp.core.identification.held_out import WindowErrors
 from hydro_sdp.core.model.effects import LoadDependence
 from hydro_sdp.core.model.joint_model import JointModel
 import numpy as np

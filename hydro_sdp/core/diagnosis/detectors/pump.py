@@ -12,8 +12,8 @@ from __future__ import annotations
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.diagnosis.context import Context
 from hydro_sdp.core.diagnosis.detectors.base import EffectDetector
-from hydro_sdp.core.diagnosis.held_out import WindowErrors
 from hydro_sdp.core.diagnosis.results import Candidate, Trial
+from hydro_sdp.core.identification.held_out import WindowErrors
 from hydro_sdp.core.model.effects import FlowSharing
 from hydro_sdp.core.model.exogenous_signals import summed_other_speeds
 from hydro_sdp.core.model.joint_model import JointModel

@@ -72,7 +72,7 @@ def initial_sdp(points: Sequence[LevelSpeed], rest: float) -> FloatArray:
     speeds = np.array([p.speed for p in points])
     errors = np.array([p.standard_error for p in points])
     peak = np.max(np.abs(speeds))
-    moving = _moving(speeds, errors)
+    moving = moving_levels(speeds, errors)
     scale = max(float(np.max(np.abs(levels - rest))), 1e-9)
     guess = []
     for sign in (-1.0, 1.0):
@@ -131,7 +131,7 @@ def check_excitation(points: Sequence[LevelSpeed], rest: float) -> None:
     speeds = np.array([p.speed for p in points])
     errors = np.array([p.standard_error for p in points])
     levels = np.array([p.level for p in points])
-    moving = _moving(speeds, errors)
+    moving = moving_levels(speeds, errors)
     if not np.any(moving & (np.abs(speeds) > 0.05 * np.max(np.abs(speeds)))):
         raise DataError('no excitation: the joint never moves (are all commands inside the '
                         'dead-zone?)')
@@ -151,7 +151,8 @@ def check_excitation(points: Sequence[LevelSpeed], rest: float) -> None:
                         'needs commands on both sides of rest that move it')
 
 
-def _moving(speeds: FloatArray, errors: FloatArray) -> npt.NDArray[np.bool_]:
+def moving_levels(speeds: FloatArray, errors: FloatArray) -> npt.NDArray[np.bool_]:
+    """Tell which levels move the joint: 3 standard errors from zero and 2 % of the fastest."""
     # One test of "this level moves the joint" for the checks and the starting values, so
     # data the checks accept always give the starting values something on both sides.
     peak = max(float(np.max(np.abs(speeds))), 1e-9)

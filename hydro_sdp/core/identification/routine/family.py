@@ -11,25 +11,21 @@ from its measured angle: an error of the map accumulates there, where in
 one-step increments it hides under the noise. A held-out piece whose commands
 reach beyond those its fold trained on is not scored: no fold extrapolates.
 
-A short routine session holds few independent stretches, and which family
-wins a fold varies from fold to fold. Another family therefore replaces the
-first paper's ``sdp`` only when it predicts better on every fold; among the
-families that do, :func:`hydro_sdp.core.identification.family_choice.choose_kind`
-chooses as for experiments.
+The family is chosen by the one rule of :mod:`~hydro_sdp.core.identification.held_out`,
+as for experiments: a short session holds few independent stretches, and the spread
+of the per-fold differences widens the tie band that keeps the simpler family.
 
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-import math
 from typing import Sequence
 
 from hydro_sdp.core.errors import HydroSdpError
 from hydro_sdp.core.identification.delay import LevelSpeed
 from hydro_sdp.core.identification.experiment import Experiment, split_long
-from hydro_sdp.core.identification.family_choice import (
-    choose_kind, FittedKind, FoldErrors, KindScore)
+from hydro_sdp.core.identification.family_choice import FittedKind, FoldErrors
+from hydro_sdp.core.identification.held_out import deal, Unit
 from hydro_sdp.core.identification.map_fit import FitData
 from hydro_sdp.core.identification.routine.increment_fit import (
     fit_increments, fit_sdp_increments)
@@ -53,41 +49,9 @@ def _within(piece: Experiment, delay: int, low: float, high: float) -> bool:
     return bool(np.min(command) >= low and np.max(command) <= high)
 
 
-@dataclass(frozen=True)
-class RoutineScores:
-    """
-    Held-out errors of the families: the mean, and fold by fold.
-
-    Parameters
-    ----------
-    scores : tuple[KindScore, ...]
-        Mean held-out simulation MAE of each family.
-    folds : dict
-        Each family's MAE on each fold, degrees.
-
-    """
-
-    scores: tuple[KindScore, ...]
-    folds: dict[str, list[float]]
-
-    def __add__(self, other: RoutineScores) -> RoutineScores:
-        """Return the scores of both comparisons."""
-        return RoutineScores(self.scores + other.scores, {**self.folds, **other.folds})
-
-    def choose(self) -> FittedKind:
-        """Return ``sdp`` unless another family predicts better on every fold (then the best)."""
-        sdp = self.folds.get('sdp', [])
-        if not sdp or not any(s.kind == 'sdp' and math.isfinite(s.mae) for s in self.scores):
-            return choose_kind(self.scores)
-        eligible = [s for s in self.scores if s.kind == 'sdp' or (
-            len(self.folds.get(s.kind, [])) == len(sdp)
-            and all(a < b for a, b in zip(self.folds[s.kind], sdp)))]
-        return choose_kind(eligible)
-
-
 def compare_routine_kinds(pieces: Sequence[Experiment], delay: int, dt: float, rest: float,
                           points: Sequence[LevelSpeed],
-                          kinds: Sequence[FittedKind]) -> RoutineScores:
+                          kinds: Sequence[FittedKind]) -> FoldErrors:
     """
     Held-out simulation error of each map family fitted to the increments.
 
@@ -108,18 +72,16 @@ def compare_routine_kinds(pieces: Sequence[Experiment], delay: int, dt: float, r
 
     Returns
     -------
-    RoutineScores
-        The mean over folds of each family's held-out simulation MAE (NaN with the
-        reason when it could not be fitted), and its value on each fold.
+    FoldErrors
+        Each family's held-out simulation error on each fold (the reason where it could
+        not be fitted).
 
     """
     tally = FoldErrors(kinds)
-    folds = min(FOLDS, len(pieces))
-    for fold in range(folds):
-        test = list(pieces[fold::folds])
-        train = [piece for index, piece in enumerate(pieces) if index % folds != fold]
-        if not test or not train:
-            continue
+    units = [Unit(index) for index in range(len(pieces))]
+    for train_index, test_index in deal(units, min(FOLDS, len(pieces))):
+        train = [pieces[i] for i in train_index]
+        test = [pieces[i] for i in test_index]
         data = increments_of(train, delay)
         low, high = float(np.min(data.command)), float(np.max(data.command))
         inside = [piece for piece in test if _within(piece, delay, low, high)]
@@ -136,4 +98,4 @@ def compare_routine_kinds(pieces: Sequence[Experiment], delay: int, dt: float, r
             return start if kind == 'sdp' else fit_increments(
                 kind, data, dt, points, rest, start).static_map
         tally.add_fold(held_out, fit_map)
-    return RoutineScores(tuple(tally.scores()), tally.fold_errors())
+    return tally

@@ -17,9 +17,10 @@ from __future__ import annotations
 
 from typing import Callable, Sequence
 
+from hydro_sdp.core.identification.determined import undetermined_edges
 from hydro_sdp.core.identification.experiment import thin
 from hydro_sdp.core.identification.family_choice import (
-    FIRST_KINDS, FittedKind, KindChoice, KindScore)
+    FIRST_KINDS, FittedKind, FoldErrors, KindChoice)
 from hydro_sdp.core.identification.identified import Identification, IdentifyStage
 from hydro_sdp.core.identification.limits import model_limits
 from hydro_sdp.core.identification.map_fit import FitData, MapFit
@@ -84,24 +85,26 @@ def identify_routine(records: Sequence[Record], segmentation: Segmentation, dt: 
                           input_limits=input_limits)
     check_coverage(points, limits.commands.seen, rest, input_limits)
     sdp_fit = fit_sdp_increments(data, dt, points, rest)
-    comparison: tuple[KindScore, ...] = ()
+    scores: FoldErrors | None = None
     chosen: FittedKind = 'sdp' if kind == 'auto' else kind
     if kind == 'auto':
         step(IdentifyStage.FAMILIES)
         trial = thin(pieces, COMPARE_SAMPLES)
         scores = compare_routine_kinds(trial, delay.samples, dt, rest, points, FIRST_KINDS)
-        chosen = scores.choose()
+        chosen = scores.chosen()
         if chosen != 'sdp':
             # Eq. (5) lost: try its generalisation, convex from the dead-zone.
-            scores += compare_routine_kinds(trial, delay.samples, dt, rest, points,
-                                            ('power_sat',))
-            chosen = scores.choose()
-        comparison = scores.scores
+            scores = scores.merged(compare_routine_kinds(trial, delay.samples, dt, rest,
+                                                         points, ('power_sat',)))
+            chosen = scores.chosen()
     fit: MapFit[StaticMap] = sdp_fit if chosen == 'sdp' else fit_increments(
         chosen, data, dt, points, rest, sdp_fit.static_map)
     model = JointModel(joint=records[0].joint or 'joint', static_map=fit.static_map,
                        delay=whole_samples_seconds(delay.samples, dt),
-                       angle_limits=limits.angle_limits, input_limits=limits.input_limits)
+                       angle_limits=limits.angle_limits, input_limits=limits.input_limits,
+                       undetermined=undetermined_edges(points, rest))
     mae = FitData(pieces, delay.samples, dt).simulation_mae(fit.static_map.rate)
-    return Identification(model, dt, delay, segmentation, points, fit, comparison, mae,
-                          route='routine', commands=limits.commands)
+    return Identification(model, dt, delay, segmentation, points, fit,
+                          () if scores is None else tuple(scores.scores()), mae,
+                          route='routine', commands=limits.commands,
+                          family=None if scores is None else scores.judgement())

@@ -8,7 +8,8 @@ Without a model, the SDP-ARX model of the first paper's step 2,
 with ``u = v - rest`` split by its sign (``u+ = max(u, 0)``, ``u- = min(u, 0)``):
 each gain per direction of motion, the delay ``tau`` from the data (the dead
 time of :func:`~hydro_sdp.core.identification.delay.estimate_delay` plus the
-lag's time constant). With a model, what it misses:
+lag's time constant); the angles are taken from their mean, so that where the
+sensor's zero lies changes nothing. With a model, what it misses:
 
     dy_k = g+{chi} dy^+_k + g-{chi} dy^-_k + e_k   (``ratio``, where the model moves),
     dy_k - dy^_k = c{chi} + e_k                    (``residual``, every sample),
@@ -17,7 +18,8 @@ lag's time constant). With a model, what it misses:
 ratio of the measured to the modelled increment per direction, and the
 increment residual. Each target's gains are weighed in two stages: every
 state alone, then every other state by what it adds to the one that explains
-most alone (docs/methods.md section 14.6).
+most alone (docs/methods.md section 14.6). Increments the joint cannot make,
+held at an end stop or stalled, are left out (:meth:`.states.Rows.free`).
 
 """
 
@@ -47,6 +49,10 @@ import numpy as np
 MIN_SAMPLES = 20
 #: Model increments below this share of the largest count as "the model does not move".
 STILL = 1e-9
+#: States whose gains remove alone within this share (relative) of the best one's are tied
+#: for first: the one named first in the list is (full strokes make the travel since a
+#: reversal the angle's twin, one each way).
+TIED = 0.02
 
 
 def rest_of(records: Sequence[Record]) -> float:
@@ -56,13 +62,22 @@ def rest_of(records: Sequence[Record]) -> float:
     A command's sign is its direction on a valve centred at 0 (the papers' +-10 V), however
     briefly the records rest there; otherwise the still command held longest
     (:func:`~hydro_sdp.core.identification.rest.estimate_rest_command`: a 0..100 % duty
-    resting at 50).
+    resting at 50), away from the ends of the travel (a duty held against a stop is still
+    too).
     """
     low = min(float(np.min(r.v)) for r in records)
     high = max(float(np.max(r.v)) for r in records)
     if low < 0.0 < high:
         return 0.0
-    return estimate_rest_command([(r.v, r.y) for r in records])
+    bottom = min(float(np.min(r.y)) for r in records)
+    top = max(float(np.max(r.y)) for r in records)
+    margin = max(1.0, 0.02 * (top - bottom))
+    pieces = []
+    for r in records:
+        inside = np.r_[False, (r.y > bottom + margin) & (r.y < top - margin), False]
+        edges = np.flatnonzero(np.diff(inside.astype(np.int8)))
+        pieces += [(r.v[a:b], r.y[a:b]) for a, b in zip(edges[::2], edges[1::2])]
+    return estimate_rest_command(pieces or [(r.v, r.y) for r in records])
 
 
 def data_delay(records: Sequence[Record], dt: float, max_delay: float,
@@ -114,18 +129,20 @@ class _Setting:
     max_groups: int | None
     seed: int
     segment: IntArray
+    runs: IntArray | None = None
     screen: float = 0.0
     alone: dict[str, float] = field(default_factory=dict)
 
-    def backfit(self, z: FloatArray, terms: list[Term], seed: int) -> Backfit:
-        """Back-fit ``terms`` to ``z`` with this setting."""
+    def backfit(self, z: FloatArray, terms: list[Term], seed: int,
+                start: Sequence[FloatArray | None] | None = None) -> Backfit:
+        """Back-fit ``terms`` to ``z`` with this setting (from ``start``, if given)."""
         return backfit(z, terms, replicates=self.replicates, max_groups=self.max_groups,
-                       seed=seed, segment=self.segment)
+                       seed=seed, segment=self.segment, start=start, runs=self.runs)
 
     def tested(self, fit: Backfit, z: FloatArray, names: Sequence[str], seed: int) -> Backfit:
         """Return ``fit`` (of ``z``, by :meth:`backfit` with ``seed``), ``names`` tested."""
         return with_tests(fit, z, names, replicates=self.replicates, seed=seed,
-                          segment=self.segment)
+                          segment=self.segment, runs=self.runs)
 
 
 class _Target:
@@ -156,13 +173,20 @@ class _Target:
         return setting.backfit(self.z, terms, seed)
 
     def given(self, first: FloatArray, state: FloatArray, setting: _Setting,
-              seed: int) -> Backfit:
-        """Back-fit the gains along ``first`` plus what they add along ``state``."""
+              seed: int, alone: Backfit) -> Backfit:
+        """
+        Back-fit the gains along ``first`` plus what they add along ``state``.
+
+        From ``alone``, the fit along ``first``: its fixed terms and gains converged, the
+        added ones from zero (from the base, back-fitting would first have to undo what a
+        fixed term like ``a1`` took of the gains' shape).
+        """
         terms = self.fixed + [Term(name, x, first, setting.kind, test=False)
                               for name, x in self.gains]
+        start: list[FloatArray | None] = [estimate.parameter for estimate in alone.terms]
         terms += [Term(f'{name} added', x, state, setting.kind, additive=True)
                   for name, x in self.gains]
-        return setting.backfit(self.z, terms, seed)
+        return setting.backfit(self.z, terms, seed, start + [None] * len(self.gains))
 
 
 def _entries(fit: Backfit, state: str, parameter: str, names: list[str],
@@ -188,7 +212,8 @@ def _two_stages(target: _Target, rows: Rows, names: Sequence[str], parameter: st
     Weigh the gains against every state: the best state alone, the others given it.
 
     Each state is first fitted alone; the one whose gains remove most of the
-    held-out squared residual comes first, with its own share and test; every
+    held-out squared residual comes first (among those within :data:`TIED` of it, the
+    first named), with its own share and test; every
     other state is weighed by what it adds to it (the same gains along both,
     back-fitted together), so a state merely correlated with the first in the
     data does not take its place. With a ``screen``, a state whose gains remove
@@ -205,7 +230,9 @@ def _two_stages(target: _Target, rows: Rows, names: Sequence[str], parameter: st
         step(name)
         alone[name] = target.alone(rows.state(name), setting, setting.seed)
         setting.alone[f'{prefix}{name}'] = sum(alone[name].term(g).share for g in gain_names)
-    first = max(names, key=lambda name: sum(alone[name].term(g).share for g in gain_names))
+    explained = {name: sum(alone[name].term(g).share for g in gain_names) for name in names}
+    best = max(explained.values())
+    first = next(name for name in names if explained[name] >= (1.0 - TIED) * best)
     step(first)
     # The first state's gains tested: the fit alone, weighed again (nothing refitted).
     fits[f'{prefix}{first}'] = setting.tested(alone[first], target.z, gain_names, setting.seed)
@@ -219,7 +246,7 @@ def _two_stages(target: _Target, rows: Rows, names: Sequence[str], parameter: st
             entries += _entries(alone[name], name, parameter, gain_names, None)
             continue
         fit = target.given(rows.state(first), rows.state(name), setting,
-                           setting.seed + 10 * (index + 1))
+                           setting.seed + 10 * (index + 1), alone[first])
         fits[f'{prefix}{name}'] = fit
         entries += _entries(fit, name, parameter, gain_names, first)
     return entries
@@ -274,6 +301,15 @@ def analyse(records: Sequence[Record], *, model: JointModel | None = None,
         The parameters against the states: the first state's entries, then the others
         by what they add to it.
 
+    See Also
+    --------
+    identify : the parametric model the analysis guides.
+
+    Examples
+    --------
+    >>> from hydro_sdp import analyse
+    >>> analysis = analyse(records, states=('command', 'angle'))  # doctest: +SKIP
+
     """
     names = check_states(list(states))
     order_of(kind)
@@ -287,11 +323,14 @@ def analyse(records: Sequence[Record], *, model: JointModel | None = None,
     else:
         rest = rest_of(records) if rest is None else rest
         tau = delay or data_delay(records, dt, max_delay, rest)
-    rows = rows_of(records, tau, rest, model, dt)
+    rows, left_out = rows_of(records, tau, rest, model, dt, holds=True).free()
+    if rows.samples < MIN_SAMPLES:
+        raise DataError(f'only {rows.samples} increments where the joint can move (left out: '
+                        + ', '.join(f'{count} {why}' for why, count in left_out.items()) + ')')
     if max_rows is not None and rows.samples > max_rows:
         rows = rows.every(-(-rows.samples // max_rows))
     usable, skipped = _usable(rows, names)
-    setting = _Setting(kind, replicates, max_groups, seed, rows.record, screen)
+    setting = _Setting(kind, replicates, max_groups, seed, rows.record, rows.run, screen)
     fits: dict[str, Backfit] = {}
     residuals: list[StateDependence] = []
     a1_entries: list[StateDependence] = []
@@ -303,16 +342,20 @@ def analyse(records: Sequence[Record], *, model: JointModel | None = None,
         # a1 is held constant while the gains are weighed, then smoothed along its own
         # regressor's state, the angle (Young's default), with the gains along the first
         # state: against the command, a1{v} y_{k-1} would mimic each step's speed over the
-        # few degrees it travels.
-        constant = Term('a1', -rows.previous, rows.previous, kind, nvr=0.0, test=False)
-        entries = _two_stages(_Target(rows.y, [constant], gains), rows, usable, 'b', setting,
+        # few degrees it travels. Angles from their mean: the model does not depend on
+        # the sensor's zero, and no sum of large angles cancels.
+        level = float(np.mean(rows.previous))
+        y, previous, angle = rows.y - level, rows.previous - level, rows.state('angle')
+        constant = Term('a1', -previous, angle, kind, nvr=0.0, test=False)
+        entries = _two_stages(_Target(y, [constant], gains), rows, usable, 'b', setting,
                               progress, fits, '')
         if progress is not None:
             progress('a1')
         first = rows.state(entries[0].state)
-        terms = [Term('a1', -rows.previous, rows.previous, kind)]
+        terms = [Term('a1', -previous, angle, kind)]
         terms += [Term(name, x, first, kind, test=False) for name, x in gains]
-        fits['a1'] = setting.backfit(rows.y, terms, seed + 1)
+        fits['a1'] = setting.backfit(y, terms, seed + 1, [
+            estimate.parameter for estimate in fits[entries[0].state].terms])
         a1_fit = fits['a1'].term('a1')
         a1 = ParameterSummary(a1_fit.constant, a1_fit.constant_se, a1_fit.nvr)
         a1_entries.append(StateDependence.of('angle', 'a1', 'both', a1_fit))
@@ -330,7 +373,7 @@ def analyse(records: Sequence[Record], *, model: JointModel | None = None,
                                 'residual ')
     return SdpAnalysis('arx' if model is None else 'ratio', rows.samples, tau, dt, rest,
                        ordered(entries), ordered(residuals), a1, tuple(a1_entries), fits,
-                       tuple(skipped), dict(setting.alone))
+                       tuple(skipped), dict(setting.alone), left_out)
 
 
 def _usable(rows: Rows, names: Sequence[str]) -> tuple[list[str], list[tuple[str, str]]]:

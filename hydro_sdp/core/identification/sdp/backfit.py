@@ -8,7 +8,7 @@ less the other terms), its NVR re-estimated in the first passes and held
 after; repeat until the squared residual stops changing. Each term is then
 weighed, the others as fitted: its share of the base model's squared residual
 (the reduction from holding it constant to letting it follow its state, on
-held-out data: :mod:`hydro_sdp.core.identification.sdp.held_out`), and the
+held-out data: :mod:`hydro_sdp.core.identification.sdp.shares`), and the
 bootstrap p-value of its dependence
 (:mod:`hydro_sdp.core.identification.sdp.significance`).
 
@@ -22,10 +22,10 @@ from typing import Sequence
 
 from hydro_sdp.core.arrays import FloatArray, IntArray
 from hydro_sdp.core.errors import DataError
-from hydro_sdp.core.identification.sdp.held_out import held_out_reduction
 from hydro_sdp.core.identification.sdp.nvr import NvrEstimate
 from hydro_sdp.core.identification.sdp.ordering import MAX_GROUPS, order_by_state, Ordering
 from hydro_sdp.core.identification.sdp.random_walk import group_stats, inner, order_of, TvpKind
+from hydro_sdp.core.identification.sdp.shares import held_out_reduction
 from hydro_sdp.core.identification.sdp.significance import dependence_test
 from hydro_sdp.core.identification.sdp.smoothing import smooth_parameter, SmoothedParameter
 import numpy as np
@@ -99,7 +99,7 @@ class TermEstimate:
     reduction : float
         Squared residual removed by letting the parameter follow the state (in-sample).
     share : float
-        Held-out reduction (:mod:`hydro_sdp.core.identification.sdp.held_out`, 0 when
+        Held-out reduction (:mod:`hydro_sdp.core.identification.sdp.shares`, 0 when
         negative) over the base model's squared residual.
     p_value : float
         Bootstrap p-value of ``reduction`` (1 when the parameter came out constant).
@@ -226,7 +226,9 @@ def base_fit(z: FloatArray, regressors: FloatArray) -> tuple[FloatArray, FloatAr
 
 def backfit(z: FloatArray, terms: Sequence[Term], *, max_groups: int | None = MAX_GROUPS,
             replicates: int = 199, seed: int = 0, segment: IntArray | None = None,
-            max_passes: int = MAX_PASSES, tolerance: float = TOLERANCE) -> Backfit:
+            max_passes: int = MAX_PASSES, tolerance: float = TOLERANCE,
+            start: Sequence[FloatArray | None] | None = None,
+            runs: IntArray | None = None) -> Backfit:
     """
     Back-fit the terms' state-dependent parameters to ``z``, and weigh each.
 
@@ -248,6 +250,12 @@ def backfit(z: FloatArray, terms: Sequence[Term], *, max_groups: int | None = MA
         Most back-fitting passes.
     tolerance : float
         Convergence threshold on the squared residual, as a share of the base's.
+    start : sequence of FloatArray or None, or None
+        Per term, its parameter at every sample to start from (a fit of fewer terms);
+        None: the base model's constant (zero for an additive term).
+    runs : IntArray or None
+        Run of every sample (a command held), where the tests' blocks may be cut
+        (:func:`~hydro_sdp.core.identification.sdp.significance.dependence_test`).
 
     Returns
     -------
@@ -267,12 +275,15 @@ def backfit(z: FloatArray, terms: Sequence[Term], *, max_groups: int | None = MA
     base, base_se, rss_base = base_fit(z, regressors[:, own])
     orderings = [order_by_state(t.state, regressors[:, i], max_groups=max_groups)
                  for i, t in enumerate(terms)]
-    start = np.zeros(len(terms))
-    start[own] = base
-    parameters = [np.full(z.size, float(value)) for value in start]
+    constants = np.zeros(len(terms))
+    constants[own] = base
+    parameters = [np.full(z.size, float(value)) for value in constants]
+    for i, given in enumerate(start or ()):
+        if given is not None:
+            parameters[i] = np.array(given, dtype=np.float64)
     nvrs: list[float | NvrEstimate | None] = [t.nvr for t in terms]
     smoothed: list[SmoothedParameter] = []
-    fitted = np.einsum('ij,j->i', regressors, start)
+    fitted = np.einsum('ij,ij->i', regressors, np.column_stack(parameters))
     previous = rss_base
     passes, converged = 0, False
     while passes < max_passes and not converged:
@@ -299,14 +310,15 @@ def backfit(z: FloatArray, terms: Sequence[Term], *, max_groups: int | None = MA
                   for ordering, result, term in zip(orderings, smoothed, terms)]
     residual = z - fitted
     estimates = tuple(_weigh(residual, regressors[:, i], terms[i], orderings[i], smoothed[i],
-                             parameters[i], rss_base, replicates, seed + i, segment)
+                             parameters[i], rss_base, replicates, seed + i, segment, runs)
                       for i in range(len(terms)))
     return Backfit(estimates, fitted, inner(residual, residual), rss_base, base,
                    base_se, passes, converged)
 
 
 def with_tests(fit: Backfit, z: FloatArray, names: Sequence[str], *, replicates: int = 199,
-               seed: int = 0, segment: IntArray | None = None) -> Backfit:
+               seed: int = 0, segment: IntArray | None = None,
+               runs: IntArray | None = None) -> Backfit:
     """
     Return a back-fit with the terms ``names`` tested, as if fitted with ``test=True``.
 
@@ -322,7 +334,7 @@ def with_tests(fit: Backfit, z: FloatArray, names: Sequence[str], *, replicates:
         Its observations.
     names : sequence of str
         The terms to test.
-    replicates, seed, segment
+    replicates, seed, segment, runs
         As :func:`backfit` was given them.
 
     Returns
@@ -335,35 +347,38 @@ def with_tests(fit: Backfit, z: FloatArray, names: Sequence[str], *, replicates:
     terms = tuple(
         _weigh(residual, np.asarray(e.term.regressor, dtype=np.float64),
                replace(e.term, test=True), e.ordering, e.smoothed, e.parameter,
-               fit.base_residual_sum, replicates, seed + i, segment)
+               fit.base_residual_sum, replicates, seed + i, segment, runs)
         if e.term.name in names else e for i, e in enumerate(fit.terms))
     return replace(fit, terms=terms)
 
 
 def _weigh(residual: FloatArray, x: FloatArray, term: Term, ordering: Ordering,
            smoothed: SmoothedParameter, parameter: FloatArray, rss_base: float, replicates: int,
-           seed: int, segment: IntArray | None) -> TermEstimate:
+           seed: int, segment: IntArray | None, runs: IntArray | None) -> TermEstimate:
     """Return one converged term with its share, its constant and its p-value."""
     stats = smoothed.stats
     total_weight = float(np.sum(stats.weight))
-    constant = float(np.sum(stats.moment)) / total_weight
+    offset = float(np.sum(stats.moment)) / total_weight
+    constant = stats.reference + offset
     # Squared residual with the parameter held constant, less that with it following the state.
-    held = stats.total - float(np.sum(stats.moment)) ** 2 / total_weight
+    held = stats.total - offset * float(np.sum(stats.moment))
     observed = max(held - stats.residual_sum(smoothed.estimate), 0.0)
     n = stats.count
     sigma2 = inner(residual[ordering.samples], residual[ordering.samples]) / max(
         n - order_of(smoothed.kind), 1)
     constant_se = math.sqrt(sigma2 / total_weight)
-    partial = residual + x * parameter
+    # The term's partial residual about its constant: the null's residual, and what the
+    # test and the held-out share are formed on (sums of small numbers, 14.2).
+    centred = residual + x * (parameter - constant)
     p_value, block = 1.0, 0
     if replicates <= 0 or not term.test:
         p_value = math.nan
     elif observed > 0.0 and ordering.groups > 1:
         # A random walk whatever draws the curve: its zero NVR is a constant, the null.
-        test = dependence_test(partial, partial - x * constant, x, term.state, ordering, 'rw',
-                               replicates=replicates, seed=seed)
+        test = dependence_test(centred, x, term.state, ordering, 'rw',
+                               replicates=replicates, seed=seed, runs=runs, alpha=ALPHA)
         p_value, block = test.p_value, test.block
-    held_out = held_out_reduction(partial, x, ordering, smoothed.kind, smoothed.nvr.nvr,
+    held_out = held_out_reduction(centred, x, ordering, smoothed.kind, smoothed.nvr.nvr,
                                   segment)
     scale = rss_base if rss_base > 0.0 else np.inf
     return TermEstimate(term, ordering, smoothed, smoothed.standard_error(), parameter,

@@ -192,9 +192,16 @@ def fit_banded(stats: GroupStats, kind: str, nvr: float, *,
     except LinAlgError:
         raise DataError('the regressor is zero at too many state values to smooth along '
                         'them') from None
-    estimate = banded_solve(factor, stats.moment)
-    residual = stats.residual_sum(estimate)
-    penalty = float(np.sum(difference(estimate, kind) ** 2)) / nvr
+    # Solved for the offset from the reference, a constant the walk's steps do not see;
+    # a proper prior's precision takes the constant at its first row only (both walks).
+    moment = stats.moment
+    if prior is not None and stats.reference != 0.0:
+        moment = moment.copy()
+        moment[0] -= stats.reference / prior
+    offset = banded_solve(factor, moment)
+    estimate = stats.reference + offset
+    residual = stats.offset_residual_sum(offset)
+    penalty = float(np.sum(difference(offset, kind) ** 2)) / nvr
     if prior is not None:
         start = estimate[0] ** 2 + ((estimate[1] - estimate[0]) ** 2 if d == 2 else 0.0)
         penalty += start / prior
@@ -284,8 +291,11 @@ def fit_flat(stats: GroupStats, kind: str) -> FlatFit:
     if sign <= 0.0 or stats.count <= d:
         raise DataError('the regressor does not excite the parameter (all zero or one value)')
     coefficients = inverse @ np.einsum('ij,i->j', basis, stats.moment)
-    estimate = np.einsum('ij,j->i', basis, coefficients)
-    residual = stats.residual_sum(estimate)
+    offset = np.einsum('ij,j->i', basis, coefficients)
+    residual = stats.offset_residual_sum(offset)
+    # The basis's first column is the constant: the reference is part of the level.
+    coefficients[0] += stats.reference
+    estimate = stats.reference + offset
     sigma2 = max(residual, 0.0) / (stats.count - d)
     if sigma2 <= 0.0:
         raise DataError('the observations are fitted exactly: no noise to weigh the walk by')

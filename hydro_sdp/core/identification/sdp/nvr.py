@@ -7,7 +7,8 @@ maximised over ``log10 nvr`` on a range relative to the information of one
 group (``1 / mean weight``): a coarse scan, then Brent's method around the
 best point. Zero NVR (no dependence: a constant, or for ``irw`` a line in the
 rank) is a candidate of its own, compared through the limit of the same
-likelihood (:func:`~hydro_sdp.core.identification.sdp.banded.fit_flat`). The
+likelihood (:func:`~hydro_sdp.core.identification.sdp.banded.fit_flat`), and wins
+unless the walk is more likely by a margin (:data:`TIE`). The
 estimate's uncertainty is the curvature of ``-2 log L`` in ``ln nvr``
 (``se = sqrt(2 / curvature)``), as CAPTAIN's ``dlropt`` returns it.
 
@@ -31,6 +32,10 @@ LOG_RANGE = (-10.0, 4.0)
 SCAN_POINTS = 15
 #: Step in ``ln nvr`` of the curvature's finite difference.
 CURVATURE_STEP = 0.1
+#: Least fall of ``-2 log L`` from the flat walk for a positive NVR: below it the data do
+#: not tell the walk from a constant (a likelihood ratio within 1.0005), and the NVR
+#: would be the rounding of sums (docs/methods.md section 14.3).
+TIE = 1e-3
 
 
 @dataclass(frozen=True)
@@ -109,7 +114,7 @@ def estimate_nvr(stats: GroupStats, kind: str) -> NvrEstimate:
     log_nvr, neg2 = float(result.x), float(result.fun)
     if values[best] < neg2:
         log_nvr, neg2 = float(scan[best]), float(values[best])
-    if flat <= neg2:
+    if flat <= neg2 + TIE:
         return NvrEstimate(0.0, math.nan, flat, flat)
     at_limit = log_nvr - low < 2.0 * CURVATURE_STEP or high - log_nvr < 2.0 * CURVATURE_STEP
     log_se = math.nan

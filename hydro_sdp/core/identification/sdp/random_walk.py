@@ -16,7 +16,10 @@ difference operator of order ``d`` (1 or 2) and its first ``d`` states
 diffuse; :data:`STENCILS` holds ``D``'s rows.
 
 Every observation ``z_k = x_k p_{g(k)} + e_k`` of a group ``g(k)`` (samples with
-the same state value) enters a fit only through the sums :class:`GroupStats`.
+the same state value) enters a fit only through the sums :class:`GroupStats`,
+formed about a reference value of the parameter (its constant least-squares fit):
+sums of ``z`` itself would cancel in the squared residual when ``z`` is large
+against its noise (docs/methods.md section 14.2).
 
 """
 
@@ -96,16 +99,21 @@ class GroupStats:
     """
     Sufficient statistics of the observations ``z_k = x_k p_{g(k)} + e_k``, per group.
 
+    The sums are of ``r_k = z_k - x_k reference``: the parameter's offset from the
+    reference is what a fit estimates.
+
     Parameters
     ----------
     weight : FloatArray
         ``sum x_k^2`` over each group's observations.
     moment : FloatArray
-        ``sum x_k z_k`` over each group's observations.
+        ``sum x_k r_k`` over each group's observations.
     total : float
-        ``sum z_k^2`` over all observations.
+        ``sum r_k^2`` over all observations.
     count : int
         Number of observations.
+    reference : float
+        The reference value of the parameter.
 
     """
 
@@ -113,6 +121,7 @@ class GroupStats:
     moment: FloatArray
     total: float
     count: int
+    reference: float = 0.0
 
     @property
     def groups(self) -> int:
@@ -126,8 +135,12 @@ class GroupStats:
 
     def residual_sum(self, estimate: FloatArray) -> float:
         """Return ``sum (z_k - x_k p_{g(k)})^2`` for the per-group ``estimate``."""
-        p = np.asarray(estimate, dtype=np.float64)
-        return self.total - 2.0 * inner(p, self.moment) + inner(p * p, self.weight)
+        return self.offset_residual_sum(np.asarray(estimate, dtype=np.float64) - self.reference)
+
+    def offset_residual_sum(self, offset: FloatArray) -> float:
+        """Return the squared residual of the parameter ``reference + offset``, per group."""
+        return self.total - 2.0 * inner(offset, self.moment) + inner(offset * offset,
+                                                                     self.weight)
 
 
 def group_stats(z: FloatArray, x: FloatArray, group: IntArray, groups: int) -> GroupStats:
@@ -148,7 +161,7 @@ def group_stats(z: FloatArray, x: FloatArray, group: IntArray, groups: int) -> G
     Returns
     -------
     GroupStats
-        The sums.
+        The sums, about the constant least-squares fit ``sum x z / sum x^2``.
 
     """
     z = np.asarray(z, dtype=np.float64)
@@ -158,6 +171,10 @@ def group_stats(z: FloatArray, x: FloatArray, group: IntArray, groups: int) -> G
                         f'({z.size}, {x.size}, {np.size(group)})')
     if not (np.all(np.isfinite(z)) and np.all(np.isfinite(x))):
         raise DataError('observations and regressors must be finite')
-    weight = np.bincount(group, weights=x * x, minlength=groups).astype(np.float64)
-    moment = np.bincount(group, weights=x * z, minlength=groups).astype(np.float64)
-    return GroupStats(weight, moment, inner(z, z), int(z.size))
+    squares = x * x
+    power = float(np.sum(squares))
+    reference = inner(x, z) / power if power > 0.0 else 0.0
+    r = z - x * reference
+    weight = np.bincount(group, weights=squares, minlength=groups).astype(np.float64)
+    moment = np.bincount(group, weights=x * r, minlength=groups).astype(np.float64)
+    return GroupStats(weight, moment, inner(r, r), int(z.size), reference)

@@ -148,6 +148,9 @@ class SdpAnalysis:
     alone : dict[str, float]
         Held-out share of each state's gains fitted alone (keys: state, or ``residual
         <state>``), before any is weighed given the first.
+    left_out : dict[str, int]
+        Increments left out because the joint could not move, by reason
+        (:data:`~hydro_sdp.core.identification.sdp.states.HOLDS`).
 
     """
 
@@ -163,6 +166,7 @@ class SdpAnalysis:
     fits: dict[str, Backfit]
     skipped: tuple[tuple[str, str], ...] = ()
     alone: dict[str, float] = field(default_factory=dict)
+    left_out: dict[str, int] = field(default_factory=dict)
 
     @property
     def analysed(self) -> tuple[str, ...]:

@@ -2,22 +2,19 @@
 Whether a parameter's dependence on a state is significant, with autocorrelated residuals.
 
 The statistic is the likelihood ratio of the dependence, ``LR = -2 log L(0) -
-min_nvr -2 log L(nvr)``: how much more likely the data are with the parameter
-following the state (its NVR chosen by the data) than with it constant. Its
-null distribution comes from a dependent wild bootstrap (Shao 2010): the
-residuals of the model with the parameter held constant, at the term's samples
-in time order, are cut into blocks
-longer than their correlation and each block's sign is flipped at random; the
-flipped residuals are smoothed along the same state, the NVR chosen again by
-the same scan, and their LR counted. Blocks keep the residuals'
-autocorrelation and their size where they occur (the noise of a fast motion
-stays with it); the signs break any link with the state. A slowly varying
-state (the angle, the time since a change) then cannot make autocorrelated
-errors look like a dependence: they do so in the replicates too. The NVR is
-re-chosen in every replicate (on the coarse scan of
-:mod:`hydro_sdp.core.identification.sdp.nvr`, for the data as for the
-replicates), since an NVR fitted to the data would make the data's own ratio
-look larger than any replicate's.
+min_nvr -2 log L(nvr)``, the NVR over a scan of walks that take at most
+:data:`SMOOTH_SHARE` of the groups' degrees of freedom: a dependence is a curve,
+and a walk that follows every group fits the error a run makes on its own (a
+held command is one group) as well as any curve. Its null distribution comes from
+a wild bootstrap in blocks (Shao 2010): the residuals of the model with the
+parameter held constant, in time order, are cut into blocks of the length
+:func:`automatic_block` gives them, only where a run of one held command ends (a
+run's own error stays whole), each block's level given back what the constant's
+fit took of it (:func:`_restored`), and each block's sign flipped at random; the
+flipped residuals are scored by the same scan. Blocks keep the residuals'
+autocorrelation and their size where they occur; the signs break any link with
+the state. The replicates are extended where their count leaves the decision
+open (:func:`_undecided`). docs/methods.md section 14.5 has the measurements.
 
 """
 
@@ -26,7 +23,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 import math
 
-from hydro_sdp.core.arrays import FloatArray
+from hydro_sdp.core.arrays import FloatArray, IntArray
 from hydro_sdp.core.identification.sdp.banded import (
     banded_factor, banded_solve, null_basis, penalty_bands)
 from hydro_sdp.core.identification.sdp.nvr import nvr_range
@@ -35,6 +32,7 @@ from hydro_sdp.core.identification.sdp.random_walk import GroupStats, inner, ord
 import numpy as np
 from scipy import sparse
 from scipy.linalg import LinAlgError
+from scipy.special import betaincinv
 
 #: Autocorrelation below which residuals count as uncorrelated, for the block length.
 ACF_CUT = 0.1
@@ -47,6 +45,62 @@ CHUNK = 16
 #: of a replicate stays below a millisecond.
 TEST_GROUPS = 2000
 TEST_SCAN = 8
+#: Largest share of the groups' degrees of freedom the test's walks may take: a dependence
+#: is a curve smoother than the groups (a held command is one group, one run).
+SMOOTH_SHARE = 0.25
+#: The replicates are extended to ``MORE`` times as many (less one: 199 to 999) when the
+#: first ones leave the decision open.
+MORE = 5
+
+
+def automatic_block(series: FloatArray) -> int:
+    """
+    Return the block length of the dependence test: Politis and White's rule, samples.
+
+    The MSE-optimal length of the circular block bootstrap (Politis and White 2004,
+    corrected by Patton, Politis and White 2009), whose variance estimator is the one
+    of blocks of random sign with a random offset: a Bartlett window. From the flat-top
+    lag-window estimates of the residuals' spectral density at zero and its first
+    moment, over the lags up to twice the last one whose autocorrelation stands out
+    (Politis 2003: ``2 sqrt(log10 n / n)``, five lags in a row below it); at most
+    ``n / MIN_BLOCKS`` (docs/methods.md section 14.5).
+
+    Parameters
+    ----------
+    series : FloatArray
+        Residuals in time order.
+
+    Returns
+    -------
+    int
+        Samples per block (>= 1).
+
+    """
+    values = np.asarray(series, dtype=np.float64)
+    n = values.size
+    longest = max(1, n // MIN_BLOCKS)
+    centred = values - np.mean(values) if n else values
+    power = inner(centred, centred)
+    if n < 4 * MIN_BLOCKS or power <= 0.0:
+        return longest
+    run = max(5, math.ceil(math.sqrt(math.log10(n))))
+    widest = math.ceil(math.sqrt(n)) + run
+    size = 1 << int(math.ceil(math.log2(2 * n)))
+    spectrum = np.fft.rfft(centred, size)
+    covariance = np.fft.irfft(spectrum * np.conj(spectrum), size)[:min(n, widest + run + 1)] / n
+    standing = np.abs(covariance[1:] / covariance[0]) >= 2.0 * math.sqrt(math.log10(n) / n)
+    # The first lag m after which `run` lags in a row stand below the bound.
+    window = np.asarray(np.lib.stride_tricks.sliding_window_view(standing, run).any(axis=1))
+    quiet = np.flatnonzero(~window[:widest])
+    lags = min(2 * max(int(quiet[0]) if quiet.size else widest, 1), widest)
+    k = np.arange(1, lags + 1)
+    flat_top = np.minimum(1.0, 2.0 * (1.0 - k / lags))
+    first = 2.0 * float(np.sum(flat_top * k * covariance[1:lags + 1]))
+    zero = float(covariance[0] + 2.0 * np.sum(flat_top * covariance[1:lags + 1]))
+    if not zero > 0.0:
+        return longest
+    optimal = (2.0 * first ** 2 / (4.0 / 3.0 * zero ** 2) * n) ** (1.0 / 3.0)
+    return int(min(longest, max(1, math.ceil(optimal))))
 
 
 def block_length(series: FloatArray) -> int:
@@ -82,6 +136,25 @@ def block_length(series: FloatArray) -> int:
     return int(min(longest, max(math.ceil(n ** (1.0 / 3.0)), 2 * lag)))
 
 
+def smooth_limit(weight: float, groups: int, kind: str) -> float:
+    """
+    Return the largest NVR the test scans: a walk of :data:`SMOOTH_SHARE` of the groups' dof.
+
+    The equivalent degrees of freedom of the walk with every group's weight ``weight``,
+    ``sum_k 1 / (1 + lambda_k / (nvr weight))`` over the eigenvalues ``lambda_k`` of
+    ``D'D`` (``(2 sin(pi k / 2 M))^(2 d)``), at most ``SMOOTH_SHARE M`` (at least 2).
+    """
+    d = order_of(kind)
+    eigen = (2.0 * np.sin(np.pi * np.arange(groups) / (2.0 * groups))) ** (2 * d)
+    target = max(2.0, SMOOTH_SHARE * groups)
+    low, high = -30.0, 30.0
+    for _ in range(60):
+        middle = 0.5 * (low + high)
+        dof = float(np.sum(1.0 / (1.0 + eigen / math.exp(middle))))
+        low, high = (middle, high) if dof < target else (low, middle)
+    return math.exp(low) / weight
+
+
 class LikelihoodRatio:
     """
     The likelihood ratio of a walk against a flat parameter, for many series at once.
@@ -109,9 +182,10 @@ class LikelihoodRatio:
         groups = self.weight.size
         stats = GroupStats(self.weight, np.zeros(groups), 0.0, count)
         low, high = nvr_range(stats)
+        high = min(high, smooth_limit(stats.scale, groups, kind))
         self.factors: list[tuple[float, FloatArray, float]] = []
         penalty = penalty_bands(groups, kind)
-        for nvr in np.geomspace(low, high, TEST_SCAN):
+        for nvr in np.geomspace(low, max(high, low), TEST_SCAN):
             bands = penalty / nvr
             bands[0] += self.weight
             try:
@@ -173,28 +247,31 @@ class DependenceTest:
         Share of replicates (with the data) whose ratio reaches it.
     block : int
         Block length, samples.
+    replicates : int
+        Replicates drawn.
 
     """
 
     statistic: float
     p_value: float
     block: int
+    replicates: int = 0
 
 
-def dependence_test(z: FloatArray, residual: FloatArray, x: FloatArray, state: FloatArray,
+def dependence_test(residual: FloatArray, x: FloatArray, state: FloatArray,
                     ordering: Ordering, kind: str, *, replicates: int = 199,
-                    seed: int = 0) -> DependenceTest:
+                    seed: int = 0, runs: IntArray | None = None,
+                    alpha: float = 0.01) -> DependenceTest:
     """
     Test whether the parameter of ``z = x p(state) + e`` depends on the state.
 
     Parameters
     ----------
-    z : FloatArray
-        The term's observations (its partial residual) at every sample.
     residual : FloatArray
-        Residuals at every sample of the model with this parameter held constant (the
-        null: residuals of the model with the dependence fitted would have lost the
-        slow part of autocorrelated errors that the smoother took for it).
+        The term's partial residual at every sample, less the parameter held constant:
+        the null's residuals (those of the model with the dependence fitted would have
+        lost the slow part of autocorrelated errors that the smoother took for it), and
+        the data, whose ratio does not change with the constant.
     x : FloatArray
         The term's regressor at every sample.
     state : FloatArray
@@ -205,14 +282,20 @@ def dependence_test(z: FloatArray, residual: FloatArray, x: FloatArray, state: F
     kind : str
         ``rw`` or ``irw``.
     replicates : int
-        Bootstrap replicates.
+        Bootstrap replicates; ``MORE`` times as many (less one) when they leave the
+        decision ``p <= alpha`` open.
     seed : int
         Seed of the signs and block offsets.
+    runs : IntArray or None
+        Run of every sample (a command held, within one record): blocks are cut only
+        where the run changes; None: anywhere.
+    alpha : float
+        The level the decision is made at.
 
     Returns
     -------
     DependenceTest
-        The ratio, its p-value and the block length.
+        The ratio, its p-value, the block length and the replicates drawn.
 
     """
     ordering = coarsened(ordering, TEST_GROUPS, state)
@@ -224,27 +307,76 @@ def dependence_test(z: FloatArray, residual: FloatArray, x: FloatArray, state: F
     weight = np.bincount(ordering.group, weights=xs * xs,
                          minlength=ordering.groups).astype(np.float64)
     ratio = LikelihoodRatio(weight, n, kind)
-    observed = np.asarray(z, dtype=np.float64)[samples]
-    statistic = float(ratio(np.asarray(operator @ observed)[:, None],
-                            np.array([inner(observed, observed)]))[0])
     e = np.asarray(residual, dtype=np.float64)[samples]
-    block = block_length(e)
+    statistic = float(ratio(np.asarray(operator @ e)[:, None], np.array([inner(e, e)]))[0])
+    block = automatic_block(e)
     if statistic <= 0.0:
         return DependenceTest(0.0, 1.0, block)
+    if runs is None:
+        cuts = np.arange(n)
+    else:
+        labels = np.asarray(runs)[samples]
+        cuts = np.flatnonzero(np.r_[True, labels[1:] != labels[:-1]])
+    restored = _restored(e, xs, _starts(cuts, n, block, 0))
     rng = np.random.default_rng(seed)
-    blocks = n // block + 2
-    exceed = 0
-    done = 0
-    while done < replicates:
-        count = min(CHUNK, replicates - done)
+    draws: list[FloatArray] = []
+    goal, done = replicates, 0
+    while done < goal:
+        count = min(CHUNK, goal - done)
         flipped = np.empty((count, n))
         for row in range(count):
-            # Blocks of random sign, their boundaries shifted by a random offset.
-            offset = int(rng.integers(0, block))
-            signs = np.repeat(rng.choice(np.array([-1.0, 1.0]), size=blocks), block)
-            flipped[row] = e * signs[offset:offset + n]
-        moment = np.asarray(operator @ flipped.T)
-        exceed += int(np.count_nonzero(ratio(moment, np.sum(flipped ** 2, axis=1))
-                                       >= statistic))
+            flipped[row] = restored * _block_signs(cuts, n, block, rng)
+        draws.append(ratio(np.asarray(operator @ flipped.T), np.sum(flipped ** 2, axis=1)))
         done += count
-    return DependenceTest(statistic, (1.0 + exceed) / (1.0 + replicates), block)
+        if done == goal and goal < MORE * replicates + MORE - 1 and _undecided(
+                statistic, np.concatenate(draws), alpha):
+            goal = MORE * replicates + MORE - 1
+    exceed = int(np.count_nonzero(np.concatenate(draws) >= statistic))
+    return DependenceTest(statistic, (1.0 + exceed) / (1.0 + done), block, done)
+
+
+def _undecided(statistic: float, draws: FloatArray, alpha: float) -> bool:
+    """
+    Whether more replicates could bring a p-value above ``alpha`` to it.
+
+    The p-value ``(1 + k) / (1 + B)`` is above ``alpha`` while the 99 % Clopper-Pearson
+    interval of the chance that a replicate reaches the statistic still reaches below
+    ``alpha`` (a p-value at or below ``alpha`` is already the test's exact answer).
+    """
+    count = draws.size
+    exceed = int(np.count_nonzero(draws >= statistic))
+    if (1.0 + exceed) / (1.0 + count) <= alpha:
+        return False
+    return exceed == 0 or float(betaincinv(exceed, count - exceed + 1, 0.005)) < alpha
+
+
+def _starts(cuts: IntArray, n: int, block: int, phase: int) -> IntArray:
+    """Return where blocks about ``block`` long start, at ``cuts`` only, from ``phase``."""
+    # Every `block` samples from the phase, moved on to the next place a cut may go.
+    wanted = np.arange(phase, n, block)
+    starts = cuts[np.minimum(np.searchsorted(cuts, wanted), cuts.size - 1)]
+    return np.unique(np.r_[0, starts])
+
+
+def _block_signs(cuts: IntArray, n: int, block: int, rng: np.random.Generator) -> FloatArray:
+    """Return a random sign per block: blocks about ``block`` long, cut at ``cuts`` only."""
+    starts = _starts(cuts, n, block, int(rng.integers(0, block)))
+    signs = rng.choice(np.array([-1.0, 1.0]), size=starts.size)
+    return np.repeat(signs, np.diff(np.r_[starts, n]))
+
+
+def _restored(e: FloatArray, x: FloatArray, starts: IntArray) -> FloatArray:
+    """
+    Return the null's residuals with each block's own level scaled by ``1 / sqrt(1 - h)``.
+
+    The constant fitted under the null took a share ``h`` (its leverage: the block's
+    ``sum x^2`` over all) of each block's level out of the residuals; flipped, the levels
+    would scatter less than the errors' do (docs/methods.md section 14.5).
+    """
+    block = np.repeat(np.arange(starts.size), np.diff(np.r_[starts, e.size]))
+    weight = np.bincount(block, weights=x * x, minlength=starts.size)
+    level = np.bincount(block, weights=x * e, minlength=starts.size) / np.maximum(weight,
+                                                                                  1e-300)
+    leverage = weight / max(float(np.sum(weight)), 1e-300)
+    scale = 1.0 / np.sqrt(np.maximum(1.0 - leverage, 0.5)) - 1.0
+    return e + x * (level * scale)[block]

@@ -6,7 +6,8 @@ One row per angle increment ``y_k - y_{k-1}`` whose delayed command
 depend on, by name:
 
 * ``command``: the delayed command ``v_{k-tau}`` (input units);
-* ``angle``: the angle ``y_{k-1}`` the increment starts from (deg); the
+* ``angle``: the angle ``y_{k-2}`` one sample before the increment starts
+  (deg; not ``y_{k-1}``, whose sensor noise is in the increment too); the
   analysis splits every gain by the direction of motion, so each direction
   gets its own curve along the angle;
 * ``since_change``: time from the last change of the delayed command to
@@ -20,6 +21,11 @@ depend on, by name:
   (what backlash hides from the sensor after each reversal), else the measured
   travel since the drive last changed sign.
 
+Rows where the joint cannot move are marked (:attr:`Rows.hold`) and left out
+by :meth:`Rows.free`: held at an end stop while the command drives it into it,
+and stalled (held after moving under a command that still drives it, away from
+the stops), found by :mod:`hydro_sdp.core.identification.end_stops`.
+
 """
 
 from __future__ import annotations
@@ -29,6 +35,10 @@ from typing import Sequence
 
 from hydro_sdp.core.arrays import FloatArray, IntArray
 from hydro_sdp.core.errors import ConfigurationError, DataError
+from hydro_sdp.core.identification.effect_check import at_stop
+from hydro_sdp.core.identification.end_stops import (
+    clamp_start, HELD_FRACTION, stop_reach, stop_tolerance, stop_window)
+from hydro_sdp.core.identification.segmentation import noise_level
 from hydro_sdp.core.model.exogenous_signals import exogenous_of, smoothed_speeds
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.records import Record
@@ -41,6 +51,10 @@ STATES: tuple[str, ...] = ('command', 'angle', 'since_change', 'others_speed', '
 #: Units of each state, for figures and reports.
 UNITS = {'command': 'input units', 'angle': 'deg', 'since_change': 's',
          'others_speed': 'deg/s', 'load': 'load units', 'reversals': 'deg'}
+#: Why a row is left out, by its :attr:`Rows.hold` code (0: kept).
+HOLDS = {1: 'held at an end stop while the command drives into it',
+         2: 'stalled: driven, not moving, away from the stops',
+         3: 'resting at an end stop'}
 
 
 @dataclass(frozen=True, eq=False)
@@ -70,6 +84,14 @@ class Rows:
         The model's one-step increment, deg (None without a model).
     reversals : FloatArray or None
         Travel since the motion last reversed, deg.
+    angle : FloatArray or None
+        Angle ``y_{k-2}``, deg (None: ``previous``).
+    hold : IntArray or None
+        Why the joint cannot move at each row (:data:`HOLDS`; 0: it can); None: not
+        looked for.
+    run : IntArray or None
+        Index of the run each row belongs to: a delayed command held, within one
+        record (None: one run per row).
 
     """
 
@@ -83,6 +105,9 @@ class Rows:
     record: IntArray
     predicted: FloatArray | None = None
     reversals: FloatArray | None = None
+    angle: FloatArray | None = None
+    hold: IntArray | None = None
+    run: IntArray | None = None
 
     @property
     def samples(self) -> int:
@@ -93,13 +118,24 @@ class Rows:
         """Return every ``stride``-th row (each record's rows stay in time order)."""
         if stride <= 1:
             return self
-        pick = slice(None, None, stride)
+        return self._pick(slice(None, None, stride))
 
+    def free(self) -> tuple[Rows, dict[str, int]]:
+        """Return the rows where the joint can move, and how many were left out, by reason."""
+        if self.hold is None or not np.any(self.hold):
+            return self, {}
+        counts = np.bincount(self.hold, minlength=len(HOLDS) + 1)
+        left = {HOLDS[code]: int(counts[code]) for code in HOLDS if counts[code]}
+        return self._pick(self.hold == 0), left
+
+    def _pick(self, pick: slice | IntArray) -> Rows:
         def kept(values: FloatArray | None) -> FloatArray | None:
             return None if values is None else values[pick]
         return Rows(self.y[pick], self.previous[pick], self.command[pick], self.drive[pick],
                     self.since_change[pick], kept(self.others_speed), kept(self.load),
-                    self.record[pick], kept(self.predicted), kept(self.reversals))
+                    self.record[pick], kept(self.predicted), kept(self.reversals),
+                    kept(self.angle), None if self.hold is None else self.hold[pick],
+                    None if self.run is None else self.run[pick])
 
     @property
     def increment(self) -> FloatArray:
@@ -129,7 +165,7 @@ class Rows:
         if name == 'command':
             return self.command
         if name == 'angle':
-            return self.previous
+            return self.previous if self.angle is None else self.angle
         if name == 'since_change':
             return self.since_change
         if name == 'others_speed':
@@ -199,7 +235,8 @@ def travel_since_reversal(direction: FloatArray, travel: FloatArray) -> FloatArr
 
 
 def rows_of(records: Sequence[Record], delay: int, rest: float,
-            model: JointModel | None = None, dt: float | None = None) -> Rows:
+            model: JointModel | None = None, dt: float | None = None, *,
+            holds: bool = False) -> Rows:
     """
     Build the rows of the SDP analysis from records of one joint.
 
@@ -215,6 +252,8 @@ def rows_of(records: Sequence[Record], delay: int, rest: float,
         A model whose one-step increments are added as ``predicted``.
     dt : float or None
         Sample period, s (for the model); default: each record's own.
+    holds : bool
+        Whether to mark the rows where the joint is held (:func:`holds_of`).
 
     Returns
     -------
@@ -225,7 +264,12 @@ def rows_of(records: Sequence[Record], delay: int, rest: float,
     if delay < 1:
         raise DataError(f'delay must be at least one sample, got {delay}')
     parts: dict[str, list[FloatArray]] = {key: [] for key in (
-        'y', 'previous', 'command', 'since', 'others', 'load', 'predicted', 'reversals')}
+        'y', 'previous', 'angle', 'command', 'since', 'others', 'load', 'predicted',
+        'reversals')}
+    hold: list[IntArray] = []
+    runs: list[IntArray] = []
+    extremes = (min(float(np.min(r.y)) for r in records if len(r)),
+                max(float(np.max(r.y)) for r in records if len(r))) if holds else (0.0, 0.0)
     owner: list[IntArray] = []
     have_others = all(r.others is not None and r.others.shape[1] > 0 for r in records)
     have_load = all(r.load is not None for r in records)
@@ -237,6 +281,7 @@ def rows_of(records: Sequence[Record], delay: int, rest: float,
         delayed = record.v[k - delay]
         parts['y'].append(record.y[k])
         parts['previous'].append(record.y[k - 1])
+        parts['angle'].append(record.y[np.maximum(k - 2, 0)])
         parts['command'].append(delayed)
         parts['since'].append(_since_change(record.t[k], delayed))
         period = dt or record.sample_period
@@ -257,6 +302,10 @@ def rows_of(records: Sequence[Record], delay: int, rest: float,
             parts['reversals'].append(travel_since_reversal(
                 delayed - rest, np.abs(record.y[k] - record.y[k - 1])))
         owner.append(np.full(k.size, i))
+        first = runs[-1][-1] + 1 if runs else 0
+        runs.append(first + np.cumsum(np.r_[0, delayed[1:] != delayed[:-1]]))
+        if holds:
+            hold.append(holds_of(record, delay, rest, model, extremes)[k])
     if not owner:
         raise DataError(f'every record is shorter than the delay ({delay} samples) + 2')
     command = np.concatenate(parts['command'])
@@ -266,4 +315,141 @@ def rows_of(records: Sequence[Record], delay: int, rest: float,
                 np.concatenate(parts['load']) if have_load else None,
                 np.concatenate(owner),
                 np.concatenate(parts['predicted']) if model is not None else None,
-                np.concatenate(parts['reversals']))
+                np.concatenate(parts['reversals']), np.concatenate(parts['angle']),
+                np.concatenate(hold) if holds else None, np.concatenate(runs))
+
+
+def holds_of(record: Record, delay: int, rest: float, model: JointModel | None,
+             extremes: tuple[float, float]) -> IntArray:
+    """
+    Mark the increments of a record the joint cannot make although it is driven.
+
+    Code 1 (:data:`HOLDS`) where the angle before the increment sits at an end stop
+    and the delayed command drives into it
+    (:func:`~hydro_sdp.core.identification.effect_check.at_stop`; the model's
+    ``angle_limits``, else the stops the joint is found held at by
+    :func:`~hydro_sdp.core.identification.end_stops.clamp_start`), code 3 where it
+    sits there undriven (the noisy angle beyond the stop, clipped by a model, would
+    read as motion); code 2 where it is stalled away from the stops (:func:`stalled`).
+
+    Parameters
+    ----------
+    record : Record
+        The record.
+    delay : int
+        Delay, samples.
+    rest : float
+        Rest command.
+    model : JointModel or None
+        The model: its stops, and its map for the direction a command drives (else the
+        sign of ``v - rest``).
+    extremes : tuple[float, float]
+        Lowest and highest angle of all the records: a joint held there is at a stop.
+
+    Returns
+    -------
+    IntArray
+        Code of the increment ending at each sample (0 at the first ``delay``).
+
+    """
+    v, y = record.v, record.y
+    n = y.size
+    code = np.zeros(n, dtype=np.int64)
+    if n <= delay + 1:
+        return code
+    noise = noise_level(record, rest, delay)
+    reach = stop_reach(noise)
+    window = stop_window(record.sample_period)
+    k = np.arange(delay, n)
+    drive = (model.rate(v[k - delay]) if model is not None else v[k - delay] - rest)
+    held = np.zeros(n, dtype=bool)
+    held[k] = stalled(y, v, delay, noise, window)[k] & (drive != 0.0)
+    # Both ends of an increment held: the first increment out of a stall is motion.
+    code[1:] = np.where(held[1:] & held[:-1], 2, 0)
+    known: tuple[float | None, float | None] = (
+        model.angle_limits if model is not None and model.angle_limits is not None
+        else _stops_found(record, delay, rest, noise, window, extremes))
+    stops = (-np.inf if known[0] is None else known[0], np.inf if known[1] is None else known[1])
+    previous = y[k - 1]
+    # Held just short of a stop (the net speed's window reaches it) is arriving there.
+    near = max(reach, stop_tolerance(known))
+    code[k[(code[k] == 2) & at_stop(previous, drive, stops, near)]] = 1
+    code[k[at_stop(previous, drive, stops, reach)]] = 1
+    middle = 0.5 * (max(stops[0], extremes[0]) + min(stops[1], extremes[1]))
+    still = np.where(drive == 0.0, np.where(previous > middle, 1.0, -1.0), 0.0)
+    code[k[at_stop(previous, still, stops, reach)]] = 3
+    return code
+
+
+def stalled(y: FloatArray, v: FloatArray, delay: int, noise: float, window: int) -> np.ndarray:
+    """
+    Mark the samples where the joint is held after moving under the same delayed command.
+
+    The joint's net speed over the ``window`` after the sample is below
+    :data:`~hydro_sdp.core.identification.end_stops.HELD_FRACTION` of the fastest it moved
+    under that command (counted from two windows after the command came through: the
+    last command's motion, through a valve lag, is not this one's), which must stand out
+    of the noise as :func:`~hydro_sdp.core.identification.end_stops.clamp_start` requires.
+
+    Parameters
+    ----------
+    y, v : FloatArray
+        Angles (deg) and commands of a record.
+    delay : int
+        Delay, samples.
+    noise : float
+        Angle noise, deg.
+    window : int
+        Samples of the net-speed window.
+
+    Returns
+    -------
+    numpy.ndarray
+        Whether each sample is held so (False at the last ``window`` and first ``delay``).
+
+    """
+    n = y.size
+    held = np.zeros(n, dtype=bool)
+    if n <= delay + window + 1:
+        return held
+    speed = np.zeros(n)
+    speed[:n - window] = np.abs(y[window:] - y[:-window]) / window
+    delayed = np.r_[np.full(delay, np.nan), v[:n - delay]]
+    start = np.r_[True, ~(delayed[1:] == delayed[:-1])]
+    index = np.arange(n)
+    since = index - np.maximum.accumulate(np.where(start, index, 0))
+    run = np.cumsum(start)
+    # Samples to the end of the run: the window must not see the next command.
+    ends = np.r_[np.flatnonzero(start)[1:], n]
+    left = ends[run - 1] - index
+    # The fastest so far within each run (from two windows in), by one running maximum:
+    # each run lifted above every earlier one.
+    counted = np.where(since >= 2 * window, speed, 0.0)
+    lift = run * (float(np.max(speed)) + 1.0)
+    fastest = np.maximum.accumulate(counted + lift) - lift
+    floor = 4.0 * max(noise, 1e-9) / window
+    held[:n - window] = ((speed < np.maximum(HELD_FRACTION * fastest, floor))
+                         & (fastest > 3.0 * floor) & (since >= 2 * window)
+                         & (left >= window))[:n - window]
+    return held
+
+
+def _stops_found(record: Record, delay: int, rest: float, noise: float, window: int,
+                 extremes: tuple[float, float]) -> tuple[float | None, float | None]:
+    """Return the angles the joint is held at, driven, at the ends of its travel."""
+    v, y = record.v, record.y
+    n = y.size
+    found: list[list[float]] = [[], []]
+    active = np.flatnonzero(np.diff(np.r_[0, (v != rest).astype(np.int8), 0]))
+    for begin, end in zip(active[::2].tolist(), active[1::2].tolist()):
+        start, stop = max(begin - 1, 0), min(end + delay, n)
+        while stop - start > 2 * window + 2:
+            clamp = clamp_start(y, v, start, stop, delay=delay, noise=noise, window=window,
+                                extremes=extremes, rest=rest)
+            if clamp is None:
+                break
+            arrival, angle, side = clamp
+            found[side].append(angle)
+            changed = np.flatnonzero(v[arrival:stop] != v[arrival])
+            start = min(arrival + int(changed[0]) + delay, stop) if changed.size else stop
+    return (min(found[0]) if found[0] else None, max(found[1]) if found[1] else None)

@@ -69,7 +69,6 @@ def closed_loop_record(joint, controller_edges, tmp_path, seed=3):
 @pytest.mark.parametrize('controller_edges', [
     (-0.9, 0.8),        # the controller's IDZ at the true edges
     (-0.7, 0.6),        # inside them: commands the joint does not answer
-    (-1.1, 1.0),        # beyond them: the edges lie in commands never sent
 ])
 def test_a_closed_loop_with_three_set_point_moves_gives_the_dead_zone(
         controller_edges, tmp_path):
@@ -79,6 +78,21 @@ def test_a_closed_loop_with_three_set_point_moves_gives_the_dead_zone(
     assert result.route == 'routine'
     assert result.model.delay == pytest.approx(0.12)
     assert edge_error(result.model, VOLTS) < 0.1
+    if controller_edges == (-0.7, 0.6):
+        # Commands between the controller's edges and the true ones leave the joint still.
+        assert result.model.undetermined == ()
+
+
+def test_edges_in_commands_a_closed_loop_never_sent_are_bounds(tmp_path):
+    # The controller's IDZ beyond the true edges: no command between rest and them.
+    record = closed_loop_record(VOLTS, (-1.1, 1.0), tmp_path)
+    model = identify([record]).model
+    bounds = {entry.parameter: entry.bound for entry in model.undetermined}
+    assert set(bounds) == {'dead_zone[0]', 'dead_zone[1]'}
+    assert -1.3 < bounds['dead_zone[0]'][0] <= -1.1
+    assert 1.0 <= bounds['dead_zone[1]'][1] < 1.2
+    for (low, high), edge in zip(bounds.values(), VOLTS.dead_zone):
+        assert low <= edge <= high
 
 
 def test_step_experiments_still_take_the_experiments_route():

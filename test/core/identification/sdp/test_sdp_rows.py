@@ -30,7 +30,8 @@ def test_each_increment_gets_its_delayed_command_and_states():
     # then counts from the sample before the change, so the first increment under it is dt.
     np.testing.assert_allclose(rows.since_change[[2, 3, 4, 5, 8, 9]],
                                [DT, 2 * DT, 3 * DT, DT, DT, 2 * DT], atol=1e-6)
-    np.testing.assert_array_equal(rows.state('angle'), rows.previous)
+    # The angle one sample before the increment: not the sample whose noise is in it.
+    np.testing.assert_array_equal(rows.state('angle'), y[k - 2])
     with pytest.raises(ConfigurationError, match="unknown state 'speed'"):
         rows.state('speed')
 

@@ -6,8 +6,9 @@ steps that each travel their own stretch of the stroke make the angle a
 label of the step, and a parameter along the angle then fits each step's own
 transient. In-sample, that looks like a strong dependence; on held-out data it
 predicts nothing. The share reported for a dependence is therefore held out:
-the term's samples are cut into contiguous stretches in time (:func:`folds`:
-each record whole, or cut into tenths of the data when it is longer), each
+the term's samples are cut into contiguous stretches in time
+(:func:`~hydro_sdp.core.identification.held_out.stretch_folds`: each record whole, or cut
+into tenths of the data when it is longer), each
 stretch is held out in turn, the parameter smoothed along the state (its NVR
 fixed) on the others predicts it at its state values (groups without training
 data are filled by the walk), and so does the parameter held constant. The
@@ -19,50 +20,12 @@ Whole records make the answer independent of the order the records come in.
 
 from __future__ import annotations
 
-import math
-
 from hydro_sdp.core.arrays import FloatArray, IntArray
+from hydro_sdp.core.identification.held_out import stretch_folds
 from hydro_sdp.core.identification.sdp.banded import fit_banded, fit_flat
 from hydro_sdp.core.identification.sdp.ordering import Ordering
 from hydro_sdp.core.identification.sdp.random_walk import GroupStats
 import numpy as np
-
-#: A stretch holds at most this share of the samples (a record longer is cut).
-STRETCHES = 10
-#: Most folds (neighbouring stretches are held out together beyond).
-MAX_FOLDS = 50
-
-
-def folds(segment: IntArray, stretches: int = STRETCHES,
-          max_folds: int = MAX_FOLDS) -> IntArray:
-    """
-    Return the fold of each sample: whole records, records cut into tenths when longer.
-
-    Parameters
-    ----------
-    segment : IntArray
-        Record of each sample, in time order (samples of one record consecutive).
-    stretches : int
-        A stretch is at most ``1 / stretches`` of the samples.
-    max_folds : int
-        Most folds; consecutive stretches are pooled beyond.
-
-    Returns
-    -------
-    IntArray
-        Fold of each sample, ``0..folds-1``.
-
-    """
-    segment = np.asarray(segment)
-    n = segment.size
-    longest = max(1, math.ceil(n / stretches))
-    starts = np.r_[True, segment[1:] != segment[:-1]]
-    index = np.arange(n)
-    # Position of each sample within its record, then its stretch within the record.
-    position = index - np.maximum.accumulate(np.where(starts, index, 0))
-    piece = np.cumsum(starts | (position % longest == 0)) - 1
-    pieces = int(piece[-1]) + 1 if n else 0
-    return piece if pieces <= max_folds else (piece * max_folds) // pieces
 
 
 def held_out_reduction(z: FloatArray, x: FloatArray, ordering: Ordering, kind: str,
@@ -98,8 +61,8 @@ def held_out_reduction(z: FloatArray, x: FloatArray, ordering: Ordering, kind: s
     zs = np.asarray(z, dtype=np.float64)[samples]
     xs = np.asarray(x, dtype=np.float64)[samples]
     n = zs.size
-    fold = folds(np.zeros(n, dtype=np.int64) if segment is None
-                 else np.asarray(segment)[samples])
+    fold = stretch_folds(np.zeros(n, dtype=np.int64) if segment is None
+                         else np.asarray(segment)[samples])
     count = int(fold[-1]) + 1 if n else 0
     if count < 2:
         return 0.0

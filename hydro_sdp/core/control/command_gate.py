@@ -1,0 +1,115 @@
+"""
+Which valve commands a valve takes: from one source, within its range and rate, while fresh.
+
+A ``Float64`` on ``<joint>/valve_command`` does not say who sent it, but the middleware says
+how many publish the topic, and the ROS graph who. :class:`CommandGate` takes a command only
+while its publishers are the one source allowed (a node named by the caller, or any single
+node when none is named): while a second node publishes, nobody's commands are taken and the
+valve is closed, since the gate cannot tell whose a message is. Commands beyond
+``rate_limit`` per second (bursts of ``burst`` allowed) are dropped, the command in force
+staying; commands beyond the valve's range are clamped to it; when the source has sent
+nothing for ``timeout_ns`` the valve is to be closed (docs/methods.md section 4.11). The
+caller reads the publishers and the clock.
+
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Sequence
+
+from hydro_sdp.core.errors import ConfigurationError, DataError
+
+#: Commands a source may send at once above the rate limit.
+BURST = 10
+
+
+class CommandGate:
+    """
+    The acceptance rule of one joint's valve commands.
+
+    Parameters
+    ----------
+    limits : tuple[float, float] or None
+        Valve range, input units (commands are clamped to it).
+    source : str
+        Fully qualified name of the only node allowed (``/pip_controller``); '' allows any
+        one node, as long as it is the only publisher.
+    rate_limit : float
+        Most commands per second taken (> 0).
+    timeout_ns : int
+        Silence of the source after which the valve is closed, ns (0: never).
+    burst : int
+        Commands taken at once above the rate.
+
+    """
+
+    def __init__(self, limits: tuple[float, float] | None, *, source: str = '',
+                 rate_limit: float = 1000.0, timeout_ns: int = 0, burst: int = BURST) -> None:
+        if not (math.isfinite(rate_limit) and rate_limit > 0.0):
+            raise ConfigurationError(f'command_rate_limit must be > 0 per s, got {rate_limit}')
+        if timeout_ns < 0:
+            raise ConfigurationError(f'command_timeout must be >= 0 s, got {timeout_ns * 1e-9}')
+        self.limits = limits
+        self.source = source
+        self.rate_limit = float(rate_limit)
+        self.timeout_ns = int(timeout_ns)
+        self.burst = burst
+        self._tokens = float(burst)
+        self._refilled_ns: int | None = None
+        self.last_accepted_ns: int | None = None
+
+    def admit(self, value: float, now_ns: int, publishers: Sequence[str]) -> float | None:
+        """
+        Decide on one command.
+
+        Parameters
+        ----------
+        value : float
+            The command, input units.
+        now_ns : int
+            The caller's clock, ns.
+        publishers : sequence of str
+            The publishers of the command topic now: fully qualified node names ('' for
+            one whose name is not known; with no source named, only their number counts).
+
+        Returns
+        -------
+        float or None
+            The command to put in force (clamped to the range), or None to drop it
+            (above the rate limit: the command in force stays).
+
+        Raises
+        ------
+        DataError
+            If the command is not finite or its publishers are not the one source: the
+            caller closes the valve.
+
+        """
+        if not math.isfinite(value):
+            raise DataError(f'a command that is not finite ({value})')
+        names = sorted(publishers)
+        if self.source:
+            if not names or any(name != self.source for name in names):
+                shown = [name or 'unknown' for name in names] or 'none known'
+                raise DataError(f'publishers {shown}: only {self.source} may command this '
+                                'valve')
+        elif len(names) != 1:
+            known = [name for name in names if name]
+            raise DataError(f"{len(names)} publishers{f' {known}' if known else ''}: a valve "
+                            'takes commands from one node')
+        if self._refilled_ns is not None:
+            elapsed = max(now_ns - self._refilled_ns, 0) * 1e-9
+            self._tokens = min(float(self.burst), self._tokens + elapsed * self.rate_limit)
+        self._refilled_ns = now_ns
+        if self._tokens < 1.0:
+            return None
+        self._tokens -= 1.0
+        self.last_accepted_ns = now_ns
+        limits = self.limits
+        return value if limits is None else min(max(value, limits[0]), limits[1])
+
+    def silent(self, now_ns: int) -> bool:
+        """Return whether the source has sent nothing taken for longer than the timeout."""
+        last = self.last_accepted_ns
+        return self.timeout_ns > 0 and last is not None and now_ns - last > self.timeout_ns

@@ -1,0 +1,56 @@
+"""An arm logged as its user logged it (duties 40-100 % only): what identify may say of it."""
+
+from hydro_sdp.core.control.controller_spec import design_from_model
+from hydro_sdp.core.identification.evaluation import evaluate, mean_errors
+from hydro_sdp.core.identification.identify import identify
+from hydro_sdp.core.model.joint_model import JointModel
+import numpy as np
+import pytest
+from support import logged_arm
+
+pytestmark = [pytest.mark.slow(12)]
+
+
+@pytest.fixture(scope='module')
+def identified():
+    fit = logged_arm.runs('low', logged_arm.ESTIMATION, seed=1)
+    return identify(list(fit.values()))
+
+
+def test_edges_below_every_command_used_are_bounds_not_points(identified):
+    model = identified.model
+    bounds = {entry.parameter: entry for entry in model.undetermined if entry.is_edge}
+    assert set(bounds) == {'dead_zone[0]', 'dead_zone[1]'}
+    for entry, edge in zip(bounds.values(), logged_arm.DEAD_ZONE):
+        assert entry.bound[0] <= edge <= entry.bound[1]
+        assert abs(entry.moving_end) == 40.0 and 0.0 < entry.motion < 0.05
+        assert 'hold commands from' in entry.record
+    # The file keeps them, so that design knows.
+    assert JointModel.from_mapping(model.to_mapping()).undetermined == model.undetermined
+
+
+def test_design_says_which_value_it_takes_where_the_data_leave_a_bound(identified):
+    spec = design_from_model(identified.model)
+    assert len(spec.notes) == 2
+    assert all("the IDZ takes the model's" in note and 'an extrapolation below' in note
+               for note in spec.notes)
+
+
+def test_the_family_is_the_one_its_held_out_table_ranks_under_the_rule(identified):
+    judgement = identified.family
+    assert identified.model.kind == judgement.names[judgement.chosen]
+    best = judgement.best
+    pooled = judgement.pooled
+    # The simplest candidate within its band of the best, and nothing simpler is.
+    assert pooled[judgement.chosen] - pooled[best] <= judgement.bands[judgement.chosen]
+    assert all(pooled[c] - pooled[best] > judgement.bands[c]
+               for c in range(judgement.chosen) if np.isfinite(pooled[c]))
+    # No effect the joint lacks: its lag acts on the spool, and it has no linkage.
+    assert identified.model.effect('stroke_geometry') is None
+
+
+def test_duties_it_did_not_see_are_predicted(identified):
+    held = logged_arm.runs('low', logged_arm.VALIDATION, seed=20)
+    scores = evaluate(list(held.values()), identified.model)
+    assert all(score.stalled == 0.0 for score in scores)
+    assert mean_errors(scores)['per_record']['model'] < 3.5
