@@ -1,8 +1,10 @@
 """
 Benchmark ``oscillation`` on the same runs with the link's mode and without it.
 
-Run with ``python bench/bench_oscillation.py [seeds] [programs]`` (``programs``:
-comma-separated, default ``random,stroke``). Each case is diagnosed twice on the same
+Run with ``python bench/bench_oscillation.py [seeds] [programs] [sources]``
+(``programs``: comma-separated, default ``random,stroke``, and ``short`` for the plant:
+20 s random levels; ``sources``: ``generator``, ``plant`` or both, comma-separated, the
+default). Each case is diagnosed twice on the same
 commands, draws and noise: once with the link ringing on its oil column, once with it
 settled. On the independent generator (``test/support/joint_generator.py``) the mode is
 the grid's (1.5-4 Hz, damping 0.05-0.2) in volts, percent and signed percent; on the
@@ -26,7 +28,7 @@ from hydro_sdp.core.diagnosis.search import diagnose  # noqa: E402, I100
 from hydro_sdp.core.model.joint_model import JointModel  # noqa: E402
 import numpy as np  # noqa: E402
 from support import diagnosis_grid, plant_grid  # noqa: E402
-from support.plant_programs import variant  # noqa: E402
+from support.plant_programs import levels, variant  # noqa: E402
 
 
 def generator_pair(program, units, seed):
@@ -48,9 +50,18 @@ def generator_pair(program, units, seed):
 def plant_pair(program, units, seed):
     """Return the model identified settled and the ringing and settled runs, and the floor."""
     seconds = 40.0
-    rng = plant_grid._rng('boom', units, program, seed, 3)
+    rng = plant_grid._rng('boom', units, 'random' if program == 'short' else program, seed, 3)
     machine = variant('boom', units, rng, ringing=True)
     settled = replace(machine, joints=(replace(machine.joints[0], compressibility=None),))
+    if program == 'short':
+        # Short random levels (20 s: two to identify, two to estimate, one to validate),
+        # which drift less than the grid's 40 s ones.
+        def runs(m, first, count):
+            return [levels(m, 20.0, 100 * seed + first + k) for k in range(count)]
+        model = plant_grid._identify(settled, runs(settled, 0, 2), 'power_sat')
+        made = {ringing: (runs(m, 10, 2), runs(m, 20, 1))
+                for ringing, m in ((True, machine), (False, settled))}
+        return model, made
     model = plant_grid._identify(
         settled, plant_grid._runs(settled, program, seed, 'identify', seconds=seconds),
         'power_sat')
@@ -68,11 +79,15 @@ def main():
                                          'plant ringing', 'plant settled')}
     halved = Counter()
     started = time.perf_counter()
+    sources = sys.argv[3].split(',') if len(sys.argv) > 3 else ['generator', 'plant']
     jobs = [('generator', units, generator_pair) for units in diagnosis_grid.UNITS]
     jobs += [('plant', units, plant_pair) for units in ('signed_percent', 'volt')]
+    jobs = [job for job in jobs if job[0] in sources]
     for seed in range(seeds):
         for source, units, pair in jobs:
             for program in programs:
+                if program == 'short' and source == 'generator':
+                    continue
                 model, made = pair(program, units, seed)
                 for ringing in (True, False):
                     estimation, validation = made[ringing]
@@ -89,7 +104,7 @@ def main():
                           f'{result.mae_before:.3g} -> {result.mae_after:.3g} deg', flush=True)
     for key, count in counts.items():
         print(f'{key}: ' + ', '.join(f'{word} {n}' for word, n in count.most_common()))
-    for source in ('generator', 'plant'):
+    for source in sources:
         print(f'{source} ringing: oscillation with the gap halved in {halved[source]}/'
               f'{sum(counts[f"{source} ringing"].values())}')
     print(f'took {time.perf_counter() - started:.0f} s')
