@@ -86,7 +86,7 @@ class LinkMode:
         return self.states(speeds, before)[0]
 
     def states(self, speeds: FloatArray, before: float) -> tuple[FloatArray, FloatArray]:
-        """Return ``e_k`` and the link's speed ``u_k`` after each interval (as :meth:`deviation`)."""
+        """Return ``e_k`` and the link's speed ``u_k`` after each interval (:meth:`deviation`)."""
         w = np.asarray(speeds, dtype=np.float64)
         if w.size == 0:
             return np.zeros(0), np.zeros(0)

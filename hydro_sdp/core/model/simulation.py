@@ -280,7 +280,7 @@ class OneStep:
         increment = self.actuator
         if mode is not None and increment.size:
             if first != 0:
-                raise ValueError('a mode needs the increments from the record\'s start')
+                raise ValueError("a mode needs the increments from the record's start")
             increment = _ringing_increments(LinkMode.of(mode, self.dt), increment,
                                             self.y[:-1], self.dt, self.before, low, high)
         increment = increment[start - first:]

@@ -17,6 +17,7 @@ from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.sample_period import whole_samples_seconds
 from hydro_sdp.core.model.simulation import OneStep
 import numpy as np
+from scipy.ndimage import median_filter
 from scipy.optimize import minimize
 
 
@@ -69,6 +70,8 @@ MODE_DAMPING = (0.02, 0.6)
 #: The coarse grid the fit starts from: frequencies and damping ratios.
 _GRID_FREQUENCIES = 12
 _GRID_DAMPING = (0.05, 0.15, 0.3, 0.5)
+#: Width of the spectrum's running median a mode's line is measured against, Hz.
+_BACKGROUND = 2.0
 #: Grid points polished, at frequencies apart.
 _POLISHED = 2
 #: How much shorter than the model's the dead time is searched with the mode, s.
@@ -182,9 +185,8 @@ def _seeds(context: Context, cost: Callable[[FloatArray], float], low: float,
     grid, so the best point of each of the :data:`_POLISHED` best frequencies is polished.
     """
     starts = [(f, d) for f in np.geomspace(low, high, _GRID_FREQUENCIES) for d in _GRID_DAMPING]
-    peak = _spectral_peak(context, low, high)
-    if peak is not None:
-        starts += [(peak, d) for d in _GRID_DAMPING]
+    starts += [(peak, d) for peak in _spectral_peaks(context, low, high)
+               for d in _GRID_DAMPING]
     costs = [cost(np.array([math.log(f), d])) for f, d in starts]
     seeds: list[tuple[float, float]] = []
     for index in np.argsort(costs):
@@ -196,12 +198,13 @@ def _seeds(context: Context, cost: Callable[[FloatArray], float], low: float,
     return [np.array([math.log(f), d]) for f, d in seeds]
 
 
-def _spectral_peak(context: Context, low: float, high: float) -> float | None:
+def _spectral_peaks(context: Context, low: float, high: float) -> list[float]:
     """
-    Return the frequency where the residual's spectrum stands highest over white noise's.
+    Return where the residual's spectrum stands highest over white noise's, and over its own.
 
-    The velocity residual's periodogram over the runs, divided by what white angle noise
-    gives a difference (``|1 - e^-iwdt|^2``), between ``low`` and ``high`` Hz.
+    The velocity residual's periodogram over the runs, between ``low`` and ``high`` Hz,
+    divided by what white angle noise gives a difference (``|1 - e^-iwdt|^2``), and by
+    its running median over :data:`_BACKGROUND` Hz.
     """
     power: FloatArray | None = None
     size = max(64, int(round(8.0 / context.dt)))
@@ -211,11 +214,16 @@ def _spectral_peak(context: Context, low: float, high: float) -> float | None:
             spectrum = np.abs(np.fft.rfft((piece - piece.mean()) * np.hanning(size))) ** 2
             power = spectrum if power is None else power + spectrum
     if power is None:
-        return None
+        return []
     frequencies = np.fft.rfftfreq(size, context.dt)
-    band = (frequencies >= low) & (frequencies <= high)
-    if not band.any():
-        return None
+    band = np.flatnonzero((frequencies >= low) & (frequencies <= high))
+    if not band.size:
+        return []
     white = np.abs(1.0 - np.exp(-2j * np.pi * frequencies * context.dt)) ** 2
-    index = np.flatnonzero(band)[int(np.argmax(power[band] / white[band]))]
-    return float(frequencies[index])
+    # A model's slow misses raise the low frequencies, over which a lightly damped mode
+    # stands out only as a line above its neighbours.
+    width = 2 * int(round(0.5 * _BACKGROUND * size * context.dt)) + 1
+    background = np.maximum(median_filter(power, size=width, mode='nearest'), 1e-300)
+    peaks = [float(frequencies[band[int(np.argmax(power[band] / floor[band]))]])
+             for floor in (white, background)]
+    return list(dict.fromkeys(peaks))
