@@ -223,3 +223,25 @@ def test_the_design_on_the_mode_steps_a_ringing_joint_without_sustained_ringing(
     assert all(s.settling < 4.0 and s.overshoot < 5.0 for s in steps), steps
     # No hold ends hunting, and none rings on: the last 2 s stay within half the band.
     assert all(s.reversals == 0 and s.wander < 0.25 for s in steps), steps
+
+
+def test_on_a_slower_lighter_mode_only_the_design_on_it_keeps_the_loop(j2, tmp_path):
+    # J2 ringing at 1.5 Hz, damping 0.05: the integrator's design drives the mode
+    # unstable; the one on the mode settles every step (the valve still hunts a little).
+    from hydro_sdp.io.controller_files import save_controller
+    from support.independent_loop import FileController, judge, run_loop
+    from support.joint_generator import GeneratedPlant, Joint, SpeedMap
+
+    j2_map = j2.static_map
+    truth = Joint(SpeedMap('exp', j2_map.dead_zone, (-j2_map.saturation_velocity[0],
+                                                     j2_map.saturation_velocity[1]),
+                           j2_map.curvature), delay=j2.delay, stops=j2.angle_limits,
+                  mode=(1.5, 0.05), noise=0.02)
+    levels = (10.0, 30.0, 50.0)
+    judged = {}
+    for name, model in (('mode', j2.with_effect(Oscillation(1.5, 0.05))), ('plain', j2)):
+        path = save_controller(design_from_model(model), tmp_path / f'{name}.yaml')
+        judged[name] = judge(run_loop(FileController.read(path),
+                                      GeneratedPlant(truth, levels[0]), 0.01, levels, 8.0))
+    assert all(s.settling < 4.0 and s.overshoot < 5.0 for s in judged['mode']), judged
+    assert all(s.settling == np.inf and s.overshoot > 15.0 for s in judged['plain']), judged
