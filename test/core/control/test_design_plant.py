@@ -245,3 +245,20 @@ def test_on_a_slower_lighter_mode_only_the_design_on_it_keeps_the_loop(j2, tmp_p
                                       GeneratedPlant(truth, levels[0]), 0.01, levels, 8.0))
     assert all(s.settling < 4.0 and s.overshoot < 5.0 for s in judged['mode']), judged
     assert all(s.settling == np.inf and s.overshoot > 15.0 for s in judged['plain']), judged
+
+
+def test_a_slower_redesign_keeps_the_modes_poles_and_slows_the_dominant_ones(j2):
+    from hydro_sdp.core.calibration import _slower
+    from hydro_sdp.core.control.design_plant import mode_poles
+
+    spec = design_from_model(j2.with_effect(Oscillation(2.0, 0.1)))
+    pair = mode_poles((2.0, 0.1), 0.05)
+    poles = _slower(spec)
+    for pole in pair:
+        assert min(abs(p - pole) for p in poles) < 1e-9
+    slower = design_from_model(j2.with_effect(Oscillation(2.0, 0.1)), poles=poles)
+    # The slow poles are placed (the repeated deadbeat ones computed only to 1e-4).
+    np.testing.assert_allclose(sorted(abs(p) for p in slower.poles if abs(p) > 0.01),
+                               sorted(abs(p) for p in poles if abs(p) > 0.01), atol=1e-6)
+    dominant = max((p for p in spec.poles if min(abs(p - m) for m in pair) > 0.05), key=abs)
+    assert max(abs(p) for p in poles if min(abs(p - m) for m in pair) > 1e-6) > abs(dominant)
