@@ -385,7 +385,9 @@ def run(args: argparse.Namespace) -> Outcome:
     lines.append(f'IDZ: {result.forms[-1] if result.forms else "chord"}; design plant: '
                  f'{result.spec.delay_samples} samples of delay'
                  + ('' if result.spec.valve_lag is None
-                    else f', valve lag {result.spec.valve_lag:.3g} s'))
+                    else f', valve lag {result.spec.valve_lag:.3g} s')
+                 + ('' if result.spec.oscillation is None
+                    else f', link mode {result.spec.oscillation[0]:.3g} Hz'))
     lines.append(control_line(result))
     lines += plausible_lines(result)
     lines += [f'warning: {w}' for w in payload['warnings']]

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 
 from hydro_sdp.cli.common import (
     finite_float, non_negative_float, Outcome, Payload, positive_float, table)
@@ -42,11 +43,12 @@ pulse while the joint holds; calibrate takes twice the band when its check
 finds the valve pulsing.
 
 The controller then sees the integrator with the model's delay and, when the
-model has a valve_lag, that lag (one more pole): the design plant, recorded in
-the controller file. The gains come from LQ design (default weights: the
-paper's design, dominant poles 0.94 +- 0.05i) or from pole assignment (--poles:
-n + m poles, complex ones in conjugate pairs, zeros allowed and repeated; n + m
-is 1 + the delay in control samples, one more with a valve lag).
+model has a valve_lag, that lag (one more pole), and with an oscillation the
+link's mode (two more): the design plant, recorded in the controller file. The
+gains come from LQ design (default weights: the paper's design, dominant poles
+0.94 +- 0.05i) or from pole assignment (--poles: n + m poles, complex ones in
+conjugate pairs, zeros allowed and repeated; n + m is 1 + the delay in control
+samples, two more with a valve lag, four more with a mode, six with both).
 
 A controller steps every whole number of the joint's samples: with
 --sample-period S (the period identify printed) the control period is the
@@ -128,7 +130,9 @@ def describe(spec: ControllerSpec) -> Payload:
         'control_period': spec.control_period,
         'delay_samples': spec.delay_samples,
         'plant': {'a': list(spec.plant.a), 'b': list(spec.plant.b),
-                  'valve_lag': spec.valve_lag},
+                  'valve_lag': spec.valve_lag,
+                  'oscillation': None if spec.oscillation is None else dict(
+                      zip(('frequency', 'damping'), spec.oscillation))},
         'idz_form': None if idz is None else (
             'table' if isinstance(idz, TableInverseDeadZone) else 'chord'),
         'slopes': None if idz is None else list(idz.slopes),
@@ -176,7 +180,9 @@ def run(args: argparse.Namespace) -> Outcome:
             ['poles', ', '.join(payload['poles'])],
             ['delay', f'{spec.delay_samples} samples of {spec.control_period:.9g} s'],
             ['valve lag', '-' if spec.valve_lag is None else f'{spec.valve_lag:.4g} s (pole '
-                          f'{spec.plant.a[-1]:.4f})']]
+                          f'{math.exp(-spec.control_period / spec.valve_lag):.4f})'],
+            ['link mode', '-' if spec.oscillation is None else
+             f'{spec.oscillation[0]:.3g} Hz, damping {spec.oscillation[1]:.2g}']]
     if spec.idz is not None:
         rows += [['IDZ form', payload['idz_form'] + (
                      f' ({len(spec.idz.u)} points)' if isinstance(spec.idz, TableInverseDeadZone)

@@ -26,7 +26,7 @@ import math
 from typing import Callable, cast, Sequence
 
 from hydro_sdp.core.control.controller_spec import ControllerSpec, design_from_model, format_pole
-from hydro_sdp.core.control.design_plant import completed_poles
+from hydro_sdp.core.control.design_plant import completed_poles, mode_poles
 from hydro_sdp.core.control.idz_design import default_form, faded, IdzForm
 from hydro_sdp.core.control.loop_check import check_loop, CheckSettings, LoopCheck, slower_poles
 from hydro_sdp.core.control.loop_obstacles import Obstacle, obstacles, standing_in_the_way
@@ -336,6 +336,24 @@ class _Designer:
         return spec
 
 
+def _slower(spec: ControllerSpec) -> list[complex]:
+    """
+    Return the spec's poles with the dominant ones slower, a link's mode left as it is.
+
+    The design's pair nearest the mode's open-loop poles (an LQ design moves them a
+    little) is put back on them and kept: the loop does not try to damp the mode.
+    """
+    poles = _clean(list(spec.poles))
+    if spec.oscillation is None:
+        return slower_poles(poles)
+    pair = _clean(mode_poles(spec.oscillation, spec.control_period))
+    for target in pair:
+        nearest = min(range(len(poles)), key=lambda i: abs(poles[i] - target))
+        if abs(poles[nearest] - target) < 0.05:
+            poles[nearest] = target
+    return slower_poles(poles, keep=pair)
+
+
 def _clean(poles: Sequence[complex]) -> list[complex]:
     """Round away the scatter of computed eigenvalues, so that pairs stay conjugate."""
     return [complex(round(p.real, 9), round(p.imag, 9)) for p in (complex(x) for x in poles)]
@@ -468,7 +486,7 @@ def calibrate(records: Sequence[Record], validation: Sequence[Record] | None = N
                 spec = table
                 continue
         try:
-            slower = designer.design(slower_poles(_clean(list(spec.poles))))
+            slower = designer.design(_slower(spec))
         except HydroSdpError as error:
             warnings.append(f'no slower design could be made: {error}')
             break

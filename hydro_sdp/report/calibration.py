@@ -123,7 +123,10 @@ def summary_lines(result: CalibrationResult, unit: str, figures: list[str]) -> l
                for i, (poles, form, fade) in enumerate(zip(result.designs, forms, fades),
                                                        start=1)]
     plant = (f'the integrator with {spec.delay_samples} samples of delay'
-             + ('' if spec.valve_lag is None else f' and a valve lag of {spec.valve_lag:.3g} s'))
+             + ('' if spec.valve_lag is None else f' and a valve lag of {spec.valve_lag:.3g} s')
+             + ('' if spec.oscillation is None else
+                f' and a link mode of {spec.oscillation[0]:.3g} Hz, damping '
+                f'{spec.oscillation[1]:.2g}'))
     obstacles = [f'| {o.element} | {o.idealised} | '
                  f'{"passes" if o.passed else f"{o.failures} failures"} |'
                  for o in result.obstacles]

@@ -52,3 +52,29 @@ def test_angle_parameters_are_documented_in_degrees(ros):
         for name in names:
             description = node.describe_parameter(name).description
             assert 'deg' in description and 'rad' not in description, (name, description)
+
+
+def test_the_plant_runs_the_model_files_oscillation(ros, tmp_path):
+    # J2 whose link rings at 2 Hz: the node builds its simulator from the file, so the
+    # published angles are the ringing model's (stepped offline here), not the plain one's.
+    from hydro_sdp.core.model.effects import Oscillation
+    from hydro_sdp.core.model.simulation import JointSimulator
+    from hydro_sdp.io.model_files import save_model
+
+    model = load_model(default_model_path()).with_effect(Oscillation(2.0, 0.1))
+    path = save_model(model, tmp_path / 'ringing.yaml')
+    plant = ros.add(PlantNode, parameters={'model_file': str(path), 'noise_std': 0.0,
+                                           'initial_angles': [10.0]})
+    publisher = ros.helper('commands').create_publisher(Float64, 'j2/valve_command', 10)
+    loop = Lockstep(ros, plant)
+    assert ros.spin_until(lambda: publisher.get_subscription_count() >= 1)
+    publisher.publish(Float64(data=5.0))
+    assert ros.spin_until(lambda: plant.commands_received == 1)
+    angles = []
+    loop.run(80, on_step=lambda k: angles.append(plant.last_angles[0]))
+    offline = {}
+    for name, joint in (('ringing', model), ('plain', model.without_effect('oscillation'))):
+        simulator = JointSimulator(joint, 0.01, 10.0, v_before=joint.rest_command)
+        offline[name] = np.r_[10.0, [simulator.step(5.0) for _ in range(79)]]
+    np.testing.assert_allclose(angles, offline['ringing'], rtol=0, atol=1e-9)
+    assert np.abs(offline['ringing'] - offline['plain']).max() > 0.05

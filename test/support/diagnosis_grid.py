@@ -12,7 +12,8 @@ in percent resting at 50 (0..100) or in signed percent (-100..100). For
 ``flow_sharing`` a second joint on the same pump moves at random; for
 ``load_dependence`` each record carries a measured load (a payload of its own and a
 digging force that comes and goes) that slows the joint through a valve without
-pressure compensation.
+pressure compensation; for ``oscillation`` the link rings on the oil column (a mode
+of 1.5-4 Hz, damping ratio 0.05-0.2).
 
 """
 
@@ -42,7 +43,8 @@ UNITS: dict[str, tuple[tuple[float, float], float]] = {
 WORDS: tuple[str, ...] = (
     'dead_zone', 'velocity_saturation', 'asymmetry', 'time_delay',
     'direction_dependent_delay', 'angle_limits', 'valve_lag', 'backlash',
-    'angle_dependent_velocity', 'none', 'stroke_geometry', 'flow_sharing', 'load_dependence')
+    'angle_dependent_velocity', 'none', 'stroke_geometry', 'flow_sharing', 'load_dependence',
+    'oscillation')
 
 #: The two programs.
 PROGRAMS: tuple[str, ...] = ('random', 'stroke')
@@ -274,6 +276,10 @@ def hide(word: str, rng: np.random.Generator, units: str) -> tuple[Truth, dict[s
                             other_speed / full)
         other = Joint(SpeedMap('exp', (-1.0, 1.0), (other_speed, other_speed), (0.8, 0.8)),
                       delay=0.1, stops=(-40.0, 40.0))
+    elif word == 'oscillation':
+        # The link rings on the oil column: 1.5-4 Hz, lightly damped.
+        joint['mode'] = (float(rng.uniform(1.5, 4.0)), float(rng.uniform(0.05, 0.2)))
+        effects['oscillation'] = dict(zip(('frequency', 'damping'), joint['mode']))
     elif word == 'load_dependence':
         reference = float(rng.uniform(20.0, 60.0))
         joint['load_factor'] = _load_factor(float(rng.uniform(2.0, 3.0)) * 150.0, reference)

@@ -18,6 +18,9 @@ written again from the physics or from the model file's documentation
   machine's other joints as the model file documents ``flow_sharing``: the joint's own
   demand and the others' speeds over what counts as a full demand, the pump's share of
   their sum (the physics plant shares its pump by the flows the valves ask for);
+* the link ringing on the oil column behind the actuator (``oscillation``): a mass on a
+  spring driven by the actuator's angle, ``y'' = w^2 (x - y) - 2 d w y'``, integrated by
+  Runge-Kutta over each sub-step with the actuator moving at that sub-step's speed;
 * its own integrator: every sample cut into sub-steps; the lag integrated exactly
   over each, the angle factors taken at the sub-step's mid-angle, the stops, the
   play and the pump's share applied at every sub-step (the others' speeds those of the
@@ -154,6 +157,9 @@ class Joint:
         pump's flow in full demands of this joint, its speeds that count as a full demand,
         the other joints' speeds that do: the speed becomes ``w min(1, limit / (own
         demand + the others' demand))``.
+    mode : tuple[float, float] or None
+        ``(frequency, damping)``, Hz and ratio: the link rings on the oil column behind
+        the actuator, ``y'' = w^2 (x - y) - 2 damping w y'``, ``w = 2 pi frequency``.
     noise : float
         Angle sensor noise, standard deviation, deg.
 
@@ -170,6 +176,7 @@ class Joint:
     stroke: Stroke | None = None
     load_factor: Callable[[float, float], float] | None = None
     sharing: tuple[float, float, float, float, float] | None = None
+    mode: tuple[float, float] | None = None
     noise: float = 0.02
 
 
@@ -205,7 +212,15 @@ class _State:
         self.spool_pole = math.exp(-h / joint.spool_lag) if joint.spool_lag > 0.0 else 0.0
         self.lag_pole = math.exp(-h / joint.lag) if joint.lag > 0.0 else 0.0
         self.speed = before
-        self.actuator = angle
+        # The link reads ``angle``; moving steadily at w it trails the actuator by
+        # 2 d w / w_n (its spring then pulls it at the damper's force).
+        self.link = angle
+        self.link_speed = before
+        lead = 0.0
+        if joint.mode is not None:
+            frequency, damping = joint.mode
+            lead = 2.0 * damping * before / (2.0 * math.pi * frequency)
+        self.actuator = angle + lead
         self.moved = 0.0
         self.offset = 0.0
         self.up = int(round(joint.delay / h))
@@ -226,7 +241,7 @@ class _State:
     def sensor(self) -> float:
         """Return the angle the sensor reads: the actuator's plus the play's offset."""
         low, high = _low_high(self.joint)
-        return min(max(self.actuator + self.offset, low), high)
+        return min(max(self.link + self.offset, low), high)
 
     def drift(self, angle: float, speed: float) -> float:
         """Angle speed of the actuator at ``angle`` for valve speed ``speed``, deg/s."""
@@ -254,36 +269,67 @@ def simulate(machine: Machine, commands: np.ndarray, *, angles0: Sequence[float]
     states = [_State(joint, h, float(angles0[j]), float(v[0, j]), n * SUBSTEPS)
               for j, joint in enumerate(machine.joints)]
     out = np.empty((n, count))
-    out[0] = [state.actuator for state in states]
+    out[0] = [state.link for state in states]
     for k in range(1, n):
-        for step in range(SUBSTEPS):
-            index = (k - 1) * SUBSTEPS + step + 1
-            wanted = []
-            for j, state in enumerate(states):
-                joint = state.joint
-                state.spool = state.spool_pole * state.spool + (1.0 - state.spool_pole) * v[k, j]
-                state.history[state.lead + index] = state.spool
-                target = state.target(index)
-                # The lag's speed, averaged over the sub-step (exact for a held target).
-                start = state.speed
-                state.speed = target + (start - target) * state.lag_pole
-                mean = target if state.lag_pole == 0.0 else target + (start - target) * (
-                    joint.lag / h) * (1.0 - state.lag_pole)
-                if joint.load_factor is not None and load is not None and mean != 0.0:
-                    mean *= joint.load_factor(float(load[k]), 1.0 if mean > 0.0 else -1.0)
-                wanted.append(mean)
-            moved = [s.moved for s in states]
-            for j, (state, speed) in enumerate(zip(states, wanted)):
-                sharing = state.joint.sharing
-                if sharing is not None and speed != 0.0:
-                    limit, full_up, full_down, other_up, other_down = sharing
-                    demand = speed / full_up if speed > 0.0 else -speed / full_down
-                    demand += sum(max(m, 0.0) / other_up - min(m, 0.0) / other_down
-                                  for i, m in enumerate(moved) if i != j)
-                    speed *= min(1.0, limit / demand)
-                _advance(state, speed, h)
+        _sample(states, v[k], k, None if load is None else float(load[k]), h)
         out[k] = [s.sensor for s in states]
     return out
+
+
+def _sample(states: Sequence[_State], v: Sequence[float], k: int, load: float | None,
+            h: float) -> None:
+    """Advance every joint over the interval ending at sample ``k`` under commands ``v``."""
+    for step in range(SUBSTEPS):
+        index = (k - 1) * SUBSTEPS + step + 1
+        wanted = []
+        for j, state in enumerate(states):
+            joint = state.joint
+            state.spool = state.spool_pole * state.spool + (1.0 - state.spool_pole) * v[j]
+            state.history[state.lead + index] = state.spool
+            target = state.target(index)
+            # The lag's speed, averaged over the sub-step (exact for a held target).
+            start = state.speed
+            state.speed = target + (start - target) * state.lag_pole
+            mean = target if state.lag_pole == 0.0 else target + (start - target) * (
+                joint.lag / h) * (1.0 - state.lag_pole)
+            if joint.load_factor is not None and load is not None and mean != 0.0:
+                mean *= joint.load_factor(load, 1.0 if mean > 0.0 else -1.0)
+            wanted.append(mean)
+        moved = [s.moved for s in states]
+        for j, (state, speed) in enumerate(zip(states, wanted)):
+            sharing = state.joint.sharing
+            if sharing is not None and speed != 0.0:
+                limit, full_up, full_down, other_up, other_down = sharing
+                demand = speed / full_up if speed > 0.0 else -speed / full_down
+                demand += sum(max(m, 0.0) / other_up - min(m, 0.0) / other_down
+                              for i, m in enumerate(moved) if i != j)
+                speed *= min(1.0, limit / demand)
+            _advance(state, speed, h)
+
+
+class GeneratedPlant:
+    """
+    One joint of the generator stepped one sample at a time: a plant of ``run_loop``.
+
+    ``angle`` is the noisy reading, ``true_angle`` the sensor's angle without noise;
+    ``step`` holds a command over the next sample (at most ``samples`` of them).
+    """
+
+    def __init__(self, joint: Joint, y0: float, *, dt: float = 0.01, rest: float = 0.0,
+                 samples: int = 20_000, seed: int = 0) -> None:
+        self.h = dt / SUBSTEPS
+        self.state = _State(joint, self.h, y0, rest, samples * SUBSTEPS)
+        self.rng = np.random.default_rng([seed, 17])
+        self.k = 0
+        self.true_angle = self.state.sensor
+        self.angle = self.true_angle + float(self.rng.normal(0.0, joint.noise))
+
+    def step(self, command: float) -> None:
+        """Hold ``command`` over the next sample."""
+        self.k += 1
+        _sample([self.state], [float(command)], self.k, None, self.h)
+        self.true_angle = self.state.sensor
+        self.angle = self.true_angle + float(self.rng.normal(0.0, self.state.joint.noise))
 
 
 def _low_high(joint: Joint) -> tuple[float, float]:
@@ -297,9 +343,32 @@ def _advance(state: _State, speed: float, h: float) -> None:
     middle = previous + 0.5 * h * state.drift(previous, speed)
     state.actuator = min(max(previous + h * state.drift(middle, speed), low), high)
     state.moved = (state.actuator - previous) / h
+    link = state.link
+    if state.joint.mode is None:
+        state.link = state.actuator
+    else:
+        _ring(state, previous, state.moved, h)
     half = 0.5 * state.joint.play
     if half > 0.0:
-        state.offset = min(max(state.offset - (state.actuator - previous), -half), half)
+        state.offset = min(max(state.offset - (state.link - link), -half), half)
+
+
+def _ring(state: _State, start: float, speed: float, h: float) -> None:
+    """Move the link on its spring over one sub-step (RK4), the actuator from ``start``."""
+    assert state.joint.mode is not None
+    frequency, damping = state.joint.mode
+    w = 2.0 * math.pi * frequency
+
+    def slope(t: float, y: float, u: float) -> tuple[float, float]:
+        return u, w * w * (start + speed * t - y) - 2.0 * damping * w * u
+
+    y, u = state.link, state.link_speed
+    k1 = slope(0.0, y, u)
+    k2 = slope(0.5 * h, y + 0.5 * h * k1[0], u + 0.5 * h * k1[1])
+    k3 = slope(0.5 * h, y + 0.5 * h * k2[0], u + 0.5 * h * k2[1])
+    k4 = slope(h, y + h * k3[0], u + h * k3[1])
+    state.link = y + h / 6.0 * (k1[0] + 2.0 * k2[0] + 2.0 * k3[0] + k4[0])
+    state.link_speed = u + h / 6.0 * (k1[1] + 2.0 * k2[1] + 2.0 * k3[1] + k4[1])
 
 
 def record(machine: Machine, commands: np.ndarray, *, angles0: Sequence[float],

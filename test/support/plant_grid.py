@@ -32,6 +32,10 @@ diagnosis data at other seeds and duties, and then:
   pressure compensation, on a pump whose power binds; identified lifting nothing;
   diagnosed on runs lifting nothing and 600 kg with the piston-side pressure logged as
   the load);
+* ``oscillation`` (the boom of ``config/physics_boom_compressible.yaml``: its link rings
+  on a soft oil column at about 2 Hz): identified on the same plant with its pressures
+  settled at every sample (no compressibility section), diagnosed on runs of the
+  ringing one; the floor is that model's error on the settled plant's validation runs;
 * ``none``: the ``power_sat`` model itself, on the same kind of runs.
 
 The gap a removed word leaves is the validation MAE above that of the model it was
@@ -91,7 +95,7 @@ from support.plant_programs import levels, strokes, variant, VARIANTS
 #: The words hidden in turn, and ``none``.
 WORDS: tuple[str, ...] = (
     'dead_zone', 'velocity_saturation', 'asymmetry', 'time_delay', 'angle_limits',
-    'valve_lag', 'stroke_geometry', 'none', 'flow_sharing', 'load_dependence')
+    'valve_lag', 'stroke_geometry', 'none', 'flow_sharing', 'load_dependence', 'oscillation')
 
 #: Words the plant cannot produce, and why (its physics).
 LEFT_OUT: dict[str, str] = {
@@ -138,8 +142,9 @@ class PlantCase:
         Plant records.
     floor : float
         Validation MAE of the model the word was removed from, degrees; for
-        ``flow_sharing`` the model's on the same program with the other joint still; 0
-        for ``load_dependence`` and ``none``.
+        ``flow_sharing`` the model's on the same program with the other joint still; for
+        ``oscillation`` the settled plant's model on its own validation runs; 0 for
+        ``load_dependence`` and ``none``.
 
     """
 
@@ -344,6 +349,21 @@ def _exogenous(word: str, joint: str, units: str, program: str, seed: int, secon
     return model, estimation, validation, 0.0
 
 
+def _ringing(joint: str, units: str, program: str, seed: int, seconds: float
+             ) -> tuple[JointModel, list[Record], list[Record], float] | None:
+    """Return the model, the runs and the floor of ``oscillation`` (the boom only)."""
+    if joint != 'boom':
+        return None  # Only the boom's preset rings on its oil column.
+    machine = variant(joint, units, _rng(joint, units, program, seed, 3), ringing=True)
+    settled = replace(machine, joints=(replace(machine.joints[0], compressibility=None),))
+    model = _identify(settled, _runs(settled, program, seed, 'identify', seconds=seconds),
+                      'power_sat')
+    floor = mae(model, runs_of(_runs(settled, program, seed, 'validate', seconds=seconds),
+                               MAX_DELAY, settle=0.0))
+    return (model, _runs(machine, program, seed, 'estimate', seconds=seconds),
+            _runs(machine, program, seed, 'validate', seconds=seconds), floor)
+
+
 def make_case(word: str, program: str, joint: str, units: str, seed: int, *,
               seconds: float = 40.0) -> PlantCase | None:
     """
@@ -370,8 +390,9 @@ def make_case(word: str, program: str, joint: str, units: str, seed: int, *,
         validation runs no better than the case's model: the runs do not show the word).
 
     """
-    if word in ('flow_sharing', 'load_dependence'):
-        made = _exogenous(word, joint, units, program, seed, seconds)
+    if word in ('flow_sharing', 'load_dependence', 'oscillation'):
+        made = _ringing(joint, units, program, seed, seconds) if word == 'oscillation' else \
+            _exogenous(word, joint, units, program, seed, seconds)
         if made is None:
             return None
         model, estimation, validation, floor = made

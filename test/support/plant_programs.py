@@ -62,7 +62,7 @@ def _with_valve(joint: Joint, valve: tuple[float, tuple[float, float]] | None,
 
 
 def variant(joint: str, units: str, rng: np.random.Generator, *, power: bool = False,
-            partner: bool = False) -> Machine:
+            partner: bool = False, ringing: bool = False) -> Machine:
     """
     Return the plant of one joint in one unit, its valve's timing drawn.
 
@@ -78,6 +78,9 @@ def variant(joint: str, units: str, rng: np.random.Generator, *, power: bool = F
         pressure compensation, on a pump whose power binds (only for the boom).
     partner : bool
         Whether the other joint of :data:`PARTNER` sits on the same pump (second).
+    ringing : bool
+        The boom of ``config/physics_boom_compressible.yaml`` instead: its link rings on a
+        soft oil column at about 2 Hz (only for the boom).
 
     Returns
     -------
@@ -88,6 +91,8 @@ def variant(joint: str, units: str, rng: np.random.Generator, *, power: bool = F
     preset, valve = VARIANTS[(joint, units)]
     if power:
         preset = 'physics_boom_power.yaml'
+    if ringing:
+        preset = 'physics_boom_compressible.yaml'
     machine = load_machine(shipped_config(preset))
     first = _with_valve(machine.joints[0], valve, float(rng.uniform(0.12, 0.3)),
                         float(rng.uniform(0.12, 0.35)))

@@ -16,7 +16,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 from typing import Mapping, Sequence
 
-from hydro_sdp.core.control.design_plant import check_plant_lag, model_lag, plant_for_model
+from hydro_sdp.core.control.design_plant import (
+    check_plant_lag, Mode, model_lag, model_mode, plant_for_model)
 from hydro_sdp.core.control.idz import IdzMode
 from hydro_sdp.core.control.idz_bounds import design_notes
 from hydro_sdp.core.control.idz_design import default_u_limits, idz_for_model, IdzForm
@@ -35,7 +36,7 @@ import numpy as np
 
 CONTROLLER_FORMAT = 'hydro_sdp/controller/v1'
 #: Keys of the ``plant`` mapping.
-PLANT_KEYS = {'a', 'b', 'valve_lag'}
+PLANT_KEYS = {'a', 'b', 'valve_lag', 'oscillation'}
 
 
 @dataclass(frozen=True)
@@ -64,6 +65,8 @@ class ControllerSpec:
     valve_lag : float or None
         Valve lag the plant was made from, s (:func:`.design_plant.lagged_integrator`);
         ``None``: the plant is given as it is.
+    oscillation : tuple[float, float] or None
+        The link's mode the plant was made from, Hz and damping ratio; ``None``: none.
 
     See Also
     --------
@@ -88,11 +91,12 @@ class ControllerSpec:
     v_limits: tuple[float, float] | None
     design: Document = field(default_factory=dict)
     valve_lag: float | None = None
+    oscillation: Mode | None = None
 
     def __post_init__(self) -> None:
         check_sample_period(self.control_period)
-        if self.valve_lag is not None:
-            check_plant_lag(self.plant, self.valve_lag, self.control_period)
+        if self.valve_lag is not None or self.oscillation is not None:
+            check_plant_lag(self.plant, self.valve_lag, self.control_period, self.oscillation)
         if len(self.gains.f) != self.plant.n or len(self.gains.g) != self.plant.m - 1:
             raise ConfigurationError(
                 f'gains ({len(self.gains.f)} f, {len(self.gains.g)} g) do not fit a plant with '
@@ -131,6 +135,9 @@ class ControllerSpec:
         plant: dict[str, object] = {'a': list(self.plant.a), 'b': list(self.plant.b)}
         if self.valve_lag is not None:
             plant['valve_lag'] = self.valve_lag
+        if self.oscillation is not None:
+            plant['oscillation'] = {'frequency': self.oscillation[0],
+                                    'damping': self.oscillation[1]}
         return {
             'format': CONTROLLER_FORMAT,
             'joint': self.joint,
@@ -171,8 +178,9 @@ class ControllerSpec:
         plant = data['plant']
         if not isinstance(plant, Mapping) or not {'a', 'b'} <= set(plant) <= PLANT_KEYS:
             raise ModelFileError("key 'plant': expected a mapping with keys 'a' and 'b' "
-                                 "(and 'valve_lag')")
+                                 "(and 'valve_lag', 'oscillation')")
         lag = plant.get('valve_lag')
+        mode = _plant_mode(plant.get('oscillation'))
         idz = idz_from_mapping(data.get('idz'))
         design = data.get('design') or {}
         if not isinstance(design, Mapping):
@@ -191,6 +199,7 @@ class ControllerSpec:
                 v_limits=_optional_pair(data.get('v_limits'), 'v_limits'),
                 design=dict(design),
                 valve_lag=None if lag is None else require_float(lag, 'plant.valve_lag'),
+                oscillation=mode,
             )
         except ConfigurationError as error:
             raise ModelFileError(str(error)) from None
@@ -208,6 +217,17 @@ def format_pole(pole: complex) -> str:
     real = round(pole.real, 6) + 0.0
     imag = round(pole.imag, 6) + 0.0
     return f'{real:.6g}{imag:+.6g}j'
+
+
+def _plant_mode(value: object) -> Mode | None:
+    """Read ``plant.oscillation``: ``{frequency: Hz, damping: ratio}``, or None."""
+    if value is None:
+        return None
+    if not isinstance(value, Mapping) or set(value) != {'frequency', 'damping'}:
+        raise ModelFileError("key 'plant.oscillation': expected a mapping with keys "
+                             "'frequency' and 'damping'")
+    return (require_float(value['frequency'], 'plant.oscillation.frequency'),
+            require_float(value['damping'], 'plant.oscillation.damping'))
 
 
 def _optional_pair(value: object, key: str) -> tuple[float, float] | None:
@@ -252,7 +272,8 @@ def design_from_model(model: JointModel, *, control_period: float = 0.05,
     Returns
     -------
     ControllerSpec
-        The controller, designed on the integrator with the model's delay and valve lag.
+        The controller, designed on the integrator with the model's delay, valve lag and
+        link mode.
 
     See Also
     --------
@@ -270,6 +291,7 @@ def design_from_model(model: JointModel, *, control_period: float = 0.05,
     period = check_sample_period(control_period)
     plant = plant_for_model(model, period)
     lag = model_lag(model)
+    ringing = model_mode(model)
     if poles is not None:
         gains = pole_assignment(plant, poles)
         design: dict[str, object] = {'method': 'poles',
@@ -290,4 +312,4 @@ def design_from_model(model: JointModel, *, control_period: float = 0.05,
         u_limits = default_u_limits(model, idz, period)
     return ControllerSpec(joint=model.joint, control_period=period, plant=plant, gains=gains,
                           idz=idz, u_limits=u_limits, v_limits=model.input_limits,
-                          design=design, valve_lag=lag)
+                          design=design, valve_lag=lag, oscillation=ringing)

@@ -253,12 +253,14 @@ def check_loop(model: JointModel, spec: ControllerSpec, stroke: tuple[float, flo
                      ramp_settling, cycles, tuple(failures), steps_trace, ramp_trace, chatter)
 
 
-def slower_poles(poles: Sequence[complex], factor: float = 0.7) -> list[complex]:
+def slower_poles(poles: Sequence[complex], factor: float = 0.7,
+                 keep: Sequence[complex] = ()) -> list[complex]:
     """
     Move the dominant poles toward 1: ``p -> 1 - factor (1 - p)``.
 
     Poles at least half as large as the largest are moved (conjugate pairs stay
-    pairs); the fast ones, such as the deadbeat poles at 0, stay where they are.
+    pairs); the fast ones, such as the deadbeat poles at 0, stay where they are, and
+    so do those of ``keep`` (a link's mode the design leaves as it is).
 
     Parameters
     ----------
@@ -266,6 +268,8 @@ def slower_poles(poles: Sequence[complex], factor: float = 0.7) -> list[complex]
         Closed-loop poles of a design.
     factor : float
         Fraction of the distance to 1 kept, in (0, 1).
+    keep : sequence of complex
+        Poles left where they are (within 1e-6).
 
     Returns
     -------
@@ -277,5 +281,5 @@ def slower_poles(poles: Sequence[complex], factor: float = 0.7) -> list[complex]
         raise ConfigurationError(f'the pole factor must be in (0, 1), got {factor}')
     values = [complex(p) for p in poles]
     largest = max((abs(p) for p in values), default=0.0)
-    return [1.0 - factor * (1.0 - p) if abs(p) >= 0.5 * largest and largest > 0.0 else p
-            for p in values]
+    return [1.0 - factor * (1.0 - p) if abs(p) >= 0.5 * largest and largest > 0.0
+            and not any(abs(p - k) < 1e-6 for k in keep) else p for p in values]

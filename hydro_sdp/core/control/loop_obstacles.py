@@ -19,7 +19,7 @@ from dataclasses import dataclass, replace
 from typing import Callable, Sequence
 
 from hydro_sdp.core.control.controller_spec import ControllerSpec
-from hydro_sdp.core.control.design_plant import completed_poles, plant_for_model
+from hydro_sdp.core.control.design_plant import completed_poles, mode_poles, plant_for_model
 from hydro_sdp.core.control.idz_table import TableInverseDeadZone
 from hydro_sdp.core.control.loop_check import check_loop, CheckSettings, LoopCheck
 from hydro_sdp.core.errors import HydroSdpError
@@ -73,8 +73,11 @@ def exact_map(spec: ControllerSpec) -> StaticMap | None:
 
 
 def dominant_poles(spec: ControllerSpec) -> list[complex]:
-    """Return the spec's two slowest poles (an exactly conjugate pair if complex)."""
-    poles = sorted((complex(p) for p in spec.poles), key=abs, reverse=True)[:2]
+    """Return the spec's two slowest poles (an exactly conjugate pair if complex), not a mode's."""
+    mode = () if spec.oscillation is None else mode_poles(spec.oscillation, spec.control_period)
+    poles = sorted((complex(p) for p in spec.poles
+                    if not any(abs(complex(p) - m) < 0.05 for m in mode)),
+                   key=abs, reverse=True)[:2]
     if len(poles) == 2 and poles[0].imag != 0.0:
         poles = [poles[0], poles[0].conjugate()]
     return poles

@@ -19,7 +19,7 @@ from typing import Sequence
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.identification.evaluation import record_mae
 from hydro_sdp.core.identification.segmentation import check_record
-from hydro_sdp.core.model.effects import AngleDependentVelocity, Backlash
+from hydro_sdp.core.model.effects import AngleDependentVelocity, Backlash, Oscillation
 from hydro_sdp.core.model.exogenous_signals import Exogenous, exogenous_of
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.records import Record
@@ -144,7 +144,8 @@ def velocity_residuals(model: JointModel, runs: Sequence[Run]) -> list[FloatArra
 
 def _plays_at_stops(model: JointModel) -> bool:
     return model.angle_limits is not None and isinstance(model.effect(Backlash.name), Backlash) \
-        and model.effect(AngleDependentVelocity.name) is None
+        and model.effect(AngleDependentVelocity.name) is None \
+        and model.effect(Oscillation.name) is None
 
 
 def _play_at_stops(model: JointModel, run: Run) -> FloatArray:

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from bisect import bisect_right
 from dataclasses import asdict, dataclass, fields, MISSING
+import math
 from typing import Any, ClassVar, Mapping, Union
 
 from hydro_sdp.core.arrays import FloatArray
@@ -96,6 +97,37 @@ class AngleDependentVelocity:
             raise ModelFileError(
                 "key 'effects.angle_dependent_velocity.amplitude': must be inside (-1, 1), "
                 f'got {self.amplitude}')
+
+
+@dataclass(frozen=True)
+class Oscillation:
+    """
+    The link rings on the oil column: a second-order mode between actuator and link.
+
+    The measured angle ``y`` follows the actuator's angle ``x`` through
+    ``y'' + 2 damping w y' + w^2 y = w^2 x``, ``w = 2 pi frequency``
+    (docs/methods.md section 3.6).
+
+    Parameters
+    ----------
+    frequency : float
+        Natural frequency of the mode, Hz (> 0).
+    damping : float
+        Damping ratio, inside (0, 1).
+
+    """
+
+    name: ClassVar[str] = 'oscillation'
+    frequency: float
+    damping: float
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.frequency) and self.frequency > 0.0):
+            raise ModelFileError(
+                f"key 'effects.oscillation.frequency': must be > 0 Hz, got {self.frequency}")
+        if not 0.0 < self.damping < 1.0:
+            raise ModelFileError(
+                f"key 'effects.oscillation.damping': must be inside (0, 1), got {self.damping}")
 
 
 @dataclass(frozen=True)
@@ -243,13 +275,13 @@ class StrokeGeometry:
 
 
 Effect = Union[ValveLag, Backlash, AngleDependentVelocity, DirectionDependentDelay,
-               StrokeGeometry, FlowSharing, LoadDependence]
+               StrokeGeometry, FlowSharing, LoadDependence, Oscillation]
 
 #: Effect classes by vocabulary word, in the order the simulation applies them.
 EFFECT_TYPES: dict[str, type[Effect]] = {
     cls.name: cls
     for cls in (DirectionDependentDelay, ValveLag, FlowSharing, LoadDependence, StrokeGeometry,
-                AngleDependentVelocity, Backlash)
+                AngleDependentVelocity, Oscillation, Backlash)
 }
 
 

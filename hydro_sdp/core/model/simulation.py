@@ -30,10 +30,11 @@ from hydro_sdp.core.model.angle_recursion import integrate_angle_dependent
 from hydro_sdp.core.model.bounded_sum import bounded_cumsum
 from hydro_sdp.core.model.effects import (
     AngleDependentVelocity, Backlash, DirectionDependentDelay, FlowSharing, LoadDependence,
-    StrokeGeometry, ValveLag)
+    Oscillation, StrokeGeometry, ValveLag)
 from hydro_sdp.core.model.exogenous_signals import Exogenous, exogenous_factor
 from hydro_sdp.core.model.first_order import first_order
 from hydro_sdp.core.model.joint_model import JointModel
+from hydro_sdp.core.model.link_mode import LinkMode, LinkState
 from hydro_sdp.core.model.static_maps import StaticMap
 from hydro_sdp.core.model.timing import check_sample_period, delay_samples, delayed, DelayLine
 import numpy as np
@@ -132,15 +133,30 @@ def integrate_speed(model: JointModel, speed: FloatArray, dt: float, y0: float,
     # The sensor reads the actuator plus the play's offset e in [-b, b]: the actuator
     # starts e away from the angle read, and it is the actuator that meets the stops.
     initial = min(max(backlash_offset, -half), half)
+    mode = _link_mode(model, dt)
+    # With the link's mode the actuator starts where a link settled at the first speed
+    # trails it from (the angle read).
+    lead = 0.0 if mode is None or speed.size == 0 else mode.lead * float(speed[0])
     if gravity is not None or geometry is not None:
-        y = integrate_angle_dependent(speed, dt, y0 - initial, low, high, gravity, geometry)
+        y = integrate_angle_dependent(speed, dt, y0 - initial + lead, low, high, gravity,
+                                      geometry)
     else:
-        y = bounded_cumsum(y0 - initial, dt * speed[1:], low, high)
+        y = bounded_cumsum(y0 - initial + lead, dt * speed[1:], low, high)
+    if mode is not None:
+        y = mode.ring(y, dt, float(speed[0]))
     if half > 0.0:
         # e_k = clamp(e_{k-1} - dy_k): the sensor lags the actuator's motion.
         offset = bounded_cumsum(initial, -np.diff(y), -half, half)
         y = np.clip(y + offset, low, high)
+    elif mode is not None:
+        y = np.clip(y, low, high)
     return y
+
+
+def _link_mode(model: JointModel, dt: float) -> LinkMode | None:
+    """Return the model's link mode at ``dt``, or None without ``oscillation``."""
+    effect = model.effect(Oscillation.name)
+    return LinkMode.of(effect, dt) if isinstance(effect, Oscillation) else None
 
 
 def speed_profile(model: JointModel, v: FloatArray, dt: float, *,
@@ -200,8 +216,8 @@ def one_step_increments(model: JointModel, v: FloatArray, y: FloatArray, dt: flo
 
     Unlike a simulation these do not drift: angle-dependent speed and end stops
     use the measured ``y_{k-1}``, so a discrepancy shows where it happens
-    (docs/methods.md section 8.1, the velocity residual). Backlash follows the model's own
-    play state.
+    (docs/methods.md section 8.1, the velocity residual). Backlash and the link's mode
+    (``oscillation``) follow the model's own state.
 
     Parameters
     ----------
@@ -218,8 +234,68 @@ def one_step_increments(model: JointModel, v: FloatArray, y: FloatArray, dt: flo
         Predicted increments for samples ``start + 1 ..``.
 
     """
-    speed = speed_profile(model, v, dt, v_before=v_before, exogenous=exogenous)[start + 1:]
-    previous = np.asarray(y, dtype=np.float64)[start:-1]
+    mode = model.effect(Oscillation.name)
+    steps = OneStep(model.without_effect(Oscillation.name) if mode is not None else model, v, y,
+                    dt, start=start, v_before=v_before, exogenous=exogenous,
+                    from_start=mode is None)
+    return steps.increments(mode if isinstance(mode, Oscillation) else None)
+
+
+class OneStep:
+    """
+    The one-step increments of a model for any link mode added to it.
+
+    What does not depend on the mode (the speed profile, the actuator's increments) is
+    worked out once, for a fit that tries many modes (:func:`one_step_increments`).
+
+    Parameters
+    ----------
+    model : JointModel
+        The model without ``oscillation``.
+    v, y, dt, start, v_before, exogenous
+        As in :func:`one_step_increments`.
+    from_start : bool
+        Whether only the increments from ``start`` are needed (no mode will be added).
+
+    """
+
+    def __init__(self, model: JointModel, v: FloatArray, y: FloatArray, dt: float, *,
+                 start: int = 0, v_before: float = 0.0, exogenous: Exogenous | None = None,
+                 from_start: bool = False) -> None:
+        self.model, self.dt, self.start = model, dt, start
+        profile = speed_profile(model, v, dt, v_before=v_before, exogenous=exogenous)
+        self.y = np.asarray(y, dtype=np.float64)
+        # The mode's state depends on the motion before ``start``: it runs from the
+        # record's start (settled there), so that a link still ringing at ``start`` is
+        # predicted.
+        self.first = start if from_start else 0
+        self.before = float(profile[self.first]) if profile.size else 0.0
+        self.actuator = _actuator_increments(model, profile[self.first + 1:],
+                                             self.y[self.first:-1], dt)
+
+    def increments(self, mode: Oscillation | None = None) -> FloatArray:
+        """Return the predicted increments for samples ``start + 1 ..`` with ``mode`` added."""
+        model, start, first = self.model, self.start, self.first
+        low, high = _limits(model)
+        increment = self.actuator
+        if mode is not None and increment.size:
+            if first != 0:
+                raise ValueError("a mode needs the increments from the record's start")
+            increment = _ringing_increments(LinkMode.of(mode, self.dt), increment,
+                                            self.y[:-1], self.dt, self.before, low, high)
+        increment = increment[start - first:]
+        previous = self.y[start:-1]
+        play = model.effect(Backlash.name)
+        if isinstance(play, Backlash) and play.play > 0.0:
+            half = 0.5 * play.play
+            offset = bounded_cumsum(0.0, -increment, -half, half)
+            increment = increment + np.diff(offset)
+        return np.clip(previous + increment, low, high) - previous
+
+
+def _actuator_increments(model: JointModel, speed: FloatArray, previous: FloatArray,
+                         dt: float) -> FloatArray:
+    """Return ``dt`` times ``speed`` with the angle effects at the ``previous`` angles."""
     gravity, geometry = _angle_effects(model)
     if geometry is not None:
         speed = speed * geometry.factor(previous, speed)
@@ -227,13 +303,55 @@ def one_step_increments(model: JointModel, v: FloatArray, y: FloatArray, dt: flo
     if gravity is not None:
         increment = increment + dt * gravity.amplitude * np.abs(speed) * np.cos(
             np.radians(previous + gravity.phase))
-    play = model.effect(Backlash.name)
-    if isinstance(play, Backlash) and play.play > 0.0:
-        half = 0.5 * play.play
-        offset = bounded_cumsum(0.0, -increment, -half, half)
-        increment = increment + np.diff(offset)
-    low, high = _limits(model)
-    return np.clip(previous + increment, low, high) - previous
+    return increment
+
+
+def _ringing_increments(mode: LinkMode, increment: FloatArray, previous: FloatArray,
+                        dt: float, before: float, low: float, high: float) -> FloatArray:
+    """
+    Return the link's increments for the actuator's, the mode's state the model's own.
+
+    The mode starts settled at ``before`` (deg/s). With stops, the actuator is the
+    measured angle less the mode's deviation; its increment is cut where it meets a
+    stop, and it stays pressed there until the drive turns away (a link ringing below
+    the stop, or the noise on the angle read, does not move it). While it is pressed and
+    the mode swings the link beyond the stop, the link is the stop plus the mode's
+    deviation, read within the stops (a sensor at the stop does not show how far beyond
+    it the link swings).
+    """
+    deviation, speed = mode.states(increment / dt, before)
+    out = increment + np.diff(np.r_[mode.settled(before)[0], deviation])
+    # Until the actuator first meets a stop this is the recursion below, all at once.
+    actuator = previous - np.r_[mode.settled(before)[0], deviation[:-1]]
+    meets = np.flatnonzero(((increment > 0.0) & (actuator + increment >= high))
+                           | ((increment < 0.0) & (actuator + increment <= low)))
+    if meets.size == 0:
+        return out
+    first = int(meets[0])
+    state = LinkState(mode, before, None if first == 0 else (float(deviation[first - 1]),
+                                                             float(speed[first - 1])))
+    pressed = 0.0
+    for k, (step, angle) in enumerate(zip(increment[first:].tolist(),
+                                          previous[first:].tolist()), start=first):
+        if pressed * step > 0.0:
+            moved = 0.0
+        else:
+            # Leaving a stop it starts from the stop, whatever a sensor there reads.
+            actuator = angle - state.e if not pressed else high if pressed > 0.0 else low
+            moved, pressed = step, 0.0
+            if step > 0.0 and actuator + step >= high:
+                moved, pressed = max(high - actuator, 0.0), 1.0
+            elif step < 0.0 and actuator + step <= low:
+                moved, pressed = min(low - actuator, 0.0), -1.0
+        e = state.e
+        swung = state.step(moved / dt)
+        stop = high if pressed > 0.0 else low
+        if pressed and not low <= stop + e <= high:
+            # The link swung beyond the stop, where the sensor cannot follow it.
+            out[k] = min(max(stop + swung, low), high) - angle
+        else:
+            out[k] = moved + swung - e
+    return out
 
 
 AngleEffects = tuple[AngleDependentVelocity | None, StrokeGeometry | None]
@@ -290,7 +408,11 @@ class JointSimulator:
                               for name in (FlowSharing.name, LoadDependence.name))
         play = model.effect(Backlash.name)
         self._half_play = 0.5 * play.play if isinstance(play, Backlash) else 0.0
-        self._actuator = min(max(float(y0), self._low), self._high)
+        mode = _link_mode(model, self.dt)
+        self._link = None if mode is None else LinkState(mode, rate_before)
+        # The link reads y0 and trails the actuator (its deviation e, settled).
+        self._deviation = 0.0 if self._link is None else self._link.e
+        self._actuator = min(max(float(y0) - self._deviation, self._low), self._high)
         self._offset = 0.0
         self.samples = 0
 
@@ -311,7 +433,7 @@ class JointSimulator:
     @property
     def angle(self) -> float:
         """Return the angle the sensor reads now, degrees."""
-        return min(max(self._actuator + self._offset, self._low), self._high)
+        return min(max(self._actuator + self._deviation + self._offset, self._low), self._high)
 
     def step(self, v: float) -> float:
         """
@@ -352,8 +474,12 @@ class JointSimulator:
             speed += self._gravity.amplitude * abs(speed) * math.cos(
                 math.radians(previous) + phase)
         self._actuator = min(max(previous + self.dt * speed, self._low), self._high)
+        moved = self._actuator - previous
+        if self._link is not None:
+            deviation = self._deviation
+            self._deviation = self._link.step(moved / self.dt)
+            moved += self._deviation - deviation
         if self._half_play > 0.0:
-            moved = self._actuator - previous
             self._offset = min(max(self._offset - moved, -self._half_play), self._half_play)
         self.samples += 1
         return self.angle

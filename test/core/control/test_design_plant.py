@@ -7,7 +7,7 @@ from hydro_sdp.core.control.loop_noise import noise_gain
 from hydro_sdp.core.control.pip_design import (
     closed_loop_poles, DiscretePlant, lq_design, LqWeights, nmss, pole_assignment)
 from hydro_sdp.core.errors import ConfigurationError, ModelFileError
-from hydro_sdp.core.model.effects import ValveLag
+from hydro_sdp.core.model.effects import Oscillation, ValveLag
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.simulation import JointSimulator
 from hydro_sdp.core.model.static_maps import LinearMap
@@ -155,3 +155,110 @@ def test_the_noise_gain_is_the_loops_own(j2, lag):
     # The values docs/methods.md section 5.5 quotes: [W18]'s J2 design, and the lagged
     # design, which reacts more to the angle's changes.
     assert expected == pytest.approx(0.1355 if lag is None else 0.4870, abs=5e-4)
+
+
+@pytest.mark.parametrize('lag, frequency, damping, period', [
+    (None, 2.0, 0.1, 0.05), (0.12, 2.0, 0.1, 0.05), (0.05, 3.5, 0.3, 0.1),
+    (0.2, 1.0, 0.05, 0.02)])
+def test_the_plant_with_a_mode_is_python_controls_zero_order_hold(
+        control, lag, frequency, damping, period):
+    # u deg per control sample asks for u / T deg/s through the lag and the link's mode
+    # w^2 / (s^2 + 2 d w s + w^2), then the integrator.
+    w = 2.0 * np.pi * frequency
+    den = np.polymul([1.0, 0.0], [1.0, 2.0 * damping * w, w * w])
+    if lag is not None:
+        den = np.polymul(den, [lag, 1.0])
+    discrete = control.c2d(control.tf([w * w / period], den), period, method='zoh')
+    num, den = (np.ravel(x) for x in control.tfdata(discrete))
+    num, den = num / den[0], den / den[0]
+    plant = lagged_integrator(2, lag, period, (frequency, damping))
+    assert plant.n == (4 if lag else 3) and plant.delay == 2
+    np.testing.assert_allclose(den, np.r_[1.0, plant.a], atol=1e-12)
+    np.testing.assert_allclose(num[-plant.n:], plant.b[1:], atol=1e-12)
+    # The steady gain stays one degree per degree asked: B(1) = A(1) / (1 - z^-1) at z = 1.
+    own = np.polydiv(np.r_[1.0, plant.a], [1.0, -1.0])[0]
+    assert sum(plant.b) == pytest.approx(float(np.sum(own)))
+    # The design keeps the mode's (and the lag's) poles and makes the rest deadbeat.
+    poles = completed_poles(plant, [0.94 + 0.05j, 0.94 - 0.05j])
+    np.testing.assert_allclose(np.poly(poles[2:2 + plant.n - 1]), own, atol=1e-12)
+    assert len(poles) == plant.n + plant.m and not any(poles[1 + plant.n:])
+
+
+def test_a_design_records_the_mode_and_the_file_checks_it(j2):
+    ringing = j2.with_effect(ValveLag(0.12)).with_effect(Oscillation(2.0, 0.1))
+    spec = design_from_model(ringing)
+    assert spec.oscillation == (2.0, 0.1) and spec.plant == lagged_integrator(
+        3, 0.12, 0.05, (2.0, 0.1))
+    data = spec.to_mapping()
+    assert data['plant']['oscillation'] == {'frequency': 2.0, 'damping': 0.1}
+    assert ControllerSpec.from_mapping(data) == spec
+    with pytest.raises(ModelFileError, match='mode of 2.5 Hz'):
+        ControllerSpec.from_mapping({**data, 'plant': {
+            **data['plant'], 'oscillation': {'frequency': 2.5, 'damping': 0.1}}})
+    with pytest.raises(ModelFileError, match='plant.oscillation'):
+        ControllerSpec.from_mapping({**data, 'plant': {
+            **data['plant'], 'oscillation': {'frequency': 2.5}}})
+    with pytest.raises(ConfigurationError, match='Nyquist'):
+        lagged_integrator(3, None, 0.05, (12.0, 0.1))
+
+
+def test_the_design_on_the_mode_steps_a_ringing_joint_without_sustained_ringing(j2, tmp_path):
+    # The true joint is the independent generator's: J2's map and delay, its link ringing at
+    # 2 Hz with a damping ratio of 0.1; the controller file runs in the independent loop.
+    from hydro_sdp.io.controller_files import save_controller
+    from support.independent_loop import FileController, judge, run_loop
+    from support.joint_generator import GeneratedPlant, Joint, SpeedMap
+
+    j2_map = j2.static_map
+    truth = Joint(SpeedMap('exp', j2_map.dead_zone, (-j2_map.saturation_velocity[0],
+                                                     j2_map.saturation_velocity[1]),
+                           j2_map.curvature), delay=j2.delay, stops=j2.angle_limits,
+                  mode=(2.0, 0.1), noise=0.02)
+    levels = (10.0, 30.0, 50.0, 30.0, 10.0, 35.0)
+    path = save_controller(design_from_model(j2.with_effect(Oscillation(2.0, 0.1))),
+                           tmp_path / 'ringing.yaml')
+    run = run_loop(FileController.read(path), GeneratedPlant(truth, levels[0]), 0.01, levels,
+                   8.0)
+    steps = judge(run)
+    assert all(s.settling < 4.0 and s.overshoot < 5.0 for s in steps), steps
+    # No hold ends hunting, and none rings on: the last 2 s stay within half the band.
+    assert all(s.reversals == 0 and s.wander < 0.25 for s in steps), steps
+
+
+def test_on_a_slower_lighter_mode_only_the_design_on_it_keeps_the_loop(j2, tmp_path):
+    # J2 ringing at 1.5 Hz, damping 0.05: the integrator's design drives the mode
+    # unstable; the one on the mode settles every step (the valve still hunts a little).
+    from hydro_sdp.io.controller_files import save_controller
+    from support.independent_loop import FileController, judge, run_loop
+    from support.joint_generator import GeneratedPlant, Joint, SpeedMap
+
+    j2_map = j2.static_map
+    truth = Joint(SpeedMap('exp', j2_map.dead_zone, (-j2_map.saturation_velocity[0],
+                                                     j2_map.saturation_velocity[1]),
+                           j2_map.curvature), delay=j2.delay, stops=j2.angle_limits,
+                  mode=(1.5, 0.05), noise=0.02)
+    levels = (10.0, 30.0, 50.0)
+    judged = {}
+    for name, model in (('mode', j2.with_effect(Oscillation(1.5, 0.05))), ('plain', j2)):
+        path = save_controller(design_from_model(model), tmp_path / f'{name}.yaml')
+        judged[name] = judge(run_loop(FileController.read(path),
+                                      GeneratedPlant(truth, levels[0]), 0.01, levels, 8.0))
+    assert all(s.settling < 4.0 and s.overshoot < 5.0 for s in judged['mode']), judged
+    assert all(s.settling == np.inf and s.overshoot > 15.0 for s in judged['plain']), judged
+
+
+def test_a_slower_redesign_keeps_the_modes_poles_and_slows_the_dominant_ones(j2):
+    from hydro_sdp.core.calibration import _slower
+    from hydro_sdp.core.control.design_plant import mode_poles
+
+    spec = design_from_model(j2.with_effect(Oscillation(2.0, 0.1)))
+    pair = mode_poles((2.0, 0.1), 0.05)
+    poles = _slower(spec)
+    for pole in pair:
+        assert min(abs(p - pole) for p in poles) < 1e-9
+    slower = design_from_model(j2.with_effect(Oscillation(2.0, 0.1)), poles=poles)
+    # The slow poles are placed (the repeated deadbeat ones computed only to 1e-4).
+    np.testing.assert_allclose(sorted(abs(p) for p in slower.poles if abs(p) > 0.01),
+                               sorted(abs(p) for p in poles if abs(p) > 0.01), atol=1e-6)
+    dominant = max((p for p in spec.poles if min(abs(p - m) for m in pair) > 0.05), key=abs)
+    assert max(abs(p) for p in poles if min(abs(p - m) for m in pair) > 1e-6) > abs(dominant)

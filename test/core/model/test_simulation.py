@@ -5,7 +5,8 @@ import math
 
 from hydro_sdp.core.errors import DataError
 from hydro_sdp.core.model.effects import (
-    AngleDependentVelocity, Backlash, DirectionDependentDelay, StrokeGeometry, ValveLag)
+    AngleDependentVelocity, Backlash, DirectionDependentDelay, Oscillation, StrokeGeometry,
+    ValveLag)
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.simulation import bounded_cumsum, JointSimulator, simulate
 from hydro_sdp.core.model.static_maps import LinearMap
@@ -65,6 +66,8 @@ EFFECT_SETS = [
     (DirectionDependentDelay(0.15, 0.2),),
     (ValveLag(0.1), Backlash(0.5), AngleDependentVelocity(0.2, 0.0),
      DirectionDependentDelay(0.1, 0.25)),
+    (Oscillation(2.0, 0.1),),
+    (ValveLag(0.1), Oscillation(2.5, 0.05), Backlash(0.5), AngleDependentVelocity(0.2, 0.0)),
 ]
 
 

@@ -14,7 +14,8 @@ from hydro_sdp.core.diagnosis.detectors.angle import (
 from hydro_sdp.core.diagnosis.detectors.base import Detector, feature_signature
 from hydro_sdp.core.diagnosis.detectors.delays import (
     DirectionDependentDelayDetector, TimeDelayDetector)
-from hydro_sdp.core.diagnosis.detectors.dynamics import BacklashDetector, ValveLagDetector
+from hydro_sdp.core.diagnosis.detectors.dynamics import (
+    BacklashDetector, OscillationDetector, ValveLagDetector)
 from hydro_sdp.core.diagnosis.detectors.load import LoadDependenceDetector
 from hydro_sdp.core.diagnosis.detectors.map_shape import (
     AsymmetryDetector, DeadZoneDetector, VelocitySaturationDetector)
@@ -27,7 +28,7 @@ DETECTORS: tuple[Detector, ...] = (
     DeadZoneDetector(), VelocitySaturationDetector(), AsymmetryDetector(), TimeDelayDetector(),
     DirectionDependentDelayDetector(), AngleLimitsDetector(), ValveLagDetector(),
     BacklashDetector(), AngleDependentVelocityDetector(), StrokeGeometryDetector(),
-    FlowSharingDetector(), LoadDependenceDetector(),
+    FlowSharingDetector(), LoadDependenceDetector(), OscillationDetector(),
 )
 
 #: The vocabulary: every word the workflow can name (besides ``none``).

@@ -26,6 +26,7 @@ from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import DataError
 from hydro_sdp.core.model.timing import check_sample_period
 from hydro_sdp.core.synthetic.physics.hydraulics import Actuator
+from hydro_sdp.core.synthetic.physics.oil_column import OilColumn
 from hydro_sdp.core.synthetic.physics.plant import Machine
 from hydro_sdp.core.synthetic.physics.supply import Supply
 from hydro_sdp.core.synthetic.physics.valve import metering_area, Spool, spool_travel
@@ -98,9 +99,20 @@ def _initial(machine: Machine, actuators: Sequence[Actuator],
 
 
 def _blocked(actuators: Sequence[Actuator], areas: Sequence[float],
-             extensions: Sequence[float]) -> bool:
+             extensions: Sequence[float], columns: Columns) -> bool:
     """Whether no cylinder can move (spool closed or driving it into its end): speeds all 0."""
-    return all(act.blocked(area, s) for act, area, s in zip(actuators, areas, extensions))
+    return not any(columns) and all(act.blocked(area, s) for act, area, s
+                                    in zip(actuators, areas, extensions))
+
+
+#: Each joint's oil column, None where the pressures settle at every sample.
+Columns = Sequence[OilColumn | None]
+
+
+def _columns(machine: Machine, actuators: Sequence[Actuator],
+             extensions: Sequence[float]) -> list[OilColumn | None]:
+    return [None if joint.compressibility is None else OilColumn(joint, act, s)
+            for joint, act, s in zip(machine.joints, actuators, extensions)]
 
 
 def _next_turn(areas: FloatArray) -> list[int]:
@@ -112,11 +124,14 @@ def _next_turn(areas: FloatArray) -> list[int]:
 
 
 def _advance(supply: Supply, areas: Sequence[float], extensions: list[float],
-             dt: float) -> list[float]:
+             dt: float, columns: Columns) -> list[float]:
     """Move every cylinder over one sample; return the speeds the pump allows (m/s)."""
     moved = supply.speeds(areas, extensions)
-    for i, (act, speed) in enumerate(zip(supply.actuators, moved)):
-        extensions[i] = min(max(extensions[i] + dt * speed, 0.0), act.stroke)
+    for i, (act, speed, column) in enumerate(zip(supply.actuators, moved, columns)):
+        if column is None:
+            extensions[i] = min(max(extensions[i] + dt * speed, 0.0), act.stroke)
+        else:
+            extensions[i] = column.advance(areas[i], speed, dt)
     return moved
 
 
@@ -160,6 +175,8 @@ def simulate_plant(machine: Machine, commands: FloatArray, dt: float, *,
     actuators = [Actuator(joint, machine.pump) for joint in machine.joints]
     extensions, before = _initial(machine, actuators, angles0, command_before)
     supply = Supply(actuators, machine.pump)
+    columns = _columns(machine, actuators, extensions)
+    held: list[list[tuple[float, float]]] = []
     areas = np.column_stack([
         metering_area(joint.valve, spool_travel(joint.valve, v[:, i], dt,
                                                 command_before=before[i]))
@@ -173,13 +190,15 @@ def simulate_plant(machine: Machine, commands: FloatArray, dt: float, *,
     moved, rows, where = [], [], []
     k = 1
     while k < n:
-        if _blocked(actuators, table[k], extensions):
+        if _blocked(actuators, table[k], extensions, columns):
             # Nothing moves until a spool closes, opens or reverses: skip to that sample.
             k = following[k]
             continue
         rows.append(k)
-        moved.append(_advance(supply, table[k], extensions, dt))
+        moved.append(_advance(supply, table[k], extensions, dt, columns))
         where.append(list(extensions))
+        if pressures and any(columns):
+            held.append([(math.nan, math.nan) if c is None else c.pressures for c in columns])
         k += 1
     if rows:
         speed[rows] = moved
@@ -205,6 +224,11 @@ def simulate_plant(machine: Machine, commands: FloatArray, dt: float, *,
         chambers = np.array([[act.pressures(table[k][i], path[k - 1 if k else 0, i],
                                             speed[k, i]) for i, act in enumerate(actuators)]
                              for k in range(n)]).reshape(n, count, 2)
+        if held:
+            # The oil columns' own pressures (every sample is a row: none is skipped).
+            states = np.array(held)
+            dynamic = [i for i, column in enumerate(columns) if column is not None]
+            chambers[1:, dynamic] = states[:, dynamic]
     return PlantRun(machine.names, angles, joint_speed, path * 1e3, chambers)
 
 
@@ -242,6 +266,7 @@ class PlantSimulator:
         self._actuators = [Actuator(joint, machine.pump) for joint in machine.joints]
         self.extensions, before = _initial(machine, self._actuators, angles0, command_before)
         self._supply = Supply(self._actuators, machine.pump)
+        self._columns = _columns(machine, self._actuators, self.extensions)
         self._spools = [Spool(joint.valve, self.dt, before[i])
                         for i, joint in enumerate(machine.joints)]
         filters = [_stop_filter(joint.stop_frequency, joint.stop_damping, self.dt)
@@ -307,11 +332,12 @@ class PlantSimulator:
         previous = self._kinematic
         before = list(self.extensions)
         moved = [0.0] * len(areas)
-        if not _blocked(self._actuators, areas, self.extensions):
-            moved = _advance(self._supply, areas, self.extensions, self.dt)
+        if not _blocked(self._actuators, areas, self.extensions, self._columns):
+            moved = _advance(self._supply, areas, self.extensions, self.dt, self._columns)
         # What the chambers' pressure sensors read over the sample (as simulate_plant's).
-        self.pressures = [act.pressures(area, extension, speed) for act, area, extension, speed
-                          in zip(self._actuators, areas, before, moved)]
+        self.pressures = [act.pressures(area, extension, speed) if column is None
+                          else column.pressures for act, area, extension, speed, column
+                          in zip(self._actuators, areas, before, moved, self._columns)]
         # A cylinder that did not move keeps its angle.
         kinematic = [p if s == b else act.geometry.angle(s) for act, s, b, p
                      in zip(self._actuators, self.extensions, before, previous)]

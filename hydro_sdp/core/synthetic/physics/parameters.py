@@ -361,3 +361,50 @@ class Load:
                    payload_distance=number(data, 'payload_distance', where, low=0.0,
                                            default=0.0),
                    phase=number(data, 'phase', where, default=0.0))
+
+
+@dataclass(frozen=True)
+class Compressibility:
+    """
+    The oil's compressibility and the link's inertia: the link rings on the oil column.
+
+    With this section the chamber pressures and the link's speed are states
+    (docs/methods.md section 11): the pressures follow the continuity equations of the
+    two chambers, the link the force balance on it, so the link rings at the hydraulic
+    natural frequency ``sqrt(k_h r^2 / J)``, ``k_h = beta (A_a^2 / V_a + A_b^2 / V_b)``.
+
+    Parameters
+    ----------
+    bulk_modulus : float
+        Effective bulk modulus of the oil with its hoses, bar.
+    dead_volume_piston, dead_volume_rod : float
+        Oil between the valve and each chamber at its end of stroke (hoses, ports), cm^3
+        (> 0): each chamber holds its dead volume plus its area times its stroke.
+    inertia : float
+        Moment of inertia of the link and payload about the joint, kg m^2 (0: the load's
+        masses as points at their distances).
+    viscous_friction : float
+        Viscous friction of the seals, N s/m of cylinder speed.
+
+    """
+
+    bulk_modulus: float
+    dead_volume_piston: float
+    dead_volume_rod: float
+    inertia: float = 0.0
+    viscous_friction: float = 0.0
+
+    keys = ('bulk_modulus', 'dead_volume_piston', 'dead_volume_rod', 'inertia',
+            'viscous_friction')
+
+    @classmethod
+    def from_mapping(cls, data: Document, where: str) -> Compressibility:
+        """Build from a joint's ``compressibility`` section."""
+        return cls(bulk_modulus=number(data, 'bulk_modulus', where, low=0.0, strict_low=True),
+                   dead_volume_piston=number(data, 'dead_volume_piston', where, low=0.0,
+                                             strict_low=True),
+                   dead_volume_rod=number(data, 'dead_volume_rod', where, low=0.0,
+                                          strict_low=True),
+                   inertia=number(data, 'inertia', where, low=0.0, default=0.0),
+                   viscous_friction=number(data, 'viscous_friction', where, low=0.0,
+                                           default=0.0))

@@ -15,7 +15,7 @@ import math
 
 from hydro_sdp.core.errors import ModelFileError
 from hydro_sdp.core.synthetic.physics.parameters import (
-    Cylinder, Linkage, Load, number, Pump, section, Valve)
+    Compressibility, Cylinder, Linkage, Load, number, Pump, section, Valve)
 from hydro_sdp.core.validation import read_document, require_mapping
 
 PHYSICS_FORMAT = 'hydro_sdp/physics/v1'
@@ -40,6 +40,10 @@ class Joint:
         Damping ratio of that mode (key ``stop.damping``), 0 < d < 1.
     noise : float
         Standard deviation of the angle sensor noise, degrees.
+    compressibility : Compressibility or None
+        The oil's compressibility and the link's inertia (key ``compressibility``):
+        the link rings on the oil column; None (the default): the pressures settle
+        at every sample.
 
     """
 
@@ -51,8 +55,9 @@ class Joint:
     stop_frequency: float
     stop_damping: float
     noise: float = 0.0
+    compressibility: Compressibility | None = None
 
-    keys = ('name', 'valve', 'cylinder', 'linkage', 'load', 'stop', 'noise')
+    keys = ('name', 'valve', 'cylinder', 'linkage', 'load', 'stop', 'noise', 'compressibility')
 
     @classmethod
     def from_mapping(cls, data: object, where: str) -> Joint:
@@ -74,7 +79,14 @@ class Joint:
             stop_frequency=number(stop, 'frequency', where + '.stop', low=0.0, strict_low=True),
             stop_damping=number(stop, 'damping', where + '.stop', low=0.0, strict_low=True,
                                 high=0.99),
-            noise=number(data, 'noise', where, low=0.0, default=0.0))
+            noise=number(data, 'noise', where, low=0.0, default=0.0),
+            compressibility=None if 'compressibility' not in data else
+            Compressibility.from_mapping(section(data, 'compressibility', where,
+                                                 Compressibility.keys),
+                                         where + '.compressibility'))
+        if joint.compressibility is not None and not joint.valve.compensated:
+            raise ModelFileError(f'key {where + ".compressibility"!r}: needs a compensated '
+                                 'valve (its meter-in flow is taken as the compensated one)')
         link = joint.linkage
         longest = link.base_distance + link.rod_distance
         shortest = abs(link.base_distance - link.rod_distance)

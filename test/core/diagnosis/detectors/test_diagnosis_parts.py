@@ -28,14 +28,15 @@ def test_the_vocabulary_is_the_registry_in_search_order():
     assert VOCABULARY == ('dead_zone', 'velocity_saturation', 'asymmetry', 'time_delay',
                           'direction_dependent_delay', 'angle_limits', 'valve_lag', 'backlash',
                           'angle_dependent_velocity', 'stroke_geometry', 'flow_sharing',
-                          'load_dependence')
+                          'load_dependence', 'oscillation')
     assert tuple(d.word for d in DETECTORS) == VOCABULARY
     features = {d.word: d.feature for d in DETECTORS}
     assert features == {
         'dead_zone': 'command', 'velocity_saturation': 'command', 'asymmetry': 'command',
         'time_delay': 'events', 'direction_dependent_delay': 'events', 'valve_lag': 'events',
         'backlash': 'reversals', 'angle_limits': 'angle', 'angle_dependent_velocity': 'angle',
-        'stroke_geometry': 'angle', 'flow_sharing': 'others', 'load_dependence': 'command'}
+        'stroke_geometry': 'angle', 'flow_sharing': 'others', 'load_dependence': 'command',
+        'oscillation': 'events'}
     for each in DETECTORS:
         assert detector(each.word) is each
         assert each.description and each.remedy and each.feature in FEATURE_LABELS

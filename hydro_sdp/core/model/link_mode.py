@@ -1,0 +1,136 @@
+"""
+The link's mode on the oil column (effect ``oscillation``), exact at the sample period.
+
+The measured angle ``y`` follows the actuator's angle ``x`` through
+``y'' + 2 d w y' + w^2 y = w^2 x``. Between samples the actuator moves at the
+speed of its interval, ``x' = w_k``, so with ``e = y - x`` and ``u = y'`` the state
+``s = [e, u]`` obeys ``s' = A s + [-1, 0]' w_k``, ``A = [[0, 1], [-w^2, -2 d w]]``,
+whose zero-order hold, ``s_k = P s_{k-1} + G w_k``, is exact (docs/methods.md
+section 3.6). A settled state at speed ``w`` is ``e = -2 d w / w_n``, ``u = w``.
+
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+import math
+
+from hydro_sdp.core.arrays import FloatArray
+from hydro_sdp.core.errors import DataError
+from hydro_sdp.core.model.effects import Oscillation
+import numpy as np
+
+#: Largest exponent ``k |ln a|`` within a block of the modal recursion (as first_order).
+_EXPONENT = 600.0
+
+
+@dataclass(frozen=True)
+class LinkMode:
+    """
+    The mode's zero-order hold at one sample period.
+
+    Parameters
+    ----------
+    transition : tuple[float, float, float, float]
+        ``P`` row by row.
+    input_gain : tuple[float, float]
+        ``G``.
+    lead : float
+        ``2 d / w_n``, s: how far a settled link trails the actuator per deg/s.
+
+    """
+
+    transition: tuple[float, float, float, float]
+    input_gain: tuple[float, float]
+    lead: float
+
+    @classmethod
+    def of(cls, effect: Oscillation, dt: float) -> LinkMode:
+        """Return the mode of ``effect`` at ``dt`` s (its frequency below the Nyquist one)."""
+        if not effect.frequency < 0.5 / dt:
+            raise DataError(f'the oscillation at {effect.frequency:g} Hz is not below the '
+                            f'Nyquist frequency of the sample period {dt:g} s '
+                            f'({0.5 / dt:g} Hz)')
+        w = 2.0 * math.pi * effect.frequency
+        sigma = effect.damping * w
+        wd = w * math.sqrt(1.0 - effect.damping ** 2)
+        decay, c, s = math.exp(-sigma * dt), math.cos(wd * dt), math.sin(wd * dt)
+        p = (decay * (c + sigma / wd * s), decay * s / wd,
+             -decay * w * w / wd * s, decay * (c - sigma / wd * s))
+        # G = A^-1 (P - I) [-1, 0]', A^-1 = [[-2 d / w, -1 / w^2], [1, 0]].
+        first, second = 1.0 - p[0], -p[2]
+        gain = (-2.0 * effect.damping / w * first - second / (w * w), first)
+        return cls(p, gain, 2.0 * effect.damping / w)
+
+    def settled(self, speed: float) -> tuple[float, float]:
+        """Return the state ``(e, u)`` of a link moving steadily at ``speed`` deg/s."""
+        return -self.lead * speed, speed
+
+    def deviation(self, speeds: FloatArray, before: float) -> FloatArray:
+        """
+        Return ``e_k = y_k - x_k`` for the actuator's speeds ``w_k``, from settled at ``before``.
+
+        Parameters
+        ----------
+        speeds : FloatArray
+            Actuator speed over each interval, deg/s.
+        before : float
+            Speed the link was settled at before the first interval, deg/s.
+
+        Returns
+        -------
+        FloatArray
+            The link's deviation from the actuator after each interval, deg.
+
+        """
+        return self.states(speeds, before)[0]
+
+    def states(self, speeds: FloatArray, before: float) -> tuple[FloatArray, FloatArray]:
+        """Return ``e_k`` and the link's speed ``u_k`` after each interval (:meth:`deviation`)."""
+        w = np.asarray(speeds, dtype=np.float64)
+        if w.size == 0:
+            return np.zeros(0), np.zeros(0)
+        p00, p01, p10, p11 = self.transition
+        matrix = np.array([[p00, p01], [p10, p11]])
+        poles, vectors = np.linalg.eig(matrix)
+        pole = complex(poles[0])
+        inverse = np.linalg.inv(vectors)
+        # Modal coordinates: m_k = pole m_{k-1} + g w_k, and e = 2 Re(V[0, 0] m).
+        gain = complex(inverse[0] @ np.array(self.input_gain))
+        state = complex(inverse[0] @ np.array(self.settled(before)))
+        out = np.empty(w.size, dtype=np.complex128)
+        block = w.size if abs(pole) >= 1.0 else max(1, int(_EXPONENT / -math.log(abs(pole))))
+        for first in range(0, w.size, block):
+            chunk = w[first:first + block]
+            powers = np.power(pole, np.arange(1.0, chunk.size + 1.0))
+            part = powers * (state + gain * np.cumsum(chunk / powers))
+            out[first:first + chunk.size] = part
+            state = complex(part[-1])
+        return (2.0 * (complex(vectors[0, 0]) * out).real,
+                2.0 * (complex(vectors[1, 0]) * out).real)
+
+    def ring(self, x: FloatArray, dt: float, before: float) -> FloatArray:
+        """Return the link's angles for the actuator's angles ``x`` (first one settled)."""
+        x = np.asarray(x, dtype=np.float64)
+        if x.size < 2:
+            return x.copy()
+        e = self.deviation(np.diff(x) / dt, before)
+        return np.r_[x[0] + self.settled(before)[0], x[1:] + e]
+
+
+class LinkState:
+    """The mode stepped one sample at a time (the same equations as :class:`LinkMode`)."""
+
+    def __init__(self, mode: LinkMode, speed: float,
+                 state: tuple[float, float] | None = None) -> None:
+        self.mode = mode
+        self.e, self.u = mode.settled(speed) if state is None else state
+
+    def step(self, speed: float) -> float:
+        """Advance over an interval of actuator speed ``speed``; return ``e = y - x``."""
+        p00, p01, p10, p11 = self.mode.transition
+        g0, g1 = self.mode.input_gain
+        e, u = self.e, self.u
+        self.e = p00 * e + p01 * u + g0 * speed
+        self.u = p10 * e + p11 * u + g1 * speed
+        return self.e
