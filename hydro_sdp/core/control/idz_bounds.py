@@ -24,6 +24,7 @@ def design_notes(model: JointModel) -> tuple[str, ...]:
         value = edges[entry.side]
         notes.append(f'{entry.parameter} is undetermined in [{entry.bound[0]:.4g}, '
                      f"{entry.bound[1]:.4g}]: the IDZ takes the model's {value:.4g}, an "
-                     f'extrapolation below {entry.moving_end:.4g}, the innermost command that '
-                     f'moved the joint ({100 * entry.motion:.0f} % of its fastest speed)')
+                     f'extrapolation from {entry.moving_end:.4g} (the innermost command that '
+                     f'moved the joint, at {100 * entry.motion:.0f} % of its fastest speed) '
+                     'towards rest, where no command was held')
     return tuple(notes)

@@ -32,8 +32,8 @@ def test_edges_below_every_command_used_are_bounds_not_points(identified):
 def test_design_says_which_value_it_takes_where_the_data_leave_a_bound(identified):
     spec = design_from_model(identified.model)
     assert len(spec.notes) == 2
-    assert all("the IDZ takes the model's" in note and 'an extrapolation below' in note
-               for note in spec.notes)
+    assert all("the IDZ takes the model's" in note and 'an extrapolation from' in note
+               and 'towards rest' in note for note in spec.notes)
 
 
 def test_the_family_is_the_one_its_held_out_table_ranks_under_the_rule(identified):
