@@ -99,6 +99,10 @@ def describe(result: Diagnosis) -> Payload:
                         'significant': c.significant, 'held_out': c.held_out,
                         'accepted': c.accepted, 'state': c.state,
                         'named_by_data': c.named_by_data, 'parameters': c.parameters,
+                        'windowed_before': c.window_before, 'windowed_after': c.window_after,
+                        'own_before': json_number(c.own_before),
+                        'own_after': json_number(c.own_after),
+                        'carries_over': c.carries_over, 'refused': c.refused,
                         'evidence': c.evidence}
                        for c in result.candidates],
         'ledger': [{'effect': s.effect, 'parameters': s.parameters,

@@ -21,6 +21,10 @@ import numpy as np
 from scipy.optimize import minimize
 
 
+#: Time the other joints must move for, s, for the records to hold a cause to share flow.
+MIN_MOVING = 1.0
+
+
 def other_speed_sums(context: Context) -> list[FloatArray | None]:
     """Return the summed other joints' speed per residual sample of each run, deg/s."""
     return [summed_other_speeds(run.exogenous, run.start) for run in context.runs]
@@ -46,6 +50,13 @@ class FlowSharingDetector(EffectDetector):
         if not top > 1.0:
             return Candidate(self.word, False, evidence='the other joints never move '
                              f'(summed speed below {max(top, 0.0):.2g} deg/s)'), None
+        # Moving, not the sensors' noise: clear of 1 deg/s and of the speeds' floor.
+        floor = max(1.0, 3.0 * float(np.median(moving)))
+        moved = float(np.count_nonzero(moving > floor)) * context.dt
+        if moved < MIN_MOVING:
+            return Candidate(self.word, False, evidence='no other joint moves on the supply '
+                             f'in the runs (above {floor:.2g} deg/s for {moved:.2g} s, '
+                             f'{MIN_MOVING:g} s needed)'), None
         levels = np.unique(np.concatenate([r.record.v for r in context.runs]))
         rates = context.model.rate(levels)
         # Full demand: the top speed in each direction, where the joint alone takes the pump.
