@@ -15,7 +15,7 @@ from hydro_sdp.plots.diagnosis_evidence import plot_candidates, plot_state_evide
 
 
 def _own(candidate: Candidate) -> str:
-    """The windowed error on the estimation records without and with the effect."""
+    """Return the windowed error on the estimation records without and with the effect."""
     if not math.isfinite(candidate.own_after):
         return '-'
     return f'{candidate.own_before:.3g} -> {candidate.own_after:.3g}'

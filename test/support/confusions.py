@@ -13,7 +13,9 @@ Confusions of the diagnosis on the independent generator: the rare stop, play ag
 Prints one row per case and seed (the word named, the validation MAE before and after)
 and the tally of each hidden word against the named one::
 
-    .venv/bin/python test/support/confusions.py [seeds] [rare|play|lag|small_play|small_lag ...]
+    .venv/bin/python test/support/confusions.py [seeds] [case ...]
+
+(cases: ``rare``, ``rare_slow``, ``play``, ``lag``, ``small_play``, ``small_lag``)
 
 """
 
@@ -64,9 +66,10 @@ def _levels(joint, seed: int, seconds: float) -> np.ndarray:
 def case(word: str, seed: int):
     """Return the model, the estimation and the validation records of one hidden word."""
     from hydro_sdp.core.identification.identify import identify
-    if word == 'rare':
-        base = STOPPED
-        hidden = STOPPED
+    if word.startswith('rare'):
+        # rare_slow: the real-arm-like timing, a 0.25 s dead time and a 0.15 s spool lag.
+        base = STOPPED if word == 'rare' else replace(STOPPED, delay=0.25, spool_lag=0.15)
+        hidden = base
         program = _rare_program
         seconds = 60.0
     else:
@@ -83,8 +86,8 @@ def case(word: str, seed: int):
     return model, runs[:1], runs[1:]
 
 
-HIDDEN = {'rare': 'angle_limits', 'play': 'backlash', 'lag': 'valve_lag',
-          'small_play': 'backlash', 'small_lag': 'valve_lag'}
+HIDDEN = {'rare': 'angle_limits', 'rare_slow': 'angle_limits', 'play': 'backlash',
+          'lag': 'valve_lag', 'small_play': 'backlash', 'small_lag': 'valve_lag'}
 
 
 def main(seeds: int, words: list[str]) -> None:

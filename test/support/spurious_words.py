@@ -35,7 +35,7 @@ def table_records(seed: int):
     def one(duty: int):
         commands, angles = stroke_run(joint, duty, DT, seed=1000 * seed + duty)
         t = DT * __import__('numpy').arange(commands.size)
-        return Record(t=t, v=commands, y=angles, joint="arm", source=f"duty_{duty}")
+        return Record(t=t, v=commands, y=angles, joint='arm', source=f'duty_{duty}')
     return [one(d) for d in ESTIMATION], [one(d) for d in VALIDATION], joint.command_limits
 
 
@@ -73,8 +73,8 @@ def physics_records(seed: int, preset: str = 'physics_arm.yaml', estimation=ESTI
         return [run for d in duties
                 for run in full_stroke_runs(machine, DT, (d,), seed=1000 * seed + d)]
     valve = machine.joints[0].valve
-    return runs(estimation), runs(validation), (float(valve.limits[0]),
-                                                 float(valve.limits[1]))
+    limits = (float(valve.limits[0]), float(valve.limits[1]))
+    return runs(estimation), runs(validation), limits
 
 
 JOINTS = {'table': table_records, 'physics': physics_records}

@@ -18,12 +18,12 @@ test says (the answer is never ``none`` while a candidate removes most of the
 residual). Neither is accepted when it raises the held-out simulation error over whole
 runs by more than :data:`RISE` (a factor that mends a few seconds at a time while the
 model drifts further over the run). An accepted candidate must also carry over: on
-the runs the model was identified from, the augmented model may be worse by no more than the tie band of the one
-held-out rule (:func:`carry_over`). Accepted candidates are ranked by the share of
-the windowed error they remove on the held-out runs, all of them over the same samples
-(:func:`on_common_samples`; docs/methods.md section 8.4), never by a fixed order of
-words. A word that holds an accepted simpler word as a special case (:data:`NESTED`)
-comes after it unless it removes clearly more.
+the runs the model was identified from, the augmented model may be worse by no more
+than the tie band of the one held-out rule (:func:`carry_over`). Accepted candidates
+are ranked by the share of the windowed error they remove on the held-out runs, all of
+them over the same samples (:func:`on_common_samples`; docs/methods.md section 8.4),
+never by a fixed order of words. A word that holds an accepted simpler word as a
+special case (:data:`NESTED`) comes after it unless it removes clearly more.
 
 """
 

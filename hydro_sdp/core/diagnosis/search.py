@@ -7,7 +7,8 @@ records, and judges each candidate on held-out records (:mod:`.decision`: a clea
 fall of the windowed simulation error, and a reduction of the squared velocity
 residual that a block bootstrap finds significant; no worse on the runs the model
 came from). The accepted candidate that removes most of the held-out error is added,
-the ledger records the validation MAE before and after, and the search repeats on the augmented model until no candidate is accepted: ``none``.
+the ledger records the validation MAE before and after, and the search repeats on the
+augmented model until no candidate is accepted: ``none``.
 
 """
 

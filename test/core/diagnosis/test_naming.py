@@ -1,7 +1,5 @@
 """The data name the state: the SDP analysis of what a model misses, on the generator's joints."""
 
-from dataclasses import replace
-
 from hydro_sdp.core.diagnosis.decision import rank
 from hydro_sdp.core.diagnosis.naming import agreement_of, MIN_SHARE, name_states, Naming
 from hydro_sdp.core.diagnosis.results import Candidate
