@@ -169,6 +169,8 @@ def run(args: argparse.Namespace) -> Outcome:
                      f'{100 * c.gain:.1f}', f'{c.t:.3g}', evidence[0]])
         rows += [['', '', '', '', '', line] for line in evidence[1:]]
     lines += table(rows, ['effect', 'accepted', 'held-out %', 'residual %', 'z', 'evidence'])
+    # A word the records hold no cause for, and why.
+    lines += [f'refused: {c.effect}: {c.refused}' for c in result.candidates if c.refused]
     if args.out:
         lines.append(f'wrote {payload["model_file"]}')
     return Outcome(payload, lines)

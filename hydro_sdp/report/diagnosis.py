@@ -120,7 +120,9 @@ def write_report(folder: Path, result: Diagnosis, *, command_unit: str | None = 
         '| effect | named by the data | accepted | held-out error removed (%) | windowed '
         'error on the estimation records (deg) | residual removed (%) | z | p | evidence |',
         '|---|---|---|---|---|---|---|---|---|',
-        *_candidate_rows(result), '', '## Figures', '', *reading,
+        *_candidate_rows(result), '',
+        *[f'Refused: `{c.effect}`: {c.refused}.' for c in result.candidates if c.refused],
+        '', '## Figures', '', *reading,
         *[f'![{Path(f).stem}]({Path(f).name})' for f in figures], '',
         '## Augmented model', '', '```yaml', dump_model(result.model).rstrip(), '```', ''])
     atomic_write_text(folder / 'summary.md', summary)

@@ -74,9 +74,10 @@ class FlowSharingDetector(EffectDetector):
                              f'(summed speed below {max(top, 0.0):.2g} deg/s)'), None
         moved = moving_time(context)
         if moved < MIN_MOVING:
-            return Candidate(self.word, False, evidence='no other joint moves on the supply '
-                             f'in the runs (it travels {MIN_TRAVEL:g} deg within a second '
-                             f'for {moved:.2g} s; {MIN_MOVING:g} s needed)'), None
+            why = ('no other joint moves on the supply in the runs (it travels '
+                   f'{MIN_TRAVEL:g} deg within a second for {moved:.2g} s; {MIN_MOVING:g} s '
+                   'needed)')
+            return Candidate(self.word, False, evidence=why, refused=why), None
         levels = np.unique(np.concatenate([r.record.v for r in context.runs]))
         rates = context.model.rate(levels)
         # Full demand: the top speed in each direction, where the joint alone takes the pump.
