@@ -41,7 +41,7 @@ class Candidate:
         What in the data shows it.
     signature_match : bool
         Whether the data show the effect's own signature, which no other word
-        explains (an accepted candidate with it is tried first).
+        explains (reported; the ranking is by held-out gain alone).
     p_value : float
         Block-bootstrap p-value of the reduction.
     held_out : float
