@@ -99,6 +99,10 @@ def describe(result: Diagnosis) -> Payload:
                         'significant': c.significant, 'held_out': c.held_out,
                         'accepted': c.accepted, 'state': c.state,
                         'named_by_data': c.named_by_data, 'parameters': c.parameters,
+                        'windowed_before': c.window_before, 'windowed_after': c.window_after,
+                        'own_before': json_number(c.own_before),
+                        'own_after': json_number(c.own_after),
+                        'carries_over': c.carries_over, 'refused': c.refused,
                         'evidence': c.evidence}
                        for c in result.candidates],
         'ledger': [{'effect': s.effect, 'parameters': s.parameters,
@@ -165,6 +169,8 @@ def run(args: argparse.Namespace) -> Outcome:
                      f'{100 * c.gain:.1f}', f'{c.t:.3g}', evidence[0]])
         rows += [['', '', '', '', '', line] for line in evidence[1:]]
     lines += table(rows, ['effect', 'accepted', 'held-out %', 'residual %', 'z', 'evidence'])
+    # A word the records hold no cause for, and why.
+    lines += [f'refused: {c.effect}: {c.refused}' for c in result.candidates if c.refused]
     if args.out:
         lines.append(f'wrote {payload["model_file"]}')
     return Outcome(payload, lines)

@@ -2,15 +2,23 @@
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
-from hydro_sdp.core.diagnosis import Diagnosis
+from hydro_sdp.core.diagnosis import Candidate, Diagnosis
 from hydro_sdp.core.diagnosis.decision import MARGIN, MOST
 from hydro_sdp.io.atomic import atomic_write_text
 from hydro_sdp.io.model_files import dump_model
 from hydro_sdp.plots import command_unit_of, plot_gap, plot_ledger, plot_signature, save_figure
 from hydro_sdp.plots.diagnosis import plot_record_scales
 from hydro_sdp.plots.diagnosis_evidence import plot_candidates, plot_state_evidence
+
+
+def _own(candidate: Candidate) -> str:
+    """Return the windowed error on the estimation records without and with the effect."""
+    if not math.isfinite(candidate.own_after):
+        return '-'
+    return f'{candidate.own_before:.3g} -> {candidate.own_after:.3g}'
 
 
 def _candidate_rows(result: Diagnosis) -> list[str]:
@@ -21,7 +29,7 @@ def _candidate_rows(result: Diagnosis) -> list[str]:
         state = f'{c.state} ({100 * result.shares.get(c.state, 0.0):.3g} %)' if \
             c.named_by_data else '-'
         rows.append(f'| {c.effect} | {state} | {"yes" if c.accepted else "no"} | '
-                    f'{100 * c.held_out:.1f} | {100 * c.gain:.1f} | {c.t:.3g} | '
+                    f'{100 * c.held_out:.1f} | {_own(c)} | {100 * c.gain:.1f} | {c.t:.3g} | '
                     f'{c.p_value:.2g} | {c.evidence} |')
     return rows
 
@@ -109,9 +117,12 @@ def write_report(folder: Path, result: Diagnosis, *, command_unit: str | None = 
         'the block '
         'bootstrap of that reduction (z, p; significant at p <= 0.01). A candidate that '
         f'removes {100 * MOST:g} % of the residual is never dismissed.', '',
-        '| effect | named by the data | accepted | held-out error removed (%) | residual '
-        'removed (%) | z | p | evidence |', '|---|---|---|---|---|---|---|---|',
-        *_candidate_rows(result), '', '## Figures', '', *reading,
+        '| effect | named by the data | accepted | held-out error removed (%) | windowed '
+        'error on the estimation records (deg) | residual removed (%) | z | p | evidence |',
+        '|---|---|---|---|---|---|---|---|---|',
+        *_candidate_rows(result), '',
+        *[f'Refused: `{c.effect}`: {c.refused}.' for c in result.candidates if c.refused],
+        '', '## Figures', '', *reading,
         *[f'![{Path(f).stem}]({Path(f).name})' for f in figures], '',
         '## Augmented model', '', '```yaml', dump_model(result.model).rstrip(), '```', ''])
     atomic_write_text(folder / 'summary.md', summary)

@@ -243,6 +243,11 @@ def test_diagnose_names_the_effect_and_writes_the_report(tmp_path, capsys):
     assert payload['effect'] == 'valve_lag'
     assert payload['mae_after'] < 0.5 * payload['mae_before']
     assert payload['candidates'][0]['effect'] == 'valve_lag'
+    # Both figures of the named word: held out, and on the runs the model came from.
+    named = payload['candidates'][0]
+    assert named['carries_over'] and named['refused'] == ''
+    assert named['windowed_after'] < named['windowed_before']
+    assert named['own_after'] <= named['own_before'] * 1.05
     assert payload['ledger'][0]['parameters']['time_constant'] == pytest.approx(0.15, rel=0.05)
     augmented = load_model(tmp_path / 'augmented.yaml')
     assert augmented.effect('valve_lag') is not None

@@ -29,6 +29,7 @@ from hydro_sdp.io.documents import load_yaml
 from hydro_sdp.io.logs.csv_logs import read_csv_log
 import pytest
 from support.real_valve_joints import cases, cycles, pulse_rate, SETTLE, settles, truth_loop
+from support.spurious_words import OWN
 
 pytestmark = [pytest.mark.usefixtures('figures_not_drawn')]
 
@@ -56,6 +57,8 @@ def calibrated(request, tmp_path_factory):
 def test_calibrates_check_passes_and_its_file_settles_the_joint(calibrated):
     case, result, path = calibrated
     assert result.check.passed and result.check.cycles == 0, result.warnings
+    # The joint has a lag and no linkage, load, other joint nor play: no word it lacks.
+    assert set(result.effects) <= OWN, result.effects
     # The map is no SDP curve: the IDZ inverts it as a table, on the model's own dynamics.
     model = result.model
     data = load_yaml(path)

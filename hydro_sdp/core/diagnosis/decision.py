@@ -17,14 +17,13 @@ the squared velocity residual and lowers the windowed error is accepted whatever
 test says (the answer is never ``none`` while a candidate removes most of the
 residual). Neither is accepted when it raises the held-out simulation error over whole
 runs by more than :data:`RISE` (a factor that mends a few seconds at a time while the
-model drifts further over the run). Accepted candidates are ranked: those whose
-signature the data show which no other word explains (a stop held while driven beyond
-the dead-zone, a factor of the angle shared by both directions where the data name the
-angle) first, then those of the states the SDP analysis names (:mod:`.naming`), each
-group by the share of the windowed error it removes, all of them over the same samples
-(:func:`on_common_samples`; docs/methods.md section 8.4). A
-word that holds an accepted simpler word as a special case (:data:`NESTED`) comes after
-it unless it removes clearly more.
+model drifts further over the run). An accepted candidate must also carry over: on
+the runs the model was identified from, the augmented model may be worse by no more
+than the tie band of the one held-out rule (:func:`carry_over`). Accepted candidates
+are ranked by the share of the windowed error they remove on the held-out runs, all of
+them over the same samples (:func:`on_common_samples`; docs/methods.md section 8.4),
+never by a fixed order of words. A word that holds an accepted simpler word as a
+special case (:data:`NESTED`) comes after it unless it removes clearly more.
 
 """
 
@@ -38,7 +37,7 @@ from hydro_sdp.core.diagnosis.naming import Naming
 from hydro_sdp.core.diagnosis.reduction import reduction_test
 from hydro_sdp.core.diagnosis.residuals import MIN_GAIN, Run, velocity_residuals
 from hydro_sdp.core.diagnosis.results import Candidate, Trial
-from hydro_sdp.core.identification.held_out import WindowErrors
+from hydro_sdp.core.identification.held_out import judge as held_out_judge, WindowErrors
 from hydro_sdp.core.model.joint_model import JointModel
 
 #: The windowed simulation error on held-out data must fall by at least this share.
@@ -127,6 +126,88 @@ def judge(trial: Trial, model: JointModel, checks: Sequence[Run], base: Sequence
                    evidence=evidence)
 
 
+def carry_over(candidate: Candidate, model: JointModel, augmented: JointModel | None,
+               own: WindowErrors) -> Candidate:
+    """
+    Refuse an accepted candidate that makes the runs the model came from worse.
+
+    The effect must hold beyond the runs it was judged on: the augmented model's
+    windowed error on the runs the model was identified from may exceed the model's by
+    no more than the tie band of :func:`~hydro_sdp.core.identification.held_out.judge`
+    (the candidate listed first, so a tie keeps it).
+
+    Parameters
+    ----------
+    candidate : Candidate
+        A judged candidate.
+    model : JointModel
+        The model under test.
+    augmented : JointModel or None
+        The model with the candidate's effect.
+    own : WindowErrors
+        The simulation errors on the runs the model was identified from.
+
+    Returns
+    -------
+    Candidate
+        With both figures on those runs; no longer accepted when it does not carry over.
+
+    """
+    if not candidate.accepted or augmented is None:
+        return candidate
+    table = own.per_record([augmented, model])
+    weights = [float(len(run.record)) for run in own.runs]
+    judgement = held_out_judge((candidate.effect, 'model'), table.tolist(), weights)
+    after, before = judgement.pooled
+    if judgement.chosen == 0:
+        return replace(candidate, own_before=before, own_after=after)
+    why = (f'it does not carry over: on the runs the model was identified from it raises '
+           f'the windowed error from {before:.3g} to {after:.3g} deg (tie band '
+           f'{judgement.bands[0]:.3g} deg)')
+    return replace(candidate, own_before=before, own_after=after, carries_over=False,
+                   accepted=False, evidence=f'{why}; {candidate.evidence}'
+                   if candidate.evidence else why)
+
+
+#: Words whose cause, where the data show it, explains the same samples as an angle factor:
+#: while one of them is accepted, ``stroke_geometry`` waits for the next round.
+EXPLAINS_ANGLE = ('angle_limits', 'load_dependence')
+
+
+def explained_away(judged: Sequence[tuple[Candidate, JointModel | None]]
+                   ) -> list[tuple[Candidate, JointModel | None]]:
+    """
+    Refuse ``stroke_geometry`` in a round where a stop or a load is accepted.
+
+    A factor of the angle bends to whatever slows the joint where it happens to be (a
+    stop the model lacks, a heavier load at one end): the cause the data hold comes
+    first, and the factor is tried again on the model that has it.
+
+    Parameters
+    ----------
+    judged : sequence of (Candidate, JointModel or None)
+        The round's judged candidates.
+
+    Returns
+    -------
+    list of (Candidate, JointModel or None)
+        ``judged``, ``stroke_geometry`` refused with its reason where one is accepted.
+
+    """
+    causes = [c.effect for c, _ in judged if c.accepted and c.effect in EXPLAINS_ANGLE]
+    if not causes:
+        return list(judged)
+    out = []
+    for candidate, augmented in judged:
+        if candidate.effect == 'stroke_geometry' and candidate.accepted:
+            why = (f'{" and ".join(causes)} explain{"s" if len(causes) == 1 else ""} the same '
+                   'samples: the factor is tried again once it is added')
+            candidate = replace(candidate, accepted=False, refused=why,
+                                evidence=f'{why}; {candidate.evidence}')
+        out.append((candidate, augmented))
+    return out
+
+
 def on_common_samples(judged: Sequence[tuple[Candidate, JointModel | None]],
                       model: JointModel, errors: WindowErrors
                       ) -> list[tuple[Candidate, JointModel | None]]:
@@ -181,7 +262,7 @@ def _direction_agrees(word: str, naming: Naming) -> bool:
 
 def rank(candidates: Sequence[Candidate], naming: Naming) -> list[Candidate]:
     """
-    Return the candidates in the order they are tried: accepted first, as the module says.
+    Return the candidates in the order they are tried: accepted first, by held-out gain.
 
     Parameters
     ----------
@@ -193,14 +274,13 @@ def rank(candidates: Sequence[Candidate], naming: Naming) -> list[Candidate]:
     Returns
     -------
     list[Candidate]
-        Accepted candidates first (signature, then the states named, then size); the
-        others after, by size; a richer word after the simpler word it holds unless it
-        lowers the windowed error by :data:`MARGIN` more.
+        Accepted candidates first, by the share of the held-out windowed error they
+        remove; the others after, by size; a richer word after the simpler word it
+        holds unless it lowers the windowed error by :data:`MARGIN` more.
 
     """
-    def key(candidate: Candidate) -> tuple[bool, bool, bool, float, float]:
-        return (not candidate.accepted, not candidate.signature_match,
-                not candidate.named_by_data, -candidate.held_out, -candidate.gain)
+    def key(candidate: Candidate) -> tuple[bool, float, float]:
+        return (not candidate.accepted, -candidate.held_out, -candidate.gain)
     ranked = sorted(candidates, key=key)
     for richer, simpler in NESTED.items():
         place = {candidate.effect: i for i, candidate in enumerate(ranked)}

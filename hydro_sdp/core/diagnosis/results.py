@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+import math
 from typing import Literal, Sequence
 
 from hydro_sdp.core.arrays import FloatArray, IntArray
@@ -40,7 +41,7 @@ class Candidate:
         What in the data shows it.
     signature_match : bool
         Whether the data show the effect's own signature, which no other word
-        explains (an accepted candidate with it is tried first).
+        explains (reported; the ranking is by held-out gain alone).
     p_value : float
         Block-bootstrap p-value of the reduction.
     held_out : float
@@ -54,6 +55,13 @@ class Candidate:
         The state of the SDP analysis that names the word.
     named_by_data : bool
         Whether the SDP analysis names that state (docs/methods.md section 8.2).
+    own_before, own_after : float
+        The windowed error on the runs the model was identified from, without and
+        with the effect, degrees (NaN: not compared).
+    carries_over : bool
+        Whether it is no worse there beyond the tie band (docs/methods.md section 8.4).
+    refused : str
+        Why the data hold no cause for the word (empty: none found missing).
 
     """
 
@@ -72,6 +80,10 @@ class Candidate:
     accepted: bool = False
     state: str = ''
     named_by_data: bool = False
+    own_before: float = math.nan
+    own_after: float = math.nan
+    carries_over: bool = True
+    refused: str = ''
 
 
 #: A detector's answer: the candidate, and the augmented model when there is one.

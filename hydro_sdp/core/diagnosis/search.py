@@ -5,9 +5,10 @@ Each round analyses what the model under test misses against every state (the SD
 analysis, :mod:`.naming`), fits every registered detector's effect to the estimation
 records, and judges each candidate on held-out records (:mod:`.decision`: a clear
 fall of the windowed simulation error, and a reduction of the squared velocity
-residual that a block bootstrap finds significant). The first accepted candidate in
-the ranking is added, the ledger records the validation MAE before and after, and the
-search repeats on the augmented model until no candidate is accepted: ``none``.
+residual that a block bootstrap finds significant; no worse on the runs the model
+came from). The accepted candidate that removes most of the held-out error is added,
+the ledger records the validation MAE before and after, and the search repeats on the
+augmented model until no candidate is accepted: ``none``.
 
 """
 
@@ -17,7 +18,8 @@ from dataclasses import replace
 from typing import Callable, Sequence
 
 from hydro_sdp.core.diagnosis.context import Context
-from hydro_sdp.core.diagnosis.decision import judge, on_common_samples, rank
+from hydro_sdp.core.diagnosis.decision import (
+    carry_over, explained_away, judge, on_common_samples, rank)
 from hydro_sdp.core.diagnosis.detectors import detector, DETECTORS
 from hydro_sdp.core.diagnosis.naming import name_states, Naming
 from hydro_sdp.core.diagnosis.reduction import bootstrap_block
@@ -127,6 +129,9 @@ def _round(context: Context, checks: Sequence[Run], progress: Callable[[str], No
             continue
         judged.append((judge(trial, context.model, checks, base, block, context.naming,
                              each.state, errors), trial[1]))
+    own_errors = WindowErrors(context.runs)
+    judged = explained_away([(carry_over(candidate, context.model, augmented, own_errors),
+                              augmented) for candidate, augmented in judged])
     judged = on_common_samples(judged, context.model, errors) + on_own
     models = {id(candidate): model for candidate, model in judged}
     ranked = rank([candidate for candidate, _ in judged], context.naming)

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import math
 from typing import Hashable, Protocol, Sequence
 
-from hydro_sdp.core.arrays import IntArray
+from hydro_sdp.core.arrays import FloatArray, IntArray
 from hydro_sdp.core.identification.evaluation import first_compared
 from hydro_sdp.core.model.exogenous_signals import Exogenous
 from hydro_sdp.core.model.joint_model import JointModel
@@ -215,12 +215,17 @@ class WindowErrors:
             One error per model, degrees.
 
         """
+        return self.per_record(models, seconds).mean(axis=0).tolist()
+
+    def per_record(self, models: Sequence[JointModel],
+                   seconds: float | None = WINDOW_SECONDS) -> FloatArray:
+        """Return the errors of :meth:`compare` per record (rows) and model (columns), deg."""
         errors = np.zeros((len(self.runs), len(models)))
         for i, run in enumerate(self.runs):
             start = max(first_compared(model, run.dt, run.record) for model in models)
             for j, model in enumerate(models):
                 errors[i, j] = self._error(model, i, start, seconds)
-        return errors.mean(axis=0).tolist()
+        return errors
 
 
 @dataclass(frozen=True)

@@ -1,8 +1,9 @@
-"""The decision compares the accepted candidates over the samples they share."""
+"""The decision: accepted candidates over the samples they share, carried over, their causes."""
 
 from dataclasses import replace
+import math
 
-from hydro_sdp.core.diagnosis.decision import on_common_samples
+from hydro_sdp.core.diagnosis.decision import carry_over, explained_away, on_common_samples
 from hydro_sdp.core.diagnosis.residuals import runs_of
 from hydro_sdp.core.diagnosis.results import Candidate
 from hydro_sdp.core.identification.held_out import WindowErrors
@@ -40,3 +41,35 @@ def test_accepted_candidates_are_compared_over_the_same_samples():
     assert pairwise[0] != pytest.approx(before)
     # Candidates not accepted keep what their own judgement found.
     assert rejected is judged[2][0]
+
+
+def test_a_candidate_worse_on_the_runs_the_model_came_from_is_refused():
+    rng = np.random.default_rng(5)
+    truth, _ = hide('none', rng, 'volt')
+    model = JointModel.from_mapping(truth.mapping)
+    own = WindowErrors(runs_of(records_of(truth, 'random', rng, seconds=20.0, count=2), 0.5))
+    accepted = Candidate('valve_lag', True, 0.3, 5.0, True, held_out=0.4, accepted=True,
+                         evidence='fitted')
+    # A lag the joint does not have makes its own runs worse: it does not carry over.
+    lagged = carry_over(accepted, model, model.with_effect(ValveLag(0.3)), own)
+    assert not lagged.accepted and not lagged.carries_over
+    assert lagged.own_after > lagged.own_before > 0.0
+    assert lagged.evidence.startswith('it does not carry over') and 'fitted' in lagged.evidence
+    # The same model again is within its tie band: kept, with both figures.
+    same = carry_over(accepted, model, replace(model), own)
+    assert same.accepted and same.carries_over and same.own_after == same.own_before
+    # A candidate not accepted is not compared.
+    assert math.isnan(carry_over(replace(accepted, accepted=False), model, model, own).own_after)
+
+
+def test_a_stop_or_a_load_accepted_puts_the_angle_factor_off_a_round():
+    def candidate(word, accepted=True):
+        return (Candidate(word, True, 0.3, 5.0, True, held_out=0.5, accepted=accepted,
+                          evidence='fit'), None)
+    judged = explained_away([candidate('stroke_geometry'), candidate('angle_limits')])
+    geometry = judged[0][0]
+    assert not geometry.accepted and 'angle_limits explains the same samples' in geometry.refused
+    assert judged[1][0].accepted
+    # Neither accepted: the factor stands.
+    alone = explained_away([candidate('stroke_geometry'), candidate('load_dependence', False)])
+    assert alone[0][0].accepted and not alone[0][0].refused

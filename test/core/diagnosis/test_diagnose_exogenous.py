@@ -100,6 +100,12 @@ def test_flow_sharing_is_not_tried_again_nor_without_another_joint_moving(
     # The boom still: nothing to share the pump with; no other joints at all: no signal.
     candidate, _ = detector('flow_sharing').fit(Context(model, runs_of(alone[:1], 0.5), 50))
     assert not candidate.applicable and 'never move' in candidate.evidence
+    # Still, read by a sensor with 0.1 deg of noise: its differentiated angle reads as
+    # speed, but it travels nowhere.
+    noisy = [replace(r, others=r.others + np.random.default_rng(3).normal(
+        0.0, 0.1, r.others.shape)) for r in alone[:1]]
+    candidate, _ = detector('flow_sharing').fit(Context(model, runs_of(noisy, 0.5), 50))
+    assert not candidate.applicable and 'no other joint moves' in candidate.refused
     bare = [Record(r.t, r.v, r.y, r.joint, r.source) for r in alone[:1]]
     candidate, _ = detector('flow_sharing').fit(Context(model, runs_of(bare, 0.5), 50))
     assert not candidate.applicable and 'no other joints' in candidate.evidence

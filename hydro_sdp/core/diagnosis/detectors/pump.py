@@ -21,6 +21,32 @@ import numpy as np
 from scipy.optimize import minimize
 
 
+#: Time the other joints must move for, s, for the records to hold a cause to share flow.
+MIN_MOVING = 1.0
+#: Travel within a second, of an angle averaged over half a second, that counts as moving,
+#: deg: a still joint's sensor noise, differentiated, reads as speed.
+MIN_TRAVEL = 1.0
+
+
+def moving_time(context: Context) -> float:
+    """Return the time, s, the other joints travel :data:`MIN_TRAVEL` in a second, summed."""
+    total = 0
+    for run in context.runs:
+        others = run.record.others
+        if others is None or len(others) < 2:
+            continue
+        width = max(1, int(round(0.5 / run.dt)))
+        second = max(1, int(round(1.0 / run.dt)))
+        kernel = np.ones(width) / width
+        angles = np.asarray(others, dtype=float).reshape(len(others), -1)
+        for column in angles.T:
+            smooth = np.convolve(column, kernel, mode='valid')
+            if smooth.size > second:
+                travel = np.abs(smooth[second:] - smooth[:-second])
+                total += int(np.count_nonzero(travel >= MIN_TRAVEL))
+    return total * context.dt
+
+
 def other_speed_sums(context: Context) -> list[FloatArray | None]:
     """Return the summed other joints' speed per residual sample of each run, deg/s."""
     return [summed_other_speeds(run.exogenous, run.start) for run in context.runs]
@@ -46,6 +72,12 @@ class FlowSharingDetector(EffectDetector):
         if not top > 1.0:
             return Candidate(self.word, False, evidence='the other joints never move '
                              f'(summed speed below {max(top, 0.0):.2g} deg/s)'), None
+        moved = moving_time(context)
+        if moved < MIN_MOVING:
+            why = ('no other joint moves on the supply in the runs (it travels '
+                   f'{MIN_TRAVEL:g} deg within a second for {moved:.2g} s; {MIN_MOVING:g} s '
+                   'needed)')
+            return Candidate(self.word, False, evidence=why, refused=why), None
         levels = np.unique(np.concatenate([r.record.v for r in context.runs]))
         rates = context.model.rate(levels)
         # Full demand: the top speed in each direction, where the joint alone takes the pump.

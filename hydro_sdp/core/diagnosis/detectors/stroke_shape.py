@@ -23,6 +23,7 @@ from hydro_sdp.core.diagnosis.detectors.angle import directional_signature, nois
 from hydro_sdp.core.diagnosis.detectors.base import EffectDetector
 from hydro_sdp.core.diagnosis.residuals import Run
 from hydro_sdp.core.diagnosis.results import Candidate, Signature, Trial
+from hydro_sdp.core.identification.stalls import stalled
 from hydro_sdp.core.identification.stroke_fit import (
     geometry_of, hats, KNOTS, penalised_lstsq, stroke_knots)
 from hydro_sdp.core.model.effects import DirectionDependentDelay
@@ -114,7 +115,7 @@ def stroke_samples(context: Context) -> Samples:
     and is not cut by the model's stops, and it does not head into a stop from within
     a band of it (the model's stops, those the segmentation saw, or else the extreme
     angles of the data; the band is 10 noise levels, 0.5 deg at least), nor is held
-    still while driven near one.
+    still while driven near one, nor stalls away from them (:mod:`~.stalls`).
 
     Parameters
     ----------
@@ -131,13 +132,17 @@ def stroke_samples(context: Context) -> Samples:
     split = model.effect(DirectionDependentDelay.name)
     delay = max(split.positive, split.negative) if isinstance(split, DirectionDependentDelay) \
         else model.delay
-    angles, drives, targets, times = [], [], [], []
+    angles, drives, targets, times, stalls = [], [], [], [], []
+    travel = (min(float(np.min(r.record.y)) for r in context.runs),
+              max(float(np.max(r.record.y)) for r in context.runs))
     for run, residual in zip(context.runs, context.base):
         dy = np.diff(run.record.y[run.start:])
         angles.append(run.record.y[run.start:-1])
         drives.append(dy - residual)
         targets.append(dy)
         times.append(context.dt * _since_change(run.record.v)[run.start + 1:])
+        # A stall (a load the valve cannot lift) is no factor of the angle.
+        stalls.append(stalled(model, run.record, run.dt, travel, run.exogenous)[run.start:-1])
     y, drive, dy = np.concatenate(angles), np.concatenate(drives), np.concatenate(targets)
     since = np.concatenate(times)
     # The stops: those the data show (extreme angles, or where the segmentation saw the
@@ -153,7 +158,7 @@ def stroke_samples(context: Context) -> Samples:
     # the stop's too.
     near = max(5.0 * band, 0.1 * (high - low))
     held = np.abs(dy) < 0.2 * np.abs(drive)
-    keep = (since > delay + SETTLE) & \
+    keep = (since > delay + SETTLE) & ~np.concatenate(stalls) & \
         ~((drive > 0.0) & ((y > high - band) | (held & (y > high - near)))) & \
         ~((drive < 0.0) & ((y < low + band) | (held & (y < low + near))))
     if model.angle_limits is not None:
