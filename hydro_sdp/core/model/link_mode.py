@@ -20,9 +20,6 @@ from hydro_sdp.core.errors import DataError
 from hydro_sdp.core.model.effects import Oscillation
 import numpy as np
 
-#: Largest exponent ``k |ln a|`` within a block of the modal recursion (as first_order).
-_EXPONENT = 600.0
-
 
 @dataclass(frozen=True)
 class LinkMode:
@@ -98,14 +95,10 @@ class LinkMode:
         # Modal coordinates: m_k = pole m_{k-1} + g w_k, and e = 2 Re(V[0, 0] m).
         gain = complex(inverse[0] @ np.array(self.input_gain))
         state = complex(inverse[0] @ np.array(self.settled(before)))
-        out = np.empty(w.size, dtype=np.complex128)
-        block = w.size if abs(pole) >= 1.0 else max(1, int(_EXPONENT / -math.log(abs(pole))))
-        for first in range(0, w.size, block):
-            chunk = w[first:first + block]
-            powers = np.power(pole, np.arange(1.0, chunk.size + 1.0))
-            part = powers * (state + gain * np.cumsum(chunk / powers))
-            out[first:first + chunk.size] = part
-            state = complex(part[-1])
+        # The recursion as a first-order filter in C; imported here, as the light command
+        # paths (identify) never need it.
+        from scipy.signal import lfilter
+        out = lfilter([gain], [1.0, -pole], w.astype(np.complex128), zi=[pole * state])[0]
         return (2.0 * (complex(vectors[0, 0]) * out).real,
                 2.0 * (complex(vectors[1, 0]) * out).real)
 
