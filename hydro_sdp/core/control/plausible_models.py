@@ -44,18 +44,24 @@ class Plausible:
     model: JointModel
 
 
+def _split_key(key: str) -> tuple[str, int | None]:
+    """Split a model-file parameter name, ``name`` or ``name[i]``, into name and index."""
+    name, _, index = key.partition('[')
+    return name, int(index.rstrip(']')) if index else None
+
+
 def _with_map_value(model: JointModel, key: str, value: float) -> JointModel | None:
     """Return ``model`` with map parameter ``key`` (``name`` or ``name[i]``) set, or None."""
     mapping = model.static_map.to_mapping()
-    name, _, index = key.partition('[')
+    name, index = _split_key(key)
     if name not in mapping:
         return None
-    if index:
+    if index is not None:
         values = mapping[name]
         if not isinstance(values, list):
             return None
         values = list(values)
-        values[int(index.rstrip(']'))] = value
+        values[index] = value
         mapping[name] = values
     else:
         mapping[name] = value
@@ -66,10 +72,10 @@ def _with_map_value(model: JointModel, key: str, value: float) -> JointModel | N
 
 
 def _map_value(model: JointModel, key: str) -> float | None:
-    name, _, index = key.partition('[')
+    name, index = _split_key(key)
     value = model.static_map.to_mapping().get(name)
-    if index and isinstance(value, list):
-        return float(value[int(index.rstrip(']'))])
+    if index is not None and isinstance(value, list):
+        return float(value[index])
     return float(value) if isinstance(value, (int, float)) else None
 
 
