@@ -18,12 +18,17 @@ from hydro_sdp.core.control.loop_check import check_loop, CheckSettings, LoopChe
 from hydro_sdp.core.errors import HydroSdpError
 from hydro_sdp.core.model.effects import ValveLag
 from hydro_sdp.core.model.joint_model import JointModel
+from hydro_sdp.core.model.static_maps.pwl import PwlMap
 from hydro_sdp.core.model.static_maps.registry import MAP_KINDS
+from hydro_sdp.core.model.undetermined import EDGES
+import numpy as np
 
 #: Standard errors a map parameter is moved by, each way.
 SPREAD = 2.0
 #: Factors the valve lag's time constant is scaled by.
 LAG_FACTORS = (0.5, 1.5)
+#: Knots a side of a map whose dead-zone edge is moved (:func:`with_edge_at`).
+_EDGE_KNOTS = 41
 
 
 @dataclass(frozen=True)
@@ -79,6 +84,74 @@ def _map_value(model: JointModel, key: str) -> float | None:
     return float(value) if isinstance(value, (int, float)) else None
 
 
+def _map_edges(model: JointModel, limits: tuple[float, float]) -> tuple[float, float]:
+    """Return the map's dead-zone edges, or for a map without one where its speed leaves 0."""
+    if model.dead_zone is not None:
+        return model.dead_zone
+    rest = model.rest_command
+    grid = np.linspace(limits[0], limits[1], 2001)
+    speeds = np.abs(model.rate(grid))
+    still = grid[speeds <= 1e-9 * max(float(speeds.max()), 1e-300)]
+    below, above = still[still <= rest], still[still >= rest]
+    return (float(below.min()) if below.size else rest, float(above.max()) if above.size else rest)
+
+
+def with_edge_at(model: JointModel, side: int, edge: float) -> JointModel | None:
+    """
+    Return ``model`` with one dead-zone edge moved to ``edge``, as a piecewise-linear map.
+
+    Any map family: the moving side is stretched so that the commands between the valve's
+    limit and the new edge give the speeds the map gave between the limit and its old edge
+    (the saturation stays, the edge moves); the other side is sampled as it was.
+
+    Parameters
+    ----------
+    model : JointModel
+        The model; its ``input_limits`` (else the records' range) bound the stretch.
+    side : int
+        0 for the negative edge, 1 for the positive one.
+    edge : float
+        The new edge, input units (clipped between rest and the limit).
+
+    Returns
+    -------
+    JointModel or None
+        The changed model, or None where it has no limits to stretch towards.
+
+    """
+    limits = model.input_limits
+    if limits is None:
+        return None
+    rest, limit = model.rest_command, limits[side]
+    edges = _map_edges(model, limits)
+    old = edges[side]
+    new = min(max(edge, limits[0]), rest) if side == 0 else max(min(edge, limits[1]), rest)
+    if abs(new - old) <= 1e-9 * max(1.0, abs(limit - rest)):
+        return model
+    moving = np.linspace(limit, new, _EDGE_KNOTS)
+    scale = (old - limit) / (new - limit) if new != limit else 1.0
+    moving_speeds = model.rate(limit + (moving - limit) * scale)
+    other = np.append(np.linspace(rest, limits[1 - side], _EDGE_KNOTS), edges[1 - side])
+    knots = np.concatenate([moving, [rest], other])
+    speeds = np.concatenate([moving_speeds, [0.0], model.rate(other)])
+    order = np.argsort(knots, kind='stable')
+    knots, speeds = knots[order], speeds[order]
+    keep = np.concatenate([[True], np.diff(knots) > 1e-9 * max(1.0, abs(limit - rest))])
+    try:
+        static_map = PwlMap(tuple(knots[keep]), tuple(np.maximum.accumulate(speeds[keep])))
+        return replace(model, static_map=static_map)
+    except HydroSdpError:
+        return None
+
+
+def _with_bounded_value(model: JointModel, key: str, value: float) -> JointModel | None:
+    """Return ``model`` with an undetermined value set: a map key, else the edge moved."""
+    changed = _with_map_value(model, key, value)
+    if changed is None and key in EDGES:
+        changed = with_edge_at(model, EDGES.index(key), value)
+    return changed
+
+
 def plausible_models(model: JointModel, *, standard_errors: Mapping[str, float],
                      sample_period: float,
                      families: Sequence[JointModel] = ()) -> tuple[Plausible, ...]:
@@ -114,8 +187,10 @@ def plausible_models(model: JointModel, *, standard_errors: Mapping[str, float],
                 found.append(Plausible(f'{key} {sign * SPREAD:+g} SE', changed))
     for key, entry in sorted(bounded.items()):
         for end, label in zip(entry.bound, ('low', 'high')):
-            changed = _with_map_value(model, key, end)
-            if changed is not None and math.isfinite(end):
+            if not math.isfinite(end):
+                continue
+            changed = _with_bounded_value(model, key, end)
+            if changed is not None and changed.static_map != model.static_map:
                 found.append(Plausible(f'{key} at the {label} end of its bound, {end:.4g}',
                                        changed))
     for sign in (-1, 1):

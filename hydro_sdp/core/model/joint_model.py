@@ -19,6 +19,7 @@ from hydro_sdp.core.errors import ConfigurationError, ModelFileError
 from hydro_sdp.core.model.effects import (
     DirectionDependentDelay, Effect, effect_from_mapping, effect_to_mapping, EFFECT_TYPES)
 from hydro_sdp.core.model.static_maps import MAP_KINDS, MapKind, SdpMap, StaticMap
+from hydro_sdp.core.model.static_maps.poly import PolyMap
 from hydro_sdp.core.model.timing import check_sample_period, delay_samples
 from hydro_sdp.core.model.undetermined import Undetermined
 from hydro_sdp.core.validation import (
@@ -129,6 +130,8 @@ class JointModel:
     @property
     def rest_command(self) -> float:
         """Command that holds the joint, input units: 0 inside the dead-zone, else its middle."""
+        if isinstance(self.static_map, PolyMap):
+            return self.static_map.rest     # the map's own zero, 50 for duty resting at 50
         dead_zone = self.dead_zone
         if dead_zone is None or dead_zone[0] <= 0.0 <= dead_zone[1]:
             return 0.0

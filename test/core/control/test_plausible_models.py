@@ -13,6 +13,8 @@ from hydro_sdp.core.control.loop_check import CheckSettings
 from hydro_sdp.core.control.plausible_models import check_over, plausible_models
 from hydro_sdp.core.identification.identify import identify
 from hydro_sdp.core.model.effects import ValveLag
+from hydro_sdp.core.model.joint_model import JointModel
+from hydro_sdp.core.model.static_maps import PolyMap, PwlMap
 from hydro_sdp.core.model.undetermined import Undetermined
 from hydro_sdp.io.controller_files import save_controller
 import numpy as np
@@ -86,3 +88,34 @@ def test_the_worst_case_bounds_the_true_joint_changed_as_the_models_are(tmp_path
         assert max(s.overshoot for s in steps) <= worst['overshoot'][0] + 2.0, truth
         rate = sum(s.pulses for s in steps) / sum(s.held for s in steps)
         assert rate <= worst['pulse_rate'][0] + 0.25, truth
+
+
+@pytest.mark.parametrize('static_map, limits, bound, rest', [
+    # A table with a 30 % dead-zone each side (duty resting at 0).
+    (PwlMap((-100.0, -30.0, 30.0, 100.0), (-40.0, 0.0, 0.0, 50.0)), (-100.0, 100.0),
+     (0.0, 40.0), 0.0),
+    # A polynomial with no dead-zone of its own, duty resting at 50.
+    (PolyMap((0.8, 0.004), (1.0, 0.005), (0.0, 100.0), rest=50.0), (0.0, 100.0),
+     (50.0, 70.0), 50.0),
+])
+def test_an_undetermined_edge_moves_on_maps_without_an_edge_key(
+        static_map, limits, bound, rest):
+    model = JointModel(joint='boom', static_map=static_map, delay=0.1, input_limits=limits,
+                       undetermined=(Undetermined('dead_zone[1]', bound, 'hold lower'),))
+    found = {p.name: p.model for p in plausible_models(model, standard_errors={},
+                                                       sample_period=0.01)}
+    assert model.rest_command == rest
+    moved = [(name, m) for name, m in found.items() if name.startswith('dead_zone[1] at')]
+    ends = {name.rsplit(', ', 1)[1]: m for name, m in moved}
+    # An end that is where the map's edge already lies is not a change, and is not tried.
+    edge = static_map.dead_zone[1] if static_map.dead_zone else rest
+    assert sorted(ends) == sorted(f'{end:.4g}' for end in bound if end != edge)
+    for end, changed in ends.items():
+        value = float(end)
+        assert changed.dead_zone[1] == pytest.approx(value, abs=1e-6)
+        # Only the edge moves: the joint still above it, the valve's limit and the other
+        # side give the speeds they gave.
+        assert changed.rate(value + 0.5)[()] > 0.0
+        assert changed.rate(limits[1])[()] == pytest.approx(model.rate(limits[1])[()])
+        other = np.linspace(limits[0], rest, 9)
+        np.testing.assert_allclose(changed.rate(other), model.rate(other), atol=1e-9 * 50)

@@ -69,7 +69,9 @@ class PolyMap:
         u = np.clip(np.asarray(v, dtype=np.float64), *self.command_range) - self.rest
         negative = np.polynomial.polynomial.polyval(u, self.gain_negative)
         positive = np.polynomial.polynomial.polyval(u, self.gain_positive)
-        return u * np.where(u < 0.0, negative, positive)
+        # A valve's gain is never negative: where the polynomials, fitted on the commands
+        # the runs held, cross zero between them (outside the data), the joint is still.
+        return u * np.maximum(np.where(u < 0.0, negative, positive), 0.0)
 
     def to_mapping(self) -> dict[str, float | list[float]]:
         """Return the model-file keys of this map."""
