@@ -303,7 +303,7 @@ def design_from_model(model: JointModel, *, control_period: float = 0.05,
                                               'w_e': weights.w_e}}
     idz = idz_for_model(model, period, form=form, beta=beta, mode=mode, v_range=v_range,
                         design=(plant, gains, lag), noise_std=noise_std)
-    notes = design_notes(model)
+    notes = design_notes(model, idz.dead_zone) if idz is not None else ()
     if notes:
         design['undetermined'] = list(notes)
     if fade:

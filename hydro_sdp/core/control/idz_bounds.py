@@ -3,8 +3,8 @@ What a design says of the dead-zone edges the data leave undetermined.
 
 A dead-zone edge below every command the runs held lies somewhere between rest and the
 innermost command that moved the joint (:mod:`hydro_sdp.core.model.undetermined`). The
-IDZ takes the model's own value there, so that the loop the check runs and the map agree,
-and the design says it is an extrapolation (docs/methods.md section 13.9).
+IDZ takes where the model's map reaches 0 there, so that the loop the check runs and the map
+agree, and the design says it is an extrapolation (docs/methods.md section 13.9).
 
 """
 
@@ -13,18 +13,17 @@ from __future__ import annotations
 from hydro_sdp.core.model.joint_model import JointModel
 
 
-def design_notes(model: JointModel) -> tuple[str, ...]:
-    """Return one line per undetermined edge: the bound, the value the IDZ takes, and why."""
-    rest = model.rest_command
-    edges = model.dead_zone or (rest, rest)
+def design_notes(model: JointModel, edges: tuple[float, float]) -> tuple[str, ...]:
+    """Return one line per undetermined edge: the bound, the IDZ's ``edges``, and why."""
     notes = []
     for entry in model.undetermined:
         if not entry.is_edge:
             continue
         value = edges[entry.side]
         notes.append(f'{entry.parameter} is undetermined in [{entry.bound[0]:.4g}, '
-                     f"{entry.bound[1]:.4g}]: the IDZ takes the model's {value:.4g}, an "
-                     f'extrapolation from {entry.moving_end:.4g} (the innermost command that '
-                     f'moved the joint, at {100 * entry.motion:.0f} % of its fastest speed) '
+                     f"{entry.bound[1]:.4g}]: the IDZ takes {value:.4g}, where the model's "
+                     f'map reaches 0, an extrapolation from {entry.moving_end:.4g} (the '
+                     f'innermost command that moved the joint, at {100 * entry.motion:.0f} % '
+                     'of its fastest speed) '
                      'towards rest, where no command was held')
     return tuple(notes)

@@ -136,7 +136,10 @@ def _branch(model: JointModel, rest: float, end: float,
                    max(rest, end))
     v = np.linspace(edge, end, 4001)
     u = np.clip(sign * control_period * model.rate(v), 0.0, None)
-    u = np.maximum.accumulate(u)            # a monotone envelope (a poly map may dip)
+    # A valve's speed does not grow towards rest: where a fitted map (a poly's extrapolation
+    # inside the commands the runs held) stops and moves again nearer rest, the joint is
+    # taken as still from where the speed first reaches 0 coming in from the end.
+    u = np.minimum.accumulate(u[::-1])[::-1]
     moving = np.flatnonzero(u > 0.0)
     if not moving.size:
         raise DataError(f'the {model.kind} map does not move the joint '

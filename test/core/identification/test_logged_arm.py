@@ -1,6 +1,9 @@
 """An arm logged as its user logged it (duties 40-100 % only): what identify may say of it."""
 
+from dataclasses import replace
+
 from hydro_sdp.core.control.controller_spec import design_from_model
+from hydro_sdp.core.control.loop_check import check_loop, CheckSettings
 from hydro_sdp.core.identification.evaluation import evaluate, mean_errors
 from hydro_sdp.core.identification.identify import identify
 from hydro_sdp.core.model.joint_model import JointModel
@@ -30,10 +33,19 @@ def test_edges_below_every_command_used_are_bounds_not_points(identified):
 
 
 def test_design_says_which_value_it_takes_where_the_data_leave_a_bound(identified):
-    spec = design_from_model(identified.model)
+    model = replace(identified.model, input_limits=(-100.0, 100.0))
+    spec = design_from_model(model)
     assert len(spec.notes) == 2
-    assert all("the IDZ takes the model's" in note and 'an extrapolation from' in note
-               and 'towards rest' in note for note in spec.notes)
+    for entry, edge, note in zip(model.undetermined, spec.idz.dead_zone, spec.notes):
+        # The table IDZ starts where the map's speed reaches 0 coming in from the valve's
+        # end, not at a poly's wiggle near rest, where no run held a command.
+        assert entry.bound[0] <= edge <= entry.bound[1]
+        assert abs(edge) > 30.0, spec.idz.dead_zone
+        assert f'the IDZ takes {edge:.4g}' in note and 'an extrapolation from' in note
+    # With those edges the loop holds its own model without pulsing (at 0 the IDZ's table
+    # jumped across the flat zone at every small error: 5 holds ended in a limit cycle).
+    check = check_loop(model, spec, model.angle_limits, settings=CheckSettings(noise_std=0.01))
+    assert check.passed, check.failures
 
 
 def test_the_family_is_the_one_its_held_out_table_ranks_under_the_rule(identified):
