@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from typing import Sequence
 
-from hydro_sdp.core.identification.sdp.results import SdpAnalysis, StateDependence
+from hydro_sdp.core.identification.sdp.dependence import SdpAnalysis, StateDependence
 from hydro_sdp.core.identification.sdp.states import UNITS
 from hydro_sdp.plots.figures import LIMIT, MEASURED, new_figure
 from matplotlib.axes import Axes

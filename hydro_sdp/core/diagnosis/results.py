@@ -200,7 +200,7 @@ class Signature:
 
 
 @dataclass(frozen=True, eq=False)
-class Gap:
+class GapTraces:
     """
     A validation record simulated with the model given and with the augmented model.
 
@@ -266,7 +266,7 @@ class Diagnosis:
         Validation MAE of the model given, degrees.
     mae_after : float
         Validation MAE of the final model, degrees.
-    gap : Gap
+    gap : GapTraces
         The first validation record against both models.
     signature : Signature or None
         The residual signature of the first effect named, on the first estimation
@@ -288,7 +288,7 @@ class Diagnosis:
     rounds: tuple[tuple[Candidate, ...], ...]
     mae_before: float
     mae_after: float
-    gap: Gap
+    gap: GapTraces
     signature: Signature | None
     evidence: StateEvidence | None = None
     validation: str = ''

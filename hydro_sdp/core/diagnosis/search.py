@@ -26,7 +26,7 @@ from hydro_sdp.core.diagnosis.reduction import bootstrap_block
 from hydro_sdp.core.diagnosis.residuals import (
     BLOCK_SECONDS, mae, Run, runs_of, velocity_residuals)
 from hydro_sdp.core.diagnosis.results import (
-    Candidate, Diagnosis, Gap, LedgerStep, Signature, StateEvidence)
+    Candidate, Diagnosis, GapTraces, LedgerStep, Signature, StateEvidence)
 from hydro_sdp.core.errors import DataError, HydroSdpError
 from hydro_sdp.core.identification.evaluation import simulated_record
 from hydro_sdp.core.identification.held_out import WindowErrors
@@ -156,12 +156,12 @@ def _refit_added(context: Context, augmented: JointModel, word: str) -> JointMod
     return augmented
 
 
-def _gap(model: JointModel, augmented: JointModel, run: Run) -> Gap:
+def _gap(model: JointModel, augmented: JointModel, run: Run) -> GapTraces:
     record = run.record
     start, before = simulated_record(model, record, run.dt, run.exogenous)
     later, after = simulated_record(augmented, record, run.dt, run.exogenous)
     start = max(start, later)
-    return Gap(record.t[start:], record.y[start:], before[start:], after[start:])
+    return GapTraces(record.t[start:], record.y[start:], before[start:], after[start:])
 
 
 def _evidence(effect: str, naming: Naming, records: Sequence[Record],

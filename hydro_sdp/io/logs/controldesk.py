@@ -83,7 +83,7 @@ class _Section:
 
 
 @dataclass(frozen=True)
-class _Column:
+class _TraceColumn:
     section: _Section
     index: int
     name: str
@@ -122,15 +122,15 @@ def _cell(cells: list[str], index: int) -> str:
     return cells[index] if index < len(cells) else ''
 
 
-def _columns(section: _Section) -> list[_Column]:
+def _columns(section: _Section) -> list[_TraceColumn]:
     names = section.keyed.get('trace_names', [])
     paths = section.keyed.get('path', [])
     width = max([len(cells) for cells in section.keyed.values()]
                 + [len(cells) for _, cells in section.data])
-    columns = [_Column(section, 1, TIME_NAME, _cell(paths, 1))]
+    columns = [_TraceColumn(section, 1, TIME_NAME, _cell(paths, 1))]
     for index in range(2, width):
         trace, path = _cell(names, index), _cell(paths, index)
-        columns.append(_Column(section, index, signal_name(trace, path), path))
+        columns.append(_TraceColumn(section, index, signal_name(trace, path), path))
     return columns
 
 
@@ -163,7 +163,7 @@ class ControlDeskTable:
         self.decimal_comma = decimal_comma
         self.sections = _sections(rows)
         self.columns = [column for section in self.sections for column in _columns(section)]
-        self.aliases: dict[str, list[_Column]] = {}
+        self.aliases: dict[str, list[_TraceColumn]] = {}
         for column in self.columns:
             for alias in names_of(column):
                 found = self.aliases.setdefault(alias, [])
@@ -174,7 +174,7 @@ class ControlDeskTable:
         self.notes = notes + (f'read as a dSPACE ControlDesk export: {len(self.sections)} '
                               f'section{plural}, {signals} signals',)
         self._times: dict[int, FloatArray] = {}
-        self.time_column: _Column | None = None
+        self.time_column: _TraceColumn | None = None
         if time is not None:
             found = self.aliases.get(time, [])
             if not found or any(column.index != 1 for column in found):
@@ -198,21 +198,21 @@ class ControlDeskTable:
 
     def _time(self, section: _Section) -> FloatArray:
         if section.number not in self._times:
-            column = _Column(section, 1, TIME_NAME, '')
+            column = _TraceColumn(section, 1, TIME_NAME, '')
             t = self._values(column)
             check_time_column(t, section.data, self._label(column), self.source)
             self._times[section.number] = t
         return self._times[section.number]
 
-    def _label(self, column: _Column) -> str:
+    def _label(self, column: _TraceColumn) -> str:
         where = '' if len(self.sections) == 1 else f' of section {column.section.number}'
         return column.label + where
 
-    def _values(self, column: _Column) -> FloatArray:
+    def _values(self, column: _TraceColumn) -> FloatArray:
         return column_values(column.section.data, column.index, self._label(column),
                              self.source, self.decimal_comma)
 
-    def _resolve(self, spec: str, option: str) -> _Column:
+    def _resolve(self, spec: str, option: str) -> _TraceColumn:
         """Find the column a ``--time``/``--angle``/... value names."""
         source = self.source
         found = self.aliases.get(spec, [])
@@ -239,7 +239,7 @@ class ControlDeskTable:
         raise DataError(f'{source}: no signal {spec!r} ({option}); signals: {names}{notes}')
 
 
-def names_of(column: _Column) -> list[str]:
+def names_of(column: _TraceColumn) -> list[str]:
     """Return the names a column answers to: its name, its trace name, its whole path."""
     trace = _cell(column.section.keyed.get('trace_names', []), column.index)
     names = [column.name, trace, column.path]

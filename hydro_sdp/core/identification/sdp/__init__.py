@@ -9,16 +9,16 @@ fixed-interval smoother in its banded least-squares form (:mod:`.banded`,
 checked against the recursive Kalman filter and smoother of :mod:`.kalman`),
 its NVR by maximum likelihood (:mod:`.nvr`); several parameters are
 back-fitted (:mod:`.backfit`), each weighed by its held-out share
-(:mod:`.held_out`) and a bootstrap test that respects autocorrelated residuals
+(:mod:`.shares`) and a bootstrap test that respects autocorrelated residuals
 (:mod:`.significance`). :func:`analyse` runs the joint analysis: the SDP-ARX
 model of a joint, or what a model misses, against the candidate states
-(:mod:`.states`), and returns an :class:`SdpAnalysis` (:mod:`.results`).
+(:mod:`.states`), and returns an :class:`SdpAnalysis` (:mod:`.dependence`).
 
 """
 
 from hydro_sdp.core.identification.sdp.analysis import analyse
 from hydro_sdp.core.identification.sdp.backfit import Backfit, backfit, Term, TermEstimate
-from hydro_sdp.core.identification.sdp.results import (
+from hydro_sdp.core.identification.sdp.dependence import (
     ParameterSummary, SdpAnalysis, StateDependence, Target)
 from hydro_sdp.core.identification.sdp.states import STATES
 

@@ -37,7 +37,7 @@ from hydro_sdp.core.identification.sdp.backfit import (
     Backfit, backfit, base_fit, Term, with_tests)
 from hydro_sdp.core.identification.sdp.ordering import MAX_GROUPS
 from hydro_sdp.core.identification.sdp.random_walk import order_of, TvpKind
-from hydro_sdp.core.identification.sdp.results import (
+from hydro_sdp.core.identification.sdp.dependence import (
     ordered, ParameterSummary, SdpAnalysis, StateDependence)
 from hydro_sdp.core.identification.sdp.states import check_states, Rows, rows_of, STATES
 from hydro_sdp.core.identification.segmentation import check_records, segment_records
