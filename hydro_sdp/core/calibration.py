@@ -498,7 +498,7 @@ def calibrate(records: Sequence[Record], validation: Sequence[Record] | None = N
     report('plausible machines', 0, 1)
     plausible = check_over(plausible_models(
         final, standard_errors=identified.fit.standard_errors,
-        sample_period=identified.sample_period,
+        dt=identified.sample_period,
         families=_families_in_band(identified, final, estimation, settings)),
         spec, stroke, check_settings)
     spec = replace(spec, design={**spec.design, 'checked_over': plausible.to_mapping()})

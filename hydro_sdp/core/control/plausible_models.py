@@ -153,7 +153,7 @@ def _with_bounded_value(model: JointModel, key: str, value: float) -> JointModel
 
 
 def plausible_models(model: JointModel, *, standard_errors: Mapping[str, float],
-                     sample_period: float,
+                     dt: float,
                      families: Sequence[JointModel] = ()) -> tuple[Plausible, ...]:
     """
     Return the models one change away from ``model`` that its data do not rule out.
@@ -164,7 +164,7 @@ def plausible_models(model: JointModel, *, standard_errors: Mapping[str, float],
         The identified model (with its effects).
     standard_errors : mapping
         Standard errors of its map parameters, by model-file name (``dead_zone[0]``).
-    sample_period : float
+    dt : float
         The records' sample period, s: the delay's resolution.
     families : sequence of JointModel
         Models of the other map families within the held-out tie band.
@@ -194,7 +194,7 @@ def plausible_models(model: JointModel, *, standard_errors: Mapping[str, float],
                 found.append(Plausible(f'{key} at the {label} end of its bound, {end:.4g}',
                                        changed))
     for sign in (-1, 1):
-        delay = model.delay + sign * sample_period
+        delay = model.delay + sign * dt
         if delay >= 0.0:
             found.append(Plausible(f'delay {sign:+d} sample', replace(model, delay=delay)))
     lag = model.effect(ValveLag.name)

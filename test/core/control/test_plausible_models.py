@@ -27,7 +27,7 @@ def test_each_model_is_one_change_from_the_identified_one(j2):
     model = replace(j2, effects=(ValveLag(0.1),), undetermined=(
         Undetermined('dead_zone[0]', (-2.0, -1.0), 'no command between -1 and -2 was held'),))
     found = {p.name: p.model for p in plausible_models(
-        model, sample_period=0.01, standard_errors={
+        model, dt=0.01, standard_errors={
             'dead_zone[0]': 0.05, 'dead_zone[1]': 0.05, 'saturation_velocity[1]': 1.5,
             'delay': 0.01, 'beta': 0.1})}
     assert sorted(found) == sorted([
@@ -68,7 +68,7 @@ def test_the_worst_case_bounds_the_true_joint_changed_as_the_models_are(tmp_path
     settings = CheckSettings(noise_std=0.02)
     checked = check_over(plausible_models(found.model,
                                           standard_errors=found.fit.standard_errors,
-                                          sample_period=0.01), spec, (-30.0, 60.0), settings)
+                                          dt=0.01), spec, (-30.0, 60.0), settings)
     worst = checked.worst()
     assert len(checked.checks) >= 10, checked.to_mapping()
     controller = save_controller(spec, tmp_path / 'c.yaml')
@@ -103,7 +103,7 @@ def test_an_undetermined_edge_moves_on_maps_without_an_edge_key(
     model = JointModel(joint='boom', static_map=static_map, delay=0.1, input_limits=limits,
                        undetermined=(Undetermined('dead_zone[1]', bound, 'hold lower'),))
     found = {p.name: p.model for p in plausible_models(model, standard_errors={},
-                                                       sample_period=0.01)}
+                                                       dt=0.01)}
     assert model.rest_command == rest
     moved = [(name, m) for name, m in found.items() if name.startswith('dead_zone[1] at')]
     ends = {name.rsplit(', ', 1)[1]: m for name, m in moved}
