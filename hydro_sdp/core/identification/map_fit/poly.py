@@ -50,13 +50,16 @@ def fit_poly(points: Sequence[LevelSpeed], rest: float, *, degree: int = 3,
     coefficients = []
     residual = 0.0
     for side in (levels < 0.0, levels > 0.0):
-        count = int(np.sum(side))
+        count = np.unique(levels[side]).size     # a level held in several runs counts once
         if count < 2:
             raise DataError('the polynomial gain map needs at least two levels on each side')
-        order = int(min(degree, count - 2)) if count > 2 else 0
+        order = int(min(degree, count - 1))
         gain = speeds[side] / levels[side]
         weights = np.abs(levels[side]) / np.maximum(errors[side], 1e-9)
-        fit = np.polynomial.polynomial.polyfit(levels[side], gain, order, w=weights)
+        # Fitted on the commands scaled to [-1, 1] (40-100 % cubed is ill-conditioned
+        # otherwise), then expressed in the map's own coefficients.
+        scaled = np.polynomial.Polynomial.fit(levels[side], gain, order, w=weights)
+        fit = np.pad(scaled.convert().coef, (0, order + 1))[:order + 1]
         coefficients.append(tuple(fit.tolist()))
         predicted = levels[side] * np.polynomial.polynomial.polyval(levels[side], fit)
         residual += float(np.sum((predicted - speeds[side]) ** 2))
