@@ -13,6 +13,7 @@ from dataclasses import replace
 import math
 
 from hydro_sdp.core.identification.online import OnlineSdpIdentifier, OnlineSettings
+from hydro_sdp.core.identification.soft_edges import map_and_soft_gradient
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.simulation import simulate
 from hydro_sdp.core.model.static_maps import SdpMap
@@ -176,3 +177,25 @@ def test_scalar_update_matches_the_numpy_equations(j2, case):
                                rtol=5e-12)
     assert scalar.r == pytest.approx(reference.r, rel=1e-12)
     assert scalar.nis == pytest.approx(reference.nis, rel=1e-12)
+
+
+def test_the_per_sample_map_is_eq_5_as_the_map_family_codes_it(j2):
+    # soft_edges writes eq. (5) out on floats for the per-sample path: its value is the
+    # map's own rate, and away from the soft edges its gradient is that of the map's own
+    # eq. (5) in the paper's coefficients (central differences of SdpMap.from_alpha).
+    dt, kappa = 0.01, 0.005
+    theta = list(j2.alpha(dt))
+    low, high = j2.dead_zone
+    commands = np.r_[np.linspace(-5.0, low - 0.2, 7), np.linspace(high + 0.2, 5.0, 7),
+                     np.linspace(low + 0.1, high - 0.1, 3)]
+    for u in commands:
+        q, gradient = map_and_soft_gradient(float(u), theta, kappa)
+        assert q == pytest.approx(float(j2.rate(u)) * dt, rel=1e-12, abs=1e-15)
+        for index in range(6):
+            step = 1e-6 * max(1.0, abs(theta[index]))
+            moved = [list(theta), list(theta)]
+            moved[0][index] += step
+            moved[1][index] -= step
+            rates = [SdpMap.from_alpha(tuple(m), dt).rate(np.array([u]))[0] * dt for m in moved]
+            assert gradient[index] == pytest.approx((rates[0] - rates[1]) / (2 * step),
+                                                    rel=1e-5, abs=1e-8), (u, index)
