@@ -14,6 +14,7 @@ import math
 from typing import Callable, Mapping, Sequence
 
 from hydro_sdp.core.control.controller_spec import ControllerSpec
+from hydro_sdp.core.control.idz_table_design import command_span
 from hydro_sdp.core.control.loop_check import check_loop, CheckSettings, LoopCheck
 from hydro_sdp.core.errors import HydroSdpError
 from hydro_sdp.core.model.effects import ValveLag
@@ -107,7 +108,8 @@ def with_edge_at(model: JointModel, side: int, edge: float) -> JointModel | None
     Parameters
     ----------
     model : JointModel
-        The model; its ``input_limits`` (else the records' range) bound the stretch.
+        The model; the commands its IDZ table covers (``command_span``: the input
+        limits, else the map's own range) bound the stretch.
     side : int
         0 for the negative edge, 1 for the positive one.
     edge : float
@@ -116,11 +118,12 @@ def with_edge_at(model: JointModel, side: int, edge: float) -> JointModel | None
     Returns
     -------
     JointModel or None
-        The changed model, or None where it has no limits to stretch towards.
+        The changed model, or None where it has no command range to stretch over.
 
     """
-    limits = model.input_limits
-    if limits is None:
+    try:
+        limits = command_span(model)
+    except HydroSdpError:
         return None
     rest, limit = model.rest_command, limits[side]
     edges = _map_edges(model, limits)

@@ -97,6 +97,8 @@ def test_the_worst_case_bounds_the_true_joint_changed_as_the_models_are(tmp_path
     # A polynomial with no dead-zone of its own, duty resting at 50.
     (PolyMap((0.8, 0.004), (1.0, 0.005), (0.0, 100.0), rest=50.0), (0.0, 100.0),
      (50.0, 70.0), 50.0),
+    # Without input limits: the table's own knots bound the stretch.
+    (PwlMap((-90.0, -30.0, 30.0, 90.0), (-40.0, 0.0, 0.0, 50.0)), None, (0.0, 40.0), 0.0),
 ])
 def test_an_undetermined_edge_moves_on_maps_without_an_edge_key(
         static_map, limits, bound, rest):
@@ -105,6 +107,7 @@ def test_an_undetermined_edge_moves_on_maps_without_an_edge_key(
     found = {p.name: p.model for p in plausible_models(model, standard_errors={},
                                                        dt=0.01)}
     assert model.rest_command == rest
+    limits = limits or (static_map.knots[0], static_map.knots[-1])
     moved = [(name, m) for name, m in found.items() if name.startswith('dead_zone[1] at')]
     ends = {name.rsplit(', ', 1)[1]: m for name, m in moved}
     # An end that is where the map's edge already lies is not a change, and is not tried.
