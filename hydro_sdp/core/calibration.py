@@ -35,8 +35,8 @@ from hydro_sdp.core.control.plausible_models import (
 from hydro_sdp.core.diagnosis import DETECTORS, diagnose, Diagnosis
 from hydro_sdp.core.errors import DataError, HydroSdpError
 from hydro_sdp.core.identification.evaluation import evaluate, RecordScore
-from hydro_sdp.core.identification.identify import (
-    Identification, identify, IdentifyStage, KindChoice)
+from hydro_sdp.core.identification.family_choice import FittedKind
+from hydro_sdp.core.identification.identify import Identification, identify, IdentifyStage
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.records import Record
 from hydro_sdp.core.model.sample_period import control_period_on, ControlPeriod
@@ -263,9 +263,7 @@ def split_records(records: Sequence[Record]) -> tuple[list[Record], list[Record]
                                     f'{names} of {recordings} (whole records)')
 
 
-def _families_in_band(identified: Identification, final: JointModel,
-                      records: Sequence[Record],
-                      settings: CalibrationSettings) -> list[JointModel]:
+def _families_in_band(identified: Identification, final: JointModel) -> list[JointModel]:
     """Return ``final`` with the map of each other family within the held-out tie band."""
     judged = identified.family
     if judged is None or judged.chosen < 0:
@@ -276,13 +274,11 @@ def _families_in_band(identified: Identification, final: JointModel,
         if c == judged.chosen or not pooled[c] - pooled[best] <= judged.bands[c]:
             continue
         try:
-            other = identify(records, kind=cast(KindChoice, name), rest=settings.rest,
-                             angle_limits=settings.angle_limits,
-                             input_limits=settings.input_limits).model
+            other = identified.family_map(cast(FittedKind, name))
         except HydroSdpError:
             continue
-        models.append(replace(final, static_map=other.static_map,
-                              undetermined=other.undetermined))
+        models.append(replace(final, static_map=other, undetermined=tuple(
+            entry for entry in final.undetermined if entry.is_edge)))
     return models
 
 
@@ -499,7 +495,7 @@ def calibrate(records: Sequence[Record], validation: Sequence[Record] | None = N
     plausible = check_over(plausible_models(
         final, standard_errors=identified.fit.standard_errors,
         dt=identified.sample_period,
-        families=_families_in_band(identified, final, estimation, settings)),
+        families=_families_in_band(identified, final)),
         spec, stroke, check_settings)
     spec = replace(spec, design={**spec.design, 'checked_over': plausible.to_mapping()})
     if check.passed and plausible.failed:

@@ -9,19 +9,20 @@ operation (:mod:`hydro_sdp.core.identification.routine`).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 import enum
 from typing import get_args, Literal
 
+from hydro_sdp.core.errors import DataError
 from hydro_sdp.core.identification.delay import DelayEstimate, LevelSpeed
 from hydro_sdp.core.identification.effect_check import HeldOut
-from hydro_sdp.core.identification.family_choice import KindScore
+from hydro_sdp.core.identification.family_choice import fit_family, FittedKind, KindScore
 from hydro_sdp.core.identification.held_out import Judgement
 from hydro_sdp.core.identification.limits import CommandRange
-from hydro_sdp.core.identification.map_fit import MapFit
+from hydro_sdp.core.identification.map_fit import FitData, FitMethod, MapFit
 from hydro_sdp.core.identification.segmentation import Segmentation
 from hydro_sdp.core.model.joint_model import JointModel
-from hydro_sdp.core.model.static_maps import StaticMap
+from hydro_sdp.core.model.static_maps import SdpMap, StaticMap
 
 #: How the records were identified: from experiments with held levels, or from routine
 #: operation (commands changing every control period).
@@ -92,6 +93,37 @@ class Identification:
     route: Route = 'experiments'
     commands: CommandRange | None = None
     family: Judgement | None = None
+    #: What the map was fitted on, for :meth:`family_map` (experiments route only).
+    fit_data: FitData | None = field(default=None, repr=False)
+    sdp_map: SdpMap | None = field(default=None, repr=False)
+    method: FitMethod = 'rr'
+
+    def family_map(self, kind: FittedKind) -> StaticMap:
+        """
+        Return the map of family ``kind`` fitted on the same data at the same timing.
+
+        Parameters
+        ----------
+        kind : str
+            A map family (``sdp``, ``pwl``, ``poly``, ``power_sat``).
+
+        Returns
+        -------
+        StaticMap
+            The chosen map for the chosen family, else the other family's fit.
+
+        Raises
+        ------
+        DataError
+            Where the identification kept no fit data (routine operation).
+
+        """
+        if kind == self.model.kind:
+            return self.fit.static_map
+        if self.fit_data is None or self.sdp_map is None:
+            raise DataError(f'no {kind} map to fit: this identification kept no fit data')
+        return fit_family(kind, self.fit_data, self.points, self.segmentation.rest,
+                          self.method, self.sdp_map).static_map
 
     @property
     def alpha(self) -> tuple[float, ...] | None:

@@ -275,4 +275,5 @@ def identify(records: Sequence[Record], *, method: FitMethod = 'rr', kind: KindC
     scores = () if comparison is None else tuple(comparison.scores())
     return Identification(model, dt, delay, segmentation, points, fit, scores, mae,
                           tuple(checks), commands=bounds.commands,
-                          family=None if comparison is None else comparison.judgement())
+                          family=None if comparison is None else comparison.judgement(),
+                          fit_data=data, sdp_map=sdp_fit.static_map, method=method)
