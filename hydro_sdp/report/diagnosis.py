@@ -69,10 +69,10 @@ def write_report(folder: Path, result: Diagnosis, *, command_unit: str | None = 
                                    folder / 'evidence.png'))
     figures.append(save_figure(plot_candidates(result.candidates, result.effect),
                                folder / 'candidates.png'))
-    # The evidence of load_dependence per record, when it was named: each record's scale.
-    named = {step.effect for step in result.ledger}
-    for candidate in result.candidates:
-        if candidate.effect == 'load_dependence' and candidate.effect in named:
+    # Records that differ in speed without a load signal, the lead: each record's scale,
+    # the evidence of a word refused for want of its cause.
+    for candidate in result.candidates[:1]:
+        if candidate.effect == 'load_dependence':
             scales = plot_record_scales(candidate)
             if scales is not None:
                 figures.append(save_figure(scales, folder / 'record_scales.png'))

@@ -103,7 +103,12 @@ def judge(trial: Trial, model: JointModel, checks: Sequence[Run], base: Sequence
     drifts = whole_after > (1.0 + RISE) * whole_before
     accepted = accepted and not drifts
     evidence = candidate.evidence
-    if not accepted:
+    if candidate.refused:
+        # Refused by its detector (its cause is not in the runs): what it would remove, said.
+        accepted = False
+        evidence = (f'{evidence}; it would remove {100 * held:.3g} % of the held-out error '
+                    f'and {100 * reduction.gain:.3g} % of the residual')
+    elif not accepted:
         # What the fit found is not a finding until the decision says so.
         if drifts:
             why = (f'it lowers the windowed error by {100 * held:.3g} % but raises the '
@@ -202,6 +207,52 @@ def explained_away(judged: Sequence[tuple[Candidate, JointModel | None]]
         if candidate.effect == 'stroke_geometry' and candidate.accepted:
             why = (f'{" and ".join(causes)} explain{"s" if len(causes) == 1 else ""} the same '
                    'samples: the factor is tried again once it is added')
+            candidate = replace(candidate, accepted=False, refused=why,
+                                evidence=f'{why}; {candidate.evidence}')
+        out.append((candidate, augmented))
+    return out
+
+
+#: Words whose cause the runs hold apart from the joint's own speed (another joint moving).
+OWN_CAUSE = ('flow_sharing',)
+
+
+def confounded_by_records(judged: Sequence[tuple[Candidate, JointModel | None]],
+                          on_own: Sequence[tuple[Candidate, JointModel | None]]
+                          ) -> list[tuple[Candidate, JointModel | None]]:
+    """
+    Hold back the words that may stand in for records differing in speed for no cause seen.
+
+    Where the records' own speed scales differ beyond their noise and no load signal says
+    why (``load_dependence`` refused), a word fitted to all the records at once takes on
+    part of that difference: an accepted word that removes less of its held-out error
+    than the records' scales remove of theirs waits, unless its cause is in the runs.
+
+    Parameters
+    ----------
+    judged : sequence of (Candidate, JointModel or None)
+        The round's candidates judged on the held-out runs.
+    on_own : sequence of (Candidate, JointModel or None)
+        Those judged on the records themselves (per-record factors).
+
+    Returns
+    -------
+    list of (Candidate, JointModel or None)
+        ``judged``, with such words refused and the reason said.
+
+    """
+    differ = [c for c, _ in on_own if c.refused and c.held_out > 0.0]
+    if not differ:
+        return list(judged)
+    lead = max(differ, key=lambda c: c.held_out)
+    out = []
+    for candidate, augmented in judged:
+        if (candidate.accepted and candidate.effect not in OWN_CAUSE
+                and candidate.held_out < lead.held_out):
+            why = (f'the records differ in speed beyond their noise ({lead.effect} per record '
+                   f'would remove {100 * lead.held_out:.3g} % of their error, this word '
+                   f'{100 * candidate.held_out:.3g} %): fitted to all of them at once it may '
+                   'stand in for that difference; record the load to tell')
             candidate = replace(candidate, accepted=False, refused=why,
                                 evidence=f'{why}; {candidate.evidence}')
         out.append((candidate, augmented))

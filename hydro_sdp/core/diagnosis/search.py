@@ -19,7 +19,7 @@ from typing import Callable, Sequence
 
 from hydro_sdp.core.diagnosis.context import Context
 from hydro_sdp.core.diagnosis.decision import (
-    carry_over, explained_away, judge, on_common_samples, rank)
+    carry_over, confounded_by_records, explained_away, judge, on_common_samples, rank)
 from hydro_sdp.core.diagnosis.detectors import detector, DETECTORS
 from hydro_sdp.core.diagnosis.naming import name_states, Naming
 from hydro_sdp.core.diagnosis.reduction import bootstrap_block
@@ -132,7 +132,8 @@ def _round(context: Context, checks: Sequence[Run], progress: Callable[[str], No
     own_errors = WindowErrors(context.runs)
     judged = explained_away([(carry_over(candidate, context.model, augmented, own_errors),
                               augmented) for candidate, augmented in judged])
-    judged = on_common_samples(judged, context.model, errors) + on_own
+    judged = confounded_by_records(on_common_samples(judged, context.model, errors), on_own)
+    judged += on_own
     models = {id(candidate): model for candidate, model in judged}
     ranked = rank([candidate for candidate, _ in judged], context.naming)
     return [(candidate, models[id(candidate)]) for candidate in ranked]

@@ -125,9 +125,11 @@ def payloads() -> Payloads:
     return arm, model, payload_runs(arm, 0.0, 50), payload_runs(arm, 1200.0, 80)
 
 
-def test_without_a_load_signal_each_record_gets_its_own_scale(tmp_path: Path) -> None:
+def test_without_a_load_signal_records_that_differ_are_shown_not_named(tmp_path: Path) -> None:
     # The generator's joint slowed by a valve without compensation, each record at its own
-    # payload, the load not recorded: the records' speeds at the same command differ.
+    # payload, the load not recorded: the records' speeds at the same command differ, but
+    # the runs do not hold the cause, and scales of the records themselves predict no
+    # other record: the finding is shown, `load_dependence` refused with what to record.
     rng = np.random.default_rng(9)
     truth, nominal = hide('load_dependence', rng, 'volt')
     loaded = []
@@ -144,17 +146,21 @@ def test_without_a_load_signal_each_record_gets_its_own_scale(tmp_path: Path) ->
     result = diagnose(bare, model, validation=bare, max_iterations=1)
     written = write_report(tmp_path, result)
     assert str(tmp_path / 'record_scales.png') in [str(path) for path in written]
-    assert result.effect == 'load_dependence'
+    # Nothing is named: fitted to all the records at once, dead_zone and
+    # angle_dependent_velocity took a third of the error each (measured) and stood in
+    # for the records' difference; they wait, and say why.
+    assert result.effect == 'none' and result.model == model
     candidate = result.candidates[0]
-    assert candidate.effect == 'load_dependence' and 'chi2' in candidate.evidence
-    first = result.ledger[0]
-    assert first.mae_after <= 0.5 * first.mae_before
-    effect = result.model.effect('load_dependence')
-    assert isinstance(effect, LoadDependence) and len(effect.records) == 4
-    # Lifting (positive) is slower the heavier the record's payload.
+    assert candidate.effect == 'load_dependence' and not candidate.accepted
+    assert 'chi2' in candidate.evidence
+    assert 'no load signal' in candidate.refused and '--load-topic' in candidate.refused
+    assert all('records differ in speed' in c.refused for c in result.candidates[1:]
+               if c.held_out > 0.1)
+    # The scales it found: lifting (positive) is slower the heavier the record's payload.
+    scales = candidate.parameters['record_positive']
     payloads = [float(np.min(r.load)) for r in loaded]
     order = np.argsort(payloads)
-    assert effect.record_positive[order[0]] > effect.record_positive[order[-1]] + 0.05
+    assert scales[order[0]] > scales[order[-1]] + 0.05
 
 
 def with_pressure(arm: Machine, payload: float, runs: list[Record]) -> list[Record]:

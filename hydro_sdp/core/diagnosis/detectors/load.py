@@ -5,14 +5,15 @@ With a measured load (the record's ``load``), the shape the data show: a smooth
 factor of the load per direction, of either sign (:mod:`.load_shape`, read off the
 SDP analysis along the load and fitted to the one-step increments), or the
 overrunning load of a pressure-compensated valve (:mod:`.overrun`), whichever
-removes more of the residual. Without one, a speed scale per record and direction,
-named only when the records' scales at the same command differ beyond their noise
-(:mod:`.record_scales`).
+removes more of the residual. Without one, a speed scale per record and direction
+(:mod:`.record_scales`): shown where the records' scales at the same command differ
+beyond their noise, and refused, the cause not being in the runs.
 
 """
 
 from __future__ import annotations
 
+from dataclasses import replace
 import math
 
 from hydro_sdp.core.diagnosis.context import Context
@@ -37,7 +38,7 @@ class LoadDependenceDetector(EffectDetector):
 
     word = 'load_dependence'
     description = 'the speed changes with the load (payload, digging)'
-    remedy = 'effect, a smooth factor of the measured load per direction, or per record'
+    remedy = 'effect, a smooth factor of the measured load per direction'
     feature = 'command'
     state = 'load'
 
@@ -54,7 +55,15 @@ class LoadDependenceDetector(EffectDetector):
                              'in the same direction'), None
         if found.p_value > P_LIMIT or found.spread < MIN_SPREAD:
             return Candidate(self.word, True, evidence=found.describe() + ': within noise'), None
-        return self._fit_records(context, found)
+        candidate, augmented = self._fit_records(context, found)
+        if augmented is None:
+            return candidate, augmented
+        # Scales of the records themselves predict no other record, and without a load
+        # signal the runs do not hold the cause: the finding is shown, the word refused.
+        why = ('the records differ in speed beyond their noise, but they carry no load '
+               'signal: a payload, the supply pressure or the oil temperature can do this; '
+               'record the load (--load-topic: a cylinder pressure) to name it')
+        return replace(candidate, refused=why, evidence=f'{why}; {candidate.evidence}'), augmented
 
     def _fit_load(self, context: Context) -> Trial:
         """Fit the smooth factor, the overrunning form and the power cap; keep the best sides."""
