@@ -1,9 +1,7 @@
 """
 What ``identify`` found (:class:`Identification`), and the stages it goes through.
 
-Both routes of :func:`hydro_sdp.core.identification.identify.identify` return it:
-experiments with held command levels (West et al. 2018, section 4) and routine
-operation (:mod:`hydro_sdp.core.identification.routine`).
+The reasoning is in docs/methods.md section 13.
 
 """
 

@@ -1,14 +1,4 @@
-"""
-The online identifier's six-state Kalman step on Python floats (docs/methods.md 7.2).
-
-One step per sample on six coefficients: on six numbers each numpy call costs about a
-microsecond of overhead, many times the arithmetic it does, so the per-sample path
-writes the arithmetic out on Python floats instead. The covariance is symmetric, so
-only its upper triangle is kept, row by row (``P00 P01 .. P05 P11 .. P15 P22 .. P55``):
-21 numbers, and the downdate computes each of them once. :func:`packed`,
-:func:`unpacked` and :func:`diagonal` convert to and from numpy for callers.
-
-"""
+"""The online identifier's six-state Kalman step on Python floats (docs/methods.md 7.2)."""
 
 from __future__ import annotations
 
@@ -74,7 +64,7 @@ def diagonal(packed_matrix: list[float]) -> FloatArray:
     Returns
     -------
     FloatArray
-        ``M00 .. M55``.
+        ``M00 ..
 
     """
     return np.array([packed_matrix[k] for k in DIAGONAL])
@@ -89,7 +79,7 @@ def add_to_diagonal(packed_matrix: list[float], values: Six) -> None:
     packed_matrix : list[float]
         The 21 entries of the upper triangle; changed in place.
     values : tuple of six floats
-        What to add to ``M00 .. M55``.
+        What to add to ``M00 ..
 
     """
     d0, d1, d2, d3, d4, d5 = values
@@ -134,9 +124,6 @@ def times(packed_matrix: list[float], x: Six) -> tuple[Six, float]:
 def downdated(packed_matrix: list[float], gain: Six, h: Six) -> list[float]:
     """
     Return ``M - gain h'`` for a symmetric result (``gain`` a multiple of ``h``).
-
-    The Kalman downdate ``P - K (P psi)'`` with ``K = P psi / S``: the upper triangle
-    ``M[i, j] - gain[i] h[j]``, ``i <= j``, as the full outer product gives it.
 
     Parameters
     ----------
