@@ -302,7 +302,7 @@ def _pooled(errors: Sequence[Sequence[float]], weights: Sequence[float], c: int)
 def judge(names: Sequence[str], errors: Sequence[Sequence[float]],
           weights: Sequence[float]) -> Judgement:
     """
-    Choose among candidates by their held-out errors: the one rule (methods 7.10).
+    Choose among candidates by their held-out errors: the one rule (methods 16).
 
     Parameters
     ----------

@@ -295,6 +295,7 @@ def sriv(y: FloatArray | Sequence[FloatArray], u: FloatArray | Sequence[FloatArr
     ----------
     y, u : array or sequence of arrays
         Output and input of one experiment, or lists of several experiments.
+        Each experiment should start at rest (deviations from an operating point).
     n : int
         Order of the estimated part of ``A`` (the known factor excluded; may be 0).
     m : int

@@ -64,7 +64,7 @@ def diagonal(packed_matrix: list[float]) -> FloatArray:
     Returns
     -------
     FloatArray
-        ``M00 ..
+        ``M00 .. M55``.
 
     """
     return np.array([packed_matrix[k] for k in DIAGONAL])
@@ -79,7 +79,7 @@ def add_to_diagonal(packed_matrix: list[float], values: Six) -> None:
     packed_matrix : list[float]
         The 21 entries of the upper triangle; changed in place.
     values : tuple of six floats
-        What to add to ``M00 ..
+        What to add to ``M00 .. M55``.
 
     """
     d0, d1, d2, d3, d4, d5 = values
