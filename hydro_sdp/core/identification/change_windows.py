@@ -1,33 +1,4 @@
-"""
-Dead time and first-order valve lag of a joint, identified together.
-
-A real valve answers a step with a dead time (electronics, pilot stage) and
-then a rise (the spool's travel): ``w_k = p w_{k-1} + (1 - p) rate(v_{k-tau})``
-with ``p = exp(-dt / T)``, the model's ``valve_lag`` effect, and the joint
-integrates ``w``. The pair ``(tau, T)`` is found from the measured increments
-around every change of the command, free of any map shape (the
-differenced-output fit of docs/methods.md section 1.5, with the lag):
-
-* each change gets a window: from :data:`BEFORE` samples before the earliest
-  place it can show (dead time 1) to :data:`AFTER` samples after the latest
-  (``max_delay``), cut where a neighbouring change could show; so every
-  candidate pair is scored on the same samples;
-* inside the window the speed the map gives is one level before the delayed
-  change and a level with a linear drift after it (the speed changes along the
-  stroke); the lag filters it, starting from a *free* speed at the window's
-  first sample, so whatever came before (an earlier transient, a stop) is
-  explained exactly and nothing is assumed about it;
-* the model is linear in those four numbers: a least-squares fit per window,
-  and the residual summed over all windows scores the pair.
-
-Fitting the measured increments (not increments with the lag inverted, which
-amplifies their noise by ``1 / (1 - p)``), carrying the lag's state across
-every change and scoring every pair on the same samples keep the score
-unbiased, so a long lag is not traded for a longer delay. Every dead time near
-the best pure delay is tried with every lag of :data:`LAG_GRID`, and the best
-time constant is then refined continuously.
-
-"""
+"""Dead time and first-order valve lag of a joint, identified together (methods 1.5)."""
 
 from __future__ import annotations
 
@@ -64,13 +35,6 @@ def lag_pole(time_constant: float, dt: float) -> float:
 class ChangeWindows:
     """
     The measured increments around every change of the command.
-
-    Each window holds the samples where the change can show for any dead time
-    from 1 to ``max_delay``, and no other change can: the same samples are
-    scored for every dead time, so their residuals compare directly. Each
-    window's share of the fit is its own, whatever other windows are scored with
-    it: :meth:`part` scores some of the experiments from what these windows
-    computed already (the folds of a held-out check score the same pairs).
 
     Parameters
     ----------
@@ -198,10 +162,6 @@ class ChangeWindows:
     def angle_error(self, delay: int, pole: float) -> tuple[float, int]:
         """
         Return the summed absolute angle error over the windows, and the samples summed.
-
-        Each window is integrated from its measured first angle with its fitted speeds
-        (:meth:`residual`'s fit), so that its error reads in degrees of angle, as a
-        simulation's restarted from the measured angle does.
 
         Parameters
         ----------

@@ -1,23 +1,4 @@
-"""
-Dead time (and valve lag) of a hydraulic joint, estimated three ways.
-
-A small step moves the joint slowly, so its motion crosses any threshold late
-and looks like extra delay; the estimators here avoid that:
-
-* **fit** (the answer): for each candidate dead time and first-order valve lag,
-  the differenced angle around every command change is explained by one speed
-  before the change and one (with a drift) after it, passed through the lag
-  from a free initial speed; the pair that explains most of it wins, scored on
-  the same samples for every pair (:mod:`hydro_sdp.core.identification.change_windows`). This
-  is the differenced-output fit of docs/methods.md section 1.5, free of any map
-  shape.
-* **onset**: on the fastest steps, the first sample where the speed reaches half
-  of the step's final speed, moved back by the time the fitted lag takes to
-  rise half way (so twitches before the motion and the lag's rise do not count).
-* **cross-correlation**: the lag where changes of speed line up with changes
-  of command.
-
-"""
+"""Dead time (and valve lag) of a hydraulic joint, estimated three ways (methods 1.5)."""
 
 from __future__ import annotations
 
@@ -220,9 +201,7 @@ def level_speeds(experiments: Sequence[Experiment], delay: int, dt: float, *,
     """
     Mean speed per experiment and delayed command level (the points of Figs. 2 and 3).
 
-    For a step experiment this is the RIV estimate of ``b_tau`` of West et al.
-    (docs/methods.md section 1.10): with the integrator known, the integrated-input SRIV is
-    least squares, and its speed is the mean of the differenced angle.
+    The reasoning is in docs/methods.md section 1.10.
 
     Parameters
     ----------

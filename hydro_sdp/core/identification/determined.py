@@ -1,12 +1,7 @@
 """
 What the data determine of a map: which edges and parameters are bounds, not points.
 
-An edge lies between the outermost command that leaves the joint still and the innermost
-that moves it at all (three standard errors from zero, however slowly). Where no command
-between rest and the innermost moving one was used, the data bound the edge by those two
-and say nothing of where in between it is. Any other parameter whose two standard errors
-exceed its size is not pinned either: two speeds cannot fix three parameters a side
-(docs/methods.md section 13.9).
+The reasoning is in docs/methods.md section 13.9.
 
 """
 

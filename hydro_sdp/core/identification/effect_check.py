@@ -1,12 +1,7 @@
 """
 Whether an effect ``identify`` adds on its own earns its place, on held-out experiments.
 
-``identify`` proposes a ``valve_lag`` with the dead time and a ``stroke_geometry``
-factor when the runs span the stroke. Either fits *something* on any data, so each
-is kept only when the model with it, fitted on each fold's training part, predicts
-the test parts better by the one rule of :mod:`.held_out`
-(docs/methods.md section 13.8). Neither is fitted on samples where the joint sits at
-an end stop (:func:`at_stop`): there the command drives a joint that cannot move.
+The reasoning is in docs/methods.md section 13.8.
 
 """
 
@@ -77,12 +72,7 @@ class HeldOut:
 
 def simulation_errors(model: JointModel, experiments: Sequence[Experiment],
                       dt: float) -> tuple[float, int]:
-    """
-    Sum of absolute simulation errors of a model over experiments, and their sample count.
-
-    Each experiment is simulated from its measured angle at its start, with its
-    command history before; the lag starts in steady state at the first command.
-    """
+    """Sum of absolute simulation errors of a model over experiments, and their sample count."""
     total, count = 0.0, 0
     for experiment in experiments:
         simulated = simulate(model, experiment.v, dt, float(experiment.y[experiment.start]),

@@ -1,16 +1,4 @@
-"""
-Where a joint is held by an end stop although its command drives it.
-
-A real stop is not a clean clamp: the link rings on its compliance, the angle
-overshoots the final angle by tenths of a degree and bounces back. So the
-test is on the net displacement over a window of about 0.3 s (which averages
-the ringing out), against the speed the joint had while it moved (not against
-the sensor noise): the joint is held where that net speed falls below a tenth
-of its moving speed and stays there while the same command is held, after it
-moved under that command, at the extreme of its travel in the direction it
-moved (or at the known stop there, when the stops are given).
-
-"""
+"""Where a joint is held by an end stop although its command drives it (methods 13.2)."""
 
 from __future__ import annotations
 
@@ -152,11 +140,6 @@ def pushes_into_stop(y: FloatArray, level: float, rest: float,
     """
     Whether a step starts at an end stop and its command drives into that stop.
 
-    Such a step says nothing about the valve: the joint cannot move, whatever
-    the command. It counts when the first angle lies within
-    :func:`stop_tolerance` of the stop the command drives towards and no angle
-    of the step gets beyond the stop by more than that.
-
     Parameters
     ----------
     y : FloatArray
@@ -199,12 +182,6 @@ def arrival_at_stop(y: FloatArray, level: float, rest: float,
                     stops: tuple[float | None, float | None], reach: float) -> int | None:
     """
     First sample at which a step reaches the stop its command drives it into, if it does.
-
-    A joint that arrives at a stop and sits there while its command still drives it
-    shows a speed of zero that says nothing about the valve; the samples from the
-    arrival on are left out of every fit. A stop too short-lived for
-    :func:`clamp_start` (under half a window at the stop) is caught here once the
-    stop is known, from this record or another.
 
     Parameters
     ----------

@@ -1,18 +1,4 @@
-"""
-Model evaluation as in Table 2 of West et al. (2018).
-
-Each record is simulated with its measured commands from its measured angle
-at the first sample whose delayed command is known (sample ``tau``; the
-command before a record is unknown), and the mean absolute error (MAE) from
-there on is reported for the model, for its
-SDP-DZ linearisation (eq. (6): chords from the dead-zone edges to the commands
-where the speed reaches two thirds of saturation, with the same delay and end
-stops) and for the linear model (eq. (2), gain optimised for each record).
-:func:`mean_errors` averages the records two ways: the per-record mean of
-Table 2 (every run counts once) and the time-weighted mean (every sample
-counts once, as a residual over the whole recording does).
-
-"""
+"""Model evaluation as in Table 2 of West et al. (2018) (methods 3.8, 13.6)."""
 
 from __future__ import annotations
 
@@ -117,9 +103,7 @@ def first_compared(model: JointModel, dt: float, record: Record) -> int:
     """
     Return the first sample compared: where the model's state no longer depends on the past.
 
-    That is the first sample whose delayed commands are all known (Table 2 of [W18]);
-    with a valve lag, once the lag's state at the record's start, which depends on
-    commands before it, has decayed (docs/methods.md section 3.8).
+    The reasoning is in docs/methods.md section 3.8.
 
     """
     known = model.longest_delay_samples(dt)
@@ -144,12 +128,7 @@ def _mae(model: JointModel, record: Record, dt: float, start: int) -> float:
 def simulated_record(model: JointModel, record: Record, dt: float | None = None,
                      exogenous: Exogenous | None = None) -> tuple[int, FloatArray]:
     """
-    Simulate a model over a record as every figure of its error does.
-
-    The record is simulated from its first sample whose delayed command is known,
-    with the command before the record taken as its first (docs/methods.md section
-    3.8); with backlash, from the best of the three states of the play (the side it
-    was taken up on is not known).
+    Simulate a model over a record as every figure of its error does (methods 3.8).
 
     Parameters
     ----------

@@ -1,8 +1,7 @@
 """
 Experiments: the pieces of records a fit sees, cut to length and thinned to a sample budget.
 
-An experiment keeps some samples of command history before its start, so that
-the delayed input of its first samples is known (docs/methods.md section 2.3).
+The reasoning is in docs/methods.md section 2.3.
 
 """
 
@@ -61,10 +60,6 @@ def split_long(experiments: Sequence[Experiment], max_samples: int,
                history: int) -> list[Experiment]:
     """
     Cut experiments longer than ``max_samples`` into consecutive pieces.
-
-    Each piece restarts from its measured angle with ``history`` samples of
-    commands before it, so fits see many medium-length pieces instead of one
-    long run (an output-error fit would otherwise drift over an hour).
 
     Parameters
     ----------

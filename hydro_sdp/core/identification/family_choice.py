@@ -1,11 +1,4 @@
-"""
-The map families, and choosing one on held-out experiments (docs/methods.md section 13.4).
-
-Each family is fitted on every fold's training part and scored on the experiments of its
-test part, each simulated from its measured start; the one rule of :mod:`.held_out`
-chooses.
-
-"""
+"""The map families, and choosing one on held-out experiments (docs/methods.md section 13.4)."""
 
 from __future__ import annotations
 
@@ -42,9 +35,6 @@ def folds(experiments: Sequence[Experiment], rest: float
           ) -> list[tuple[list[Experiment], list[Experiment]]]:
     """
     Training and test parts of each fold (:func:`~.held_out.deal`).
-
-    Steps are dealt by their level; runs alternate between the folds in pairs. Too few
-    experiments to deal: each is cut in two halves in time, each half a fold.
 
     Parameters
     ----------
@@ -111,9 +101,6 @@ class KindScore:
 class FoldErrors:
     """
     Each family's held-out errors, fold by fold, and why any failed.
-
-    A failure of the fit every family starts from (:meth:`fail`) ends the
-    comparison of all of them; a family's own failure ends that family's.
 
     Parameters
     ----------
@@ -239,9 +226,6 @@ class Fold:
 class FoldFits:
     """
     The folds of :func:`folds` with their ``sdp`` fits, made once for every comparison.
-
-    ``identify`` compares the first families, then ``power_sat`` on the same folds:
-    both start from these fits.
 
     Parameters
     ----------

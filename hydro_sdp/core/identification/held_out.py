@@ -1,12 +1,7 @@
 """
 Held-out judgement: the folds, the error and the rule that every choice on data follows.
 
-The map family, the effects ``identify`` proposes, the routine route's family, the
-diagnosis's candidates and the SDP analysis's shares are judged alike
-(docs/methods.md section 16): units dealt into folds (:func:`deal`), the simulation
-error from the measured angle at the start of every unit (an experiment, a piece of
-routine operation, or a window of :data:`WINDOW_SECONDS` of a long record:
-:class:`WindowErrors`), and one rule (:func:`judge`).
+The reasoning is in docs/methods.md section 16.
 
 """
 
@@ -57,10 +52,6 @@ class Unit:
 def deal(units: Sequence[Unit], count: int | None = None) -> list[tuple[list[int], list[int]]]:
     """
     Deal units into folds whose test parts never ask a fit to extrapolate.
-
-    A level held by several units is spread over the folds; a level held once is left
-    out in turn only when it lies strictly inside its side's levels, so the outermost
-    always train; everything else is dealt in turn, a group at a time.
 
     Parameters
     ----------
@@ -120,8 +111,7 @@ def stretch_folds(segment: IntArray, stretches: int = STRETCHES,
     """
     Return the fold of each sample in time order: whole records, cut into tenths when longer.
 
-    The folds of the SDP analysis's held-out shares (docs/methods.md section 14.5): each
-    contiguous stretch is a fold, so a state that labels the samples predicts nothing.
+    The reasoning is in docs/methods.md section 14.5.
 
     Parameters
     ----------
@@ -312,14 +302,7 @@ def _pooled(errors: Sequence[Sequence[float]], weights: Sequence[float], c: int)
 def judge(names: Sequence[str], errors: Sequence[Sequence[float]],
           weights: Sequence[float]) -> Judgement:
     """
-    Choose among candidates by their held-out errors: the one rule.
-
-    The candidate with the least pooled error is the best. A simpler candidate wins
-    when its pooled error exceeds the best's by no more than its tie band: the larger
-    of :data:`MARGIN` of its own error and the standard error of its per-fold
-    differences from the best (the one-standard-error rule, Hastie, Tibshirani and
-    Friedman 2009, section 7.10). Ties go to the simpler, so a result never turns on
-    the last bits of a sum.
+    Choose among candidates by their held-out errors: the one rule (methods 16).
 
     Parameters
     ----------

@@ -1,9 +1,7 @@
 """
 What ``identify`` found (:class:`Identification`), and the stages it goes through.
 
-Both routes of :func:`hydro_sdp.core.identification.identify.identify` return it:
-experiments with held command levels (West et al. 2018, section 4) and routine
-operation (:mod:`hydro_sdp.core.identification.routine`).
+The reasoning is in docs/methods.md section 13.
 
 """
 
@@ -78,6 +76,8 @@ class Identification:
         The commands seen and where the model's limits come from.
     family : Judgement or None
         How the family was chosen (None when it was asked for by name).
+    fit_data, sdp_map, method
+        The map's data, eq. (5)'s fit and the method, for :meth:`family_map`.
 
     """
 
@@ -93,7 +93,6 @@ class Identification:
     route: Route = 'experiments'
     commands: CommandRange | None = None
     family: Judgement | None = None
-    #: What the map was fitted on, for :meth:`family_map` (experiments route only).
     fit_data: FitData | None = field(default=None, repr=False)
     sdp_map: SdpMap | None = field(default=None, repr=False)
     method: FitMethod = 'rr'

@@ -1,22 +1,7 @@
 """
 Offline identification of a hydraulic joint from records (the ``identify`` command).
 
-The pipeline of West et al. (2018) section 4, made automatic: cut the records
-into experiments (at the valve's neutral, and where an end stop holds the
-joint), estimate the dead time with the valve's first-order lag, measure the
-speed of every command level (their Figs. 2 and 3), then fit the static map to
-the raw angles by regret-regression (or their output-error fit). Besides eq.
-(5) (``sdp``), a monotone piecewise-linear map (``pwl``), the second paper's
-polynomial gain (``poly``) and a saturating power law (``power_sat``, convex
-from the dead-zone) are fitted, and the family that predicts held-out
-experiments best is chosen (``kind='auto'``, folds that never extrapolate:
-:mod:`hydro_sdp.core.identification.family_choice`), by the one rule of
-:mod:`~hydro_sdp.core.identification.held_out`. When the data span the stroke, a
-``stroke_geometry`` factor of the angle is fitted on top. The result is a
-:class:`~hydro_sdp.core.model.joint_model.JointModel` whose effects carry the lag and the
-geometry found. Records of routine operation (a closed loop, an operator: few
-held levels) take their own route, the map from the one-step increments
-(:mod:`hydro_sdp.core.identification.routine`).
+The reasoning is in docs/methods.md sections 2, 13.
 
 """
 
@@ -69,12 +54,7 @@ COMPARE_SAMPLES = 30_000
 
 
 def experiments_mae(model: JointModel, experiments: Sequence[Experiment], dt: float) -> float:
-    """
-    Mean absolute simulation error of a model over experiments, degrees (per sample).
-
-    Each experiment is simulated from its measured angle at its start, with its
-    command history before; the lag starts in steady state at the first command.
-    """
+    """Mean absolute simulation error of a model over experiments, degrees (per sample)."""
     total, count = simulation_errors(model, experiments, dt)
     return total / max(count, 1)
 

@@ -1,11 +1,7 @@
 """
 The end stops and the valve range an identified model is given, and where each comes from.
 
-A model says only what was given or seen: end stops passed in are written as
-given, else the angles where the joint was seen held against a stop (a side where
-it never was has none); the valve range passed in is written as given, else the range
-of commands the records used (with the rest command inside it), which is all
-the data show of the valve.
+The reasoning is in docs/methods.md section 13.2.
 
 """
 

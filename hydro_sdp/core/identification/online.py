@@ -1,20 +1,4 @@
-"""
-Online identification of the SDP map (docs/methods.md section 7), one sample at a time.
-
-A random-walk Kalman filter tracks ``theta = (a1 .. a6)`` of eq. (5) (per-sample
-units at the records' sample period) from ``dy_k = q(v_{k-tau}; theta) + noise``.
-Its gradient is taken from a soft-edged copy of ``q`` so that a dead-zone edge
-that has moved inwards can still be learned (inside the estimated dead-zone the
-exact gradient is zero). Samples are skipped while the static model does not
-hold: just after a command change (valve transients), near an end stop, for
-non-finite data and for outliers. A model's valve lag is followed: the
-prediction and its gradient pass through it, and samples where the valve has
-not settled are skipped. The estimator is what lets a PIP-IDZ loop recalibrate
-itself after wear or a part replacement, the first paper's promise.
-:class:`OnlineMapFilter` is the filter on any six map coefficients; the other
-map families' is :mod:`.online_edges`.
-
-"""
+"""Online identification of the SDP map (docs/methods.md section 7), one sample at a time."""
 
 from __future__ import annotations
 
@@ -196,10 +180,6 @@ saturation_positive_std, curvature_negative_std, curvature_positive_std : float
 class OnlineMapFilter:
     """
     The random-walk Kalman filter of docs/methods.md 7.2-7.4 on six map coefficients.
-
-    Three per side, below and above the dead-zone, the edges third and sixth; the
-    subclasses give the map, its soft-edged gradient, the starting point, the
-    start variances and the box (:meth:`_start`).
 
     Parameters
     ----------
@@ -393,13 +373,7 @@ class OnlineMapFilter:
         return self._lag_speed, self._lag_gradient
 
     def _reset_covariance(self, lower: bool, upper: bool) -> None:
-        """
-        Add part of the start covariance back on the side(s) that changed (section 7.4).
-
-        Dead-zone edges are what wear moves: the edge of a changed side is forgotten; its
-        speed and curvature, poorly excited while a set-point is held, keep most of what
-        they know, and the other side keeps everything.
-        """
+        """Add part of the start covariance back on the side(s) that changed (section 7.4)."""
         below = 1.0 if lower else 0.0
         above = 1.0 if upper else 0.0
         v = self._start_variances

@@ -1,23 +1,7 @@
 """
 Online identification of the dead-zone edges and the speeds near them, for any map family.
 
-Eq. (5) has six coefficients the filter of :mod:`.online` tracks; a ``pwl``,
-``poly`` or ``power_sat`` map has others, or many. What wear changes is local:
-where each side of the dead-zone starts, and how fast the joint moves beyond
-it. So each side of the model's own map is kept in shape and moved and scaled
-(docs/methods.md section 7.6): below the dead-zone ``q(v) = k_n Q_n(a3 - v)``,
-above it ``q(v) = k_p Q_p(v - a6)``, 0 between, where ``Q_n``, ``Q_p`` are the
-model's increments per sample at the distance ``x`` beyond its own edges,
-``a3, a6`` the edges and ``k_n, k_p`` speed scales: what a table IDZ's
-``with_edges`` and ``with_slopes`` apply. The same random-walk filter, gating,
-change detection and covariance reset run on ``(k_n, -, a3, k_p, -, a6)`` (the
-second and fifth coefficients, eq. (5)'s curvatures, stay 1), with eq. (5)'s
-variances expressed relative to the map's own speed. ``Q`` is tabulated once on
-a fine grid; the per-sample update reads it in constant time. A convex map
-barely moves near its edge, so an edge's shift is seen, near the edge, through
-the map's chord over a band beyond it (the slope the edge's gradient uses is at
-least that chord's): the soft edges of section 7.2 then learn an edge that moved
-inwards from a joint that moves where the model says it should not.
+The reasoning is in docs/methods.md sections 7.6, 7.2.
 
 """
 

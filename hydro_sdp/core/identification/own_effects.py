@@ -1,11 +1,7 @@
 """
 The effects ``identify`` proposes by itself: checked on held-out experiments, then fitted.
 
-A ``valve_lag`` comes with the dead time (:mod:`.change_windows`), a
-``stroke_geometry`` factor when the runs span the stroke (:mod:`.stroke_fit`).
-:func:`check_lag` and :func:`check_geometry` say whether each lowers the error
-of experiments it was not fitted on by a clear margin (:mod:`.effect_check`);
-:func:`shape_with_geometry` then refits the map under the factor.
+The reasoning is in docs/methods.md section 13.8.
 
 """
 
@@ -43,11 +39,7 @@ def check_lag(experiments: Sequence[Experiment], delay: DelayEstimate, dt: float
     """
     Held-out angle error around the command changes, with the lag and with the best pure delay.
 
-    On each fold the dead time and lag, and the best pure delay, are fitted on the
-    training part (:func:`~.change_windows.fit_delay_lag_and_pure`); the test part's
-    windows around its command changes are integrated from their measured first angles
-    with each timing, the speeds before and after each change fitted in the window, so
-    that no map shape enters (docs/methods.md section 13.8).
+    The reasoning is in docs/methods.md section 13.8.
 
     Parameters
     ----------
@@ -135,10 +127,6 @@ def shape_with_geometry(model: JointModel, geometry: StrokeGeometry | None, refi
                         ) -> tuple[JointModel | None, MapFit[StaticMap]]:
     """
     Refit the map under the stroke factor, then the factor under the new map, in turn.
-
-    The two share the speed's scale, so they alternate (:data:`GEOMETRY_ROUNDS`);
-    the result stands when it lowers the error of the experiments by
-    :data:`GEOMETRY_GAIN`.
 
     Parameters
     ----------

@@ -1,11 +1,7 @@
 """
 The first paper's identification as a plain baseline: eq. (5) by simplex on the output error.
 
-West et al. (2018) fit the six coefficients of eq. (5) by Nelder-Mead on the
-mean over experiments of the summed squared simulation error, with a pure
-delay and no other dynamics. Here it gets the same experiments and end stops
-as :func:`hydro_sdp.core.identification.identify.identify` (the segmentation is not what is
-compared) and the pure delay that explains the differenced angle best.
+The reasoning is in docs/methods.md section 13.7.
 
 """
 

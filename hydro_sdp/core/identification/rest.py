@@ -1,12 +1,7 @@
 """
 The rest command of a joint's records: the command at which the joint stands still.
 
-The valve's neutral is the answer whenever the data allow it: 0 for commands
-that range over both signs, or the neutral the caller gives. Only when the
-neutral is not among the held commands, or the joint moves while it is held,
-is another command chosen, and then only one at which the joint stands still.
-Motion is measured inside each record (never across the join of two records),
-and the records are pooled by sums and medians, so their order does not matter.
+The reasoning is in docs/methods.md section 13.1.
 
 """
 

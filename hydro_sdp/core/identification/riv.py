@@ -1,16 +1,7 @@
 """
 Refined instrumental variable estimation of discrete transfer functions (SRIV/RIV).
 
-``y_k = [B(z^-1) / A(z^-1)] u_{k-delay} + xi_k`` with ``A = 1 + a_1 z^-1 + .. + a_n z^-n``
-and ``B = b_0 + b_1 z^-1 + .. + b_m z^-m`` (CAPTAIN's ``[n, m + 1, delay]``). SRIV
-(Young 2011, ch. 6-8; docs/methods.md section 1) iterates: simulate the auxiliary
-model ``x = B/A u`` as instrument source, prefilter everything with ``1/A``,
-solve the IV normal equations, until the parameters stop changing. Several
-experiments are pooled without filtering across their boundaries. A known
-factor of ``A`` (the integrator ``1 - z^-1`` of a hydraulic joint) is handled by
-filtering the input with its inverse and estimating the rest (docs/methods.md section 1.4 a).
-With ``noise_order > 0`` the noise is modelled as AR and the prefilter becomes
-``C/A`` (RIV, docs/methods.md section 1.6).
+The reasoning is in docs/methods.md sections 1.4, 1.6.
 
 """
 
@@ -172,14 +163,7 @@ class _NormalEquations:
 
 def _normal_equations(problem: _IvProblem, prefilter: tuple[FloatArray, FloatArray] | None,
                       rho: FloatArray | None) -> _NormalEquations:
-    """
-    Sum the IV cross-products over the experiments, each filtered on its own.
-
-    Without ``rho`` the instruments are the regressors themselves (least squares);
-    with it, the auxiliary model ``B/A`` of ``rho`` makes them, and every signal is
-    prefiltered by ``C/A`` (``prefilter``: numerator ``C``, denominator ``A``).
-
-    """
+    """Sum the IV cross-products over the experiments, each filtered on its own."""
     n, m, delay, k0 = problem.n, problem.m, problem.delay, problem.warm_up
     size = problem.parameters
     cross = np.zeros((size, size))
@@ -238,13 +222,7 @@ def _least_squares_start(problem: _IvProblem) -> FloatArray:
 
 def _iterate(problem: _IvProblem, rho: FloatArray, noise_order: int, tol: float,
              max_iterations: int) -> tuple[FloatArray, FloatArray, int, bool]:
-    """
-    Refine ``rho`` by IV iterations until it stops changing (relative change below ``tol``).
-
-    Returns the parameters, the AR noise polynomial, the iterations done and whether
-    they converged.
-
-    """
+    """Refine ``rho`` by IV iterations until it stops changing (relative change below ``tol``)."""
     n = problem.n
     noise: FloatArray = np.ones(1)
     iterations = 0

@@ -1,14 +1,4 @@
-"""
-The online identifier's six-state Kalman step on Python floats (docs/methods.md 7.2).
-
-One step per sample on six coefficients: on six numbers each numpy call costs about a
-microsecond of overhead, many times the arithmetic it does, so the per-sample path
-writes the arithmetic out on Python floats instead. The covariance is symmetric, so
-only its upper triangle is kept, row by row (``P00 P01 .. P05 P11 .. P15 P22 .. P55``):
-21 numbers, and the downdate computes each of them once. :func:`packed`,
-:func:`unpacked` and :func:`diagonal` convert to and from numpy for callers.
-
-"""
+"""The online identifier's six-state Kalman step on Python floats (docs/methods.md 7.2)."""
 
 from __future__ import annotations
 
@@ -134,9 +124,6 @@ def times(packed_matrix: list[float], x: Six) -> tuple[Six, float]:
 def downdated(packed_matrix: list[float], gain: Six, h: Six) -> list[float]:
     """
     Return ``M - gain h'`` for a symmetric result (``gain`` a multiple of ``h``).
-
-    The Kalman downdate ``P - K (P psi)'`` with ``K = P psi / S``: the upper triangle
-    ``M[i, j] - gain[i] h[j]``, ``i <= j``, as the full outer product gives it.
 
     Parameters
     ----------

@@ -1,18 +1,4 @@
-"""
-Segmentation: records cut into the experiments that identification fits.
-
-A record is cut where the command leaves its rest value and where it returns.
-A block of one held command is a *step* experiment (West et al. 2018, Fig. 1);
-a block of changing commands (random levels, closed-loop traffic) is a *run*.
-Each experiment keeps some samples of command history before its start, so
-that the delayed input of its first samples is known (docs/methods.md section 2.3), and
-ends before the joint is clamped by an end stop: an end stop makes the joint
-stand still although the command drives it, which no static map explains.
-A step that starts at a stop (known or detected) and drives into it is
-dropped whole, "held against an end stop". What is dropped is kept with the
-reason.
-
-"""
+"""Segmentation: records cut into the experiments that identification fits (methods 2.3, 2.6)."""
 
 from __future__ import annotations
 
@@ -413,12 +399,7 @@ def _stall_or_stop(dropped: Dropped, stops: tuple[float | None, float | None]) -
 
 def _drop_stalled(experiments: Sequence[Experiment], rest: float, noise: float
                   ) -> tuple[list[Experiment], tuple[Dropped, ...]]:
-    """
-    Leave out steps that did not move where a command no larger moved the joint elsewhere.
-
-    Every map is monotone: a command that moves the joint in one run moves it at least
-    as fast in any run, unless a load holds it (a stall).
-    """
+    """Leave out steps that did not move where a command no larger moved the joint elsewhere."""
     steps = [e for e in experiments if e.kind == 'step' and e.level != rest and e.samples > 0]
     net = {id(e): float(e.y[-1] - e.y[e.start]) / e.samples for e in steps}
     fastest = max((abs(speed) for speed in net.values()), default=0.0)

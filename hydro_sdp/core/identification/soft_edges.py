@@ -1,14 +1,4 @@
-"""
-Eq. (5) and the gradient of its soft-edged form, on Python floats (docs/methods.md 7.2).
-
-The online identifier needs both once per sample. Inside the estimated dead-zone the
-exact gradient is zero, so an edge that has moved inwards could never be learned: the
-gradient is taken from a copy of the map whose ``min(u - a3, 0)`` and ``max(u - a6, 0)``
-are replaced by softplus functions of width ``kappa``. Written on floats (no numpy, the
-softplus inlined, comparisons rather than ``min``/``max`` calls) because on six numbers
-the call overheads would cost more than the arithmetic.
-
-"""
+"""Eq. (5) and the gradient of its soft-edged form, on Python floats (docs/methods.md 7.2)."""
 
 from __future__ import annotations
 

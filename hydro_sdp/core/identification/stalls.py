@@ -1,11 +1,7 @@
 """
 Stretches where a record stalls: driven beyond the dead-zone, not moving, not at a stop.
 
-A load the valve cannot lift holds the joint still under a command that moves it in
-other runs. Nothing in a joint model explains that, so scoring it against a model only
-measures how far the model runs on; such stretches are left out of the scores and
-listed (docs/methods.md section 13.10). A joint held at the far end of its travel is at
-a stop, not stalled.
+The reasoning is in docs/methods.md section 13.10.
 
 """
 
@@ -39,11 +35,6 @@ def stalled(model: JointModel, record: Record, dt: float,
             exogenous: Exogenous | None = None) -> np.ndarray:
     """
     Mark the samples of a record where the joint stalls.
-
-    Over windows of :data:`WINDOW` the model, from the record's commands, moves the joint
-    at least ten noise levels while the measured angle moves less than a fifth of that,
-    away from the model's stops and from the far end of the travel in the driven
-    direction, for at least :data:`MIN_STALL`.
 
     Parameters
     ----------

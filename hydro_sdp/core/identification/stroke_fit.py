@@ -1,16 +1,7 @@
 """
 Fitting the ``stroke_geometry`` effect: how the speed changes along the stroke.
 
-With the map, the delay and the lag fixed, each measured increment is
-``dy_k = dt w_k f(y_{k-1}, sign w_k)`` with ``w_k`` the model's speed; ``f``
-piecewise-linear over knots in the angle is linear in its knot values, so the
-shared factors and the per-direction parts are one (slightly smoothed) least
-squares problem. Knots are spread evenly over the angles the joint moved
-through, with two more near each end where the cushions act. The factor is
-identified only when the data span the stroke (the joint moved through most
-of the range between its stops, in both directions), never from samples where
-the joint sits at a stop, and kept only when it lowers the simulation error of
-held-out experiments (:mod:`.effect_check`).
+The reasoning is in docs/methods.md section 13.5.
 
 """
 
@@ -112,9 +103,6 @@ def penalised_lstsq(blocks: Sequence[FloatArray], smoothed: Sequence[bool],
     """
     Least squares over column blocks, those of knot values smoothed by a small penalty.
 
-    A block may also be drawn towards zero (a ridge), so that values the data do not
-    determine stay there instead of taking any value.
-
     Parameters
     ----------
     blocks : sequence of FloatArray
@@ -172,9 +160,6 @@ def fit_factor(angles: FloatArray, drive: FloatArray, target: FloatArray, knots:
                ) -> tuple[FloatArray, FloatArray, float]:
     """
     Fit ``target ~ drive (s(y) + sign(drive) p(y))``, both parts piecewise-linear in the angle.
-
-    The knot values are one least-squares problem, smoothed by a small penalty on their
-    second differences (:func:`penalised_lstsq`).
 
     Parameters
     ----------
@@ -309,11 +294,6 @@ def unit_mean_per_direction(knots: FloatArray, shared: FloatArray, part: FloatAr
                             ) -> tuple[FloatArray, FloatArray]:
     """
     Scale the factor of each direction to a mean of 1 over the angles it was seen at.
-
-    The map has a speed scale per direction (its two saturation speeds), so a factor's
-    mean in each direction is the map's to carry: left in the factor, a map a little off
-    in scale would be fixed by a flat "geometry" that the joint does not have. What
-    stays is the factor's shape along the stroke.
 
     Parameters
     ----------

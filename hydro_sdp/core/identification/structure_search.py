@@ -1,10 +1,7 @@
 """
 Structure identification by SRIV: every order and delay in a range, ranked (CAPTAIN ``rivid``).
 
-The criteria are those of docs/methods.md section 1.8: ``R_T^2`` (of the output,
-and of the differenced output for integrating joints) and Young's information
-criterion YIC, which chooses among the models that explain the data about as well
-as the best (section 1.9).
+The reasoning is in docs/methods.md sections 1.8, 1.9.
 
 """
 

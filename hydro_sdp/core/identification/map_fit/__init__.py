@@ -1,11 +1,4 @@
-"""
-Fitting the static map of a joint to experiments (docs/methods.md section 2).
-
-One module per map family (``sdp``: eq. (5); ``pwl``: monotone
-piecewise-linear, for valves that do not follow eq. (5); ``poly``: the second
-paper's polynomial gain) over the shared residual machinery of :mod:`.data`.
-
-"""
+"""Fitting the static map of a joint to experiments (docs/methods.md section 2)."""
 
 from hydro_sdp.core.identification.map_fit.data import (
     FIT_METHODS, FitData, FitMethod, MapFit, RateFunction)

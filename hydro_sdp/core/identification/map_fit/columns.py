@@ -1,17 +1,4 @@
-"""
-Finite-difference Jacobians of the residuals, every column in one pass.
-
-scipy's ``least_squares`` estimates the Jacobian by moving one parameter at a
-time and evaluates those points through a map-like ``workers`` callable.
-:class:`BatchedResiduals` is both the residual function and that map: handed
-the points of a Jacobian, it evaluates them all at once
-(:meth:`~.data.FitData.residuals_of_many`, a few numpy calls for all columns
-instead of a few per column, each from the point's own evaluation where the
-column leaves an experiment's rates alone), then lets scipy read each through
-the residual function. scipy forms the steps and the differences as it always
-does, and the residuals are the same bit for bit, so the fit is the same too.
-
-"""
+"""Finite-difference Jacobians of the residuals, every column in one pass (methods 2.3)."""
 
 from __future__ import annotations
 

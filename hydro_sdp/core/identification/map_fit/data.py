@@ -1,16 +1,4 @@
-"""
-Experiments arranged for fast residual evaluation, and what a fit returns.
-
-Every experiment predicts its angles from its initial state with
-``pred_k = x_{k-1} + dt w_k``, ``Z_k = y_k - pred_k`` and
-``x_k = pred_k + beta Z_k`` (docs/methods.md section 2), where ``w_k`` is
-``rate(v_{k-tau})``, passed through the first-order valve lag when there is one. The recursion is a
-first-order filter, so each residual evaluation is a few numpy and ``first_order``
-calls over all experiments at once (experiments of similar length share one
-padded 2-D array, and a short one joins the next when the padding costs less than
-the calls it saves), and the map is evaluated once per distinct command level.
-
-"""
+"""Experiments arranged for fast residual evaluation, and what a fit returns (methods 2.3)."""
 
 from __future__ import annotations
 
@@ -48,11 +36,6 @@ MERGE_CELLS = 2048
 def buckets_of(lengths: IntArray) -> list[IntArray]:
     """
     Group experiments by length into the rows of padded 2-D blocks.
-
-    Experiments of the same power of two share a block; a block joins the next
-    longer one when that pads it by at most :data:`MERGE_CELLS` cells. Rows keep
-    the order of the power-of-two blocks, so the residuals come out in the same order
-    either way (each row's numbers do not depend on the block it is in).
 
     Parameters
     ----------
@@ -190,13 +173,6 @@ class FitData:
         """
         Return the residuals of several maps, each as :meth:`residuals` gives them, bit for bit.
 
-        Maps of the same ``beta`` (the columns of a finite-difference Jacobian but the
-        one of ``beta``) run through each numpy operation together, one row of a 3-D
-        block each: the same operations on the same numbers, a few calls for all.
-        Given a ``base`` of the same ``beta``, an experiment none of whose levels
-        changed rate keeps its residuals from it (a Jacobian's column moves the rates
-        of one direction, or of one knot interval), and only the others are computed.
-
         Parameters
         ----------
         maps : sequence of (callable, float)
@@ -261,12 +237,7 @@ class FitData:
 
     def _increments(self, bucket: int, per_level: FloatArray,
                     rows: tuple[IntArray, IntArray] | None = None) -> FloatArray:
-        """
-        Return a bucket's increments, padding set to zero.
-
-        Without ``rows``, one block per row of ``per_level``; with ``(maps, rows)``,
-        one row per pair: that row of the bucket, with the rates of that row of levels.
-        """
+        """Return a bucket's increments, padding set to zero."""
         padded, padding = self._padded[bucket], self._padding[bucket]
         gain = self.gains[bucket] if self.gains else None
         # take reads the same numbers as fancy indexing, in a fraction of the time.

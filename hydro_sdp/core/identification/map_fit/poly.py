@@ -1,11 +1,4 @@
-"""
-Fitting the second paper's polynomial gain map (``poly``).
-
-The gain polynomials are fitted to the per-level speeds (the second paper's
-way) in the command from rest; given experiments, the coefficients are then
-refined on the raw angles by regret-regression (``rr``) or output error (``oe``).
-
-"""
+"""Fitting the second paper's polynomial gain map (``poly``) (methods 2.7)."""
 
 from __future__ import annotations
 

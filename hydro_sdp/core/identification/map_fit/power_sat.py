@@ -1,14 +1,4 @@
-"""
-Fitting the saturating power-law map (``power_sat``) to experiments.
-
-The parameters are bounded by what the per-level speeds show: saturation
-speeds between 0.7 and 1.5 times the fastest measured speed, each edge between
-rest and the innermost level that moves the joint, exponents 0.5..8. The start
-is the best of a few exponents fitted to the per-level speeds from the edges
-of an ``sdp`` fit; the map is then fitted to the raw angles by
-regret-regression (``rr``) or by output error (``oe``: ``beta = 0``).
-
-"""
+"""Fitting the saturating power-law map (``power_sat``) to experiments (methods 2.7)."""
 
 from __future__ import annotations
 
@@ -74,10 +64,6 @@ def power_sat_start(points: Sequence[LevelSpeed], rest: float, start: SdpMap
                     ) -> tuple[FloatArray, FloatArray, FloatArray]:
     """
     Return the starting parameters and their bounds from the per-level speeds.
-
-    The best of :data:`START_EXPONENTS`, each fitted to the points from the edges
-    of ``start``. ``identify`` refits the map under each stroke factor from the
-    same points and edges: the few last answers are kept.
 
     Parameters
     ----------

@@ -1,13 +1,4 @@
-"""
-Fitting the monotone piecewise-linear map (``pwl``) to experiments.
-
-The zero-speed plateau spans the dead-zone; beyond each edge a knot sits at
-every command level the data hold (a valve measured at a few duties is
-followed exactly there), or at :data:`QUANTILE_KNOTS` quantiles of the commands
-when there are more than :data:`MAX_KNOTS` of them; the speeds are cumulative non-negative
-increments outward from the edges, so the map stays monotone.
-
-"""
+"""Fitting the monotone piecewise-linear map (``pwl``) to experiments (methods 2.7)."""
 
 from __future__ import annotations
 

@@ -1,14 +1,4 @@
-"""
-Fitting eq. (5) of West et al. (2018), the ``sdp`` map, to experiments.
-
-Regret-regression (``rr``, the default) estimates the state-residual gain
-``beta`` with the map and so sits between the simulation (output-error) fit
-(``beta = 0``) and the one-step equation-error fit (``beta = 1``), with
-``beta`` near the Kalman gain of the joint's noise (Henderson et al. 2010;
-Clairon et al. 2017). ``oe`` is West et al.'s fit: Nelder-Mead on the mean
-simulation error.
-
-"""
+"""Fitting eq. (5) of West et al. (2018), the ``sdp`` map, to experiments (methods 2.1-2.5)."""
 
 from __future__ import annotations
 
@@ -49,10 +39,6 @@ def sdp_from_rate_vector(x: FloatArray) -> SdpMap:
 def initial_sdp(points: Sequence[LevelSpeed], rest: float) -> FloatArray:
     """
     Return starting values of ``(vn, cn, a3, vp, cp, a6)`` from per-level speeds.
-
-    The edges lie between the outermost still level and the innermost moving
-    one on each side; the saturation speeds a little beyond the fastest points;
-    then the exponential is fitted to the points themselves.
 
     Parameters
     ----------
@@ -189,10 +175,6 @@ def fit_sdp(data: FitData, points: Sequence[LevelSpeed], rest: float, *,
             polish: FitData | None = None) -> MapFit[SdpMap]:
     """
     Fit eq. (5) of West et al. by regret-regression or by output error.
-
-    Regret-regression is solved by Levenberg-Marquardt (MINPACK) on logs of the
-    positive quantities and a logit of ``beta``, which keeps the signs, the
-    ordering ``a3 <= rest <= a6`` and ``0 < beta < 1`` without bounds.
 
     Parameters
     ----------

@@ -1,12 +1,7 @@
 """
 Telling routine operation from experiments: how much of the driving is done by held levels.
 
-The experiments route of ``identify`` measures the speed of every command
-level held after the delay has passed (West et al. 2018, Figs. 2 and 3). A
-machine at work is driven otherwise: a closed loop or an operator's joystick
-changes the command every control period, and few levels, if any, are held
-long enough to show their speed. Such records go the routine route
-(:mod:`hydro_sdp.core.identification.routine`).
+The reasoning is in docs/methods.md section 15.1.
 
 """
 

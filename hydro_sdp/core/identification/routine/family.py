@@ -1,21 +1,4 @@
-"""
-Choosing the map family of routine operation on held-out stretches of it.
-
-The runs are cut into pieces of :data:`PIECE_SECONDS`, dealt out to
-:data:`FOLDS` folds in turn, so that every fold trains on stretches from the
-whole recording (a closed loop visits its large commands only during its few
-large moves; a fold of one contiguous block would hold them out). Each family
-is fitted to the increments of the training pieces and scored, as for
-experiments, by the simulation error of the held-out pieces, each simulated
-from its measured angle: an error of the map accumulates there, where in
-one-step increments it hides under the noise. A held-out piece whose commands
-reach beyond those its fold trained on is not scored: no fold extrapolates.
-
-The family is chosen by the one rule of :mod:`~hydro_sdp.core.identification.held_out`,
-as for experiments: a short session holds few independent stretches, and the spread
-of the per-fold differences widens the tie band that keeps the simpler family.
-
-"""
+"""Choosing the map family of routine operation on held-out stretches of it (methods 15.6)."""
 
 from __future__ import annotations
 

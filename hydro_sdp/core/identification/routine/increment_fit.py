@@ -1,18 +1,4 @@
-"""
-The map families fitted to the one-step increments of routine operation.
-
-Each family's ``rate`` is fitted by least squares to ``dy_k = dt rate(v_{k-tau}) +
-e_k``: the equation error of an integrating joint, the regret-regression
-residual with ``beta = 1`` (docs/methods.md section 15). Under feedback it is
-the consistent choice: the command ``v_{k-tau}`` depends on angles measured up
-to ``k - tau``, while ``e_k`` holds the noise of ``y_k`` and ``y_{k-1}`` only,
-so for a delay of two samples or more they are uncorrelated, where a simulation
-or a regret-regression residual with ``0 < beta < 1`` carries older noise that
-the loop has fed back into the commands. The starting values come from the
-speeds the SDP smoother measured along the command
-(:mod:`hydro_sdp.core.identification.routine.speed_curve`).
-
-"""
+"""The map families fitted to the one-step increments of routine operation (methods 15.5)."""
 
 from __future__ import annotations
 
@@ -34,14 +20,7 @@ from scipy.optimize import least_squares
 
 
 class _Residuals:
-    """
-    ``dy_k - dt rate(v_{k-tau})`` summed per distinct command.
-
-    The squared residual splits into the spread of the increments about their mean
-    at each command, which no map changes, and ``n_l (mean_l - dt rate(v_l))^2``
-    per command ``v_l`` held ``n_l`` times: the least squares are solved on the
-    distinct commands, the same answer on a fraction of the rows.
-    """
+    """``dy_k - dt rate(v_{k-tau})`` summed per distinct command."""
 
     def __init__(self, data: Increments, dt: float) -> None:
         self.levels, inverse, counts = np.unique(data.command, return_inverse=True,

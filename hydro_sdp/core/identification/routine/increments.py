@@ -1,15 +1,7 @@
 """
 One-step increments against the delayed command, and the delay that pairs them best.
 
-In routine operation the command changes every control period, so no level is
-held long enough to measure its speed; but every sample still pairs an angle
-increment ``dy_k = y_k - y_{k-1}`` with the command that drove it, ``v_{k-tau}``
-(an integrating joint, docs/methods.md section 15). The delay is the ``tau``
-at which the delayed command explains the increments best: the correlation
-ratio of increments and delayed commands with a monotone conditional mean
-(every valve's speed rises with its opening), the cross-correlation of the two
-for a map that need not be linear. The linear cross-correlation is kept as a
-cross-check.
+The reasoning is in docs/methods.md section 15.3.
 
 """
 
@@ -88,10 +80,6 @@ def increments_of(experiments: Sequence[Experiment], delay: int, *,
 def monotone_share(increment: FloatArray, command: FloatArray) -> float:
     """
     Share of the increments' variance explained by the best monotone function of the command.
-
-    The correlation ratio with the conditional mean constrained to rise with the
-    command, as every valve's speed does (isotonic regression, pool-adjacent-violators):
-    no bins to choose and no map family assumed.
 
     Parameters
     ----------

@@ -1,15 +1,7 @@
 """
 Identifying a joint from routine operation: the route ``identify`` takes for such records.
 
-The runs of the segmentation (cut at rest and where an end stop clamps the
-joint) give increments and delayed commands; the delay is the one whose
-delayed command explains the increments best
-(:mod:`.increments`); the SDP smoother measures the speed along the command and
-the data are refused, naming what was never seen, when they cannot place a
-dead-zone edge (:mod:`.speed_curve`); each map family is fitted to the
-increments (:mod:`.increment_fit`) and, with ``kind='auto'``, the family is
-chosen on held-out pieces (:mod:`.family`). Routine records do not show a valve
-lag or the speed along the stroke apart from the map: the model has neither.
+The reasoning is in docs/methods.md section 15.
 
 """
 

@@ -1,16 +1,7 @@
 """
 The speed along the delayed command, without a map family, and what it was never shown.
 
-The non-parametric stage of the SDP method (docs/methods.md section 14) on the
-increments of routine operation: ``dy_k = b(v_{k-tau}) (v_{k-tau} - rest) + e_k``,
-the gain ``b`` one random walk along the delayed command on each side of rest,
-smoothed by the fixed-interval smoother with its NVR by maximum likelihood.
-Its speed ``b (v - rest) / dt`` at every distinct command, with standard
-errors, plays the part of the per-level speeds of step experiments: the
-starting values of the map fits, the points of the velocity-map figure and the
-evidence of what the data show. Where the joint never moved one way, the data
-cannot place that side's dead-zone edge; the message names the commands never
-seen.
+The reasoning is in docs/methods.md section 15.4.
 
 """
 

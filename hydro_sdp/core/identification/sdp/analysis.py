@@ -1,25 +1,7 @@
 """
 The SDP analysis of a joint: how its parameters depend on the candidate states.
 
-Without a model, the SDP-ARX model of the first paper's step 2,
-
-    y_k = -a1{angle} y_{k-1} + b+{chi} u+_{k-tau} + b-{chi} u-_{k-tau} + e_k,
-
-with ``u = v - rest`` split by its sign (``u+ = max(u, 0)``, ``u- = min(u, 0)``):
-each gain per direction of motion, the delay ``tau`` from the data (the dead
-time of :func:`~hydro_sdp.core.identification.delay.estimate_delay` plus the
-lag's time constant); the angles are taken from their mean, so that where the
-sensor's zero lies changes nothing. With a model, what it misses:
-
-    dy_k = g+{chi} dy^+_k + g-{chi} dy^-_k + e_k   (``ratio``, where the model moves),
-    dy_k - dy^_k = c{chi} + e_k                    (``residual``, every sample),
-
-``dy^`` the model's one-step increments (docs/methods.md section 8.1): the
-ratio of the measured to the modelled increment per direction, and the
-increment residual. Each target's gains are weighed in two stages: every
-state alone, then every other state by what it adds to the one that explains
-most alone (docs/methods.md section 14.6). Increments the joint cannot make,
-held at an end stop or stalled, are left out (:meth:`.states.Rows.free`).
+The reasoning is in docs/methods.md sections 8.1, 14.6.
 
 """
 
@@ -56,15 +38,7 @@ TIED = 0.02
 
 
 def rest_of(records: Sequence[Record]) -> float:
-    """
-    Return the valve's rest command: 0 when the commands take both signs, else from the data.
-
-    A command's sign is its direction on a valve centred at 0 (the papers' +-10 V), however
-    briefly the records rest there; otherwise the still command held longest
-    (:func:`~hydro_sdp.core.identification.rest.estimate_rest_command`: a 0..100 % duty
-    resting at 50), away from the ends of the travel (a duty held against a stop is still
-    too).
-    """
+    """Return the valve's rest command: 0 when the commands take both signs, else from the data."""
     low = min(float(np.min(r.v)) for r in records)
     high = max(float(np.max(r.v)) for r in records)
     if low < 0.0 < high:
@@ -82,14 +56,7 @@ def rest_of(records: Sequence[Record]) -> float:
 
 def data_delay(records: Sequence[Record], dt: float, max_delay: float,
                rest: float) -> int:
-    """
-    Return the delay of model (2) found in the records, samples.
-
-    The dead time of :func:`~hydro_sdp.core.identification.delay.estimate_delay`
-    on the records' experiments plus the valve lag's time constant (the pure delay
-    that matches a lag's mean); records that never rest (no experiments) get the
-    delay whose split gains explain the increments best.
-    """
+    """Return the delay of model (2) found in the records, samples."""
     longest = max(2, int(round(max_delay / dt)))
     try:
         segmentation = segment_records(records, max_delay=longest, rest=rest)
@@ -146,19 +113,7 @@ class _Setting:
 
 
 class _Target:
-    """
-    One model of the analysis: its observations, its fixed terms and its gains.
-
-    Parameters
-    ----------
-    z : FloatArray
-        Observations.
-    fixed : list of Term
-        Terms along states of their own (``a1`` along the angle).
-    gains : list of tuple[str, FloatArray]
-        Name and regressor of each gain that follows the candidate states.
-
-    """
+    """One model of the analysis: its observations, its fixed terms and its gains."""
 
     def __init__(self, z: FloatArray, fixed: list[Term],
                  gains: list[tuple[str, FloatArray]]) -> None:
@@ -174,13 +129,7 @@ class _Target:
 
     def given(self, first: FloatArray, state: FloatArray, setting: _Setting,
               seed: int, alone: Backfit) -> Backfit:
-        """
-        Back-fit the gains along ``first`` plus what they add along ``state``.
-
-        From ``alone``, the fit along ``first``: its fixed terms and gains converged, the
-        added ones from zero (from the base, back-fitting would first have to undo what a
-        fixed term like ``a1`` took of the gains' shape).
-        """
+        """Back-fit the gains along ``first`` plus what they add along ``state``."""
         terms = self.fixed + [Term(name, x, first, setting.kind, test=False)
                               for name, x in self.gains]
         start: list[FloatArray | None] = [estimate.parameter for estimate in alone.terms]
@@ -208,18 +157,7 @@ def _entries(fit: Backfit, state: str, parameter: str, names: list[str],
 def _two_stages(target: _Target, rows: Rows, names: Sequence[str], parameter: str,
                 setting: _Setting, progress: Callable[[str], None] | None,
                 fits: dict[str, Backfit], prefix: str) -> list[StateDependence]:
-    """
-    Weigh the gains against every state: the best state alone, the others given it.
-
-    Each state is first fitted alone; the one whose gains remove most of the
-    held-out squared residual comes first (among those within :data:`TIED` of it, the
-    first named), with its own share and test; every
-    other state is weighed by what it adds to it (the same gains along both,
-    back-fitted together), so a state merely correlated with the first in the
-    data does not take its place. With a ``screen``, a state whose gains remove
-    less than that share alone keeps its alone fit, untested (it adds no more given
-    the first).
-    """
+    """Weigh the gains against every state: the best state alone, the others given it."""
     gain_names = [name for name, _ in target.gains]
 
     def step(name: str) -> None:

@@ -1,16 +1,7 @@
 """
 Back-fitting several state-dependent parameters, ``z_k = sum_i x_ik p_i(chi_ik) + e_k``.
 
-Young, McKenna and Bruun (2001) and CAPTAIN's ``sdp``: start from the
-constant-parameter least-squares fit; then, term after term, smooth the
-term's parameter along its own state against the partial residual (``z``
-less the other terms), its NVR re-estimated in the first passes and held
-after; repeat until the squared residual stops changing. Each term is then
-weighed, the others as fitted: its share of the base model's squared residual
-(the reduction from holding it constant to letting it follow its state, on
-held-out data: :mod:`hydro_sdp.core.identification.sdp.shares`), and the
-bootstrap p-value of its dependence
-(:mod:`hydro_sdp.core.identification.sdp.significance`).
+The reasoning is in docs/methods.md section 14.4.
 
 """
 
@@ -199,9 +190,6 @@ def base_fit(z: FloatArray, regressors: FloatArray) -> tuple[FloatArray, FloatAr
     """
     Least-squares constant parameters of ``z = X p + e``.
 
-    By the normal equations of the columns scaled to unit norm (a handful of columns,
-    no BLAS: see :func:`~hydro_sdp.core.identification.sdp.random_walk.inner`).
-
     Returns
     -------
     tuple
@@ -321,10 +309,6 @@ def with_tests(fit: Backfit, z: FloatArray, names: Sequence[str], *, replicates:
                runs: IntArray | None = None) -> Backfit:
     """
     Return a back-fit with the terms ``names`` tested, as if fitted with ``test=True``.
-
-    The back-fit does not depend on the tests (they only weigh the converged
-    terms), so the terms named are weighed again, with the seeds :func:`backfit`
-    gives them, and nothing is fitted twice.
 
     Parameters
     ----------

@@ -1,26 +1,7 @@
 """
 The fixed-interval smoother of a random-walk parameter as a banded least-squares problem.
 
-The smoothed estimate of the walk (:mod:`hydro_sdp.core.identification.sdp.random_walk`)
-minimises the quadratic
-
-    S(p) = sum_k (z_k - x_k p_{g(k)})^2 + (1/nvr) |D p|^2 [+ prior terms],
-
-whose normal equations ``A p = X'z`` with ``A = W + D'D / nvr`` (``W`` the
-per-group weights) are banded: bandwidth 1 for ``rw``, 2 for ``irw``. A banded
-Cholesky factor solves them in ``O(M)`` and gives ``log det A`` from its
-diagonal; the smoothed variances ``diag(A^{-1})`` come from the factor by the
-selected-inversion recursion of Takahashi et al. (1973), also ``O(M)``. The
-concentrated likelihood of the walk with its first ``d`` states diffuse is
-
-    -2 log L = (n - d) (log(2 pi sigma^2) + 1) + log det A + (M - d) log nvr,
-    sigma^2 = S(p^) / (n - d),
-
-the prediction-error decomposition of the Kalman filter with a diffuse start
-(Harvey 1989; de Jong 1991) computed without the filter. With a proper initial
-state ``N(0, prior sigma^2 I)`` (``prior`` given), ``A`` and ``S`` carry its
-precision, ``n`` replaces ``n - d`` and ``d log prior`` is added: the filter's
-likelihood exactly (docs/methods.md section 14).
+The reasoning is in docs/methods.md section 14.2.
 
 """
 
@@ -83,10 +64,6 @@ class BandedFit:
 def banded_factor(bands: FloatArray) -> FloatArray:
     """
     Return the lower banded Cholesky factor of ``bands`` (lower banded storage).
-
-    LAPACK's ``dpbtrf`` called directly: the numbers of ``scipy.linalg.cholesky_banded``
-    without its checks and dispatch, which cost more than the factorisation of these
-    short bands.
 
     Raises
     ------
@@ -263,10 +240,6 @@ def fit_flat(stats: GroupStats, kind: str) -> FlatFit:
     """
     Fit the walk at zero NVR: weighted least squares on its null space.
 
-    As the NVR goes to 0, ``log det A + (M - d) log nvr`` tends to
-    ``log det(N'WN)`` (the pseudo-determinant of ``D'D`` equals ``det(N'N)``
-    for these bases), so the likelihood stays comparable with :func:`fit_banded`.
-
     Parameters
     ----------
     stats : GroupStats
@@ -306,10 +279,6 @@ def fit_flat(stats: GroupStats, kind: str) -> FlatFit:
 def selected_inverse_diagonal(factor: FloatArray) -> FloatArray:
     """
     Return ``diag(A^{-1})`` from the lower banded Cholesky factor of ``A``.
-
-    Takahashi's recursion: with ``A = L L'``, ``(A^{-1} L)_{ij} = delta_ij / L_jj``
-    for ``i >= j``, so column ``j`` of ``A^{-1}`` within the band follows from
-    the columns after it, from the last column back (bandwidth 1 or 2).
 
     Parameters
     ----------

@@ -1,4 +1,4 @@
-"""What the SDP analysis of a joint finds: each parameter against each state."""
+"""What the SDP analysis of a joint finds: each parameter against each state (methods 14.6)."""
 
 from __future__ import annotations
 
@@ -80,11 +80,7 @@ class StateDependence:
                    term.constant, int(term.ordering.samples.size))
 
     def grid(self, points: int = GRID_POINTS) -> tuple[FloatArray, FloatArray, FloatArray]:
-        """
-        Return ``(state, estimate, se)`` at up to ``points`` groups evenly spread in rank.
-
-        Every point is a group with data, so nothing is interpolated.
-        """
+        """Return ``(state, estimate, se)`` at up to ``points`` groups evenly spread in rank."""
         size = self.values.size
         index = np.arange(size) if size <= points else np.unique(
             np.round(np.linspace(0, size - 1, points)).astype(int))

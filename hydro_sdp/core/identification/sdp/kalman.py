@@ -1,26 +1,7 @@
 """
 The recursive Kalman filter and fixed-interval smoother of a random-walk parameter.
 
-Young's TVP estimation (Young 2011, ch. 4; CAPTAIN's ``dlr``) in its recursive
-form: a forward Kalman filter over the observations sorted by group, the
-walk's transition applied between one group and the next (observations of one
-group share one parameter value), and a backward fixed-interval smoother
-(the Rauch-Tung-Striebel form). Covariances are kept normalised by the noise
-variance, ``P* = P / sigma^2``, so the filter depends on the NVR alone and
-``sigma^2`` is concentrated out of the likelihood (prediction-error
-decomposition, Harvey 1989 sec. 3.4):
-
-    -2 log L = sum_k log f_k + n log(2 pi sigma^2) + n,
-    sigma^2 = (1/n) sum_k eps_k^2 / f_k,
-
-with ``eps_k`` the innovations and ``f_k = 1 + x_k^2 P*_{k|k-1}`` their
-normalised variances. The initial state is ``N(0, prior sigma^2 I)``, as
-CAPTAIN's ``P0`` (default ``1e5``).
-
-This is the reference implementation: a Python loop per observation, right for
-checking and for short records. The banded solution
-(:mod:`hydro_sdp.core.identification.sdp.banded`) gives the same estimates and
-likelihood in linear time.
+The reasoning is in docs/methods.md section 14.1.
 
 """
 

@@ -1,18 +1,4 @@
-"""
-The NVR of a random-walk parameter by maximum likelihood.
-
-The concentrated likelihood of :func:`~hydro_sdp.core.identification.sdp.banded.fit_banded`
-(the prediction-error decomposition, computed from the banded factor) is
-maximised over ``log10 nvr`` on a range relative to the information of one
-group (``1 / mean weight``): a coarse scan, then Brent's method around the
-best point. Zero NVR (no dependence: a constant, or for ``irw`` a line in the
-rank) is a candidate of its own, compared through the limit of the same
-likelihood (:func:`~hydro_sdp.core.identification.sdp.banded.fit_flat`), and wins
-unless the walk is more likely by a margin (:data:`TIE`). The
-estimate's uncertainty is the curvature of ``-2 log L`` in ``ln nvr``
-(``se = sqrt(2 / curvature)``), as CAPTAIN's ``dlropt`` returns it.
-
-"""
+"""The NVR of a random-walk parameter by maximum likelihood (methods 14.3)."""
 
 from __future__ import annotations
 

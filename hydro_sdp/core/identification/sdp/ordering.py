@@ -1,17 +1,7 @@
 """
 Re-ordering the samples by a state: the groups a state-dependent parameter is estimated over.
 
-Young's step that turns a time-variable parameter into a state-dependent one:
-sort the samples by the state and let the parameter walk along the sorted
-order (Young, McKenna and Bruun 2001). Here the walk steps from one *distinct*
-state value to the next: samples with equal values (a held command, an angle
-at the sensor's resolution) share one parameter value, so the estimate is a
-function of the state and ties are not ordered arbitrarily. Only samples whose
-regressor is not zero inform the parameter; the others are left out of the
-ordering. Beyond ``max_groups`` distinct values, neighbouring values are pooled
-into about ``max_groups`` groups of equal sample count (a group never splits a
-tie), which bounds the size of the smoothing problem and keeps its banded
-equations well conditioned; the group's state value is its samples' mean.
+The reasoning is in docs/methods.md section 14.1.
 
 """
 

@@ -1,25 +1,7 @@
 """
 Random-walk models of a parameter along an ordering, and the statistics a fit needs.
 
-A state-dependent parameter ``p_j`` is estimated along the distinct values of a
-state, sorted (Young, McKenna and Bruun 2001): ``j = 0..M-1`` is the rank of the
-value, and ``p`` moves from one value to the next as
-
-* a random walk (``rw``): ``p_{j+1} = p_j + eta_j``, or
-* an integrated random walk (``irw``): ``p_{j+1} = p_j + s_j``,
-  ``s_{j+1} = s_j + eta_j``, so ``p_{j+2} - 2 p_{j+1} + p_j = eta_{j+1}``,
-
-with ``eta ~ N(0, nvr sigma^2)``: the noise variance ratio (NVR) scales the
-variance of the walk's steps by that of the observation noise ``sigma^2``.
-Either walk is the prior ``D p ~ N(0, nvr sigma^2 I)`` with ``D`` the
-difference operator of order ``d`` (1 or 2) and its first ``d`` states
-diffuse; :data:`STENCILS` holds ``D``'s rows.
-
-Every observation ``z_k = x_k p_{g(k)} + e_k`` of a group ``g(k)`` (samples with
-the same state value) enters a fit only through the sums :class:`GroupStats`,
-formed about a reference value of the parameter (its constant least-squares fit):
-sums of ``z`` itself would cancel in the squared residual when ``z`` is large
-against its noise (docs/methods.md section 14.2).
+The reasoning is in docs/methods.md section 14.2.
 
 """
 
@@ -40,12 +22,7 @@ STENCILS: dict[str, tuple[float, ...]] = {'rw': (-1.0, 1.0), 'irw': (1.0, -2.0, 
 
 
 def inner(a: FloatArray, b: FloatArray) -> float:
-    """
-    Return ``sum(a * b)`` without BLAS.
-
-    The vectors here are short and the products many: a threaded BLAS ``dot`` on a busy
-    machine waits far longer for its threads than it computes.
-    """
+    """Return ``sum(a * b)`` without BLAS."""
     return float(np.sum(np.multiply(a, b)))
 
 
@@ -98,9 +75,6 @@ def difference(values: FloatArray, kind: str) -> FloatArray:
 class GroupStats:
     """
     Sufficient statistics of the observations ``z_k = x_k p_{g(k)} + e_k``, per group.
-
-    The sums are of ``r_k = z_k - x_k reference``: the parameter's offset from the
-    reference is what a fit estimates.
 
     Parameters
     ----------

@@ -1,20 +1,7 @@
 """
 How much of the squared residual a state dependence removes on data it was not fitted to.
 
-A state with many distinct values can index the samples almost one by one:
-steps that each travel their own stretch of the stroke make the angle a
-label of the step, and a parameter along the angle then fits each step's own
-transient. In-sample, that looks like a strong dependence; on held-out data it
-predicts nothing. The share reported for a dependence is therefore held out:
-the term's samples are cut into contiguous stretches in time
-(:func:`~hydro_sdp.core.identification.held_out.stretch_folds`: each record whole, or cut
-into tenths of the data when it is longer), each
-stretch is held out in turn, the parameter smoothed along the state (its NVR
-fixed) on the others predicts it at its state values (groups without training
-data are filled by the walk), and so does the parameter held constant. The
-reduction is the held-out squared residual of the constant less that of the
-smoothed parameter (negative: the dependence predicts worse than a constant).
-Whole records make the answer independent of the order the records come in.
+The reasoning is in docs/methods.md section 14.5.
 
 """
 

@@ -1,20 +1,7 @@
 """
 Whether a parameter's dependence on a state is significant, with autocorrelated residuals.
 
-The statistic is the likelihood ratio of the dependence, ``LR = -2 log L(0) -
-min_nvr -2 log L(nvr)``, the NVR over a scan of walks that take at most
-:data:`SMOOTH_SHARE` of the groups' degrees of freedom: a dependence is a curve,
-and a walk that follows every group fits the error a run makes on its own (a
-held command is one group) as well as any curve. Its null distribution comes from
-a wild bootstrap in blocks (Shao 2010): the residuals of the model with the
-parameter held constant, in time order, are cut into blocks of the length
-:func:`automatic_block` gives them, only where a run of one held command ends (a
-run's own error stays whole), each block's level given back what the constant's
-fit took of it (:func:`_restored`), and each block's sign flipped at random; the
-flipped residuals are scored by the same scan. Blocks keep the residuals'
-autocorrelation and their size where they occur; the signs break any link with
-the state. The replicates are extended where their count leaves the decision
-open (:func:`_undecided`). docs/methods.md section 14.5 has the measurements.
+The reasoning is in docs/methods.md section 14.5.
 
 """
 
@@ -57,13 +44,7 @@ def automatic_block(series: FloatArray) -> int:
     """
     Return the block length of the dependence test: Politis and White's rule, samples.
 
-    The MSE-optimal length of the circular block bootstrap (Politis and White 2004,
-    corrected by Patton, Politis and White 2009), whose variance estimator is the one
-    of blocks of random sign with a random offset: a Bartlett window. From the flat-top
-    lag-window estimates of the residuals' spectral density at zero and its first
-    moment, over the lags up to twice the last one whose autocorrelation stands out
-    (Politis 2003: ``2 sqrt(log10 n / n)``, five lags in a row below it); at most
-    ``n / MIN_BLOCKS`` (docs/methods.md section 14.5).
+    The reasoning is in docs/methods.md section 14.5.
 
     Parameters
     ----------
@@ -107,9 +88,6 @@ def block_length(series: FloatArray) -> int:
     """
     Return the block length for a residual series, samples.
 
-    Twice the first lag at which the autocorrelation falls below :data:`ACF_CUT`,
-    at least ``n^(1/3)`` (the usual rate of block bootstraps), at most ``n / 20``.
-
     Parameters
     ----------
     series : FloatArray
@@ -137,13 +115,7 @@ def block_length(series: FloatArray) -> int:
 
 
 def smooth_limit(weight: float, groups: int, kind: str) -> float:
-    """
-    Return the largest NVR the test scans: a walk of :data:`SMOOTH_SHARE` of the groups' dof.
-
-    The equivalent degrees of freedom of the walk with every group's weight ``weight``,
-    ``sum_k 1 / (1 + lambda_k / (nvr weight))`` over the eigenvalues ``lambda_k`` of
-    ``D'D`` (``(2 sin(pi k / 2 M))^(2 d)``), at most ``SMOOTH_SHARE M`` (at least 2).
-    """
+    """Return the largest NVR the test scans: a walk of :data:`SMOOTH_SHARE` of the groups' dof."""
     d = order_of(kind)
     eigen = (2.0 * np.sin(np.pi * np.arange(groups) / (2.0 * groups))) ** (2 * d)
     target = max(2.0, SMOOTH_SHARE * groups)
@@ -158,10 +130,6 @@ def smooth_limit(weight: float, groups: int, kind: str) -> float:
 class LikelihoodRatio:
     """
     The likelihood ratio of a walk against a flat parameter, for many series at once.
-
-    The walk's factor at each NVR of the scan is computed once; each series (a
-    column of per-group moments with its sum of squares) is then scored at all
-    of them.
 
     Parameters
     ----------
@@ -336,13 +304,7 @@ def dependence_test(residual: FloatArray, x: FloatArray, state: FloatArray,
 
 
 def _undecided(statistic: float, draws: FloatArray, alpha: float) -> bool:
-    """
-    Whether more replicates could bring a p-value above ``alpha`` to it.
-
-    The p-value ``(1 + k) / (1 + B)`` is above ``alpha`` while the 99 % Clopper-Pearson
-    interval of the chance that a replicate reaches the statistic still reaches below
-    ``alpha`` (a p-value at or below ``alpha`` is already the test's exact answer).
-    """
+    """Whether more replicates could bring a p-value above ``alpha`` to it."""
     count = draws.size
     exceed = int(np.count_nonzero(draws >= statistic))
     if (1.0 + exceed) / (1.0 + count) <= alpha:
@@ -369,9 +331,7 @@ def _restored(e: FloatArray, x: FloatArray, starts: IntArray) -> FloatArray:
     """
     Return the null's residuals with each block's own level scaled by ``1 / sqrt(1 - h)``.
 
-    The constant fitted under the null took a share ``h`` (its leverage: the block's
-    ``sum x^2`` over all) of each block's level out of the residuals; flipped, the levels
-    would scatter less than the errors' do (docs/methods.md section 14.5).
+    The reasoning is in docs/methods.md section 14.5.
     """
     block = np.repeat(np.arange(starts.size), np.diff(np.r_[starts, e.size]))
     weight = np.bincount(block, weights=x * x, minlength=starts.size)

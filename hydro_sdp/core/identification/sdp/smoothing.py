@@ -1,11 +1,7 @@
 """
 One state-dependent parameter smoothed along its ordering, its NVR estimated or given.
 
-The step every back-fitting pass repeats for each term (CAPTAIN's ``sdp``
-calls ``dlropt`` then ``dlr``): sum the term's observations per group of its
-state, estimate the NVR by maximum likelihood (or take the one given), and
-smooth. A parameter with no more distinct state values than the walk's order
-is taken as constant.
+The reasoning is in docs/methods.md section 14.3.
 
 """
 

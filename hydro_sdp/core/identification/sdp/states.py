@@ -1,30 +1,7 @@
 """
 The samples of a joint's records as rows of the SDP analysis, and the candidate states.
 
-One row per angle increment ``y_k - y_{k-1}`` whose delayed command
-``v_{k-tau}`` lies inside its record. The candidate states a parameter may
-depend on, by name:
-
-* ``command``: the delayed command ``v_{k-tau}`` (input units);
-* ``angle``: the angle ``y_{k-2}`` one sample before the increment starts
-  (deg; not ``y_{k-1}``, whose sensor noise is in the increment too); the
-  analysis splits every gain by the direction of motion, so each direction
-  gets its own curve along the angle;
-* ``since_change``: time from the last change of the delayed command to
-  ``t_k`` (s; from the record's start before its first change);
-* ``others_speed``: the other joints' absolute speeds summed (deg/s, the
-  trailing mean of :func:`~hydro_sdp.core.model.exogenous_signals.smoothed_speeds`),
-  from the JointState's other joints;
-* ``load``: the measured load in force over the increment (its own units);
-* ``reversals``: the travel since the motion last reversed (deg) before the
-  increment: the model's travel since its motion reversed when a model is given
-  (what backlash hides from the sensor after each reversal), else the measured
-  travel since the drive last changed sign.
-
-Rows where the joint cannot move are marked (:attr:`Rows.hold`) and left out
-by :meth:`Rows.free`: held at an end stop while the command drives it into it,
-and stalled (held after moving under a command that still drives it, away from
-the stops), found by :mod:`hydro_sdp.core.identification.end_stops`.
+The reasoning is in docs/methods.md section 14.6.
 
 """
 
@@ -324,14 +301,6 @@ def holds_of(record: Record, delay: int, rest: float, model: JointModel | None,
     """
     Mark the increments of a record the joint cannot make although it is driven.
 
-    Code 1 (:data:`HOLDS`) where the angle before the increment sits at an end stop
-    and the delayed command drives into it
-    (:func:`~hydro_sdp.core.identification.effect_check.at_stop`; the model's
-    ``angle_limits``, else the stops the joint is found held at by
-    :func:`~hydro_sdp.core.identification.end_stops.clamp_start`), code 3 where it
-    sits there undriven (the noisy angle beyond the stop, clipped by a model, would
-    read as motion); code 2 where it is stalled away from the stops (:func:`stalled`).
-
     Parameters
     ----------
     record : Record
@@ -384,12 +353,6 @@ def holds_of(record: Record, delay: int, rest: float, model: JointModel | None,
 def stalled(y: FloatArray, v: FloatArray, delay: int, noise: float, window: int) -> np.ndarray:
     """
     Mark the samples where the joint is held after moving under the same delayed command.
-
-    The joint's net speed over the ``window`` after the sample is below
-    :data:`~hydro_sdp.core.identification.end_stops.HELD_FRACTION` of the fastest it moved
-    under that command (counted from two windows after the command came through: the
-    last command's motion, through a valve lag, is not this one's), which must stand out
-    of the noise as :func:`~hydro_sdp.core.identification.end_stops.clamp_start` requires.
 
     Parameters
     ----------
