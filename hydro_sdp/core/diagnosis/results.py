@@ -1,4 +1,8 @@
-"""What the discrepancy workflow returns: candidates, the gap ledger and the evidence."""
+"""
+What the discrepancy workflow returns: candidates, the gap ledger and the evidence.
+
+See methods 8.4.
+"""
 
 from __future__ import annotations
 

@@ -1,4 +1,8 @@
-"""Detectors of timing: a wrong pure delay, different delays for the two directions."""
+"""
+Detectors of timing: a wrong pure delay, different delays for the two directions.
+
+See methods 8.2.
+"""
 
 from __future__ import annotations
 
