@@ -111,10 +111,8 @@ class PipIdzController:
         y : float
             Measured angle ``y_k``, degrees.
         feedforward : float or None
-            Set-point increment ``w_k`` the plant should make, degrees per
-            control sample, taken ``tau`` control samples ahead (module
-            docstring); ``None``: the plain PIP law (the increments of ``d``
-            are then not used).
+            Set-point increment ``w_k``, degrees per control sample, ``tau`` samples
+            ahead (methods 4.9); ``None``: the plain PIP law.
 
         Returns
         -------
