@@ -1,5 +1,1 @@
-"""
-Control: from a joint model to a controller that holds the joint.
-
-See methods 4-6.
-"""
+"""Control: from a joint model to a controller that holds the joint (methods 4-6)."""

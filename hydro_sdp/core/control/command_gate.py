@@ -1,8 +1,4 @@
-"""
-Which valve commands a valve takes: from one source, within its range and rate, while fresh.
-
-See methods 4.11.
-"""
+"""Which valve commands a valve takes: one source, in range and rate, fresh (methods 4.11)."""
 
 from __future__ import annotations
 

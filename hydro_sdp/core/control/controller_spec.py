@@ -1,8 +1,4 @@
-"""
-Controller specifications: PIP-IDZ design from a joint model, and the controller file.
-
-See methods 4.3-4.5.
-"""
+"""Controller specifications: PIP-IDZ design from a joint model (methods 4.3-4.5)."""
 
 from __future__ import annotations
 

@@ -1,8 +1,4 @@
-"""
-The plant a PIP-IDZ design sees: the integrator with the model's dead time and valve lag.
-
-See methods 4.1.
-"""
+"""The plant a PIP-IDZ design sees: the integrator, dead time and valve lag (methods 4.1)."""
 
 from __future__ import annotations
 

@@ -1,8 +1,4 @@
-"""
-The inverse dead-zone (IDZ) of a joint model, as chords or as the map's own table.
-
-See methods 5.4, 5.6.
-"""
+"""The inverse dead-zone (IDZ) of a joint model: chords or the map's table (methods 5.4, 5.6)."""
 
 from __future__ import annotations
 

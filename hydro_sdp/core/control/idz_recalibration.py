@@ -1,8 +1,4 @@
-"""
-When the online estimate calls for a new inverse dead-zone (IDZ), and which edges.
-
-See methods 7.5.
-"""
+"""When the online estimate calls for a new IDZ, and which edges (methods 7.5)."""
 
 from __future__ import annotations
 

@@ -1,8 +1,4 @@
-"""
-The identified map's own inverse as the inverse dead-zone (IDZ): a monotone table.
-
-See methods 5.4-5.5.
-"""
+"""The identified map's own inverse as the IDZ: a monotone table (methods 5.4-5.5)."""
 
 from __future__ import annotations
 

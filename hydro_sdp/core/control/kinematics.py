@@ -1,8 +1,4 @@
-"""
-Planar two-link kinematics of a boom and a dipper, and straight bucket-tip lines.
-
-See methods 4.10.
-"""
+"""Planar two-link kinematics of a boom and a dipper, and straight tip lines (methods 4.10)."""
 
 from __future__ import annotations
 

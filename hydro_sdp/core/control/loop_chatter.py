@@ -1,8 +1,4 @@
-"""
-How much the valve works while a joint holds its set-point.
-
-See methods 5.7.
-"""
+"""How much the valve works while a joint holds its set-point (methods 5.7)."""
 
 from __future__ import annotations
 

@@ -1,8 +1,4 @@
-"""
-The closed-loop check of a designed controller on a joint model, and slower re-designs.
-
-See methods 4.6.
-"""
+"""The closed-loop check of a controller on a model, and slower re-designs (methods 4.6, 10)."""
 
 from __future__ import annotations
 

@@ -1,8 +1,4 @@
-"""
-What stands in the way of a failed closed-loop check: map, delay, lag or noise.
-
-See methods 10.
-"""
+"""What stands in the way of a failed closed-loop check (methods 10)."""
 
 from __future__ import annotations
 

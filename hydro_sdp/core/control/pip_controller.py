@@ -1,8 +1,4 @@
-"""
-The runtime PIP-IDZ controller: one object used offline and inside the ROS node.
-
-See methods 4.7.
-"""
+"""The runtime PIP-IDZ controller, used offline and inside the ROS node (methods 4.7)."""
 
 from __future__ import annotations
 

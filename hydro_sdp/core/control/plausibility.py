@@ -1,8 +1,4 @@
-"""
-Whether a measured angle can be the joint's: inside its stops, and no faster than it moves.
-
-See methods 4.11.
-"""
+"""Whether a measured angle can be the joint's: inside its stops, not too fast (methods 4.11)."""
 
 from __future__ import annotations
 

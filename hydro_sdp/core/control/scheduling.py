@@ -1,8 +1,4 @@
-"""
-When a controller may use a feedback sample and when it acts.
-
-See methods 4.8.
-"""
+"""When a controller may use a feedback sample and when it acts (methods 4.8)."""
 
 from __future__ import annotations
 

@@ -1,8 +1,4 @@
-"""
-Joint trajectories as a ROS ``JointTrajectoryController`` user expects them.
-
-See methods 4.9-4.10.
-"""
+"""Joint trajectories as a ``JointTrajectoryController`` user expects them (methods 4.9-4.10)."""
 
 from __future__ import annotations
 

@@ -1,8 +1,4 @@
-"""
-Data shared by the detectors of one iteration, and the scoring of their candidates.
-
-See methods 8.2.
-"""
+"""Data shared by the detectors of one iteration, and their scoring (methods 8.2)."""
 
 from __future__ import annotations
 

@@ -1,8 +1,4 @@
-"""
-The data name the effect: the SDP analysis of what the model misses against every state.
-
-See methods 8.3.
-"""
+"""The data name the effect: SDP analysis of what the model misses (methods 8.3)."""
 
 from __future__ import annotations
 

@@ -1,8 +1,4 @@
-"""
-Whether a candidate's reduction of the squared velocity residual is real: a block bootstrap.
-
-See methods 8.4.
-"""
+"""Whether a candidate's reduction of the residual is real: a block bootstrap (methods 8.4)."""
 
 from __future__ import annotations
 

@@ -1,8 +1,4 @@
-"""
-Static maps refitted with a chosen set of features (dead-zone, saturation, asymmetry).
-
-See methods 8.2.
-"""
+"""Static maps refitted with chosen features: dead-zone, saturation, asymmetry (methods 8.2)."""
 
 from __future__ import annotations
 

@@ -1,8 +1,4 @@
-"""
-What the discrepancy workflow returns: candidates, the gap ledger and the evidence.
-
-See methods 8.4.
-"""
+"""What the discrepancy workflow returns: candidates, ledger and evidence (methods 8.4)."""
 
 from __future__ import annotations
 

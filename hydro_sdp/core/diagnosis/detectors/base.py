@@ -1,8 +1,4 @@
-"""
-What a detector is: one word of the vocabulary, how it is fitted and how it shows.
-
-See methods 8.5.
-"""
+"""What a detector is: one word, how it is fitted and how it shows (methods 8.5)."""
 
 from __future__ import annotations
 

@@ -1,8 +1,4 @@
-"""
-Detectors of the valve's and the linkage's dynamics: valve lag, backlash, the link's mode.
-
-See methods 8.2.
-"""
+"""Detectors of valve lag, backlash and the link's mode (methods 8.2)."""
 
 from __future__ import annotations
 

@@ -1,8 +1,4 @@
-"""
-The forms of ``load_dependence`` with a measured load, chosen direction by direction.
-
-See methods 8.2.
-"""
+"""The forms of ``load_dependence`` with a measured load, per direction (methods 8.2)."""
 
 from __future__ import annotations
 

@@ -1,8 +1,4 @@
-"""
-The shape of ``load_dependence`` with a measured load: a smooth factor per direction.
-
-See methods 8.2.
-"""
+"""The shape of ``load_dependence`` with a measured load (methods 8.2)."""
 
 from __future__ import annotations
 

@@ -1,8 +1,4 @@
-"""
-Detector of a joint slowed while other joints move: one pump for all (``flow_sharing``).
-
-See methods 8.2.
-"""
+"""Detector of a joint slowed while others move: ``flow_sharing`` (methods 8.2)."""
 
 from __future__ import annotations
 

@@ -1,8 +1,4 @@
-"""
-Each record's speed scale per direction, and whether they differ beyond their noise.
-
-See methods 8.2.
-"""
+"""Each record's speed scale per direction, and whether they differ (methods 8.2)."""
 
 from __future__ import annotations
 

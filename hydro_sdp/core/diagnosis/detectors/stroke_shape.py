@@ -1,8 +1,4 @@
-"""
-Detector of a speed that changes along the stroke the same way in both directions.
-
-See methods 8.2.
-"""
+"""Detector of a speed that changes along the stroke alike both ways (methods 8.2)."""
 
 from __future__ import annotations
 
