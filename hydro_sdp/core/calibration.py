@@ -1,23 +1,4 @@
-"""
-From a machine's recordings to a checked controller (the ``calibrate`` command).
-
-:func:`calibrate` chains what the other commands do one at a time: identify the
-joint (held-out choice of the map family), evaluate the model on validation
-records, diagnose what it misses and add the named effects, design the PIP-IDZ
-controller from the final model (on its delay and valve lag; the chord IDZ for
-an ``sdp`` map, the map's own table for the others), and check it in closed
-loop on that final model with its effects and the records' noise
-(:mod:`.loop_check`). When the valve pulses at hold and nothing else fails, the
-IDZ's compensation fades in instead (a fade-in band; the result keeps both
-designs' figures, the trade of settling against chatter); when chords fail the
-check the table takes their place; when the check still fails the dominant
-poles move toward 1 and the controller is designed again, and the result says
-so; if no design passes, the check is run again with each element idealised to
-say what stands in the way (:mod:`.loop_obstacles`). Without validation
-records, whole records are held out (never a piece of a record), and the
-result says which.
-
-"""
+"""From a machine's recordings to a checked controller: the ``calibrate`` command (methods 10)."""
 
 from __future__ import annotations
 
@@ -231,10 +212,6 @@ def split_records(records: Sequence[Record]) -> tuple[list[Record], list[Record]
     """
     Hold out whole recordings for validation: every third one, at least one of two.
 
-    Pieces of one recording (a bag cut at a hole in its stamps shares its
-    ``source``) stay together, on one side: a held-out piece of a recording the
-    model was fitted on would not be held out.
-
     Parameters
     ----------
     records : sequence of Record
@@ -333,12 +310,7 @@ class _Designer:
 
 
 def _slower(spec: ControllerSpec) -> list[complex]:
-    """
-    Return the spec's poles with the dominant ones slower, a link's mode left as it is.
-
-    The design's pair nearest the mode's open-loop poles (an LQ design moves them a
-    little) is put back on them and kept: the loop does not try to damp the mode.
-    """
+    """Return the spec's poles with the dominant ones slower, a link's mode left as it is."""
     poles = _clean(list(spec.poles))
     if spec.oscillation is None:
         return slower_poles(poles)

@@ -1,17 +1,4 @@
-"""
-Which valve commands a valve takes: from one source, within its range and rate, while fresh.
-
-A ``Float64`` on ``<joint>/valve_command`` does not say who sent it, but the middleware says
-how many publish the topic, and the ROS graph who. :class:`CommandGate` takes a command only
-while its publishers are the one source allowed (a node named by the caller, or any single
-node when none is named): while a second node publishes, nobody's commands are taken and the
-valve is closed, since the gate cannot tell whose a message is. Commands beyond
-``rate_limit`` per second (bursts of ``burst`` allowed) are dropped, the command in force
-staying; commands beyond the valve's range are clamped to it; when the source has sent
-nothing for ``timeout_ns`` the valve is to be closed (docs/methods.md section 4.11). The
-caller reads the publishers and the clock.
-
-"""
+"""Which valve commands a valve takes: one source, in range and rate, fresh (methods 4.11)."""
 
 from __future__ import annotations
 

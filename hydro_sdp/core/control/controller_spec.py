@@ -1,15 +1,4 @@
-"""
-Controller specifications: PIP-IDZ design from a joint model, and the controller file.
-
-:func:`design_from_model` turns a :class:`~hydro_sdp.core.model.joint_model.JointModel`
-into a :class:`ControllerSpec` at a chosen control period: the IDZ, as the chord of
-the static map (docs/methods.md section 3.3) or the map's own table (section 5.4),
-and PIP gains for the plant the IDZ leaves behind: the integrator with the model's
-delay and valve lag (:mod:`.design_plant`; ``y_k = y_{k-1} + u_{k-tau}`` without a
-lag). The spec is what ``hydro-sdp design`` writes (format
-``hydro_sdp/controller/v1``) and what the controller node loads.
-
-"""
+"""Controller specifications: PIP-IDZ design from a joint model (methods 4.3-4.5)."""
 
 from __future__ import annotations
 

@@ -1,25 +1,4 @@
-"""
-The plant a PIP-IDZ design sees: the integrator with the model's dead time and valve lag.
-
-With the IDZ inverting the static map, the joint seen from the controller's
-``u`` (degrees per control sample) is an integrator of unit gain behind the
-model's pure delay and, when the model has a ``valve_lag`` effect, its
-first-order lag (docs/methods.md section 4.1). With a zero-order hold at the
-control period ``T`` and ``p = exp(-T / T_v)`` the lagged integrator
-``1 / (T s (T_v s + 1))`` is exactly
-
-``A = (1 - z^-1)(1 - p z^-1)``, ``B = z^-(tau - 1) (b_1 z^-1 + b_2 z^-2)``
-
-with ``b_1 = 1 - r (1 - p)``, ``b_2 = r (1 - p) - p`` and ``r = T_v / T``; it
-becomes ``A = 1 - z^-1``, ``B = z^-tau`` as the lag goes to 0. ``tau`` is the
-model's delay in control samples.
-
-A model with an ``oscillation`` adds its mode, ``w^2 / (s^2 + 2 d w s + w^2)``, in
-series: the zero-order hold of the whole is summed over its poles (distinct: the
-integrator's, the lag's and the mode's pair), each first-order part held exactly, so
-the PIP is designed on the higher-order plant (docs/methods.md section 4.1).
-
-"""
+"""The plant a PIP-IDZ design sees: the integrator, dead time and valve lag (methods 4.1)."""
 
 from __future__ import annotations
 
@@ -84,13 +63,7 @@ def lagged_integrator(delay: int, time_constant: float | None,
 
 def _with_mode(delay: int, time_constant: float | None, period: float,
                mode: Mode) -> DiscretePlant:
-    """
-    Return the zero-order hold of ``1 / (T s)``, the lag and the mode, behind the delay.
-
-    With distinct poles ``l_i`` the plant is ``sum_i r_i / (s - l_i)``, and each part
-    held over ``T`` is ``r_i (e^(l_i T) - 1) / l_i z^-1 / (1 - e^(l_i T) z^-1)`` (``r_i T``
-    at ``l_i = 0``): summed over a common denominator, ``A = prod (1 - e^(l_i T) z^-1)``.
-    """
+    """Return the zero-order hold of ``1 / (T s)``, the lag and the mode, behind the delay."""
     frequency, damping = mode
     if not (math.isfinite(frequency) and 0.0 < frequency < 0.5 / period
             and 0.0 < damping < 1.0):
@@ -169,12 +142,6 @@ def plant_for_model(model: JointModel, control_period: float) -> DiscretePlant:
 def completed_poles(plant: DiscretePlant, poles: Sequence[complex]) -> list[complex]:
     """
     Complete dominant ``poles`` to the ``n + m`` a plant needs.
-
-    A lagged integrator (``n = 2``) keeps its lag pole ``p`` (the valve is not
-    made faster, which would take large gains and amplify the noise), and a plant
-    with a mode its pair of poles too (the loop does not try to damp a mode behind
-    its delay); the remaining poles are deadbeat (at 0). Extra poles beyond
-    ``n + m`` are refused by the design, not here.
 
     Parameters
     ----------

@@ -1,18 +1,4 @@
-"""
-The health of one controlled or identified joint, as ``/diagnostics`` reports it.
-
-:func:`joint_health` turns a plain snapshot of a joint's state
-(:class:`JointSnapshot`) into a level, a one-line message and key-values; the
-ROS nodes only copy the result into a ``diagnostic_msgs/DiagnosticStatus``.
-The rule:
-
-* ERROR: the watchdog closed the valve (no valid feedback for the timeout);
-* WARN: feedback refused since the last report, feedback older than
-  ``stale_after``, no feedback yet, the estimates call for a recalibration, or
-  the set-point was clamped to the end stops;
-* OK otherwise (an inactive controller is OK: it was stopped on purpose).
-
-"""
+"""The health of one controlled or identified joint, as ``/diagnostics`` reports it."""
 
 from __future__ import annotations
 

@@ -1,19 +1,4 @@
-"""
-Inverse dead-zone (IDZ) compensation, eq. (7) of West et al. (2018).
-
-The linear controller's output ``u`` is a desired angle increment per control
-sample. The IDZ turns it into a valve command ``v`` by inverting the chord
-model ``q_lin(v) = s_n (v - a3)`` below the dead-zone and ``s_p (v - a6)``
-above it, so that the loop sees ``y_k = y_{k-1} + u_{k-tau}``. Near ``u = 0``
-a pure inverse would flip between the two edges at every sample; three modes
-avoid that (docs/methods.md section 5.2): a zero band (the paper's, ``v = rest`` while
-``|u| <= beta``), a smooth blend of the two branches over ``beta``, and a
-hysteresis (Schmitt) band that switches branch only when ``u`` crosses ``+-beta``.
-With a fade-in band (``fade > 0``, ``zero`` mode) the compensation does not jump
-across the dead-zone as ``u`` leaves the band: it fades in from rest
-(section 5.2), so that the valve does not pulse at hold.
-
-"""
+"""Inverse dead-zone (IDZ) compensation, eq. (7) of West et al. (2018) (methods 5.1-5.3)."""
 
 from __future__ import annotations
 
@@ -72,13 +57,7 @@ def smooth_weight(u: float, beta: float) -> float:
 
 
 class TwoBranchInverse:
-    """
-    The anti-chatter modes (docs/methods.md section 5.2) over an inverse's two branches.
-
-    An inverse gives :meth:`branch_command`: each branch for ``u`` of either sign,
-    the positive one floored at the lower edge, the negative one capped at the
-    upper; :meth:`command` picks the branch by mode.
-    """
+    """The anti-chatter modes (docs/methods.md section 5.2) over an inverse's two branches."""
 
     beta: float
     mode: IdzMode

@@ -1,12 +1,4 @@
-"""
-What a design says of the dead-zone edges the data leave undetermined.
-
-A dead-zone edge below every command the runs held lies somewhere between rest and the
-innermost command that moved the joint (:mod:`hydro_sdp.core.model.undetermined`). The
-IDZ takes where the model's map reaches 0 there, so that the loop the check runs and the map
-agree, and the design says it is an extrapolation (docs/methods.md section 13.9).
-
-"""
+"""What a design says of the dead-zone edges the data leave undetermined (methods 13.9)."""
 
 from __future__ import annotations
 

@@ -1,21 +1,4 @@
-"""
-The inverse dead-zone (IDZ) of a joint model, as chords or as the map's own table.
-
-Two forms (docs/methods.md sections 3.3 and 5.4):
-
-* ``chord``: the paper's IDZ, the inverse of straight lines from each
-  dead-zone edge. For ``sdp`` maps the chord meets eq. (5) at two thirds of
-  saturation ([W18] eqs. (6)-(7)); ``sdp_dz`` and ``linear`` maps are their
-  own chords; any other map gets :func:`chord_map`.
-* ``table``: the map itself inverted (:class:`.idz_table.TableInverseDeadZone`),
-  for valves whose speed rises convexly from the dead-zone and saturates,
-  where a chord promises near the edge several times the speed the valve gives.
-
-The default form is the chord for ``sdp`` (the paper's IDZ), ``sdp_dz`` and
-``linear`` (exact there) and the table for every other family. Effects are
-taken at their nominal values: the table inverts the static map.
-
-"""
+"""The inverse dead-zone (IDZ) of a joint model: chords or the map's table (methods 5.4, 5.6)."""
 
 from __future__ import annotations
 
@@ -65,15 +48,6 @@ def default_form(model: JointModel) -> IdzForm:
 def chord_map(model: JointModel, span: tuple[float, float]) -> SdpDzMap:
     """
     SDP-DZ chords of any monotone map, as the IDZ of an ``sdp`` map (docs/methods.md 3.3).
-
-    On each side of rest the chord ends where the speed reaches two thirds of its
-    value at the end of ``span``; its edge is the outer of where the speed first
-    exceeds 0.1 % of that value and where the line through the points at 2 %
-    (:data:`CREEP_SPEED_FRACTION`) and two thirds meets zero speed. For a map that
-    leaves its dead-zone steeply (``sdp``, ``pwl``) that is the dead-zone edge; a
-    convex map (``power_sat``) creeps for a long way past its dead-zone, and an
-    IDZ edge there leaves the integral action to wind through commands that barely
-    move the joint.
 
     Parameters
     ----------
@@ -212,8 +186,6 @@ def faded(idz: Idz) -> Idz:
     """
     Return the IDZ with the fade-in band a design takes when it pulses at hold (methods.md 5.2).
 
-    The band is :data:`FADE_MULTIPLE` chatter bands wide, in the ``zero`` mode.
-
     Parameters
     ----------
     idz : InverseDeadZone or TableInverseDeadZone
@@ -232,11 +204,6 @@ def default_u_limits(model: JointModel, idz: Idz,
                      control_period: float) -> tuple[float, float] | None:
     """
     Return the default limits of ``u`` for a model and its IDZ.
-
-    A table: its end increments (the speeds at the ends of its commands). A chord
-    of an ``sdp`` map: 1.25 times the saturation speeds (J2 at 0.05 s: about
-    -1.84 and +2.43, near the paper's +-2.5). Other chords: their increments at
-    the valve's input limits, or no limits when the model has none.
 
     Parameters
     ----------

@@ -1,12 +1,4 @@
-"""
-The ``idz`` mapping of a controller file, in either form (docs/interfaces.md section 6).
-
-A chord IDZ is ``{mode, beta, dead_zone, slopes, rest}``; a table IDZ is
-``{mode, beta, table: {u: [...], v: [...]}, rest}`` (its edges and chord slopes
-follow from the table and are not written). Either may have ``fade``, the
-fade-in band, written when it is not 0.
-
-"""
+"""The ``idz`` mapping of a controller file, in either form (docs/interfaces.md section 6)."""
 
 from __future__ import annotations
 

@@ -1,21 +1,4 @@
-"""
-When the online estimate calls for a new inverse dead-zone (IDZ), and which edges.
-
-The controller's IDZ edges are the reference. An edge is recalibrated when its
-estimate differs from the reference significantly for the estimate's own
-uncertainty (``|change| > significance * std``, and at least ``min_change``),
-when the estimate has settled (over the last ``settle`` seconds it moved less
-than its standard deviation: not an estimate still on its way to a new value),
-and when that standard deviation is small next to the dead-zone's width
-(``confidence``). Every threshold is relative to the noise and the data but
-``min_change``, the smallest change worth acting on. Edges that did not change
-keep the reference. The decision is pure: the caller gives the time of each
-estimate and reports what the controller accepted. It reads only the edges and
-their standard deviations, so it serves the estimate of any map family
-(:mod:`hydro_sdp.core.identification.online_edges`); :func:`recalibrated_idz`
-gives the IDZ to set, a chord or a table.
-
-"""
+"""When the online estimate calls for a new IDZ, and which edges (methods 7.5)."""
 
 from __future__ import annotations
 

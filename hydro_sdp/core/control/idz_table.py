@@ -1,27 +1,4 @@
-"""
-The identified map's own inverse as the inverse dead-zone (IDZ): a monotone table.
-
-The paper's IDZ (:mod:`.idz`) inverts the chord of each branch of the map.
-For a valve whose speed rises convexly from a wide dead-zone and then
-saturates, the chord promises near the edge several times the speed the valve
-gives, so small corrections are too weak and the loop creeps and hunts. The
-table inverts the map itself (docs/methods.md section 5.4): points
-``(u_i, v_i)`` with ``u_i = T_c rate(v_i)`` (degrees per control sample) over
-the valve's range, increasing in both, interpolated linearly in both
-directions. The increments are 0 on the dead-zone, between the edges
-``(a3, a6)`` (the last command with ``u < 0`` ends the negative branch at
-``a3``, the positive one starts at ``a6``); the rest command lies between.
-
-The three anti-chatter modes keep their meaning (section 5.2): ``zero`` sends
-``|u| <= beta`` to ``rest``; ``smooth`` blends the two branches; ``hysteresis``
-keeps the last branch inside the band. A branch asked for an increment of the
-other sign continues its first segment, floored at the other edge (the chord
-IDZ's rule, which is the table of two points per branch). Beyond its ends the
-table holds the end commands: the valve gives no more than the map's speed at
-its range's ends, and :attr:`TableInverseDeadZone.u_range` tells the
-controller so (its history then stores what the valve gives).
-
-"""
+"""The identified map's own inverse as the IDZ: a monotone table (methods 5.4-5.5)."""
 
 from __future__ import annotations
 
@@ -109,12 +86,7 @@ class TableInverseDeadZone(TwoBranchInverse):
                       positive: tuple[Sequence[float], Sequence[float]], *,
                       beta: float = 0.05, mode: IdzMode = 'zero',
                       rest: float = 0.0, fade: float = 0.0) -> TableInverseDeadZone:
-        """
-        Build the table from its two branches, each ``(u, v)`` from its outer end to its edge.
-
-        The negative branch ends at ``(0, a3)``, the positive one starts at ``(0, a6)``
-        (given as ``(u, v)`` in increasing order); equal edges become one point.
-        """
+        """Build the table from two branches, each ``(u, v)`` from its outer end to its edge."""
         nu, nv = (tuple(float(x) for x in side) for side in negative)
         pu, pv = (tuple(float(x) for x in side) for side in positive)
         if not (nu and pu and nu[-1] == 0.0 and pu[0] == 0.0):
@@ -135,14 +107,7 @@ class TableInverseDeadZone(TwoBranchInverse):
 
     @property
     def slopes(self) -> tuple[float, float]:
-        """
-        Chord slope of each branch, degrees per control sample per input unit.
-
-        The chord runs from the edge to where the branch reaches two thirds of its
-        largest increment (as the paper's chord of an ``sdp`` map to two thirds of
-        saturation); setting ``idz.slopes`` scales a branch's increments by the
-        ratio of the new slope to this one (:meth:`with_slopes`).
-        """
+        """Chord slope of each branch, degrees per control sample per input unit."""
         low, high = self.dead_zone
         target = CHORD_SPEED_FRACTION * self.u[0]
         reach = float(np.interp(target, self._negative_u, self._negative_v))
@@ -241,12 +206,7 @@ Idz = InverseDeadZone | TableInverseDeadZone
 
 
 def chord_as_table(idz: InverseDeadZone, v_range: tuple[float, float]) -> TableInverseDeadZone:
-    """
-    Return the chord IDZ as a table of two points per branch over ``v_range`` (input units).
-
-    Both give the same commands for ``u`` inside the table's increments (the
-    ``smooth`` mode aside, where the table floors each branch at the other edge).
-    """
+    """Return the chord IDZ as a table of two points per branch over ``v_range`` (input units)."""
     low, high = idz.dead_zone
     if not v_range[0] < low <= high < v_range[1]:
         raise ConfigurationError(f'the command range {list(v_range)} must contain the IDZ '

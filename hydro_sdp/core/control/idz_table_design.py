@@ -1,13 +1,7 @@
 """
 The map's own inverse as the IDZ of a model: the table, its command range and its band.
 
-:func:`table_idz` samples the static map over :func:`command_span` (the valve's
-range) and keeps up to :data:`TABLE_POINTS` points per branch, evenly spaced
-along the curve (docs/methods.md section 5.4). :func:`table_beta` is the
-default chatter band: wide enough that the sensor noise alone does not reverse
-the valve, and no wider than the delay and lag allow for the smallest
-correction.
-
+See methods 5.4-5.5.
 """
 
 from __future__ import annotations
@@ -41,10 +35,6 @@ def command_span(model: JointModel,
                  v_range: tuple[float, float] | None = None) -> tuple[float, float]:
     """
     Return the commands an IDZ table (or the chords of ``chord_map``) covers, input units.
-
-    ``v_range`` if given; else the valve's input limits; else the map's own range
-    (``pwl`` knots, ``poly`` command range) or, for a saturating map, where it
-    reaches 99 % of saturation on each side.
 
     Parameters
     ----------
@@ -88,14 +78,6 @@ def table_beta(dead_zone: tuple[float, float], plant: DiscretePlant, gains: PipG
                lag: float | None, control_period: float, noise_std: float) -> float:
     """
     Return the default chatter band of an IDZ table, degrees per control sample.
-
-    When ``u`` leaves the band the joint starts to move only after the delay
-    ``tau`` and the lag ``T_v``, and meanwhile the controller keeps asking: the
-    smallest correction moves about ``beta (tau + T_v / T)`` degrees. The band
-    keeps that at [W18]'s J2 value, :data:`SMALLEST_CORRECTION` (0.05 deg per
-    sample over 3 samples of delay), unless the noise needs more: the band is
-    at least :data:`NOISE_MULTIPLE` standard deviations of the noise on ``u``
-    (:func:`.loop_noise.noise_gain`). A map without a dead-zone needs no band.
 
     Parameters
     ----------

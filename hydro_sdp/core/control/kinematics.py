@@ -1,22 +1,4 @@
-"""
-Planar two-link kinematics of a boom and a dipper, and straight bucket-tip lines.
-
-Frame: origin at the boom pivot, ``x`` forward and ``z`` up, metres. The
-absolute angle of the boom (from the horizontal, counter-clockwise positive)
-is ``phi_1 = theta_1 + offset_1`` and that of the dipper
-``phi_2 = phi_1 + theta_2 + offset_2``, with ``theta`` the joint angles of the
-joint models (degrees) and the offsets from the kinematics file. The tip is
-
-``x = L_1 cos(phi_1) + L_2 cos(phi_2),   z = L_1 sin(phi_1) + L_2 sin(phi_2)``.
-
-A kinematics file (format ``hydro_sdp/kinematics/v1``)::
-
-    format: hydro_sdp/kinematics/v1
-    links:
-      - {joint: boom, length: 1.8, offset: 0.0}     # m, deg
-      - {joint: dipper, length: 1.0, offset: 0.0}
-
-"""
+"""Planar two-link kinematics of a boom and a dipper, and straight tip lines (methods 4.10)."""
 
 from __future__ import annotations
 
@@ -193,8 +175,7 @@ class TwoLinkArm:
         """
         Return ``d(x, z) / d(boom, dipper)`` at the joint angles (deg), m per degree.
 
-        The angles are those of :meth:`forward`; the result is a 2 x 2 matrix, rows ``x``
-        and ``z``.
+        A 2 x 2 matrix, rows ``x`` and ``z``.
 
         """
         phi1 = math.radians(boom + self.offsets[0])
@@ -211,10 +192,6 @@ def line_trajectory(arm: TwoLinkArm, start: tuple[float, float], end: tuple[floa
                     point_period: float = 0.05, elbow: str = 'up') -> JointTrajectory:
     """
     Joint trajectory that moves the tip along a straight line at constant speed.
-
-    Points are spaced ``point_period`` in time (the last one at the end of the
-    line), each on the line by inverse kinematics, with the joint velocities
-    that give the line's speed (so the sampler interpolates by cubic Hermite).
 
     Parameters
     ----------

@@ -1,19 +1,4 @@
-"""
-How much the valve works while a joint holds its set-point: pulses across the dead-zone and travel.
-
-Measured on a closed-loop run (docs/methods.md section 5.7). A hold is the part of a
-set-point level after the joint has settled into its band. The valve's command is
-*closed* within the inner half of the dead-zone around rest, *open* below the lower
-edge or above the upper one, and *between* otherwise (it keeps its last state); a
-*pulse* is every opening: the valve going from closed, or from open on the other
-side, to open beyond an edge, so that a jump from rest to an edge and back counts
-one, and a swing from beyond one edge to beyond the other counts one. The valve's
-travel is the sum of the command's changes. Both are pooled over the holds of a
-run, per second of hold, and bounded: :data:`MAX_PULSE_RATE` pulses and
-:data:`MAX_TRAVEL_WIDTHS` dead-zone widths of travel per second. The functions take
-a trace and the valve's edges, so that any loop on any joint can be judged.
-
-"""
+"""How much the valve works while a joint holds its set-point (methods 5.7)."""
 
 from __future__ import annotations
 

@@ -1,16 +1,4 @@
-"""
-The closed-loop check of a designed controller on a joint model, and slower re-designs.
-
-:func:`check_loop` runs a controller on a model with all its effects (a valve lag,
-an angle factor...) over set-point steps across the stroke, up and down, and a
-ramp, and judges it: every step settles into the band within a bound, overshoots
-by at most 10 %, and no hold ends in a limit cycle (the valve hunting across
-rest, or the angle wandering more than the band) and the valve does not pulse
-at hold (:mod:`.loop_chatter`), with the angle read through the noise the
-settings give. :func:`slower_poles` moves a
-design's dominant poles toward 1, for the re-design when the check fails.
-
-"""
+"""The closed-loop check of a controller on a model, and slower re-designs (methods 4.6, 10)."""
 
 from __future__ import annotations
 
@@ -168,11 +156,6 @@ def check_loop(model: JointModel, spec: ControllerSpec, stroke: tuple[float, flo
     """
     Run a controller on a model over steps across the stroke and a ramp, and judge it.
 
-    The steps start at 20 % of the stroke and go to 50 %, 80 %, back to 50 % and
-    20 % (two up, two down); the ramp then runs from 20 % to 80 % at a quarter
-    of the joint's full speed and holds there. The controller reads the angle
-    with the noise of ``settings``.
-
     Parameters
     ----------
     model : JointModel
@@ -257,10 +240,6 @@ def slower_poles(poles: Sequence[complex], factor: float = 0.7,
                  keep: Sequence[complex] = ()) -> list[complex]:
     """
     Move the dominant poles toward 1: ``p -> 1 - factor (1 - p)``.
-
-    Poles at least half as large as the largest are moved (conjugate pairs stay
-    pairs); the fast ones, such as the deadbeat poles at 0, stay where they are, and
-    so do those of ``keep`` (a link's mode the design leaves as it is).
 
     Parameters
     ----------

@@ -1,22 +1,4 @@
-"""
-How the angle sensor's noise reaches the PIP controller's output ``u``.
-
-With the measured angle ``y + e``, the incremental PIP law (docs/methods.md
-section 4.2) and the design plant ``A y = B u`` give
-
-``u / e = -(F(z^-1) Delta + k_I) A / (Delta (A G + B F) + k_I B)``
-
-whose denominator is the closed-loop polynomial of section 4.3. For white
-noise of standard deviation ``sigma`` the standard deviation of ``u`` is
-``sigma`` times the root of the sum of the squared impulse response: the
-:func:`noise_gain`. An IDZ chatter band a few times that wide keeps the valve
-from reversing on noise alone (section 5.4).
-
-The sum is the H2 norm of the filter, ``d^2 + c P c'`` for a state-space form
-``(A, b, c, d)`` of it, with ``P = A P A' + b b'`` (the controllability Gramian):
-exact, and in numpy: scipy.signal's import alone cost more than the design.
-
-"""
+"""How the angle sensor's noise reaches the PIP controller's output ``u`` (methods 5.5)."""
 
 from __future__ import annotations
 

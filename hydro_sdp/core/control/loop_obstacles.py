@@ -1,17 +1,4 @@
-"""
-What stands in the way of a failed closed-loop check: the map, the delay, the lag or the noise.
-
-Each element is idealised in turn and the check run again (docs/methods.md
-section 10): the **map** becomes exactly the one the IDZ inverts (its chords,
-or the table's points), so the IDZ is exact; the **delay** becomes one control
-sample and the **lag** goes, each with the controller designed again for the
-idealised model with the same dominant poles (the others at 0); the **noise**
-goes from the angle the controller reads. Any other effects of the model
-(``stroke_geometry``, ``backlash``...) are idealised together as **effects**.
-An element whose idealisation makes the check pass stands in the way; when
-none does alone, the one that leaves the fewest failures is named.
-
-"""
+"""What stands in the way of a failed closed-loop check (methods 10)."""
 
 from __future__ import annotations
 
@@ -147,13 +134,7 @@ def obstacles(model: JointModel, spec: ControllerSpec, stroke: tuple[float, floa
 
 
 def standing_in_the_way(found: Sequence[Obstacle], failures: int) -> tuple[str, ...]:
-    """
-    Return the elements that stand in the way of a check that failed ``failures`` ways.
-
-    Those whose idealisation makes the check pass; if none does, the one that
-    leaves the fewest failures, if fewer than ``failures`` (all of them on a
-    tie); empty when idealising no element alone helps.
-    """
+    """Return the elements that stand in the way of a check that failed ``failures`` ways."""
     passing = tuple(o.element for o in found if o.passed)
     if passing or not found:
         return passing

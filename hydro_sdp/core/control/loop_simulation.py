@@ -1,18 +1,4 @@
-"""
-Offline closed-loop simulation of PIP-IDZ controlled joints, and step metrics.
-
-The plant runs at its own sample period and the controller at a multiple of
-it; between control instants the valve command is held (zero-order hold). At
-plant sample ``j`` the controller, when ``j`` is a control instant, reads the
-(noisy) angle ``y_j`` and issues the command the plant applies over the next
-interval (``v_{j+1}``): exactly what the ROS nodes do in lockstep, and the
-timing of the verified loops of docs/methods.md section 4.6. The control
-instants come from the same :class:`~hydro_sdp.core.control.scheduling.ControlSchedule`
-as the node's, and the commands in force from
-:func:`~hydro_sdp.core.model.timing.command_in_force`. Several joints run side by
-side, each with its own model, controller and set-point.
-
-"""
+"""Offline closed-loop simulation of PIP-IDZ controlled joints, and step metrics (methods 4.6)."""
 
 from __future__ import annotations
 

@@ -1,33 +1,4 @@
-"""
-The runtime PIP-IDZ controller: one object used offline and inside the ROS node.
-
-Each call of :meth:`PipIdzController.step` is one control sample of the
-incremental PIP law (eq. (8) of West et al. 2018, generalised in docs/methods.md section 4.2)
-
-``u_k = u_{k-1} - sum_j g_j (u_{k-j} - u_{k-j-1}) - sum_i f_i (y_{k-i} - y_{k-i-1})
-+ k_I (d_k - y_k)``
-
-followed by the clamp of ``u`` to its limits, the inverse dead-zone and the
-clamp of the valve command to the valve's range. The history keeps the ``u``
-that was really applied: the clamped value, or, when the valve range cut the
-command, the increment that the cut command produces (back-calculation). The
-integral action lives only in that history, so it cannot wind up (docs/methods.md section 6).
-
-With a feed-forward (``step(setpoint, y, feedforward)``, for trajectories) the
-controller works on the deviation from the set-point's own motion: the
-feed-forward ``w_k`` (the set-point increment per control sample, taken ``tau``
-control samples ahead, see
-:meth:`~hydro_sdp.core.control.trajectory.TrajectorySampler.feedforward`) is added to
-``u`` before the limits and the IDZ, the ``f`` terms act on
-``(y_{k-i} - y_{k-i-1}) - (d_{k-i} - d_{k-i-1})`` and the history keeps the
-controller's own part, ``u`` less ``w_k`` (bounded as the comment in the code
-says when the limits cut the command). For the delayed integrator
-``y_k = y_{k-1} + u_{k-tau}`` the error then obeys the same closed loop as a
-regulator, so a ramp of ``r`` degrees per sample is tracked without the lag
-``sum(f) r / k_I`` the PIP alone leaves (its incremental law balances
-``k_I e`` against ``f_0 r`` when ``u`` is steady).
-
-"""
+"""The runtime PIP-IDZ controller, used offline and inside the ROS node (methods 4.7)."""
 
 from __future__ import annotations
 
@@ -136,10 +107,8 @@ class PipIdzController:
         y : float
             Measured angle ``y_k``, degrees.
         feedforward : float or None
-            Set-point increment ``w_k`` the plant should make, degrees per
-            control sample, taken ``tau`` control samples ahead (module
-            docstring); ``None``: the plain PIP law (the increments of ``d``
-            are then not used).
+            Set-point increment ``w_k``, degrees per control sample, ``tau`` samples
+            ahead (methods 4.9); ``None``: the plain PIP law.
 
         Returns
         -------
@@ -195,12 +164,7 @@ class PipIdzController:
 
     def _law(self, setpoint: float, y: float, ys: list[float], us: list[float],
              ds: list[float] | None = None) -> float:
-        """
-        Return the PIP increment ``u`` before limits.
-
-        The proportional terms act on the output's differences ``ys``, less
-        those of the set-point ``ds`` when given (the feed-forward form).
-        """
+        """Return the PIP increment ``u`` before limits."""
         gains = self.settings.gains
         u = us[0] + gains.k_i * (setpoint - y)
         for j, g_j in enumerate(gains.g, start=1):
@@ -262,10 +226,6 @@ class PipIdzController:
     def update_idz(self, idz: Idz) -> None:
         """
         Change the IDZ at run time without a jump in the valve command.
-
-        The stored increments are re-expressed in the new IDZ (chord or table),
-        so that the command the valve receives stays where it was until the
-        control law moves it; inside the chatter band nothing needs to change.
 
         Parameters
         ----------

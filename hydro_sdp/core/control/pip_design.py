@@ -1,18 +1,4 @@
-"""
-Proportional-Integral-Plus (PIP) design in non-minimal state space (NMSS).
-
-The plant is ``A(z^-1) y_k = B(z^-1) u_k`` with ``A = 1 + a_1 z^-1 + ... + a_n z^-n``
-and ``B = b_1 z^-1 + ... + b_m z^-m`` (a pure delay is leading zeros in ``b``).
-The NMSS state is ``[y_k .. y_{k-n+1}, u_{k-1} .. u_{k-m+1}, z_k]`` with the
-integral-of-error state ``z_k = z_{k-1} + d_k - y_k`` (Taylor, Young & Chotai
-2013, *True Digital Control*; docs/methods.md section 4). The control law
-``u_k = -k' x_k`` with ``k = [f_0 .. f_{n-1}, g_1 .. g_{m-1}, -k_I]`` is found by
-pole assignment (coefficient matching of the closed-loop polynomial, which,
-unlike scipy's ``place_poles``, accepts repeated poles and poles at the origin)
-or by LQ design through the discrete Riccati equation. Every design's
-closed-loop poles are computed from ``F - g k'`` and checked.
-
-"""
+"""Proportional-Integral-Plus (PIP) design in non-minimal state space (NMSS) (methods 4.1-4.5)."""
 
 from __future__ import annotations
 
@@ -252,9 +238,6 @@ def pole_assignment(plant: DiscretePlant, poles: Sequence[complex]) -> PipGains:
     """
     PIP gains that place the closed-loop poles at ``poles``.
 
-    Solves the coefficient equations of ``Delta (A G + B F) + k_I B = D`` with
-    ``D = prod (1 - p_i z^-1)``; repeated poles and poles at the origin are fine.
-
     Parameters
     ----------
     plant : DiscretePlant
@@ -292,13 +275,7 @@ def pole_assignment(plant: DiscretePlant, poles: Sequence[complex]) -> PipGains:
 
 
 def check_poles(plant: DiscretePlant, gains: PipGains, poles: Sequence[complex]) -> None:
-    """
-    Raise :class:`ConfigurationError` unless ``gains`` give the closed-loop ``poles``.
-
-    ``plant`` and ``gains`` as in :func:`closed_loop_poles`; ``poles`` (sequence of
-    complex) are the requested ones.
-
-    """
+    """Raise :class:`ConfigurationError` unless ``gains`` give the closed-loop ``poles``."""
     achieved = closed_loop_poles(plant, gains)
     wanted = np.asarray(poles, dtype=complex)
     # Repeated poles spread as the root of the tolerance, so compare characteristic polynomials.
@@ -312,8 +289,6 @@ def check_poles(plant: DiscretePlant, gains: PipGains, poles: Sequence[complex])
 class LqWeights:
     """
     Diagonal LQ weights in the True Digital Control convention.
-
-    ``Q = diag(w_y/n .. , w_u/m .., w_e)`` and ``r = w_u/m`` (docs/methods.md section 4.4).
 
     Parameters
     ----------

@@ -1,15 +1,4 @@
-"""
-Whether a measured angle can be the joint's: inside its stops, and no faster than it moves.
-
-A sensor that fails, a driver that mixes up units or a stranger on ``joint_states`` can send
-an angle that is finite and well stamped but not the joint's. :class:`FeedbackPlausibility`
-refuses an angle more than ``margin`` beyond the end stops, and a change from the sample
-before larger than twice the joint's identified top speed over the time between their stamps
-plus ``margin`` (docs/methods.md section 4.11). After a refused jump the next sample is
-judged against the refused one, so a real jump (a sensor re-zeroed, a plant restarted) costs
-one sample and a single wild sample two.
-
-"""
+"""Whether a measured angle can be the joint's: inside its stops, not too fast (methods 4.11)."""
 
 from __future__ import annotations
 

@@ -1,10 +1,7 @@
 """
 The machines a joint's data do not rule out, and a controller's check over them.
 
-One change at a time from the identified model (not their product, which would grow as the
-power of the parameters): each map parameter at +-2 standard errors, each undetermined
-dead-zone edge at both ends of its bound, the delay +-1 sample of the records, the valve lag
-+-50 %, and the map families within the held-out tie band (docs/methods.md section 5.8).
+See methods 5.8.
 """
 
 from __future__ import annotations
@@ -100,10 +97,6 @@ def _map_edges(model: JointModel, limits: tuple[float, float]) -> tuple[float, f
 def with_edge_at(model: JointModel, side: int, edge: float) -> JointModel | None:
     """
     Return ``model`` with one dead-zone edge moved to ``edge``, as a piecewise-linear map.
-
-    Any map family: the moving side is stretched so that the commands between the valve's
-    limit and the new edge give the speeds the map gave between the limit and its old edge
-    (the saturation stays, the edge moves); the other side is sampled as it was.
 
     Parameters
     ----------

@@ -1,18 +1,4 @@
-"""
-Safety rules shared by the controller node and ``hydro-sdp closed-loop``.
-
-* Set-points are kept ``margin`` degrees inside the end stops, so the loop never
-  drives the joint into a stop (where the integral would press against it).
-* A controller designed for another joint, or one that commands the valve beyond
-  the range of the model in use, is refused with the reason and the fix. A range
-  known on one side only is the range: a controller made from a model without
-  one runs within the model's, and one made with a range runs a model without one.
-* An IDZ set at run time must fit the model: its edges inside the valve range, its
-  slopes within the physical bounds of the model's map (:func:`check_idz_fits`,
-  docs/methods.md section 4.11).
-* Near a stop the valve does not push (:class:`StopHold`).
-
-"""
+"""Safety rules shared by the controller node and ``hydro-sdp closed-loop`` (methods 4.11)."""
 
 from __future__ import annotations
 
@@ -184,11 +170,6 @@ def slope_bounds(model: JointModel, control_period: float,
     """
     Return the physical IDZ slopes of each side of the model's map, (low, high) each.
 
-    On each side: low, the chord from the model's edge to the valve's end (a lower IDZ
-    slope would need more than the whole range to reach the top speed); high, the
-    steepest chord from the edge to any command up to the end. In degrees per control
-    sample per input unit.
-
     Parameters
     ----------
     model : JointModel
@@ -264,12 +245,6 @@ def check_idz_fits(idz: Idz, model: JointModel, control_period: float,
 class StopHold:
     """
     Hold the valve in its dead-zone once the joint is near a set-point at a stop.
-
-    A set-point is stop-side when it lies within ``band`` of an end of the allowed
-    set-point range (so within ``margin + band`` of a stop). The hold starts when the
-    joint comes within ``band`` of a stop-side set-point or passes it towards the stop,
-    and ends when the set-point leaves the stop side or the joint falls back more than
-    twice ``band`` from it (docs/methods.md section 4.11).
 
     Parameters
     ----------

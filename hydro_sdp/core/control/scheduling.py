@@ -1,23 +1,4 @@
-"""
-When a controller may use a feedback sample and when it acts: a pure feedback gate and schedule.
-
-The controller node and the offline closed loop share these rules
-(docs/methods.md section 4.8); everything takes stamps and clock readings in
-integer nanoseconds as arguments and returns a decision, so the rules are tested
-without a clock or ROS:
-
-* :class:`FeedbackGate`: a stamp further than the timeout behind the reader's clock,
-  or more than one control period ahead of it, is refused (stale, or a clock
-  mix-up); then stamps must increase (a duplicate or a sample overtaken by a newer
-  one is ignored, the command in force came from fresher feedback); the watchdog
-  says when nothing valid came for the timeout, on the reader's clock or on a
-  steady one, whichever passes first.
-* :class:`ControlSchedule`: control instants every period from the first sample;
-  the first sample at or after an instant is the one controlled, missed instants
-  are skipped; after the valve was closed the next step starts from rest
-  (bumpless resume).
-
-"""
+"""When a controller may use a feedback sample and when it acts (methods 4.8)."""
 
 from __future__ import annotations
 
@@ -158,8 +139,7 @@ class FeedbackGate:
         Parameters
         ----------
         now_ns : int
-            Clock reading, ns. A reading before the last valid sample's (a clock that
-            went back) counts the silence from now.
+            Clock reading, ns.
         steady_ns : int or None
             Steady clock reading, ns: once a sample was accepted with a steady reading,
             the silence is the longer of the two clocks' (a simulated clock that stops

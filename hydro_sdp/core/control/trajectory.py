@@ -1,24 +1,4 @@
-"""
-Joint trajectories as a ROS ``JointTrajectoryController`` user expects them.
-
-* A trajectory holds joint names and points: time from its start (s),
-  positions (deg) and, optionally, velocities (deg/s).
-* It starts at its header stamp, or at once when the stamp is zero.
-* Before its start the joints keep the set-point in force; its first segment
-  runs from the set-point held at its start time to its first point.
-* Between points the set-point is interpolated linearly, or by a cubic
-  Hermite where velocities are given; after the last point it holds that
-  point's position (rate 0).
-* A new trajectory replaces the rest of the old one from its own start time,
-  for the joints it names; the other joints go on as before.
-* A trajectory naming a joint not controlled, or with a position beyond the
-  end stops less the set-point margin, is refused whole, with one message
-  naming every offender (:func:`check_trajectory`); so is one whose set-point
-  would move faster than a joint's top speed, its first segment from the
-  set-point in force included (:meth:`TrajectorySampler.planned_rates`,
-  :func:`check_trajectory_speeds`).
-
-"""
+"""Joint trajectories as a ``JointTrajectoryController`` user expects them (methods 4.9-4.10)."""
 
 from __future__ import annotations
 
@@ -312,13 +292,6 @@ class TrajectorySampler:
         """
         Set-point increment over one control period ending ``lead`` periods after ``t``.
 
-        This is the set-point rate taken ``lead`` control samples ahead, in
-        degrees per control sample, as the controller's feed-forward wants it:
-        with ``lead`` equal to the loop's delay (in control samples) the
-        delayed integrator ``y_k = y_{k-1} + u_{k-lead}`` driven by it alone
-        follows the set-point exactly. On straight segments it equals
-        ``rate * control_period``.
-
         Parameters
         ----------
         joint : str
@@ -364,11 +337,6 @@ class TrajectorySampler:
     def replace(self, trajectory: JointTrajectory, start: float) -> None:
         """
         Follow ``trajectory`` from ``start`` on, replacing the rest of what was planned.
-
-        For each joint it names, what was planned from ``start`` on is
-        dropped; its first segment runs from the set-point (and, when the
-        trajectory has velocities, the rate) in force at ``start`` to its first
-        point. A first point at time 0 is a jump to that point.
 
         Parameters
         ----------

@@ -1,4 +1,4 @@
-"""Data shared by the detectors of one iteration, and the scoring of their candidates."""
+"""Data shared by the detectors of one iteration, and their scoring (methods 8.2)."""
 
 from __future__ import annotations
 
@@ -77,13 +77,7 @@ class Context:
 
     def score(self, effect: str, candidate: JointModel, parameters: dict[str, object],
               evidence: str) -> Trial:
-        """
-        Compare ``candidate`` with the model under test on the estimation runs.
-
-        The share removed and the block bootstrap's verdict (:mod:`.reduction`) on the
-        data the candidate was fitted to: what a detector chooses between its forms
-        by; the search judges the candidate again on held-out runs.
-        """
+        """Compare ``candidate`` with the model under test on the estimation runs."""
         reduction = reduction_test(self.base, velocity_residuals(candidate, self.runs),
                                    self.block)
         significant = reduction.significant and reduction.gain > MIN_GAIN

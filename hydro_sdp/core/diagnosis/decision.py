@@ -1,31 +1,4 @@
-"""
-The decision: which candidate is named, weighing the size of what it explains.
-
-Every candidate is judged on the held-out runs (the validation records, or those the
-search held out; the estimation records when there are none):
-
-* its **size**: the simulation error over windows of a few seconds started from the
-  measured angle (:mod:`.held_out`) must fall by at least :data:`MARGIN` of the model's,
-  and the candidate must remove at least :data:`~.residuals.MIN_GAIN` of the squared
-  velocity residual;
-* its **significance**: the reduction of the squared velocity residual under a block
-  bootstrap that keeps the residuals' autocorrelation and the reduction's magnitude
-  (:mod:`.reduction`), ``p <= 0.01``.
-
-A candidate that passes both is *accepted*; one that removes at least :data:`MOST` of
-the squared velocity residual and lowers the windowed error is accepted whatever its
-test says (the answer is never ``none`` while a candidate removes most of the
-residual). Neither is accepted when it raises the held-out simulation error over whole
-runs by more than :data:`RISE` (a factor that mends a few seconds at a time while the
-model drifts further over the run). An accepted candidate must also carry over: on
-the runs the model was identified from, the augmented model may be worse by no more
-than the tie band of the one held-out rule (:func:`carry_over`). Accepted candidates
-are ranked by the share of the windowed error they remove on the held-out runs, all of
-them over the same samples (:func:`on_common_samples`; docs/methods.md section 8.4),
-never by a fixed order of words. A word that holds an accepted simpler word as a
-special case (:data:`NESTED`) comes after it unless it removes clearly more.
-
-"""
+"""The decision: which candidate is named, weighing the size of what it explains (methods 8.4)."""
 
 from __future__ import annotations
 
@@ -136,11 +109,6 @@ def carry_over(candidate: Candidate, model: JointModel, augmented: JointModel | 
     """
     Refuse an accepted candidate that makes the runs the model came from worse.
 
-    The effect must hold beyond the runs it was judged on: the augmented model's
-    windowed error on the runs the model was identified from may exceed the model's by
-    no more than the tie band of :func:`~hydro_sdp.core.identification.held_out.judge`
-    (the candidate listed first, so a tie keeps it).
-
     Parameters
     ----------
     candidate : Candidate
@@ -183,10 +151,6 @@ def explained_away(judged: Sequence[tuple[Candidate, JointModel | None]]
                    ) -> list[tuple[Candidate, JointModel | None]]:
     """
     Refuse ``stroke_geometry`` in a round where a stop or a load is accepted.
-
-    A factor of the angle bends to whatever slows the joint where it happens to be (a
-    stop the model lacks, a heavier load at one end): the cause the data hold comes
-    first, and the factor is tried again on the model that has it.
 
     Parameters
     ----------
@@ -264,13 +228,6 @@ def on_common_samples(judged: Sequence[tuple[Candidate, JointModel | None]],
                       ) -> list[tuple[Candidate, JointModel | None]]:
     """
     Return the judged candidates with the accepted ones' windowed errors over the same samples.
-
-    Each candidate is judged against the model over the samples where neither depends on
-    what came before the record; a lag's candidate starts later than a delay's. Ranked
-    by shares taken over different samples, a delay could win over a lag by what it
-    mends in the first samples, which the lag's comparison leaves out. The accepted
-    candidates are therefore compared again, all of them and the model over the samples
-    where none of them depends on the past.
 
     Parameters
     ----------

@@ -1,20 +1,4 @@
-"""
-The data name the effect: the SDP analysis of what the model misses against every state.
-
-:func:`~hydro_sdp.core.identification.sdp.analyse` with the model under test
-(docs/methods.md section 14.6) estimates, without assuming a shape, how the ratio of
-the measured to the model's increment (per direction of motion) and the increment
-residual depend on each candidate state. A state whose dependence is significant and
-explains at least :data:`MIN_SHARE` of the squared residual held out names the words of
-that state (each detector's :attr:`~.detectors.base.Detector.state`): the command the
-map's words, the time since a command change the delay and lag words, the other joints'
-speed ``flow_sharing``, the load ``load_dependence``, the travel since a reversal
-``backlash``; along the angle, ``stroke_geometry`` when the two directions' ratios agree
-and ``angle_dependent_velocity`` when they mirror. The estimate along the state is the
-shape the effect is given (``load_dependence``'s factor of the load) and what the report
-draws (docs/methods.md section 8.3).
-
-"""
+"""The data name the effect: SDP analysis of what the model misses (methods 8.3)."""
 
 from __future__ import annotations
 
@@ -132,10 +116,6 @@ def agreement_of(up: StateDependence, down: StateDependence) -> float | None:
 def scale_share(rows: Rows) -> float:
     """
     Return the share of the squared increment residual a speed scale per direction removes.
-
-    The ratio's walk along a state starts from its constant per direction of motion, so
-    a speed the model gets wrong by one factor in each direction shows along no state;
-    it is the map's (a side too fast, both too slow): it names the command's words.
 
     Parameters
     ----------

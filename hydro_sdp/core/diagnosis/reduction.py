@@ -1,23 +1,4 @@
-"""
-Whether a candidate's reduction of the squared velocity residual is real: a block bootstrap.
-
-With ``eps`` the model's velocity residuals, ``eps'`` the candidate's and ``d = eps -
-eps'`` what the candidate changes, the reduction is ``R = sum(eps^2 - eps'^2)``. Were
-the model's residual only noise ``e`` that the change does not follow, the candidate
-would remove ``R0 = sum(2 e d - d^2)``, negative on average. The noise is drawn by a
-dependent wild bootstrap (Shao 2010) of the candidate's residual, the noise left if
-the candidate is right: cut into blocks longer than its correlation (one second at
-least), each block's sign flipped at random. The blocks keep the residuals'
-autocorrelation and their size where they occur; the reduction keeps its magnitude:
-two seconds of a joint held at a stop the model lacks remove far more than the noise
-could, though they are two blocks of sixty (docs/methods.md section 8.4).
-
-The same distribution gives the reduction a standard score, ``z = (R + sum d^2) /
-(2 sqrt(sum_b c_b^2))`` with ``c_b = sum_{k in b} eps'_k d_k``: the cluster-robust t
-statistic of the regression of ``eps`` on ``d`` (coefficient 1 when the candidate is
-right, 0 under the null).
-
-"""
+"""Whether a candidate's reduction of the residual is real: a block bootstrap (methods 8.4)."""
 
 from __future__ import annotations
 

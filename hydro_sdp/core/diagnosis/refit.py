@@ -1,16 +1,4 @@
-"""
-Static maps refitted with a chosen set of features (dead-zone, saturation, asymmetry).
-
-The map-shape detectors add one feature to the model's map and refit the whole
-map by regret-regression (docs/methods.md sections 2.1 and 8.2) on the experiments
-of the data. The refit stays in the model's family: a ``power_sat`` map (a valve
-opening convexly through its notches) is refitted as ``power_sat``, an ``sdp`` or
-``sdp_dz`` map as eq. (5) or its chords. Saturation added to a map that has none
-is fitted in both saturating families, eq. (5) and ``power_sat``, and the one that
-predicts the records better is kept: a map without saturation says nothing of
-whether the speed levels off concavely or after a convex start.
-
-"""
+"""Static maps refitted with chosen features: dead-zone, saturation, asymmetry (methods 8.2)."""
 
 from __future__ import annotations
 
@@ -230,14 +218,6 @@ def _refit_in(context: Context, model: JointModel, features: Features,
 def refit_map(context: Context, features: Features, delay: float | None = None) -> JointModel:
     """
     Return the model under test with its map refitted to have ``features``.
-
-    The map is fitted by regret-regression on the experiments of the data, then
-    polished on the velocity residuals of whole records, starting from that fit or
-    from the model's own map, whichever predicts better (segmentation of records
-    that run into end stops may give poor experiments; the records themselves do not).
-    It stays in the model's family; saturation added to a map without it that has a
-    dead-zone is fitted both as eq. (5) and as ``power_sat``, and the better on the
-    records kept.
 
     Parameters
     ----------

@@ -1,14 +1,4 @@
-"""
-Runs, simulation error and the velocity residual of the discrepancy workflow.
-
-The velocity residual ``eps_k = dy_k - dy^_k`` (measured against the model's
-one-step increments, docs/methods.md section 8.1) localises a discrepancy in time
-without the drift of the simulation error; detectors fit their effects on its sum of
-squares over whole one-second blocks, and :mod:`.reduction` tests what a candidate
-removes of it. The validation error is the per-record mean of
-:func:`hydro_sdp.core.identification.evaluation.record_mae`.
-
-"""
+"""Runs, simulation error and the velocity residual of the discrepancy workflow (methods 8.1)."""
 
 from __future__ import annotations
 
@@ -74,9 +64,6 @@ def runs_of(records: Sequence[Record], max_delay: float, settle: float = 1.0) ->
     """
     Wrap records with the sample each is simulated from.
 
-    That is the first sample after the command has been held long enough for every
-    delay considered and for a valve lag to settle (``settle`` s at least).
-
     Parameters
     ----------
     records : sequence of Record
@@ -105,9 +92,6 @@ def runs_of(records: Sequence[Record], max_delay: float, settle: float = 1.0) ->
 def mae(model: JointModel, runs: Sequence[Run]) -> float:
     """
     Return the mean absolute simulation error, averaged per record, degrees.
-
-    Each record's error is :func:`~hydro_sdp.core.identification.evaluation.record_mae`,
-    the figure ``evaluate`` reports: the two agree by construction.
 
     Parameters
     ----------

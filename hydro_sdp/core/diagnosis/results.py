@@ -1,4 +1,4 @@
-"""What the discrepancy workflow returns: candidates, the gap ledger and the evidence."""
+"""What the discrepancy workflow returns: candidates, ledger and evidence (methods 8.4)."""
 
 from __future__ import annotations
 

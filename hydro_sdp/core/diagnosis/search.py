@@ -1,16 +1,4 @@
-"""
-The search loop of the discrepancy workflow (docs/methods.md section 8.4).
-
-Each round analyses what the model under test misses against every state (the SDP
-analysis, :mod:`.naming`), fits every registered detector's effect to the estimation
-records, and judges each candidate on held-out records (:mod:`.decision`: a clear
-fall of the windowed simulation error, and a reduction of the squared velocity
-residual that a block bootstrap finds significant; no worse on the runs the model
-came from). The accepted candidate that removes most of the held-out error is added,
-the ledger records the validation MAE before and after, and the search repeats on the
-augmented model until no candidate is accepted: ``none``.
-
-"""
+"""The search loop of the discrepancy workflow (docs/methods.md section 8.4)."""
 
 from __future__ import annotations
 
@@ -42,11 +30,7 @@ SIGNATURE_SAMPLES = 60_000
 
 def _signature(word: str, model: JointModel, augmented: JointModel,
                runs: Sequence[Run]) -> Signature:
-    """
-    Return the signature of ``word`` over the first runs, up to :data:`SIGNATURE_SAMPLES`.
-
-    Several runs, because one may not show it: a full-stroke run moves one way only.
-    """
+    """Return the signature of ``word`` over the first runs, up to :data:`SIGNATURE_SAMPLES`."""
     parts: list[Signature] = []
     samples = 0
     for run in runs:
@@ -60,9 +44,6 @@ def _signature(word: str, model: JointModel, augmented: JointModel,
 def hold_out(records: Sequence[Record]) -> tuple[list[Record], list[Record], str]:
     """
     Hold out whole recordings to judge the candidates on: every third, from three on.
-
-    Pieces of one recording (records sharing a ``source``) stay on one side. With
-    fewer than three recordings every record is both fitted and judged on.
 
     Parameters
     ----------
@@ -89,13 +70,7 @@ def hold_out(records: Sequence[Record]) -> tuple[list[Record], list[Record], str
 
 def _round(context: Context, checks: Sequence[Run], progress: Callable[[str], None] | None,
            every: bool = True) -> list[tuple[Candidate, JointModel | None]]:
-    """
-    Fit the detectors on the estimation runs, judge each on the held-out runs, rank.
-
-    Every detector in the first round (the report shows them all); after it, those of
-    the states the data name, the stops (they have their own signature) and the
-    effects the model has that are fitted again (a lag fitted while play was missing).
-    """
+    """Fit the detectors on the estimation runs, judge each on the held-out runs, rank."""
     base = velocity_residuals(context.model, checks)
     block = bootstrap_block(base, max(2, int(round(BLOCK_SECONDS / checks[0].dt))))
     errors = WindowErrors(checks)
@@ -140,12 +115,7 @@ def _round(context: Context, checks: Sequence[Run], progress: Callable[[str], No
 
 
 def _refit_added(context: Context, augmented: JointModel, word: str) -> JointModel:
-    """
-    Fit again, with the new effect, the effects added before that are fitted again.
-
-    An effect added first takes on what the ones still missing leave (a lag grows to
-    mimic the play after reversals); with the play added it shrinks back.
-    """
+    """Fit again, with the new effect, the effects added before that are fitted again."""
     for each in DETECTORS:
         if each.word == word or not getattr(each, 'refits', False) or \
                 augmented.effect(each.word) is None:

@@ -1,11 +1,4 @@
-"""
-The detectors of the discrepancy workflow, one word of the vocabulary each.
-
-:data:`DETECTORS` is the one list: the vocabulary, the command-line help, the
-search order and the report's signature figures all derive from it. A new word
-is a :class:`Detector` subclass in a module of this package, registered here.
-
-"""
+"""The detectors of the discrepancy workflow, one word of the vocabulary each (methods 8.5)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Detectors of what the angle does: end stops, speed that depends on the angle."""
+"""Detectors of what the angle does: end stops, speed that depends on the angle (methods 8.2)."""
 
 from __future__ import annotations
 
@@ -31,16 +31,6 @@ def noise_of(angles: FloatArray) -> float:
 def held_at_stops(context: Context) -> tuple[float | None, float | None, int]:
     """
     Return the angles the joint is held still at while driven on, low and high side.
-
-    A stop shows as motion that ends at one angle each time the command drives the
-    joint towards it: samples from which the model moves the joint at least ten noise
-    levels within 0.2 s while the measured angle moves less than a fifth of that, while
-    the delayed command drives the joint that way beyond its dead-zone: at least as far
-    from rest as the smallest command seen moving the joint that way elsewhere (a joint
-    resting inside its dead-zone, or a model still moving on after the command turned,
-    is not at a stop). The stop is the outermost angle such samples gather at for
-    :data:`MIN_CONTACT` s, passed by fewer samples than are held there (a rebound beyond
-    it is brief; a stall that the joint later passes is no stop).
 
     Parameters
     ----------
@@ -125,8 +115,7 @@ def outermost_dwell(outward: FloatArray, band: float, needed: int) -> float | No
     -------
     float or None
         The median of the outermost ``2 band`` wide window holding ``needed`` samples (in
-        the signed angles), None where no window does. The outermost single sample is
-        not the stop: a joint rebounds beyond where it then rests.
+        the signed angles), None where no window does.
 
     """
     values = np.sort(outward)
@@ -145,11 +134,6 @@ def directional_signature(word: str, model: JointModel, augmented: JointModel,
                           run: Run) -> Signature:
     """
     Return the residual against the angle with the direction of the model's motion.
-
-    The signature's ``signs`` hold, sample by sample, the sign of the model's speed
-    (0 where it does not move), so that the report draws the two directions apart: a
-    factor shared by both shows the same curve for both once each residual is signed
-    by its direction, a gravity-like one mirrored curves.
 
     Parameters
     ----------

@@ -1,12 +1,4 @@
-"""
-What a detector is: one word of the vocabulary, how it is fitted and how it shows.
-
-A detector tries one effect on the data (:meth:`Detector.fit`) and says what its
-residual signature is drawn against (:attr:`Detector.feature`,
-:meth:`Detector.signature`). The vocabulary, the command-line help and the
-report's signature figure all come from the registered detectors.
-
-"""
+"""What a detector is: one word, how it is fitted and how it shows (methods 8.5)."""
 
 from __future__ import annotations
 
@@ -34,13 +26,7 @@ FEATURE_LABELS: dict[Feature, str] = {
 
 
 class Detector(ABC):
-    """
-    One effect of the vocabulary: what the model misses, how it is fitted, how it shows.
-
-    Subclasses set the class attributes and implement :meth:`fit`; registering an
-    instance in :data:`hydro_sdp.core.diagnosis.detectors.DETECTORS` adds the word.
-
-    """
+    """One effect of the vocabulary: what the model misses, how it is fitted, how it shows."""
 
     #: Vocabulary word (also the effect's key in a model file when it is an effect).
     word: ClassVar[str]
@@ -94,15 +80,7 @@ class Detector(ABC):
 
 
 class EffectDetector(Detector):
-    """
-    An effect of :mod:`hydro_sdp.core.model.effects`, tried on a model without it.
-
-    The word is the effect's name. Subclasses implement :meth:`fit_effect`; those
-    that set :attr:`refits` are also tried on a model that has the effect, which
-    they fit again (the candidate replaces it and is scored against the model
-    with the old value, so a poorly fitted effect is named and corrected).
-
-    """
+    """An effect of :mod:`hydro_sdp.core.model.effects`, tried on a model without it."""
 
     #: Whether the effect is fitted again when the model has it already.
     refits: ClassVar[bool] = False
@@ -120,14 +98,7 @@ class EffectDetector(Detector):
     def fit_one_parameter(self, context: Context, effect: Callable[[float], Effect],
                           parameter: str, bounds: tuple[float, float], finding: str,
                           log: bool = False) -> Trial:
-        """
-        Fit an effect of one parameter in ``bounds`` and score it (for :meth:`fit_effect`).
-
-        ``effect`` builds the effect from a value and ``parameter`` names the value in
-        the model file; ``finding`` is the evidence, with ``{}`` where the value goes
-        (formatted ``.3g``); ``log`` searches its logarithm (as :meth:`Context.fit_scalar`).
-
-        """
+        """Fit an effect of one parameter in ``bounds`` and score it (for :meth:`fit_effect`)."""
         def model_with(value: float) -> JointModel:
             return context.model.with_effect(effect(value))
         value = context.fit_scalar(model_with, bounds, log=log)

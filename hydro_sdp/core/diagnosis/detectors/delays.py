@@ -1,4 +1,4 @@
-"""Detectors of timing: a wrong pure delay, different delays for the two directions."""
+"""Detectors of timing: a wrong pure delay, a delay per direction (methods 8.2)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Detectors of the valve's and the linkage's dynamics: valve lag, backlash, the link's mode."""
+"""Detectors of valve lag, backlash and the link's mode (methods 8.2)."""
 
 from __future__ import annotations
 
@@ -22,13 +22,7 @@ from scipy.optimize import minimize
 
 
 class ValveLagDetector(EffectDetector):
-    """
-    The speed approaches each new level with a first-order lag: fit its time constant.
-
-    A model with a lag has it fitted again: a time constant that is far off (a short
-    lag traded for a longer delay) is named and corrected like a missing one.
-
-    """
+    """The speed approaches each new level with a first-order lag: fit its time constant."""
 
     word = 'valve_lag'
     description = 'the speed approaches each new level with a lag'
@@ -84,16 +78,7 @@ Fit = tuple[float, float, float]
 
 
 class OscillationDetector(EffectDetector):
-    """
-    The link rings on the oil column after starts, stops and reversals: fit its mode.
-
-    Frequency and damping minimise the blocked squared velocity residual, polished
-    from the best points of a coarse grid and of the residual's spectral peak at
-    frequencies apart; the dead time is searched with them, up to :data:`SHORTER`
-    shorter than the model's, which took the link's lag for delay where it was
-    identified without the mode (docs/methods.md section 8.2).
-
-    """
+    """The link rings on the oil column after starts, stops and reversals: fit its mode."""
 
     word = 'oscillation'
     description = 'the joint rings after starts, stops and reversals'
@@ -185,12 +170,7 @@ def _cost(fit: tuple[float, FloatArray]) -> float:
 
 def _seeds(context: Context, cost: Callable[[FloatArray], float], low: float,
            high: float) -> list[FloatArray]:
-    """
-    Return the starts of the polish: the best grid points at frequencies apart.
-
-    A mode and a harmonic of it (or a better damped one elsewhere) can come close on the
-    grid, so the best point of each of the :data:`_POLISHED` best frequencies is polished.
-    """
+    """Return the starts of the polish: the best grid points at frequencies apart."""
     starts = [(f, d) for f in np.geomspace(low, high, _GRID_FREQUENCIES) for d in _GRID_DAMPING]
     starts += [(peak, d) for peak in _spectral_peaks(context, low, high)
                for d in _GRID_DAMPING]
@@ -206,13 +186,7 @@ def _seeds(context: Context, cost: Callable[[FloatArray], float], low: float,
 
 
 def _spectral_peaks(context: Context, low: float, high: float) -> list[float]:
-    """
-    Return where the residual's spectrum stands highest over white noise's, and over its own.
-
-    The velocity residual's periodogram over the runs, between ``low`` and ``high`` Hz,
-    divided by what white angle noise gives a difference (``|1 - e^-iwdt|^2``), and by
-    its running median over :data:`_BACKGROUND` Hz.
-    """
+    """Return where the residual's spectrum stands highest over white noise's, and over its own."""
     power: FloatArray | None = None
     size = max(64, int(round(8.0 / context.dt)))
     for residual in context.base:

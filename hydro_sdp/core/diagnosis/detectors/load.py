@@ -1,15 +1,4 @@
-"""
-Detector of a speed that changes with the load (``load_dependence``).
-
-With a measured load (the record's ``load``), the shape the data show: a smooth
-factor of the load per direction, of either sign (:mod:`.load_shape`, read off the
-SDP analysis along the load and fitted to the one-step increments), or the
-overrunning load of a pressure-compensated valve (:mod:`.overrun`), whichever
-removes more of the residual. Without one, a speed scale per record and direction
-(:mod:`.record_scales`): shown where the records' scales at the same command differ
-beyond their noise, and refused, the cause not being in the runs.
-
-"""
+"""Detector of a speed that changes with the load, `load_dependence` (methods 8.2, 8.4)."""
 
 from __future__ import annotations
 

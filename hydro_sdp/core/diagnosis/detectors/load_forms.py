@@ -1,20 +1,4 @@
-"""
-The forms of ``load_dependence`` with a measured load, chosen direction by direction.
-
-The detector fits several forms (:mod:`.load`): a smooth factor of the load fitted to
-the increments or read off the SDP analysis, the overrunning load of a compensated
-valve, the pump's power cap. Each holds both directions, but the physics of one
-direction says nothing of the other's (lifting against the load on a pump whose power
-binds, lowering metered by the outlet edge): each direction takes the form that
-simulates the estimation runs best, or none.
-
-The forms differ in what they hold (a factor of the load slows every command alike, a
-power cap only the fast ones): the one-step residual, which the valve's transients
-dominate, favours the form with the most knots; the simulation error over windows from
-the measured angle (:mod:`..held_out`), where a cut integrates over a move, tells which
-one the joint follows.
-
-"""
+"""The forms of ``load_dependence`` with a measured load, per direction (methods 8.2)."""
 
 from __future__ import annotations
 
@@ -39,12 +23,7 @@ def one_side(effect: LoadDependence, positive: bool) -> LoadDependence:
 
 
 def joined(up: LoadDependence | None, down: LoadDependence | None) -> LoadDependence | None:
-    """
-    Return the positive direction of ``up`` with the negative of ``down`` (None: neither).
-
-    The factors' knots are those of whichever holds them (both forms fitted at the same
-    knots, the loads the joint moved at).
-    """
+    """Return the positive direction of ``up`` with the negative of ``down`` (None: neither)."""
     if up is None:
         return None if down is None else one_side(down, False)
     if down is None:
@@ -61,14 +40,6 @@ def best_sides(base: JointModel, forms: Sequence[LoadDependence],
                runs: Sequence[Run]) -> tuple[LoadDependence | None, tuple[int, int]]:
     """
     Choose each direction's form by the windowed simulation error on ``runs``.
-
-    The positive direction first, the negative left alone; then the negative with the
-    positive chosen. A direction keeps no form unless one lowers the error. The first
-    form given is the data's own shape (a factor at the loads the joint moved at); a form
-    of assumed physics takes its place only when it lowers the error by at least
-    :data:`~hydro_sdp.core.diagnosis.residuals.MIN_GAIN` of the first's (the least gain
-    the diagnosis counts): with a few loads, any form of two parameters runs through the
-    same points, and the data's shape assumes least about the loads between them.
 
     Parameters
     ----------

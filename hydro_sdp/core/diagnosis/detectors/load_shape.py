@@ -1,19 +1,4 @@
-"""
-The shape of ``load_dependence`` with a measured load: a smooth factor per direction.
-
-The SDP analysis draws the ratio of the measured to the model's increment against
-the load, per direction of motion, without assuming a form (:mod:`..naming`): a
-valve without pressure compensation slows the joint as its load pressure rises
-(``sqrt(p_s - p_L)``), a pump whose power binds gives less flow the higher its
-pressure, an overrunning load speeds it up. The effect takes that shape with a few
-parameters: its value at :data:`KNOTS` knots spread over the loads seen (quantiles),
-linear in between and flat beyond (:class:`~hydro_sdp.core.model.effects.LoadDependence`
-``knots``, ``factors_positive``, ``factors_negative``). Two readings of it are
-offered: the SDP estimate at the knots, and the knot values fitted by penalised least
-squares to the one-step increments (``dy = dy^ f(L)``, linear in the values); the
-detector keeps whichever leaves the smaller residual.
-
-"""
+"""The shape of ``load_dependence`` with a measured load (methods 8.2)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Detectors of the static map's shape: dead-zone, velocity saturation, asymmetry."""
+"""Detectors of the static map's shape: dead-zone, velocity saturation, asymmetry (methods 8.2)."""
 
 from __future__ import annotations
 
@@ -14,13 +14,7 @@ from hydro_sdp.core.model.static_maps import PowerSatMap, SdpMap
 
 
 class MapShapeDetector(Detector):
-    """
-    An effect of the map's shape: the static map refitted with one more feature.
-
-    Subclasses name the feature (:attr:`adds`) and say what the refitted map
-    shows (:meth:`finding`).
-
-    """
+    """An effect of the map's shape: the static map refitted with one more feature."""
 
     feature = 'command'
     state = 'command'

@@ -1,15 +1,4 @@
-"""
-The overrunning load of ``load_dependence``, fitted on the one-step increments.
-
-With a measured load ``L`` the speed of a pressure-compensated valve is the
-compensated one until the load pulls the actuator along; beyond an onset the
-outlet edge meters it and the speed grows as the root of the load pressure:
-``dy = dy^ sqrt(1 + max(0, g (L - onset)))`` per direction
-(:class:`~hydro_sdp.core.model.effects.LoadDependence`). The fit is on the residual the
-block test scores, so a candidate that lowers it sample by sample is the one
-scored.
-
-"""
+"""The overrunning load of ``load_dependence``, fitted on the one-step increments (methods 8.2)."""
 
 from __future__ import annotations
 
@@ -31,14 +20,7 @@ def inner_range(context: Context, end_share: float) -> tuple[float, float]:
 
 def one_step_samples(context: Context,
                      end_share: float) -> list[tuple[FloatArray, FloatArray, FloatArray]]:
-    """
-    Return the measured and predicted increments (deg) and the load of every run.
-
-    Away from the ends of the range (``end_share`` of it each side: cushions,
-    impacts) and predicted by the model without its ``load_dependence``, so that
-    a model holding the effect is fitted afresh; samples without a load signal
-    are left out.
-    """
+    """Return the measured and predicted increments (deg) and the load of every run."""
     base = context.model.without_effect(LoadDependence.name)
     low, high = inner_range(context, end_share)
     out = []
@@ -57,10 +39,6 @@ def fit_overrun(measured: FloatArray, predicted: FloatArray,
                 load: FloatArray) -> tuple[float, float]:
     """
     Fit ``measured = predicted sqrt(1 + max(0, g (L - onset)))`` by least squares.
-
-    The one-step increments of one direction, the statistic the block test
-    judges. Started from both signs of ``g`` and three onsets (the load's
-    deciles 1, 5 and 9), since the kink leaves no gradient where it is idle.
 
     Returns
     -------

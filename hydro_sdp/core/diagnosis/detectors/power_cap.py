@@ -1,15 +1,4 @@
-"""
-The pump's power cap of ``load_dependence``, fitted on the one-step increments.
-
-A pump whose torque limiter holds flow x pressure at its power gives at most
-``Q = P / p``, its pressure the load pressure plus its load-sensing margin: the
-joint's speed is capped at ``limit / (L + offset)`` of the measured load ``L``
-while commands whose flow stays below the cap keep their speed
-(:class:`~hydro_sdp.core.model.effects.LoadDependence` ``limit_*``). A factor of the
-load alone cannot say that: fitted to fast and slow commands at once it slows the
-slow ones the pump never held back.
-
-"""
+"""The pump's power cap of ``load_dependence``, fitted on the one-step increments (methods 8.2)."""
 
 from __future__ import annotations
 
@@ -35,10 +24,6 @@ def fit_power_cap(measured: FloatArray, predicted: FloatArray,
                   load: FloatArray) -> tuple[float, float]:
     """
     Fit ``|dy| <= c / (L + offset)`` to one direction's one-step increments.
-
-    Least squares on ``measured - capped(predicted)``, the offset kept above the
-    lowest load seen (the pump's pressure is above the load's), started from three
-    offsets and the cap each leaves on the fastest tenth of the measured increments.
 
     Parameters
     ----------

@@ -1,11 +1,4 @@
-"""
-Detector of a joint slowed while other joints move: one pump for all (``flow_sharing``).
-
-It needs the other joints of the JointState (:class:`~hydro_sdp.core.model.records.Record`
-``others``); on records without them it is not applicable, with the reason as evidence.
-Fitted as a shared pump-flow limit (:class:`~hydro_sdp.core.model.effects.FlowSharing`).
-
-"""
+"""Detector of a joint slowed while others move: ``flow_sharing`` (methods 8.2)."""
 
 from __future__ import annotations
 

@@ -1,12 +1,4 @@
-"""
-Each record's speed scale per direction, and whether they differ beyond their noise.
-
-Without a load signal ``load_dependence`` compares records: each record's scale is
-its measured over its predicted travel away from the ends of the range, with a
-block (cluster) sandwich error; the records' scales at the same command level are
-tested for agreement by a chi-square of heterogeneity (docs/methods.md section 8.2).
-
-"""
+"""Each record's speed scale per direction, and whether they differ (methods 8.2)."""
 
 from __future__ import annotations
 
@@ -38,11 +30,6 @@ def block_scale(measured: FloatArray, predicted: FloatArray, block: int) -> tupl
     """
     Scale of the measured travel on the predicted travel, and its standard error.
 
-    The scale is the ratio of the summed increments (the travel, in which the
-    link's ringing cancels); its error is the block (cluster) sandwich estimate
-    from the unexplained travel of each block of ``block`` samples, so that
-    autocorrelation within a block does not shrink it.
-
     Returns
     -------
     tuple[float, float]
@@ -61,13 +48,7 @@ def block_scale(measured: FloatArray, predicted: FloatArray, block: int) -> tupl
 
 def polish_record(context: Context, run: Run, key: str, up: float,
                   down: float) -> tuple[float, float]:
-    """
-    Return a record's speed factors per direction, fitted to its simulation error.
-
-    Each record's error depends on its own factors only; each direction is fitted
-    in turn within +-50 % of the regression's scale (1 where the record does not
-    move that way).
-    """
+    """Return a record's speed factors per direction, fitted to its simulation error."""
     factors = [up if math.isfinite(up) and up > 0.0 else 1.0,
                down if math.isfinite(down) and down > 0.0 else 1.0]
     for side, scale in enumerate((up, down)):

@@ -1,16 +1,4 @@
-"""
-Detector of a speed that changes along the stroke the same way in both directions.
-
-The linkage maps the cylinder's stroke to the joint angle, so at one valve flow the
-joint moves faster in some parts of its range than in others, alike for both
-directions, and the cylinder's cushions slow it at the ends. Each measured
-increment is the model's increment times a factor of the angle, ``dy = dy^ (s(y) +
-sign(dy^) p(y))``: ``s`` is shared by both directions, ``p`` opposite for them
-(gravity-like: ``angle_dependent_velocity``). Both are piecewise-linear over knots
-spread over the angles moved through (:mod:`hydro_sdp.core.identification.stroke_fit`), fitted
-away from the stops (contact and impacts there are the stops' business).
-
-"""
+"""Detector of a speed that changes along the stroke alike both ways (methods 8.2)."""
 
 from __future__ import annotations
 
@@ -110,13 +98,6 @@ def stroke_samples(context: Context) -> Samples:
     """
     Return the samples of motion away from the stops.
 
-    A sample counts when its command has been held for longer than the model's delay
-    and :data:`SETTLE`, the model's one-step increment is at least 5 % of its largest
-    and is not cut by the model's stops, and it does not head into a stop from within
-    a band of it (the model's stops, those the segmentation saw, or else the extreme
-    angles of the data; the band is 10 noise levels, 0.5 deg at least), nor is held
-    still while driven near one, nor stalls away from them (:mod:`~.stalls`).
-
     Parameters
     ----------
     context : Context
@@ -174,16 +155,6 @@ def factor_parts(samples: Samples) -> Parts:
     """
     Return what a shared and an opposite angle factor explain beyond map and transients.
 
-    Both are fitted on top of a factor of the model's speed per direction and one of
-    the time since the command changed (up to :data:`TRANSIENT`, alike for both
-    directions), so that an error of the map (a function of the command, which a
-    program may tie to the angle) or of the delay or lag (a transient where runs start,
-    at the ends of the stroke) passes for neither. Only where both directions are seen
-    at the same angles can the two be told apart (elsewhere either fits the one
-    direction there): the comparison is made over the angles both directions move
-    through; where that overlap is under :data:`MIN_OVERLAP` of the angles moved
-    through, neither part explains anything.
-
     Parameters
     ----------
     samples : Samples
@@ -225,11 +196,6 @@ def factor_parts(samples: Samples) -> Parts:
 def fit_shape(samples: Samples, knots: FloatArray) -> tuple[FloatArray, FloatArray]:
     """
     Fit the shared factor and its per-direction part (cushions, load) at ``knots``.
-
-    As :func:`~hydro_sdp.core.identification.stroke_fit.fit_factor`, with the
-    per-direction part drawn towards zero (:data:`RIDGE`) at the knots where one
-    direction alone is seen (the other has under a tenth of its samples there): the
-    factor there is taken as shared, not left to any split between the parts.
 
     Parameters
     ----------
