@@ -28,7 +28,7 @@ import time
 
 # The cases are built with the test suite's helpers.
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / 'test'))
-from hydro_sdp.core.identification.sdp import analyse  # noqa: E402, I100
+from hydro_sdp.core.identification.state_dependence import analyse  # noqa: E402, I100
 from support.sdp_null_cases import null_case, null_pairs, PROGRAMS, RATIO_WORDS  # noqa: E402
 
 #: Size of the slow random factor on the speed of the ``drift`` cases.

@@ -24,7 +24,7 @@ if TYPE_CHECKING:  # pragma: no cover - for type checkers and editors only
     from hydro_sdp.core.diagnosis.search import diagnose
     from hydro_sdp.core.identification.evaluation import evaluate
     from hydro_sdp.core.identification.identify import identify
-    from hydro_sdp.core.identification.sdp.analysis import analyse
+    from hydro_sdp.core.identification.state_dependence.analysis import analyse
     from hydro_sdp.core.model.joint_model import JointModel
     from hydro_sdp.core.model.records import Record
     from hydro_sdp.core.model.simulation import simulate
@@ -41,7 +41,7 @@ _EXPORTS = {
     'identify': 'hydro_sdp.core.identification.identify',
     'evaluate': 'hydro_sdp.core.identification.evaluation',
     'simulate': 'hydro_sdp.core.model.simulation',
-    'analyse': 'hydro_sdp.core.identification.sdp.analysis',
+    'analyse': 'hydro_sdp.core.identification.state_dependence.analysis',
     'diagnose': 'hydro_sdp.core.diagnosis.search',
     'design_from_model': 'hydro_sdp.core.control.controller_spec',
     'calibrate': 'hydro_sdp.core.calibration',

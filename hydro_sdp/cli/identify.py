@@ -278,7 +278,7 @@ def _plots(result: Identification, records: list, folder: Path) -> list[str]:
 def _measured_gain(records: list, result: Identification) -> tuple:
     """Return the gain along the delayed command by the SDP analysis, for the gains figure."""
     from hydro_sdp.core.errors import HydroSdpError
-    from hydro_sdp.core.identification.sdp import analyse
+    from hydro_sdp.core.identification.state_dependence import analyse
 
     dt = result.sample_period
     try:

@@ -13,7 +13,7 @@ from hydro_sdp.cli.common import (
 from hydro_sdp.cli.progress import ProgressBar
 
 if TYPE_CHECKING:
-    from hydro_sdp.core.identification.sdp import SdpAnalysis, StateDependence
+    from hydro_sdp.core.identification.state_dependence import SdpAnalysis, StateDependence
 
 HELP = 'estimate how a parameter depends on each state, without assuming its shape (SDP)'
 STATE_NAMES = ('command', 'angle', 'since_change', 'others_speed', 'load', 'reversals')
@@ -141,7 +141,7 @@ def describe(analysis: SdpAnalysis) -> Payload:
 
 def run(args: argparse.Namespace) -> Outcome:
     """Run ``sdp``."""
-    from hydro_sdp.core.identification.sdp import analyse
+    from hydro_sdp.core.identification.state_dependence import analyse
     from hydro_sdp.io.model_files import load_model
 
     model = load_model(args.model) if args.model else None

@@ -6,7 +6,7 @@ from typing import Sequence
 
 from hydro_sdp.core.identification.delay import LevelSpeed
 from hydro_sdp.core.identification.experiment import Experiment
-from hydro_sdp.core.identification.sdp.dependence import StateDependence
+from hydro_sdp.core.identification.state_dependence.dependence import StateDependence
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.records import Record
 from hydro_sdp.plots.figures import (

@@ -12,8 +12,8 @@ from __future__ import annotations
 
 from typing import Sequence
 
-from hydro_sdp.core.identification.sdp.dependence import SdpAnalysis, StateDependence
-from hydro_sdp.core.identification.sdp.states import UNITS
+from hydro_sdp.core.identification.state_dependence.dependence import SdpAnalysis, StateDependence
+from hydro_sdp.core.identification.state_dependence.states import UNITS
 from hydro_sdp.plots.figures import LIMIT, MEASURED, new_figure
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure

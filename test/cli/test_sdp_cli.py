@@ -11,7 +11,7 @@ from conftest import REPO
 from hydro_sdp.bags import write_bag
 from hydro_sdp.cli.main import main
 from hydro_sdp.cli.sdp import STATE_NAMES
-from hydro_sdp.core.identification.sdp import STATES
+from hydro_sdp.core.identification.state_dependence import STATES
 from hydro_sdp.core.model.records import Record
 from hydro_sdp.io.model_files import save_model
 import numpy as np

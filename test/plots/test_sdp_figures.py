@@ -1,7 +1,7 @@
 """Figures of the SDP analysis: the estimate and its +-2 SE band, drawn where the data are."""
 
 from hydro_sdp.core.identification.delay import LevelSpeed
-from hydro_sdp.core.identification.sdp.dependence import SdpAnalysis, StateDependence
+from hydro_sdp.core.identification.state_dependence.dependence import SdpAnalysis, StateDependence
 from hydro_sdp.plots.identification import plot_gains
 from hydro_sdp.plots.sdp import plot_shares, plot_state
 import numpy as np

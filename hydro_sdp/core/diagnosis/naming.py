@@ -7,8 +7,8 @@ from typing import Sequence
 
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import HydroSdpError
-from hydro_sdp.core.identification.sdp import analyse, SdpAnalysis, StateDependence
-from hydro_sdp.core.identification.sdp.states import Rows, rows_of
+from hydro_sdp.core.identification.state_dependence import analyse, SdpAnalysis, StateDependence
+from hydro_sdp.core.identification.state_dependence.states import Rows, rows_of
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.records import Record
 import numpy as np

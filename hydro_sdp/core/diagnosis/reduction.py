@@ -7,7 +7,7 @@ import math
 from typing import Sequence
 
 from hydro_sdp.core.arrays import FloatArray
-from hydro_sdp.core.identification.sdp.significance import block_length
+from hydro_sdp.core.identification.state_dependence.significance import block_length
 import numpy as np
 
 #: Bootstrap replicates of the test.

@@ -7,7 +7,7 @@ import math
 from typing import Literal, Sequence
 
 from hydro_sdp.core.arrays import FloatArray, IntArray
-from hydro_sdp.core.identification.sdp import StateDependence
+from hydro_sdp.core.identification.state_dependence import StateDependence
 from hydro_sdp.core.model.joint_model import JointModel
 import numpy as np
 

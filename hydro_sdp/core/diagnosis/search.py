@@ -18,7 +18,7 @@ from hydro_sdp.core.diagnosis.results import (
 from hydro_sdp.core.errors import DataError, HydroSdpError
 from hydro_sdp.core.identification.evaluation import simulated_record
 from hydro_sdp.core.identification.held_out import WindowErrors
-from hydro_sdp.core.identification.sdp import analyse
+from hydro_sdp.core.identification.state_dependence import analyse
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.records import Record
 import numpy as np

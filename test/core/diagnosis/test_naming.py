@@ -3,7 +3,7 @@
 from hydro_sdp.core.diagnosis.decision import rank
 from hydro_sdp.core.diagnosis.naming import agreement_of, MIN_SHARE, name_states, Naming
 from hydro_sdp.core.diagnosis.results import Candidate
-from hydro_sdp.core.identification.sdp import StateDependence
+from hydro_sdp.core.identification.state_dependence import StateDependence
 import numpy as np
 import pytest
 from support.diagnosis_grid import make_case

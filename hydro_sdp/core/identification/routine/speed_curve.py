@@ -12,7 +12,7 @@ from typing import Sequence
 from hydro_sdp.core.errors import DataError
 from hydro_sdp.core.identification.delay import LevelSpeed
 from hydro_sdp.core.identification.routine.increments import Increments
-from hydro_sdp.core.identification.sdp import backfit, Term
+from hydro_sdp.core.identification.state_dependence import backfit, Term
 import numpy as np
 
 #: Fewest increments on one side of rest for its gain to be estimated.

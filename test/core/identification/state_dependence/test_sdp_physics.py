@@ -4,7 +4,7 @@ from dataclasses import replace
 from typing import Sequence
 
 from hydro_sdp.core.identification.identify import identify
-from hydro_sdp.core.identification.sdp import analyse
+from hydro_sdp.core.identification.state_dependence import analyse
 from hydro_sdp.core.model.records import Record
 from hydro_sdp.core.synthetic.physics.linkage import Geometry
 from hydro_sdp.core.synthetic.physics.machine import PlantSimulator

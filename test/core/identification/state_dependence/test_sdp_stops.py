@@ -1,8 +1,8 @@
 """Increments the joint cannot make are left out of the SDP analysis, and counted."""
 
 from hydro_sdp.core.errors import DataError
-from hydro_sdp.core.identification.sdp import analyse
-from hydro_sdp.core.identification.sdp.states import HOLDS, rows_of
+from hydro_sdp.core.identification.state_dependence import analyse
+from hydro_sdp.core.identification.state_dependence.states import HOLDS, rows_of
 from hydro_sdp.core.model.joint_model import JointModel
 import numpy as np
 import pytest

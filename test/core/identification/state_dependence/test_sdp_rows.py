@@ -1,7 +1,7 @@
 """Rows of the SDP analysis: each increment with its delayed command and its states."""
 
 from hydro_sdp.core.errors import ConfigurationError, DataError
-from hydro_sdp.core.identification.sdp.states import rows_of
+from hydro_sdp.core.identification.state_dependence.states import rows_of
 from hydro_sdp.core.model.records import Record
 import numpy as np
 import pytest

@@ -2,7 +2,7 @@
 
 import math
 
-from hydro_sdp.core.identification.sdp.backfit import backfit, Term
+from hydro_sdp.core.identification.state_dependence.backfit import backfit, Term
 import numpy as np
 import pytest
 from scipy.signal import lfilter

@@ -9,9 +9,9 @@ from __future__ import annotations
 
 from hydro_sdp.core.arrays import FloatArray, IntArray
 from hydro_sdp.core.identification.held_out import stretch_folds
-from hydro_sdp.core.identification.sdp.banded import fit_banded, fit_flat
-from hydro_sdp.core.identification.sdp.ordering import Ordering
-from hydro_sdp.core.identification.sdp.random_walk import GroupStats
+from hydro_sdp.core.identification.state_dependence.banded import fit_banded, fit_flat
+from hydro_sdp.core.identification.state_dependence.ordering import Ordering
+from hydro_sdp.core.identification.state_dependence.random_walk import GroupStats
 import numpy as np
 
 

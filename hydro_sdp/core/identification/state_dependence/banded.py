@@ -12,7 +12,7 @@ import math
 
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import DataError
-from hydro_sdp.core.identification.sdp.random_walk import (
+from hydro_sdp.core.identification.state_dependence.random_walk import (
     difference, GroupStats, order_of, STENCILS)
 import numpy as np
 from scipy.linalg import LinAlgError

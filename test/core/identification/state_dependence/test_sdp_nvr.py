@@ -2,8 +2,8 @@
 
 import math
 
-from hydro_sdp.core.identification.sdp.nvr import estimate_nvr
-from hydro_sdp.core.identification.sdp.random_walk import group_stats
+from hydro_sdp.core.identification.state_dependence.nvr import estimate_nvr
+from hydro_sdp.core.identification.state_dependence.random_walk import group_stats
 import numpy as np
 import pytest
 

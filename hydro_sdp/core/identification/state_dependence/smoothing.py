@@ -10,10 +10,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from hydro_sdp.core.arrays import FloatArray
-from hydro_sdp.core.identification.sdp.banded import (
+from hydro_sdp.core.identification.state_dependence.banded import (
     BandedFit, fit_banded, fit_flat, FlatFit, null_basis)
-from hydro_sdp.core.identification.sdp.nvr import estimate_nvr, NvrEstimate
-from hydro_sdp.core.identification.sdp.random_walk import GroupStats, inner, order_of
+from hydro_sdp.core.identification.state_dependence.nvr import estimate_nvr, NvrEstimate
+from hydro_sdp.core.identification.state_dependence.random_walk import GroupStats, inner, order_of
 import numpy as np
 
 
@@ -75,7 +75,7 @@ def smooth_parameter(stats: GroupStats, kind: str,
     ----------
     stats : GroupStats
         Sums of the observations per group
-        (:meth:`~hydro_sdp.core.identification.sdp.ordering.Ordering.stats`).
+        (:meth:`~hydro_sdp.core.identification.state_dependence.ordering.Ordering.stats`).
     kind : str
         ``rw`` or ``irw``.
     nvr : float, NvrEstimate or None

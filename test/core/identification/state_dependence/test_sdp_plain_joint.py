@@ -2,7 +2,7 @@
 
 from hydro_sdp.core.errors import ConfigurationError, DataError
 from hydro_sdp.core.identification.identify import identify
-from hydro_sdp.core.identification.sdp import analyse, SdpAnalysis
+from hydro_sdp.core.identification.state_dependence import analyse, SdpAnalysis
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.records import Record
 import numpy as np

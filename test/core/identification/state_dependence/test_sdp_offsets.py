@@ -2,10 +2,10 @@
 
 from dataclasses import replace
 
-from hydro_sdp.core.identification.sdp import analyse
-from hydro_sdp.core.identification.sdp.backfit import backfit, Term
-from hydro_sdp.core.identification.sdp.nvr import estimate_nvr
-from hydro_sdp.core.identification.sdp.random_walk import group_stats
+from hydro_sdp.core.identification.state_dependence import analyse
+from hydro_sdp.core.identification.state_dependence.backfit import backfit, Term
+from hydro_sdp.core.identification.state_dependence.nvr import estimate_nvr
+from hydro_sdp.core.identification.state_dependence.random_walk import group_stats
 from hydro_sdp.core.model.joint_model import JointModel
 import numpy as np
 import pytest

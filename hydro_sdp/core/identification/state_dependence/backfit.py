@@ -13,12 +13,12 @@ from typing import Sequence
 
 from hydro_sdp.core.arrays import FloatArray, IntArray
 from hydro_sdp.core.errors import DataError
-from hydro_sdp.core.identification.sdp.nvr import NvrEstimate
-from hydro_sdp.core.identification.sdp.ordering import MAX_GROUPS, order_by_state, Ordering
-from hydro_sdp.core.identification.sdp.random_walk import group_stats, inner, order_of, TvpKind
-from hydro_sdp.core.identification.sdp.shares import held_out_reduction
-from hydro_sdp.core.identification.sdp.significance import dependence_test
-from hydro_sdp.core.identification.sdp.smoothing import smooth_parameter, SmoothedParameter
+from hydro_sdp.core.identification.state_dependence.nvr import NvrEstimate
+from hydro_sdp.core.identification.state_dependence.ordering import MAX_GROUPS, order_by_state, Ordering
+from hydro_sdp.core.identification.state_dependence.random_walk import group_stats, inner, order_of, TvpKind
+from hydro_sdp.core.identification.state_dependence.shares import held_out_reduction
+from hydro_sdp.core.identification.state_dependence.significance import dependence_test
+from hydro_sdp.core.identification.state_dependence.smoothing import smooth_parameter, SmoothedParameter
 import numpy as np
 
 #: Passes in which the NVRs are re-estimated (CAPTAIN's ``nvr = -2``).
@@ -90,7 +90,7 @@ class TermEstimate:
     reduction : float
         Squared residual removed by letting the parameter follow the state (in-sample).
     share : float
-        Held-out reduction (:mod:`hydro_sdp.core.identification.sdp.shares`, 0 when
+        Held-out reduction (:mod:`hydro_sdp.core.identification.state_dependence.shares`, 0 when
         negative) over the base model's squared residual.
     p_value : float
         Bootstrap p-value of ``reduction`` (1 when the parameter came out constant).
@@ -227,7 +227,7 @@ def backfit(z: FloatArray, terms: Sequence[Term], *, max_groups: int | None = MA
     terms : sequence of Term
         The terms; each parameter follows its own state.
     max_groups : int or None
-        Most groups per state (:func:`~hydro_sdp.core.identification.sdp.ordering.order_by_state`).
+        Most groups per state (:func:`~hydro_sdp.core.identification.state_dependence.ordering.order_by_state`).
     replicates : int
         Bootstrap replicates of each term's test (0: no test, p-values NaN).
     seed : int
@@ -243,7 +243,7 @@ def backfit(z: FloatArray, terms: Sequence[Term], *, max_groups: int | None = MA
         None: the base model's constant (zero for an additive term).
     runs : IntArray or None
         Run of every sample (a command held), where the tests' blocks may be cut
-        (:func:`~hydro_sdp.core.identification.sdp.significance.dependence_test`).
+        (:func:`~hydro_sdp.core.identification.state_dependence.significance.dependence_test`).
 
     Returns
     -------

@@ -7,7 +7,7 @@ import math
 from typing import Literal
 
 from hydro_sdp.core.arrays import FloatArray
-from hydro_sdp.core.identification.sdp.backfit import Backfit, TermEstimate
+from hydro_sdp.core.identification.state_dependence.backfit import Backfit, TermEstimate
 import numpy as np
 
 #: What the gains describe: the SDP-ARX model's ``b``, or the measured increment over
@@ -146,7 +146,7 @@ class SdpAnalysis:
         <state>``), before any is weighed given the first.
     left_out : dict[str, int]
         Increments left out because the joint could not move, by reason
-        (:data:`~hydro_sdp.core.identification.sdp.states.HOLDS`).
+        (:data:`~hydro_sdp.core.identification.state_dependence.states.HOLDS`).
 
     """
 

@@ -11,11 +11,11 @@ from dataclasses import dataclass
 import math
 
 from hydro_sdp.core.arrays import FloatArray, IntArray
-from hydro_sdp.core.identification.sdp.banded import (
+from hydro_sdp.core.identification.state_dependence.banded import (
     banded_factor, banded_solve, null_basis, penalty_bands)
-from hydro_sdp.core.identification.sdp.nvr import nvr_range
-from hydro_sdp.core.identification.sdp.ordering import coarsened, Ordering
-from hydro_sdp.core.identification.sdp.random_walk import GroupStats, inner, order_of
+from hydro_sdp.core.identification.state_dependence.nvr import nvr_range
+from hydro_sdp.core.identification.state_dependence.ordering import coarsened, Ordering
+from hydro_sdp.core.identification.state_dependence.random_walk import GroupStats, inner, order_of
 import numpy as np
 from scipy import sparse
 from scipy.linalg import LinAlgError

@@ -3,11 +3,11 @@
 import math
 
 from hydro_sdp.core.errors import DataError
-from hydro_sdp.core.identification.sdp.banded import (
+from hydro_sdp.core.identification.state_dependence.banded import (
     fit_banded, fit_flat, penalty_bands, selected_inverse_diagonal)
-from hydro_sdp.core.identification.sdp.kalman import kalman_smooth
-from hydro_sdp.core.identification.sdp.ordering import order_by_state
-from hydro_sdp.core.identification.sdp.random_walk import group_stats, STENCILS
+from hydro_sdp.core.identification.state_dependence.kalman import kalman_smooth
+from hydro_sdp.core.identification.state_dependence.ordering import order_by_state
+from hydro_sdp.core.identification.state_dependence.random_walk import group_stats, STENCILS
 import numpy as np
 import pytest
 

@@ -2,9 +2,9 @@
 
 import math
 
-from hydro_sdp.core.identification.sdp import analyse
-from hydro_sdp.core.identification.sdp.ordering import order_by_state
-from hydro_sdp.core.identification.sdp.significance import dependence_test
+from hydro_sdp.core.identification.state_dependence import analyse
+from hydro_sdp.core.identification.state_dependence.ordering import order_by_state
+from hydro_sdp.core.identification.state_dependence.significance import dependence_test
 import numpy as np
 import pytest
 from support.sdp_null_cases import null_case, null_pairs

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 from hydro_sdp.core.arrays import FloatArray, IntArray
 from hydro_sdp.core.errors import DataError
-from hydro_sdp.core.identification.sdp.random_walk import group_stats, GroupStats
+from hydro_sdp.core.identification.state_dependence.random_walk import group_stats, GroupStats
 import numpy as np
 
 #: Most groups a state is cut into (distinct values pooled beyond it).

@@ -12,7 +12,7 @@ import math
 
 from hydro_sdp.core.arrays import FloatArray, IntArray
 from hydro_sdp.core.errors import DataError
-from hydro_sdp.core.identification.sdp.random_walk import transition
+from hydro_sdp.core.identification.state_dependence.random_walk import transition
 import numpy as np
 
 
