@@ -134,8 +134,27 @@ def input_scale(input_limits: tuple[float, float] | None) -> float:
     return scale
 
 
+class EstimatedEdges:
+    """The dead-zone edges of an online estimate, and their standard deviations."""
+
+    dead_zone_lower: float
+    dead_zone_upper: float
+    dead_zone_lower_std: float
+    dead_zone_upper_std: float
+
+    @property
+    def edges(self) -> tuple[float, float]:
+        """Return the dead-zone edges, input units."""
+        return self.dead_zone_lower, self.dead_zone_upper
+
+    @property
+    def edges_std(self) -> tuple[float, float]:
+        """Return the standard deviations of the edges, input units."""
+        return self.dead_zone_lower_std, self.dead_zone_upper_std
+
+
 @dataclass(frozen=True)
-class SdpEstimate:
+class SdpEstimate(EstimatedEdges):
     """
     The online estimate of an SDP map by name, with standard deviations.
 
@@ -165,16 +184,6 @@ saturation_positive_std, curvature_negative_std, curvature_positive_std : float
     saturation_positive_std: float
     curvature_negative_std: float
     curvature_positive_std: float
-
-    @property
-    def edges(self) -> tuple[float, float]:
-        """Return the dead-zone edges, input units."""
-        return self.dead_zone_lower, self.dead_zone_upper
-
-    @property
-    def edges_std(self) -> tuple[float, float]:
-        """Return the standard deviations of the edges, input units."""
-        return self.dead_zone_lower_std, self.dead_zone_upper_std
 
 
 class OnlineMapFilter:

@@ -13,7 +13,7 @@ import math
 from hydro_sdp.core.control.idz_table_design import command_span
 from hydro_sdp.core.errors import ConfigurationError
 from hydro_sdp.core.identification.online import (
-    NOISE_VARIANCE_RATIOS, OnlineMapFilter, OnlineSdpIdentifier, OnlineSettings)
+    EstimatedEdges, NOISE_VARIANCE_RATIOS, OnlineMapFilter, OnlineSdpIdentifier, OnlineSettings)
 from hydro_sdp.core.identification.scalar_kalman import Six
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.static_maps import (
@@ -29,7 +29,7 @@ BAND_SHARE = 1.0 / 3.0
 
 
 @dataclass(frozen=True)
-class EdgeEstimate:
+class EdgeEstimate(EstimatedEdges):
     """
     The online estimate of a map's edges and the speeds near them, with standard deviations.
 
@@ -53,16 +53,6 @@ speed_scale_positive_std : float
     dead_zone_upper_std: float
     speed_scale_negative_std: float
     speed_scale_positive_std: float
-
-    @property
-    def edges(self) -> tuple[float, float]:
-        """Return the dead-zone edges, input units."""
-        return self.dead_zone_lower, self.dead_zone_upper
-
-    @property
-    def edges_std(self) -> tuple[float, float]:
-        """Return the standard deviations of the edges, input units."""
-        return self.dead_zone_lower_std, self.dead_zone_upper_std
 
 
 def _side(model: JointModel, rest: float, end: float, dt: float) -> tuple[float, np.ndarray,
