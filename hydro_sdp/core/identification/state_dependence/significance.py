@@ -40,6 +40,21 @@ SMOOTH_SHARE = 0.25
 MORE = 5
 
 
+def _centred(series: FloatArray) -> tuple[int, int, FloatArray, float]:
+    """Return the series' length, its longest block, the series centred and its power."""
+    values = np.asarray(series, dtype=np.float64)
+    n = values.size
+    centred = values - np.mean(values) if n else values
+    return n, max(1, n // MIN_BLOCKS), centred, inner(centred, centred)
+
+
+def _autocovariance(centred: FloatArray, lags: int) -> FloatArray:
+    """Return the sums of lagged products of a centred series, lags 0 to ``lags - 1``."""
+    size = 1 << int(math.ceil(math.log2(2 * centred.size)))
+    spectrum = np.fft.rfft(centred, size)
+    return np.fft.irfft(spectrum * np.conj(spectrum), size)[:lags]
+
+
 def automatic_block(series: FloatArray) -> int:
     """
     Return the block length of the dependence test: Politis and White's rule, samples.
@@ -57,18 +72,12 @@ def automatic_block(series: FloatArray) -> int:
         Samples per block (>= 1).
 
     """
-    values = np.asarray(series, dtype=np.float64)
-    n = values.size
-    longest = max(1, n // MIN_BLOCKS)
-    centred = values - np.mean(values) if n else values
-    power = inner(centred, centred)
+    n, longest, centred, power = _centred(series)
     if n < 4 * MIN_BLOCKS or power <= 0.0:
         return longest
     run = max(5, math.ceil(math.sqrt(math.log10(n))))
     widest = math.ceil(math.sqrt(n)) + run
-    size = 1 << int(math.ceil(math.log2(2 * n)))
-    spectrum = np.fft.rfft(centred, size)
-    covariance = np.fft.irfft(spectrum * np.conj(spectrum), size)[:min(n, widest + run + 1)] / n
+    covariance = _autocovariance(centred, min(n, widest + run + 1)) / n
     standing = np.abs(covariance[1:] / covariance[0]) >= 2.0 * math.sqrt(math.log10(n) / n)
     # The first lag m after which `run` lags in a row stand below the bound.
     window = np.asarray(np.lib.stride_tricks.sliding_window_view(standing, run).any(axis=1))
@@ -99,16 +108,10 @@ def block_length(series: FloatArray) -> int:
         Samples per block (>= 1).
 
     """
-    values = np.asarray(series, dtype=np.float64)
-    n = values.size
-    longest = max(1, n // MIN_BLOCKS)
-    centred = values - np.mean(values) if n else values
-    power = inner(centred, centred)
+    n, longest, centred, power = _centred(series)
     if n < 4 or power <= 0.0:
         return min(longest, max(1, int(round(n ** (1.0 / 3.0)))))
-    size = 1 << int(math.ceil(math.log2(2 * n)))
-    spectrum = np.fft.rfft(centred, size)
-    acf = np.fft.irfft(spectrum * np.conj(spectrum), size)[:n] / power
+    acf = _autocovariance(centred, n) / power
     below = np.flatnonzero(acf[1:longest + 1] < ACF_CUT)
     lag = int(below[0]) + 1 if below.size else longest
     return int(min(longest, max(math.ceil(n ** (1.0 / 3.0)), 2 * lag)))
