@@ -271,7 +271,11 @@ def test_trajectories_faster_than_the_joint_are_refused(rig, kind):
 
 
 # 5. Impossible feedback.
-def test_impossible_feedback_closes_the_valve(rig):
+def _answers_while_moving(rig, inject):
+    """Send a bad JointState three times, 0.4 s apart, while the joint moves up.
+
+    Returns the time of the first and the valve commands within :data:`WITHIN` of each.
+    """
     rig.go(0.0)
     rig.setpoints.publish(Float64(data=math.radians(40.0)))
     assert rig.spin_until(lambda: rig.angle > 10.0, 10.0)
@@ -279,9 +283,14 @@ def test_impossible_feedback_closes_the_valve(rig):
     first = _now()
     for _ in range(3):
         sent = _now()
-        rig.inject(1e10)
+        inject()
         rig.spin_for(0.4)
         answers.append([round(v, 2) for t, v in rig.since(sent) if t < sent + WITHIN])
+    return first, answers
+
+
+def test_impossible_feedback_closes_the_valve(rig):
+    first, answers = _answers_while_moving(rig, lambda: rig.inject(1e10))
     refused = rig.said(first, CONTROLLER, 'refused feedback')
     print(f'\n[5] JointState of 1e10 rad, three times, 0.4 s apart: the commands within '
           f'{WITHIN} s {answers}; said {refused[:1]}')
@@ -313,16 +322,8 @@ def test_a_stamp_from_the_future_closes_the_valve_and_control_goes_on(rig):
 
 
 def test_a_stamp_far_behind_is_refused_and_closes_the_valve(rig):
-    rig.go(0.0)
-    rig.setpoints.publish(Float64(data=math.radians(40.0)))
-    assert rig.spin_until(lambda: rig.angle > 10.0, 10.0)
-    answers = []
-    first = _now()
-    for _ in range(3):
-        sent = _now()
-        rig.inject(math.radians(rig.angle), stamp_offset_ns=-100 * 10**9)
-        rig.spin_for(0.4)
-        answers.append([round(v, 2) for t, v in rig.since(sent) if t < sent + WITHIN])
+    first, answers = _answers_while_moving(rig, lambda: rig.inject(
+        math.radians(rig.angle), stamp_offset_ns=-100 * 10**9))
     ignored = rig.said(first, CONTROLLER, 'ignored')
     refused = rig.said(first, CONTROLLER, 'behind')
     print(f'\n[6] JointState stamped 100 s behind, three times, 0.4 s apart: the commands '
