@@ -108,9 +108,6 @@ def shipped_config(name: str) -> Path:
     """
     Path of a file shipped in the package's ``config`` folder.
 
-    Looks in the installed share folder (``ros2 run`` installs) first, then in
-    the source tree (virtual environment installs).
-
     Parameters
     ----------
     name : str
