@@ -1,12 +1,4 @@
-"""
-The message types the recorder records, and the type each of hydro_sdp's topics must have.
-
-The ROS graph says which type a topic is advertised with, but anyone on the domain can
-advertise anything: the recorder imports message classes from :data:`RECORDABLE` only
-(never a module named by the graph), and records a topic of hydro_sdp's (``joint_states``,
-``<joint>/valve_command``...) only with the type :data:`EXPECTED` gives it.
-
-"""
+"""The message types the recorder records, and the type each of hydro_sdp's topics must have."""
 
 from __future__ import annotations
 
