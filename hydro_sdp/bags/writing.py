@@ -127,8 +127,7 @@ def write_bag(path: str | os.PathLike[str], records: Sequence[Record], *,
         Desired angle (degrees) per joint and sample, written as
         ``/<joint>/setpoint`` in radians at the sample stamps.
     command_topics : mapping of str to str, optional
-        Command topic per joint, e.g. ``{'arm': '/arm/pwm'}``; default
-        ``/<joint>/valve_command``.
+        Command topic per joint, e.g. ``{'arm': '/arm/pwm'}``; default ``/<joint>/valve_command``.
     signals : mapping of str to FloatArray, optional
         More Float64 topics (``/arm/head_pressure``), one value per sample, stamped as the commands
         are, so that the value in force at ``t_k`` (a load read with ``load_topic``) reads back at

@@ -40,8 +40,7 @@ def read_text(path: str | os.PathLike[str], error: type[HydroSdpError] = ModelFi
     Raises
     ------
     HydroSdpError
-        Of type ``error``, if the file is missing, a directory, unreadable or
-        not UTF-8.
+        Of type ``error``, if the file is missing, a directory, unreadable or not UTF-8.
 
     """
     source = Path(path)

@@ -47,8 +47,7 @@ def choose_type(topic: str, advertised: Sequence[str]) -> tuple[str | None, str]
     Returns
     -------
     tuple[str or None, str]
-        The type (None: none can be recorded) and, when there is a problem, why
-        ('' otherwise).
+        The type (None: none can be recorded) and, when there is a problem, why ('' otherwise).
 
     """
     expected = expected_type(topic)

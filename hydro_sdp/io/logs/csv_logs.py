@@ -86,11 +86,9 @@ def parse_csv_log(text: str, *, joint: str, time: str, angle: str, command: str,
     joint : str
         Joint name for the record.
     time, angle, command : str
-        Columns (header name or 0-based index) of the time (s), the angle and
-        the command.
+        Columns (header name or 0-based index) of the time (s), the angle and the command.
     command_negative : str or None
-        Column subtracted from ``command`` (one-sided duty of the other
-        direction's valve).
+        Column subtracted from ``command`` (one-sided duty of the other direction's valve).
     angle_unit : str
         ``deg`` or ``rad``.
     delimiter : str or None
