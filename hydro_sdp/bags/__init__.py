@@ -1,12 +1,4 @@
-"""
-Reading and writing rosbag2 bags (sqlite3 and mcap) with ``rosbags``.
-
-:mod:`~hydro_sdp.bags.storage` finds and opens a bag's storage files,
-:mod:`~hydro_sdp.bags.reading` turns JointState and Float64 topics into
-records, :mod:`~hydro_sdp.bags.writing` writes records as a bag. Both sides
-pair commands with samples by the rule of :mod:`hydro_sdp.core.model.timing`.
-
-"""
+"""Reading and writing rosbag2 bags (sqlite3 and mcap) with ``rosbags``."""
 
 from hydro_sdp.bags.reading import BagData, read_bag, read_record, Series
 from hydro_sdp.bags.storage import (

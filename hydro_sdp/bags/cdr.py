@@ -1,15 +1,4 @@
-"""
-Bulk CDR codecs for the two message types hydro_sdp records.
-
-A stream of ``sensor_msgs/msg/JointState`` messages from one publisher has the
-same byte layout in every message: only the stamp and the numbers change. The
-decoder walks the layout of one message, checks that every other message of
-the same length carries the same bytes outside the stamp and the positions
-(same frame id, same joint names), and then reads the stamps and positions of
-all of them at once with numpy. Messages that differ are decoded one by one.
-``std_msgs/msg/Float64`` is a fixed 12-byte message and is decoded in one go.
-
-"""
+"""Bulk CDR codecs for the two message types hydro_sdp records."""
 
 from __future__ import annotations
 

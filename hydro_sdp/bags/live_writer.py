@@ -1,17 +1,4 @@
-"""
-A rosbag2 sqlite3 bag written as it is recorded, committed at least once per period.
-
-rosbag2 on Jazzy writes ``<bag>/<bag>_0.db3`` (sqlite schema version 4) while
-recording and ``metadata.yaml`` when it stops. :class:`Sqlite3BagWriter` does
-the same with the standard ``sqlite3`` module and commits whenever
-``flush_period`` has passed, so a recorder killed outright loses at most the
-last period of messages; ``hydro-sdp reindex`` then writes the missing
-``metadata.yaml`` (:mod:`hydro_sdp.bags.reindex`). A write the disk refuses (full, or
-a file size limit) raises :class:`~hydro_sdp.core.errors.BagWriteError` after rolling back
-the messages not yet committed; :meth:`Sqlite3BagWriter.close` then still closes the bag
-with what was committed.
-
-"""
+"""A rosbag2 sqlite3 bag written as it is recorded, committed at least once per period."""
 
 from __future__ import annotations
 

@@ -1,21 +1,4 @@
-"""
-Opening a plain sqlite3 bag folder without rosbags.
-
-Opening a bag with rosbags counts every storage file's messages per topic (a
-pass over the whole file) and parses ``metadata.yaml`` in pure Python; on a
-one-hour bag that costs a third of reading it. A folder written the plain way
-(``metadata.yaml`` version 9 or older, sqlite3 storage, no compression, CDR,
-QoS text the same in the metadata and the storage) is opened here with PyYAML
-and ``sqlite3``, by rosbags' rules: the folder's topics come from the metadata,
-a storage topic feeds one when name, type, serialisation, QoS and type hash
-agree, and its messages come as :func:`~hydro_sdp.bags.sqlite_rows.topic_rows`
-reads them. Anything else, or anything that fails here, gives ``None``, and the
-bag is opened with rosbags, which reads it or says what is wrong with it. Bags
-of ``ros2 bag record`` on Jazzy write their QoS as a YAML list, not text: they
-take the rosbags route (still with the bulk rows of ``sqlite_rows``); the bags
-:func:`~hydro_sdp.bags.write_bag` writes (``simulate``, ``import``) take this one.
-
-"""
+"""Opening a plain sqlite3 bag folder without rosbags."""
 
 from __future__ import annotations
 

@@ -1,16 +1,4 @@
-"""
-Reading a bag's joint angles and commands into records.
-
-Bags hold ``/joint_states`` (``sensor_msgs/msg/JointState``, radians) and one
-``std_msgs/msg/Float64`` valve command topic per joint (docs/interfaces.md
-section 2). :func:`read_bag` turns a bag into arrays; :meth:`BagData.record`
-picks one joint and its command and returns a :class:`~hydro_sdp.core.model.records.Record`
-in degrees, pairing each angle sample with the command in force
-(:func:`hydro_sdp.core.model.timing.command_in_force`). Anything that cannot be used
-is refused with a typed error that says why: an empty bag, a missing topic or
-joint.
-
-"""
+"""Reading a bag's joint angles and commands into records."""
 
 from __future__ import annotations
 
@@ -81,10 +69,8 @@ class BagData:
     stamps : IntArray
         The times of ``t`` in integer nanoseconds from :attr:`start`.
     start : int
-        Origin of the bag's times, ns since 1970 (or since the clock's zero): the
-        whole second at or before its first message. Stamps stay integers and are
-        made relative to it before any arithmetic, so a stamp of 1.76e9 s keeps
-        its nanoseconds and the sub-second digits stay as stamped.
+        Origin of the bag's times, ns since 1970 (or since the clock's zero): the whole second at
+        or before its first message.
 
     """
 
@@ -178,10 +164,6 @@ class BagData:
         """
         One joint's angle with the command in force before each angle sample.
 
-        ``v_k`` is the last command received before ``t_k`` (zero-order hold):
-        the one a plant applies over the interval ending at ``t_k``. Angle
-        samples without an earlier command are dropped.
-
         Parameters
         ----------
         joint : str or None
@@ -189,9 +171,9 @@ class BagData:
         command_topic : str or None
             Float64 command topic; default: the only topic ending in ``valve_command``.
         load_topic : str or None
-            Float64 topic of a measured load (a cylinder pressure, say), held like
-            the command (:func:`hydro_sdp.core.model.timing.command_in_force`) into the
-            record's ``load``; angle samples before its first message are dropped.
+            Float64 topic of a measured load (a cylinder pressure, say), held like the command
+            (:func:`hydro_sdp.core.model.timing.command_in_force`) into the record's ``load``;
+            angle samples before its first message are dropped.
         others : bool
             Whether to carry the angles of the bag's other joints (those named in
             every message that names ``joint``) as the record's ``others``.

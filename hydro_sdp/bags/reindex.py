@@ -1,15 +1,4 @@
-"""
-Rebuild a bag's ``metadata.yaml`` from its sqlite3 storage files (``hydro-sdp reindex``).
-
-A recorder that dies (SIGKILL, power cut) leaves its ``.db3`` files without the
-``metadata.yaml`` that rosbag2 tools and ``rosbags`` need to open the folder.
-As ``ros2 bag reindex`` does, :func:`reindex` reads every storage file of the
-folder, counts the messages of each topic, finds the start time and duration,
-and writes metadata version 8 (what rosbag2 on Jazzy writes). A storage file
-left with a half-written transaction is rolled back to its last commit first,
-by sqlite itself, when it is opened for writing.
-
-"""
+"""Rebuild a bag's ``metadata.yaml`` from its sqlite3 storage files (``hydro-sdp reindex``)."""
 
 from __future__ import annotations
 
@@ -306,15 +295,7 @@ def write_metadata(summary: BagSummary) -> Path:
 
 
 def reindex(folder: str | os.PathLike[str]) -> BagSummary:
-    """
-    Rebuild ``metadata.yaml`` of a bag folder from its sqlite3 storage files.
-
-    An existing ``metadata.yaml`` is replaced (as ``ros2 bag reindex`` does);
-    the storage files are not changed, except that a transaction a crash cut
-    short is rolled back by sqlite. ``folder``, the returned summary (what was
-    indexed) and the errors are those of :func:`summarise`.
-
-    """
+    """Rebuild ``metadata.yaml`` of a bag folder from its sqlite3 storage files."""
     summary = summarise(folder)
     write_metadata(summary)
     return summary

@@ -1,18 +1,4 @@
-"""
-Reading the messages of sqlite3 storage files in bulk, one query per topic.
-
-rosbags hands out a bag's messages one at a time through two generators, and
-that walk takes longer than decoding them all (:mod:`hydro_sdp.bags.cdr`). For the
-plain case, uncompressed sqlite3 storage, the rows of each wanted topic are
-fetched here in one query instead, with the rules of rosbags' reader: a bag
-folder's topics are matched to each storage file's topics by name, type,
-serialisation, QoS and type hash, the files are read in the order of
-``metadata.yaml``, and the messages of a file come ordered by receive time, ties
-in storage order (the order of rosbag2's ``timestamp_idx``). Anything else
-(mcap, compression, a reader laid out otherwise) gives ``None``: read it
-message by message then.
-
-"""
+"""Reading the messages of sqlite3 storage files in bulk, one query per topic."""
 
 from __future__ import annotations
 

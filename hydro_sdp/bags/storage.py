@@ -1,15 +1,4 @@
-"""
-Finding and opening a bag's storage: folders, storage files, split bags.
-
-A bag is a folder with ``metadata.yaml``, a single ``.db3`` or ``.mcap``
-storage file, or a folder of split storage files without metadata. Bags
-written by older tools sometimes read empty through their folder although
-their storage files hold messages (the QoS text in ``metadata.yaml`` differs
-from the storage's); such bags are read from their storage files directly.
-Anything that cannot be opened is refused with a typed error that says why: a
-missing path, an unknown serialisation, a corrupt storage file.
-
-"""
+"""Finding and opening a bag's storage: folders, storage files, split bags."""
 
 from __future__ import annotations
 

@@ -1,13 +1,4 @@
-"""
-Writing records as a rosbag2 bag (sqlite3 or mcap), whole or not at all.
-
-:func:`write_bag` writes records: commands are stamped by
-:func:`hydro_sdp.core.model.timing.command_stamps_for`, so that the bag reader
-pairs each one with the sample it belongs to again. :func:`write_topics` writes
-samples and Float64 topics each at its own stamps, as a recorder leaves them
-(epoch stamps, commands at their own rate).
-
-"""
+"""Writing records as a rosbag2 bag (sqlite3 or mcap), whole or not at all."""
 
 from __future__ import annotations
 
@@ -57,10 +48,6 @@ def write_topics(path: str | os.PathLike[str], stamps: IntArray, names: Sequence
                  storage: str = 'sqlite3') -> Path:
     """
     Write ``/joint_states`` and Float64 topics, each at its own stamps, whole or not at all.
-
-    This is what ``ros2 bag record`` leaves: samples stamped by the publisher's
-    clock (``header.stamp`` and receive time alike), commands and other signals
-    at their own rate, in time order.
 
     Parameters
     ----------
@@ -128,13 +115,6 @@ def write_bag(path: str | os.PathLike[str], records: Sequence[Record], *,
     """
     Write records as a rosbag2 bag, whole or not at all.
 
-    All records must share their time stamps: each sample becomes one
-    ``/joint_states`` message holding every joint (radians) and one
-    ``/<joint>/valve_command`` message per joint. A record's ``v_k`` is the
-    command in force over the interval ending at ``t_k``, so it is written at
-    ``t_{k-1}``, when a controller reading ``y_{k-1}`` would have sent it;
-    :meth:`BagData.record` reads it back as ``v_k``.
-
     Parameters
     ----------
     path : str or PathLike
@@ -147,12 +127,11 @@ def write_bag(path: str | os.PathLike[str], records: Sequence[Record], *,
         Desired angle (degrees) per joint and sample, written as
         ``/<joint>/setpoint`` in radians at the sample stamps.
     command_topics : mapping of str to str, optional
-        Command topic per joint, e.g. ``{'arm': '/arm/pwm'}``; default
-        ``/<joint>/valve_command``.
+        Command topic per joint, e.g. ``{'arm': '/arm/pwm'}``; default ``/<joint>/valve_command``.
     signals : mapping of str to FloatArray, optional
-        More Float64 topics (``/arm/head_pressure``), one value per sample, stamped
-        as the commands are, so that the value in force at ``t_k`` (a load read
-        with ``load_topic``) reads back at sample ``k``.
+        More Float64 topics (``/arm/head_pressure``), one value per sample, stamped as the commands
+        are, so that the value in force at ``t_k`` (a load read with ``load_topic``) reads back at
+        sample ``k``.
     start : int
         Nanoseconds added to every stamp (``1_760_000_000 * 10**9`` stamps the bag
         in 2025, as a recorder on a wall clock does).

@@ -1,12 +1,4 @@
-"""
-What every ``hydro-sdp`` command shares: options, output and exit codes.
-
-Commands return a :class:`Outcome`; :func:`hydro_sdp.cli.main.main` prints it
-as one JSON object (``--json``) or as text, and turns errors into the exit
-codes of docs/interfaces.md section 4.1: 0 success, 2 bad input with a one-line
-``error: ...`` on stderr, 1 internal failure.
-
-"""
+"""What every ``hydro-sdp`` command shares: options, output and exit codes."""
 
 from __future__ import annotations
 
@@ -222,9 +214,6 @@ def read_bag_records(bag: str, joint: str | None, command_topic: str | None, *,
                      others: bool = False) -> tuple[list, str]:
     """
     Read one joint's record from one bag, cut at gaps in its time stamps.
-
-    The one path every command reads a bag by (``identify``, ``evaluate``,
-    ``diagnose``, ``calibrate``).
 
     Parameters
     ----------

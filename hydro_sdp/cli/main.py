@@ -1,18 +1,4 @@
-"""
-Entry point of the ``hydro-sdp`` command line.
-
-Exit codes (docs/interfaces.md section 4.1): 0 success; 2 bad input, with one line
-``error: ...`` on stderr and no traceback; 1 internal failure; 130 when
-interrupted (nothing half-written is left behind: files are written atomically).
-
-This module imports only the standard library at the top: the commands, and
-numpy, scipy and rclpy with them, are imported inside :func:`main`, where a
-Ctrl-C in the first second of a command ends it with exit code 130 and one
-line, not a traceback. Only the command asked for gets its full parser, and
-its module imports what it needs when it runs (matplotlib only to draw), so
-``hydro-sdp --help`` and ``hydro-sdp identify`` without plots stay light.
-
-"""
+"""Entry point of the ``hydro-sdp`` command line."""
 
 from __future__ import annotations
 
@@ -60,9 +46,9 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
     Parameters
     ----------
     only : str or None
-        Give only this command its options and description; the others are
-        listed by name, and with their one-line help (all ``hydro-sdp --help``
-        shows) unless ``only`` names a command; default: every command in full.
+        Give only this command its options and description; the others are listed by name, and with
+        their one-line help (all ``hydro-sdp --help`` shows) unless ``only`` names a command;
+        default: every command in full.
 
     Returns
     -------
@@ -107,14 +93,7 @@ def _fail(message: str, code: int) -> int:
 
 
 class _Interrupts:
-    """
-    Note every Ctrl-C (SIGINT) while a command runs, and raise KeyboardInterrupt as usual.
-
-    A Ctrl-C that lands inside an extension (rclpy's nodes in the demo) can come out of
-    it as another exception: noted, it still ends the command as interrupted (130).
-    Only Python's own handler is wrapped, in the main thread: a shell's ignored SIGINT
-    stays ignored.
-    """
+    """Note every Ctrl-C (SIGINT) while a command runs, and raise KeyboardInterrupt as usual."""
 
     def __init__(self) -> None:
         self.seen = False

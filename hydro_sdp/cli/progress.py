@@ -1,11 +1,4 @@
-"""
-A small progress bar for long commands, drawn on stderr.
-
-It draws only when stderr is a terminal (or ``HYDRO_SDP_PROGRESS=1``), so that
-logs and ``--json`` pipelines stay clean, and it stays silent for work that
-ends within about two seconds.
-
-"""
+"""A small progress bar for long commands, drawn on stderr."""
 
 from __future__ import annotations
 

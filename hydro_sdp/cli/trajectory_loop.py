@@ -94,9 +94,6 @@ def simulate_trajectory(models: list[JointModel], specs: list[ControllerSpec],
     """
     Run the joints through the trajectory and measure how well they follow it.
 
-    Joints named in the trajectory start at its first point, the others at 0
-    (or mid-travel if 0 is outside their stops), holding until ``start_at``.
-
     Parameters
     ----------
     models, specs : list

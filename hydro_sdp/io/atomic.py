@@ -1,12 +1,4 @@
-"""
-Files written whole or not at all.
-
-Every file hydro_sdp writes goes through :func:`atomic_write_bytes` or
-:func:`atomic_directory`: the content is produced beside the target under a
-temporary name and renamed into place only when complete, so an interrupted
-run never leaves a partial model, bag or figure behind.
-
-"""
+"""Files written whole or not at all."""
 
 from __future__ import annotations
 
@@ -32,14 +24,7 @@ _UMASK = _read_umask()
 
 @contextmanager
 def interrupts_deferred() -> Iterator[None]:
-    """
-    Hold Ctrl-C (SIGINT) back for the duration of the block (creating or removing a temporary).
-
-    A SIGINT that arrives meanwhile is acted on when the block ends, so a
-    temporary file is never created without its cleanup being armed, nor left
-    half-removed. Only the main thread can receive KeyboardInterrupt; elsewhere
-    the block runs as is.
-    """
+    """Hold Ctrl-C (SIGINT) back while the block creates or removes a temporary."""
     # None: a handler installed outside Python, which could not be put back.
     if threading.current_thread() is not threading.main_thread() or \
             signal.getsignal(signal.SIGINT) is None:
@@ -108,10 +93,6 @@ def atomic_write_text(path: str | os.PathLike[str], text: str) -> Path:
 def atomic_directory(path: str | os.PathLike[str]) -> Iterator[Path]:
     """
     Build a directory under a temporary name and move it to ``path`` when done.
-
-    The yielded path does not exist yet (rosbag2 writers create their folder).
-    An existing ``path`` is replaced only after the new one is complete; if the
-    block raises, nothing at ``path`` changes.
 
     Parameters
     ----------

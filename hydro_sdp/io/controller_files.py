@@ -51,9 +51,9 @@ def controller_for(model: JointModel, path: str | os.PathLike[str] | None,
     model : JointModel
         The joint's model.
     path : str, PathLike or None
-        Controller file (checked to be for this joint and to command the valve within
-        the model's range, and given that range when it has none), or None to design
-        the PIP-IDZ controller from the model.
+        Controller file (checked to be for this joint and to command the valve within the model's
+        range, and given that range when it has none), or None to design the PIP-IDZ controller
+        from the model.
     control_period : float
         Control period of a designed controller, s.
 

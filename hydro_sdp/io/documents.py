@@ -40,8 +40,7 @@ def read_text(path: str | os.PathLike[str], error: type[HydroSdpError] = ModelFi
     Raises
     ------
     HydroSdpError
-        Of type ``error``, if the file is missing, a directory, unreadable or
-        not UTF-8.
+        Of type ``error``, if the file is missing, a directory, unreadable or not UTF-8.
 
     """
     source = Path(path)
@@ -107,9 +106,6 @@ def yaml_text(data: Mapping[str, object]) -> str:
 def shipped_config(name: str) -> Path:
     """
     Path of a file shipped in the package's ``config`` folder.
-
-    Looks in the installed share folder (``ros2 run`` installs) first, then in
-    the source tree (virtual environment installs).
 
     Parameters
     ----------

@@ -9,11 +9,5 @@ from hydro_sdp.io.documents import load_document
 
 
 def load_machine(path: str | os.PathLike[str]) -> Machine:
-    """
-    Read a physics plant file (YAML, format ``hydro_sdp/physics/v1``) at ``path``.
-
-    The machine is validated as by :meth:`Machine.from_mapping`; its
-    :class:`~hydro_sdp.core.errors.ModelFileError` names the file and the key.
-
-    """
+    """Read a physics plant file (YAML, format ``hydro_sdp/physics/v1``) at ``path``."""
     return load_document(path, Machine.from_mapping)

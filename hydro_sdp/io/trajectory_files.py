@@ -1,26 +1,4 @@
-"""
-Trajectory files: joint angles over time (YAML or CSV), or a straight tip line (YAML).
-
-YAML, joint angles (as ``trajectory_msgs/JointTrajectory``, degrees)::
-
-    format: hydro_sdp/trajectory/v1
-    joint_names: [boom, dipper]
-    points:
-      - {time_from_start: 0.0, positions: [0.0, -100.0]}
-      - {time_from_start: 4.0, positions: [30.0, -60.0], velocities: [0.0, 0.0]}
-
-(velocities, deg/s, in every point or in none). YAML, a straight line of the
-bucket tip (metres; ``speed`` in m/s or ``duration`` in s; the kinematics file
-is found beside the trajectory file, then among the shipped ones)::
-
-    format: hydro_sdp/trajectory/v1
-    kinematics: lucie_kinematics.yaml
-    line: {start: [1.6, 0.3], end: [2.3, -0.4], speed: 0.1}
-
-CSV: a header ``time,<joint>,<joint>...`` then one row per point (s, deg);
-lines starting with ``#`` are comments.
-
-"""
+"""Trajectory files: joint angles over time (YAML or CSV), or a straight tip line (YAML)."""
 
 from __future__ import annotations
 

@@ -1,14 +1,4 @@
-"""
-Figures in the style of West et al. (2018), drawn with matplotlib's object API.
-
-Figures are built on :class:`matplotlib.figure.Figure` directly (no pyplot
-global state), so they can be made from any thread and in tests, and saved
-whole or not at all with :func:`save_figure`. By subject: :mod:`.figures`
-(colours, axes, saving), :mod:`.units` (the command's unit in labels),
-:mod:`.identification`, :mod:`.sdp` (the SDP analysis), :mod:`.control` and
-:mod:`.diagnosis`.
-
-"""
+"""Figures in the style of West et al. (2018), drawn with matplotlib's object API."""
 
 from hydro_sdp.plots.control import (
     plot_closed_loop, plot_idz, plot_idz_table, plot_recalibration)

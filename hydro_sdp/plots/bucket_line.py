@@ -64,9 +64,8 @@ def plot_bucket_line(x: FloatArray, z: FloatArray,
     Returns
     -------
     Figure
-        Top: the tip path in the arm's plane (equal scales) and the path error
-        in mm against time; below, the demanded and actual angle of each joint
-        (as the paper's Fig. 7 (a) and (b)).
+        Top: the tip path in the arm's plane (equal scales) and the path error in mm against time;
+        below, the demanded and actual angle of each joint (as the paper's Fig. 7 (a) and (b)).
 
     """
     rows = 1 + (len(traces) + 1) // 2

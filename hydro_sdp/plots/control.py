@@ -28,9 +28,6 @@ def plot_idz(model: JointModel, idz: InverseDeadZone, control_period: float, *,
     """
     IDZ approximation, as the paper's Fig. 6.
 
-    The model's increment per control sample against the steady command, the
-    chords the IDZ inverts, the dead-zone edges and the limits of ``u``.
-
     Parameters
     ----------
     model : JointModel
@@ -88,11 +85,6 @@ def plot_idz_table(model: JointModel, table: TableInverseDeadZone, chord: Invers
                    control_period: float, *, command_unit: str | None = None) -> Figure:
     """
     Draw the map's table IDZ next to the paper's chord IDZ, and the loop gain each leaves.
-
-    Top: the model's increment per control sample against the steady command,
-    the table's points (the IDZ inverts the line through them) and the chords.
-    Bottom: the loop gain ``T rate(IDZ(u)) / u`` the controller sees through each
-    inverse: 1 where the inverse is exact.
 
     Parameters
     ----------

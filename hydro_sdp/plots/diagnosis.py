@@ -42,13 +42,6 @@ def plot_signature(signature: Signature, *, command_unit: str | None = None) -> 
     """
     Draw the residual signature that named an effect, before and after adding it.
 
-    Against the delayed command or the angle, the residuals are averaged in bins;
-    after command changes or reversals, over the second after each event. When the
-    signature holds the direction of motion at every sample (the angle words), each
-    direction is drawn apart, its residual signed by the direction (positive: faster
-    than the model): a factor of the angle shared by both directions shows as one
-    curve twice, a gravity-like one as two mirrored curves.
-
     Parameters
     ----------
     signature : Signature
@@ -185,8 +178,8 @@ def plot_record_scales(candidate: Candidate) -> Figure | None:
     ----------
     candidate : Candidate
         The ``load_dependence`` candidate; its parameters hold ``scales_positive``,
-        ``errors_positive`` and the same for ``negative`` (None where a record does
-        not move that way).
+        ``errors_positive`` and the same for ``negative`` (None where a record does not move that
+        way).
 
     Returns
     -------

@@ -1,13 +1,4 @@
-"""
-Figures of what named an effect: the SDP estimate along its state, and every candidate.
-
-:func:`plot_state_evidence` draws what the model misses against the state that named
-the effect (the ratio of the measured to the model's increment per direction, and the
-increment residual, +-2 standard errors), for the model given and with the effect:
-the curve flattens onto 1 (or 0) when the effect explains it. :func:`plot_candidates`
-draws what each word of the vocabulary explains on held-out data and how sure that is.
-
-"""
+"""Figures of what named an effect: the SDP estimate along its state, and every candidate."""
 
 from __future__ import annotations
 
@@ -64,11 +55,6 @@ def plot_state_evidence(evidence: StateEvidence, *, command_unit: str | None = N
 def plot_candidates(candidates: Sequence[Candidate], named: str) -> Figure:
     """
     Draw what every word of the vocabulary explains on held-out data, and how sure that is.
-
-    One bar per applicable candidate: the share of the windowed simulation error it
-    removes on the held-out records (top, with the margin a name needs) and the
-    standard score of its reduction of the squared velocity residual under the block
-    bootstrap (bottom); accepted candidates are drawn dark, the one named is labelled.
 
     Parameters
     ----------

@@ -1,11 +1,4 @@
-"""
-Figure basics: the colours, a new figure with stacked axes, saving it whole.
-
-Figures are built on :class:`matplotlib.figure.Figure` directly (no pyplot
-global state), so they can be made from any thread and in tests, and saved
-whole or not at all with :func:`save_figure`.
-
-"""
+"""Figure basics: the colours, a new figure with stacked axes, saving it whole."""
 
 from __future__ import annotations
 

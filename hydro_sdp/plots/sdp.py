@@ -1,12 +1,4 @@
-"""
-Figures of the SDP analysis: each parameter against a state with +-2 standard-error bands.
-
-As the SDP papers draw them (Young, McKenna and Bruun 2001; CAPTAIN's
-``sdpdemo``): the estimate along the sorted state, a band of two standard
-errors either side, the parameter held constant for comparison. Each direction
-of motion is its own curve.
-
-"""
+"""Figures of the SDP analysis: each parameter against a state with +-2 standard-error bands."""
 
 from __future__ import annotations
 
@@ -83,9 +75,6 @@ def plot_state(analysis: SdpAnalysis, state: str, *, command_unit: str | None = 
                title: str = '') -> Figure:
     """
     Draw every parameter of the analysis against one state.
-
-    The gains (``b`` or ``ratio``), one curve per direction, on top; the increment
-    residual below it when the analysis holds one. Dashed: each parameter held constant.
 
     Parameters
     ----------

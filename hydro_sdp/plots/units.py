@@ -1,12 +1,4 @@
-"""
-The unit of a joint's command, for axis labels and reports.
-
-Commands are in the valve's own units (docs/interfaces.md): volts on an
-analogue valve amplifier, percent duty on a PWM valve, drive-demand units on a
-machine's bus. A model does not store the unit, so it is read from its input
-range when that range is a usual one, and is otherwise what the user says.
-
-"""
+"""The unit of a joint's command, for axis labels and reports."""
 
 from __future__ import annotations
 

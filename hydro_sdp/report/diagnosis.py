@@ -50,9 +50,9 @@ def write_report(folder: Path, result: Diagnosis, *, command_unit: str | None = 
     Returns
     -------
     list[str]
-        The paths written: ``gap.png``, ``ledger.png``, ``signature.png`` and
-        ``evidence.png`` when an effect was named, ``candidates.png``,
-        ``record_scales.png`` for per-record load factors, and ``summary.md``.
+        The paths written: ``gap.png``, ``ledger.png``, ``signature.png`` and ``evidence.png`` when
+        an effect was named, ``candidates.png``, ``record_scales.png`` for per-record load factors,
+        and ``summary.md``.
 
     """
     gap = result.gap

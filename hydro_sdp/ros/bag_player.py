@@ -1,12 +1,7 @@
 """
 Replay a bag's JointState and Float64 topics (``ros2 run hydro_sdp bag_player``).
 
-Messages go out in recorded order at the recorded timing times ``rate``; with
-``publish_clock`` the bag time is published on ``/clock`` first, so nodes with
-``use_sim_time`` (an identifier fed from a recording) follow the bag's time.
-When the last message is out the node shuts its context down, so the process
-ends (as ``ros2 bag play`` does); with ``loop`` it starts over instead.
-Tests can drive the player without a wall clock through :meth:`play_until`.
+Topics, parameters and lifecycle: docs/interfaces.md section 3.6.
 
 """
 

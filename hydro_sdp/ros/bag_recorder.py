@@ -1,23 +1,7 @@
 """
 Record topics into a rosbag2 bag without rosbag2 (``ros2 run hydro_sdp bag_recorder``).
 
-As ``ros2 bag record`` does, the recorder writes ``output/output_0.db3`` (sqlite3,
-rosbag2's schema) while it runs and ``output/metadata.yaml`` when it stops. It
-commits at least every ``flush_period`` seconds, so a recorder that is killed
-outright loses at most that much; ``hydro-sdp reindex output`` then writes the
-missing ``metadata.yaml``. An ``output`` that exists is refused and left as it is.
-
-Each topic is recorded with the type its publishers advertise in the ROS graph
-(a ``std_msgs/msg/Bool`` stays a Bool) if it is one the recorder records, and for
-hydro_sdp's own topics only with their type (``joint_states`` a JointState:
-:mod:`~hydro_sdp.ros.recorded_types`; a class is never imported by a name the graph
-gives), stamped with the node's clock at receipt (simulated time when
-``use_sim_time`` is set). A topic nobody publishes yet, or only with another type,
-is looked up again every ``discovery_period`` seconds and recorded from when it
-appears; the log says what is recorded, what is still awaited, and at the end how
-many messages were written. When the disk refuses a write (full), the recorder
-stops with one line on stderr and exit code 3, the bag closed with what was
-committed (:class:`~hydro_sdp.core.errors.BagWriteError`).
+Topics, parameters and lifecycle: docs/interfaces.md section 3.5.
 
 """
 

@@ -1,14 +1,4 @@
-"""
-What the controller node's configure transition builds: one loop per joint, with its parameters.
-
-:class:`ControllerConfiguration` reads the file parameters of
-:data:`~hydro_sdp.ros.parameters.controller.CONTROLLER_PARAMETERS`, loads each joint's
-model and controller (or designs one), builds one
-:class:`~hydro_sdp.ros.joint_loop.JointLoop` per joint and declares the joints' run-time
-parameters; cleanup undeclares them. It touches no topic: that is
-:class:`~hydro_sdp.ros.controller_interfaces.ControllerInterfaces`.
-
-"""
+"""What the controller node's configure builds: one loop per joint, with its parameters."""
 
 from __future__ import annotations
 
@@ -101,9 +91,6 @@ class ControllerConfiguration:
               stop_band: float) -> list[JointLoop]:
         """
         Load the files and design; declare each joint's parameters; return the loops.
-
-        Values given at start-up (``-p``, a parameter file) to the joints' parameters go
-        through the same check as a run-time request.
 
         Parameters
         ----------

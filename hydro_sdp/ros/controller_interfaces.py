@@ -1,14 +1,4 @@
-"""
-The topics and timers of a configured controller node, made at configure, destroyed at cleanup.
-
-:class:`ControllerInterfaces` gives each :class:`~hydro_sdp.ros.joint_loop.JointLoop` its
-``<joint>/valve_command`` and ``<joint>/controller_state`` publishers and its
-``<joint>/setpoint`` subscription, subscribes to ``joint_states`` and ``joint_trajectory``,
-and runs the feedback watchdog, on the node's clock and on a steady clock (a simulated
-clock that stops must not stop it). The node's callbacks are passed in; nothing here
-controls.
-
-"""
+"""The topics and timers of a controller node, made at configure, destroyed at cleanup."""
 
 from __future__ import annotations
 

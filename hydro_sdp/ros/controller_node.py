@@ -1,64 +1,7 @@
 """
 The PIP-IDZ controller as a ROS lifecycle node (``ros2 run hydro_sdp controller_node``).
 
-One node controls one joint (``model_file``, ``controller_file``) or several
-(``joints`` with ``model_files`` and ``controller_files`` in the same order; an
-empty controller file name designs from the model). Per joint it subscribes to
-``<joint>/setpoint`` (rad) and publishes ``<joint>/valve_command`` and
-``<joint>/controller_state`` (the layout of
-:data:`~hydro_sdp.ros.conversions.CONTROLLER_STATE_LABELS`); one ``joint_states``
-feeds every joint, and ``joint_trajectory`` (``trajectory_msgs/JointTrajectory``)
-moves the set-points as :mod:`~hydro_sdp.core.control.trajectory` says, with the set-point
-rate fed forward through the IDZ when ``feedforward`` is true (a trajectory is
-refused whole, with a warning naming the offenders, if it names a joint not
-controlled or leaves the end stops less ``setpoint_margin``, or if the node is not
-active or has had no feedback from a joint it names). ``/diagnostics``
-gets one status per joint every ``diagnostic_period`` (:mod:`~hydro_sdp.core.control.health`).
-
-The node holds its parts: its parameters
-(:class:`~hydro_sdp.ros.parameters.node_parameters.NodeParameters` over
-:data:`~hydro_sdp.ros.parameters.controller.CONTROLLER_PARAMETERS`), what configure
-builds (:class:`~hydro_sdp.ros.controller_configuration.ControllerConfiguration`: one
-:class:`~hydro_sdp.ros.joint_loop.JointLoop` per joint), its topics and watchdog
-(:class:`~hydro_sdp.ros.controller_interfaces.ControllerInterfaces`), what follows its
-trajectories (:class:`~hydro_sdp.ros.trajectory_follower.TrajectoryFollower`) and its
-diagnostics (:class:`~hydro_sdp.ros.diagnostics.DiagnosticsReporter`).
-
-The core :class:`~hydro_sdp.core.control.pip_controller.PipIdzController` does the
-control and the core :mod:`~hydro_sdp.core.control.scheduling` decides when: the first
-JointState sample at or after each control instant is controlled (so the
-feedback-to-command latency is the computation time); a duplicate or
-out-of-order sample is ignored; a sample that cannot be used (NaN, joint
-missing, arrays of different lengths, stamp more than ``feedback_timeout``
-behind the node's clock or more than a control period ahead of it, an angle
-beyond the stops or faster than the joint by more than ``feedback_margin``) is
-refused for that joint with a throttled warning and its valve is closed; if no
-valid feedback arrives for ``feedback_timeout``, on the node clock or a steady
-clock, the watchdog closes the valve, and control resumes from the next valid
-sample without a bump. Set-points are kept ``setpoint_margin`` degrees inside the
-end stops, and near a stop the valve holds in its dead-zone
-(:mod:`~hydro_sdp.core.control.safety`). Per message the node reads the clock once
-and the stamp once, and publishes the command before anything else it does.
-
-Its parameter services answer a request whose arrays or strings are too large from
-the message alone, so no request holds up the loop for more than its reading
-(:class:`~hydro_sdp.ros.parameters.node_parameters.NodeParameters`).
-
-Lifecycle: configure loads the files and designs, and declares the joints'
-parameters; activate starts commanding (every joint first holds where it is
-found); deactivate closes every valve once and stops commanding; cleanup undoes
-configure. With ``autostart`` (the default) the node configures and activates
-itself at start.
-
-Every writable parameter applies at run time: ``<joint>.gains.k_i``,
-``<joint>.idz.dead_zone``... per joint (with one joint also under the plain names
-``gains.k_i``, ``idz.dead_zone``..., kept in step). With a table IDZ (the map's own
-inverse) a new ``idz.dead_zone`` shifts the branch of the edge that moved and a new
-``idz.slopes`` scales a branch's increments (its chord slope to two thirds of its
-largest increment); new edges must lie inside the valve range and new slopes within
-the model's (:func:`~hydro_sdp.core.control.safety.check_idz_fits`). A change request is
-checked as a whole before anything is applied and applied in the post-set callback.
-Trajectories faster than a joint's identified top speed are refused.
+Topics, parameters and lifecycle: docs/interfaces.md section 3.2.
 
 """
 

@@ -1,11 +1,4 @@
-"""
-Conversions between ROS messages and core values (REP 103 at the boundary).
-
-JointState positions are radians on the wire and degrees in the core. The
-functions read attributes only, so they serve rclpy messages and rosbags'
-deserialised messages alike.
-
-"""
+"""Conversions between ROS messages and core values (REP 103 at the boundary)."""
 
 from __future__ import annotations
 

@@ -1,11 +1,4 @@
-"""
-``/diagnostics`` of the nodes: DiagnosticArray from joints' health statuses.
-
-:class:`~hydro_sdp.core.control.health.HealthStatus` says what each status holds.
-
-:class:`DiagnosticsReporter` is the part of a node that publishes them on a timer.
-
-"""
+"""``/diagnostics`` of the nodes: DiagnosticArray from joints' health statuses."""
 
 from __future__ import annotations
 

@@ -1,14 +1,4 @@
-"""
-Console-script entry points of the nodes (``ros2 run hydro_sdp plant_node`` ...).
-
-Loading a node's modules (rclpy, numpy) takes a good part of a second; a Ctrl-C in
-that time would otherwise end in a ``KeyboardInterrupt`` traceback, or worse, in
-an ``ImportError`` when it lands inside rclpy's C extension, whose initialiser turns
-the interrupt into "initialization failed". Here a Ctrl-C during the import is only
-noted; once the modules are in, the process ends quietly with 130, as the command
-line does. Once the node runs, :func:`hydro_sdp.ros.runner.run_node` handles signals.
-
-"""
+"""Console-script entry points of the nodes (``ros2 run hydro_sdp plant_node`` ...)."""
 
 from __future__ import annotations
 

@@ -1,10 +1,4 @@
-"""
-One joint of the identifier node: its estimator, recalibration decision and topics.
-
-:class:`IdentifiedJoint` holds what :class:`~hydro_sdp.ros.identifier_node.IdentifierNode`
-keeps per joint; :func:`estimate_topics` gives the published values.
-
-"""
+"""One joint of the identifier node: its estimator, recalibration decision and topics."""
 
 from __future__ import annotations
 
@@ -24,12 +18,7 @@ from rclpy.task import Future
 
 
 class OnlineEstimator(Protocol):
-    """
-    What the node needs of an online estimator (tests put a stand-in with a set estimate).
-
-    :func:`~hydro_sdp.core.identification.online_edges.online_identifier` gives the real
-    one: eq. (5)'s filter for an ``sdp`` model, the edges' filter for any other.
-    """
+    """What the node needs of an online estimator (tests put a stand-in with a set estimate)."""
 
     @property
     def delay(self) -> int:

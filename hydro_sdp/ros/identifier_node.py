@@ -1,36 +1,7 @@
 """
 Online identification as a ROS node (``ros2 run hydro_sdp identifier_node``).
 
-One node identifies one joint (``model_file``) or several (``joints`` with
-``model_files`` in the same order), of any map family. Per joint it pairs each
-``joint_states`` sample with the last ``<joint>/valve_command`` received before it
-(the command in force over the interval that ends at the sample, as in a recorded
-bag), feeds the core online identifier
-(:func:`~hydro_sdp.core.identification.online_edges.online_identifier`: eq. (5)'s
-six coefficients for an ``sdp`` model, the edges and the speed scales near them
-for any other), and publishes the estimates and their standard deviations on
-``<joint>/sdp/...`` (``std_msgs/Float64``):
-
-* ``dead_zone_lower``, ``dead_zone_upper``: edges, input units;
-* ``sdp`` models: ``saturation_negative_rad_s``, ``saturation_positive_rad_s``,
-  saturation speeds, rad/s, and ``curvature_negative``, ``curvature_positive``,
-  1/input unit; other families: ``speed_scale_negative``, ``speed_scale_positive``,
-  the speeds beyond each edge over the model's;
-* each of these with ``_std`` appended: its standard deviation, same unit;
-* ``delay``: the delay, s;
-* ``slope_negative``, ``slope_positive``: the IDZ slopes for the controller's
-  ``idz.slopes`` parameter, deg per control sample per input unit, in the IDZ form
-  the family's design takes (chords for ``sdp``, ``sdp_dz`` and ``linear``, a
-  table for the others);
-* ``recalibration_needed`` (``std_msgs/Bool``).
-
-The core :class:`~hydro_sdp.core.control.idz_recalibration.Recalibration` decides when the
-estimates call for a new IDZ; with ``auto_recalibrate`` the node then sets the
-controller's ``<joint>.idz.dead_zone`` and ``<joint>.idz.slopes`` parameters
-(a one-joint controller keeps its plain ``idz.*`` names in step). ``/diagnostics``
-gets one status per joint every ``diagnostic_period``: the estimates with their
-standard deviations, WARN when a recalibration is needed or samples stop. Every
-writable parameter takes effect at once.
+Topics, parameters and lifecycle: docs/interfaces.md section 3.3.
 
 """
 

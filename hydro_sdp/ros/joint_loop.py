@@ -1,13 +1,4 @@
-"""
-One joint of the controller node: its model, design, controller, schedule and parameters.
-
-The node (:mod:`hydro_sdp.ros.controller_node`) holds one :class:`JointLoop` per
-joint and wires them to ROS; a loop knows its run-time parameters by their
-name under the joint (``<joint>.gains.k_i``, ``<joint>.idz.dead_zone``...: the per-joint
-rows of :data:`~hydro_sdp.ros.parameters.controller.CONTROLLER_PARAMETERS`) and builds
-the spec a set request would give (:meth:`JointLoop.candidate`).
-
-"""
+"""One joint of the controller node: its model, design, controller, schedule and parameters."""
 
 from __future__ import annotations
 

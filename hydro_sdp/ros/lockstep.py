@@ -1,10 +1,7 @@
 """
 Lockstep: a plant node advanced one period at a time until the graph has settled.
 
-What it needs of the nodes it steps is written as Protocols (the plant's period, ticks
-and commands; a controller's counters; an observer's counters), so a test may step
-nodes of its own (docs/methods.md section 9.4). Used through
-:mod:`hydro_sdp.ros.testing`.
+Reasoning: methods 9.4.
 
 """
 
@@ -76,11 +73,6 @@ class LoopController(Protocol):
 class Lockstep:
     """
     Advance a plant node one period at a time and wait until the graph has settled.
-
-    After each step: the plant has ticked once more, every observer has taken the
-    new sample, and every command the controllers sent has reached the plant and
-    every observer. Timers fire before subscriptions in one wait, so waiting for
-    consumption (not just publication) keeps the loop exact.
 
     Parameters
     ----------

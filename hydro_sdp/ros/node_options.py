@@ -9,13 +9,7 @@ from rclpy.parameter import Parameter
 
 
 class NodeOptions(TypedDict, total=False):
-    """
-    Keyword options of :class:`rclpy.node.Node`, all optional, passed on unchanged.
-
-    A node of this package takes them as ``**kwargs: Unpack[NodeOptions]``, so that a
-    misspelt or mistyped option is found by the type checker, not by rclpy at run time.
-
-    """
+    """Keyword options of :class:`rclpy.node.Node`, all optional, passed on unchanged."""
 
     context: Context | None
     cli_args: list[str] | None

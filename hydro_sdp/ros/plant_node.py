@@ -1,29 +1,7 @@
 """
 Simulated hydraulic joints as a ROS node (``ros2 run hydro_sdp plant_node``).
 
-The node owns the only timer of a simulated machine. On each tick it applies,
-for every joint, the last valve command received before the tick (the command
-in force over the interval that ends now: the rule of
-:func:`~hydro_sdp.core.model.timing.command_in_force`, here in arrival order since a
-Float64 carries no stamp), advances the core
-:class:`~hydro_sdp.core.model.simulation.JointSimulator` one sample, and publishes one
-``joint_states`` with every joint (REP 103: position in rad, velocity in rad/s,
-the simulated motion over the last sample, without measurement noise). Angle
-parameters are in degrees. With ``use_sim_time`` the tick follows ``/clock``, so
-a test can run the machine in lockstep.
-
-Two parameters change at run time, from the next tick: ``noise_std`` (a sensor
-that degrades) and ``dead_zone_shift`` (a valve that wears); a request is checked
-whole (the worn model as a whole: edges inside the valve range) before either
-applies, and values given at start-up apply the same way. The others shape the
-machine and are read-only (:data:`~hydro_sdp.ros.parameters.plant.PLANT_PARAMETERS`).
-
-Each joint's valve takes commands as the core
-:class:`~hydro_sdp.core.control.command_gate.CommandGate` says: only while the
-publishers matched to its subscription are the one allowed source (``command_source``,
-named by the ROS graph, or any single node), at most ``command_rate_limit`` per second,
-clamped to the valve range; a refused command closes that valve (throttled warning), and
-with ``command_timeout`` the valve closes when its source falls silent.
+Topics, parameters and lifecycle: docs/interfaces.md section 3.1.
 
 """
 

@@ -1,12 +1,4 @@
-"""
-The message types the recorder records, and the type each of hydro_sdp's topics must have.
-
-The ROS graph says which type a topic is advertised with, but anyone on the domain can
-advertise anything: the recorder imports message classes from :data:`RECORDABLE` only
-(never a module named by the graph), and records a topic of hydro_sdp's (``joint_states``,
-``<joint>/valve_command``...) only with the type :data:`EXPECTED` gives it.
-
-"""
+"""The message types the recorder records, and the type each of hydro_sdp's topics must have."""
 
 from __future__ import annotations
 
@@ -55,8 +47,7 @@ def choose_type(topic: str, advertised: Sequence[str]) -> tuple[str | None, str]
     Returns
     -------
     tuple[str or None, str]
-        The type (None: none can be recorded) and, when there is a problem, why
-        ('' otherwise).
+        The type (None: none can be recorded) and, when there is a problem, why ('' otherwise).
 
     """
     expected = expected_type(topic)

@@ -1,23 +1,4 @@
-"""
-The ``main()`` every hydro_sdp node shares (the Jazzy pattern of demo_nodes_py).
-
-SIGTERM (``timeout``, ``kill``, ``ros2 launch`` ending) stops a node as SIGINT
-(Ctrl-C) does: the node is destroyed (a recorder closes its bag) and the process
-exits with code 0, without a traceback. A signal that comes before this module
-is loaded (about the first half second, while Python imports the node) ends the
-process by the signal (status -15 for SIGTERM), as for any program.
-
-Why not plain ``rclpy.spin``: on a signal rclpy shuts the context down from
-another thread, so a callback or the node's constructor can fail half-way
-("context is not valid"), and the wake-up of the executor can be lost when the
-shutdown lands between its check of the context and its next wait, which
-leaves a node without timers (``identifier_node``) waiting forever. Here a
-Python handler records the signal first (rclpy's handler calls it), rclpy's
-handlers are installed only once the node is built (so a recorder always
-closes its bag), errors after a signal count as the shutdown they are, and the
-executor never waits longer than :data:`WAKE_PERIOD` before it looks again.
-
-"""
+"""The ``main()`` every hydro_sdp node shares (the Jazzy pattern of demo_nodes_py)."""
 
 from __future__ import annotations
 
@@ -78,13 +59,6 @@ def _destroy(node: Node | None, executor: SingleThreadedExecutor | None, stop: _
 def run_node(node_cls: Callable[[], Node], args: list[str] | None = None) -> None:
     """
     Initialise rclpy, spin one node of ``node_cls`` and always clean up.
-
-    A configuration error (a bad parameter or file) ends the process with one
-    line on stderr and exit code 2, not a traceback; a fault the running node
-    cannot work around (a recorder's full disk) with one line and exit code 3.
-    SIGINT and SIGTERM end it with code 0 within about :data:`WAKE_PERIOD` (plus
-    the node's own clean-up). A crash in compiled code prints every thread's
-    Python stack (:mod:`faulthandler`).
 
     Parameters
     ----------

@@ -1,10 +1,4 @@
-"""
-Scenarios run through the ROS nodes in-process, for the demo and for users' checks.
-
-:func:`wear_and_recalibration` runs the plant, controller and identifier nodes
-on simulated time while the plant's valve wears, and returns what happened.
-
-"""
+"""Scenarios run through the ROS nodes in-process, for the demo and for users' checks."""
 
 from __future__ import annotations
 

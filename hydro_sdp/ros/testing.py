@@ -1,25 +1,4 @@
-"""
-A launch-free harness to run hydro_sdp nodes in-process, deterministically.
-
-Nodes share one private :class:`rclpy.context.Context` and one
-:class:`~rclpy.executors.SingleThreadedExecutor`, so every callback runs in the
-caller's thread. With simulated time the harness sets every node's clock and
-spins until a barrier holds, one plant period at a time; the trajectory is then
-the same on every run and equal to the offline simulation (docs/methods.md section 9.4).
-
-Usable in any test::
-
-    with RosHarness() as ros:
-        plant = ros.add(PlantNode, parameters={'noise_std': 0.0})
-        controller = ros.add(PipControllerNode)
-        loop = Lockstep(ros, plant, controllers=[controller])
-        loop.run(500)
-        ParameterClient(ros, 'pip_controller').set_atomically(feedback_timeout=1)
-
-:class:`ParameterClient` sets and gets parameters over a node's services, as
-``ros2 param`` does (values travel as messages: an integer stays an integer).
-
-"""
+"""A launch-free harness to run hydro_sdp nodes in-process, deterministically (methods 9.4)."""
 
 from __future__ import annotations
 
@@ -115,10 +94,7 @@ class RosHarness:
         cli_args : list of str or None
             ROS command-line arguments (``--ros-args --params-file ...``).
         services : bool
-            Whether the node answers parameter and type description requests. A node that
-            no client asks (a plant stepped in process, a test's helper) leaves them out:
-            the executor waits on every service of every node at each spin, and these are
-            a quarter of a lockstep step's work.
+            Whether the node answers parameter and type description requests.
         **kwargs : object
             More constructor arguments (``node_name``...).
 

@@ -1,15 +1,4 @@
-"""
-The controller node's ``joint_trajectory`` input: trajectories taken, refused, and followed.
-
-:class:`TrajectoryFollower` is the part of
-:class:`~hydro_sdp.ros.controller_node.PipControllerNode` that turns
-``trajectory_msgs/JointTrajectory`` messages into set-points (and their rate, for the
-feed-forward) with the core :class:`~hydro_sdp.core.control.trajectory.TrajectorySampler`,
-as ros2_control's JointTrajectoryController does: a trajectory starts at its stamp (now when
-it is zero), replaces the rest of the one before for the joints it names, and is refused whole
-when it cannot be followed.
-
-"""
+"""The controller node's ``joint_trajectory`` input: trajectories taken, refused, and followed."""
 
 from __future__ import annotations
 
@@ -54,10 +43,10 @@ class TrajectoryFollower:
         Raises
         ------
         DataError
-            Naming every reason it is refused (nothing changes then): a message that is
-            not a valid trajectory, a joint not controlled, a position beyond the end stops
-            less ``margin``, the controller not active, a named joint without feedback yet,
-            a set-point faster than a joint's identified top speed.
+            Naming every reason it is refused (nothing changes then): a message that is not a valid
+            trajectory, a joint not controlled, a position beyond the end stops less ``margin``,
+            the controller not active, a named joint without feedback yet, a set-point faster than
+            a joint's identified top speed.
 
         """
         trajectory, stamp = trajectory_from_message(message)

@@ -1,30 +1,4 @@
-"""
-dSPACE ControlDesk recorder exports (CSV): sections of rows keyed by their first cell.
-
-An export holds one section per raster or platform, each with its own time,
-separated by blank rows::
-
-    trace_names,,In1,In1,Out1
-    trace_units,s,deg,%,%
-    raster,,10 ms,10 ms,10 ms
-    path,,Model Root/Arm/Arm_ang/In1,Model Root/Boom/Boom_ang/In1,Model Root/Arm_duty/Out1
-    min,...
-    max,...
-    trace_values,0,12.5,-3.1,40
-    ,0.0099909,12.6,-3.1,40
-
-Other keyed rows (a description, the experiment, a date) may come first. The
-samples start at the row keyed ``trace_values``, which carries the first one,
-and go on while the first cell is empty. The second cell is the time, s, a
-column with no trace name (``time`` names it). Every other column is a signal,
-named as a user reads it: its trace name or, where that is a block port
-(``In1``, ``Out2``, ``Inport``), the last element of its ``path`` that is not a
-port (``Model Root/Arm/Arm_ang/In1`` and ``Model Root/Arm/Arm_ang`` are
-``Arm_ang``). A signal also answers to its trace name and to its whole path; a
-0-based index counts the columns of the first section as a spreadsheet shows
-them (0 holds the keys, 1 the time).
-
-"""
+"""dSPACE ControlDesk recorder exports (CSV): sections of rows keyed by their first cell."""
 
 from __future__ import annotations
 
@@ -51,7 +25,7 @@ def is_controldesk(rows: Rows) -> bool:
 
 def signal_name(trace: str, path: str) -> str:
     """
-    Return a column's name as a user reads it (module docstring).
+    Return a column's name as a user reads it (docs/interfaces.md section 4.4).
 
     Parameters
     ----------

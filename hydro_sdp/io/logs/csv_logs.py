@@ -1,31 +1,4 @@
-"""
-CSV logs of one joint, read as records ready to be written as bags.
-
-A logger writes one row per sample: the time (s), the measured angle and the
-command it applied at that time. Columns are chosen by name or by 0-based
-index; the header block is found above the first row of numbers (lines of the
-logger's own above it are skipped; :mod:`.csv_table`), and a ControlDesk
-export is read by its own layout. Row numbers in messages are those a
-spreadsheet shows: the file's line.
-
-Timing (docs/methods.md section 3.4). A record's ``v_k`` is the command in
-force over the interval ``(t_{k-1}, t_k]`` that ends at sample ``t_k``. The
-command on row ``k`` is the one the logger applied at ``t_k``, so it is in
-force over the interval *after* the row: ``v_{k+1}`` = command of row ``k``,
-and the angle of row ``k + 1`` is the first that can show it. Before the first
-row the command is taken to be the first row's (rule 3: ``timing.delayed`` by
-one sample); the last row's command acts after the last angle and is unused.
-Written with :func:`hydro_sdp.bags.write_bag`, the command of row ``k`` is
-stamped at ``t_k`` itself, which is what the logger did, and reads back as the
-same record.
-
-Time. Only differences of the time column matter: it may start at any value
-(logger clock, Unix time, negative). It is shifted so the first row lands one
-period ``t_1 - t_0`` after ``t = 0``, where a bag must start (its first
-command is stamped one period before the first sample). Irregular steps are
-kept as they are; steps that repeat or go backwards are refused.
-
-"""
+"""CSV logs of one joint, read as records ready to be written as bags (methods 3.4)."""
 
 from __future__ import annotations
 
@@ -66,7 +39,7 @@ class CsvLog:
 def record_from_log(t: FloatArray, y: FloatArray, command: FloatArray, *, joint: str,
                     source: str = '') -> CsvLog:
     """
-    Turn logged rows into a record by the timing rule of the module docstring.
+    Turn logged rows into a record by the timing rule of methods 3.4.
 
     Parameters
     ----------
@@ -113,11 +86,9 @@ def parse_csv_log(text: str, *, joint: str, time: str, angle: str, command: str,
     joint : str
         Joint name for the record.
     time, angle, command : str
-        Columns (header name or 0-based index) of the time (s), the angle and
-        the command.
+        Columns (header name or 0-based index) of the time (s), the angle and the command.
     command_negative : str or None
-        Column subtracted from ``command`` (one-sided duty of the other
-        direction's valve).
+        Column subtracted from ``command`` (one-sided duty of the other direction's valve).
     angle_unit : str
         ``deg`` or ``rad``.
     delimiter : str or None

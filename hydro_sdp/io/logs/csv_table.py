@@ -1,22 +1,4 @@
-"""
-CSV logs as channels: one time column, columns by name or 0-based index.
-
-Loggers write lines of their own above the table (the logger's name, the date,
-the sample rate) and a header block of several rows: the names, then units or
-descriptions, then the numbers. The header block is the run of rows just above
-the first row of numbers that have at least two cells and no number (a blank
-row, a one-cell line or a line with a number ends it going up); its names row
-is the one with the most filled cells, the highest on a tie. ``--header-row N``
-names the names row instead (numbered as a spreadsheet numbers rows); the rows
-between it and the numbers are the rest of the block. A column is found by its
-cell in the names row, else by its cell in another row of the block (a
-description), else by its 0-based index. Every row after the block is a
-sample. Row numbers in messages are those a spreadsheet shows: the file's line.
-
-A dSPACE ControlDesk export (a row keyed ``trace_values``) is read by its own
-layout (:mod:`.controldesk`); :func:`text_table` chooses.
-
-"""
+"""CSV logs as channels: one time column, columns by name or 0-based index."""
 
 from __future__ import annotations
 
@@ -72,7 +54,7 @@ def split_header(rows: Rows, header_row: int | None, source: str,
     rows : Rows
         The file's rows, blank ones empty.
     header_row : int or None
-        Spreadsheet number of the names row; default: found (module docstring).
+        Spreadsheet number of the names row; default: found (docs/interfaces.md section 4.4).
     source : str
         The file, for messages.
     decimal_comma : bool

@@ -1,14 +1,4 @@
-"""
-A logger's file as a machine's records: every joint, its command, and more signals.
-
-The first joint's angle samples are the time base; every other channel (the
-other joints' angles, the commands, the pressures) is put on it by holding its
-last value (:func:`~hydro_sdp.io.logs.table.held_at`). The records share their
-time stamps, shifted so the first sample lands one sample period after
-``t = 0`` (where a bag must start: its first command is stamped a period
-before the first sample); only differences of time matter.
-
-"""
+"""A logger's file as a machine's records: every joint, its command, and more signals."""
 
 from __future__ import annotations
 
@@ -38,9 +28,9 @@ class MachineLog:
     Parameters
     ----------
     records : tuple[Record, ...]
-        One per joint, in the signals file's order, sharing their time stamps:
-        ``t`` (s, shifted), ``v`` (the command in force over the interval ending
-        at each sample; zero for a joint without a command), ``y`` (degrees).
+        One per joint, in the signals file's order, sharing their time stamps: ``t`` (s, shifted),
+        ``v`` (the command in force over the interval ending at each sample; zero for a joint
+        without a command), ``y`` (degrees).
     commanded : tuple[str, ...]
         Joints that have a command channel.
     signals : Mapping[str, FloatArray]

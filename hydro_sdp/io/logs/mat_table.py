@@ -1,12 +1,4 @@
-"""
-MATLAB ``.mat`` files as channels: vectors of one length, timed by the time variable.
-
-Version 5 files (MATLAB's default up to ``-v7``) are read with :mod:`scipy.io`;
-version 7.3 files are HDF5 and are read with :mod:`h5py`. A variable is named
-as MATLAB names it, a field of a structure with a dot (``log.Boom_ang``); it
-must be a numeric vector (a row or a column) as long as the time variable.
-
-"""
+"""MATLAB ``.mat`` files as channels: vectors of one length, timed by the time variable."""
 
 from __future__ import annotations
 

@@ -1,15 +1,4 @@
-"""
-ASAM MDF4 files (``.mf4``) as channels, each on its own channel group's time base.
-
-dSPACE ControlDesk, Vector CANape and ETAS INCA log measurements as MDF: each
-channel group holds the channels sampled together, with its master channel
-(the time, s from the start of the measurement). A channel is found by name
-with :mod:`asammdf`; its own timestamps come with it, so channels logged at
-different rates keep them (:func:`~hydro_sdp.io.logs.table.held_at` aligns
-them). A ``time`` channel may be named instead: its values then time the
-channels of its own group.
-
-"""
+"""ASAM MDF4 files (``.mf4``) as channels, each on its own channel group's time base."""
 
 from __future__ import annotations
 

@@ -1,23 +1,4 @@
-"""
-The signals file: which channels of a logger's file are a machine's joints and signals.
-
-.. code-block:: yaml
-
-    time: t                    # column or variable (MDF4: the channels' own time base)
-    angle_unit: deg            # or rad
-    joints:
-      boom: {angle: Boom_ang, command: Boom_up_duty, command_negative: Boom_dn_duty}
-      arm:  {angle: Arm_ang,  command: Arm_out_duty}
-    signals:                   # more std_msgs/Float64 topics, e.g. for --load-topic
-      boom/head_pressure: Boom_head_P
-
-Every joint needs its ``angle``; ``command`` (and ``command_negative``,
-subtracted from it) give ``/<joint>/valve_command``; a joint may set its own
-``angle_unit``. Each signal becomes the Float64 topic ``/<topic>``. Unknown
-keys are refused, so a misspelt key never silently drops a channel
-(docs/interfaces.md section 2.1).
-
-"""
+"""The signals file: which channels of a logger's file are a machine's joints and signals."""
 
 from __future__ import annotations
 

@@ -1,22 +1,7 @@
 """
 A logger's file as channels, each with its own time base, and the rule that aligns them.
 
-CSV and MAT files hold one time column or variable for every channel; an MDF4
-file gives each channel group its own time base (a dSPACE or CANape log samples
-the angles at 100 Hz, the pressures at 1 kHz, the duties at 50 Hz). Every reader
-hands back :class:`Channel` objects; :func:`held_at` puts a channel on the
-angle's samples by holding its last value, as the bag readers do
-(docs/methods.md section 3.4):
-
-* a command is in force from the instant it was logged on, over the interval
-  after it: a sample at ``t_k`` sees the last command logged strictly before
-  ``t_k`` (a command logged on the same row as an angle acts after that angle);
-* a measured signal (another joint's angle, a pressure) at ``t_k`` is the last
-  value logged at or before ``t_k``;
-* before a channel's first value, that value is held.
-
-Times are compared as integer nanoseconds from the first angle sample, so a
-50 Hz and a 100 Hz clock that meet at an instant meet exactly.
+Reasoning: methods 3.4.
 
 """
 
@@ -135,9 +120,8 @@ def first_time_fault(t: FloatArray) -> TimeFault | None:
     Returns
     -------
     TimeFault or None
-        Its index ``k`` (``t[k + 1] <= t[k]``), how it fails (``repeats`` or
-        ``goes backwards from``) and how many times fail in all; None if ``t``
-        increases strictly.
+        Its index ``k`` (``t[k + 1] <= t[k]``), how it fails (``repeats`` or ``goes backwards
+        from``) and how many times fail in all; None if ``t`` increases strictly.
 
     """
     steps = np.diff(t)

@@ -1,22 +1,4 @@
-"""
-A logger's text file as rows of cells: its encoding, its delimiter, its numbers.
-
-Loggers on Windows write UTF-16 with a byte-order mark, or their metadata (a
-date, a unit, a comment) in a code page around numbers in plain ASCII. The text
-is read (:func:`read_log_text`) in the encoding named (``--encoding``), else the
-one a byte-order mark says (UTF-8, UTF-16, UTF-32), else UTF-16 when every other
-byte is zero, else UTF-8 when the bytes are UTF-8, else each byte as one
-character (Latin-1): every ASCII name and number reads as it is and nothing
-fails, so a code page never blocks the numbers, and ``--encoding`` reads its
-text in its own characters.
-
-Cells are split at the delimiter named, or at the one of ``,``, ``;`` and tab
-that makes the most rows of numbers (:func:`sniff_delimiter`). Where the
-delimiter is not a comma, a comma in a number is its decimal point (``0,01``).
-Quotes, spaces around cells, trailing empty cells and CRLF line ends are not
-part of the cells.
-
-"""
+"""A logger's text file as rows of cells: its encoding, its delimiter, its numbers."""
 
 from __future__ import annotations
 
@@ -103,7 +85,7 @@ def _utf16_without_mark(data: bytes) -> str | None:
 
 def decode_log(data: bytes, source: str, encoding: str | None = None) -> LogText:
     """
-    Decode a logger's file by the rule of the module docstring.
+    Decode a logger's file (docs/interfaces.md section 4.4).
 
     Parameters
     ----------

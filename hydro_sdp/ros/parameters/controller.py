@@ -1,13 +1,4 @@
-"""
-The parameters of ``controller_node`` (node ``pip_controller``).
-
-The node is :mod:`hydro_sdp.ros.controller_node`.
-
-The gains and the IDZ are declared per joint at configuration (``<joint>.gains.k_i``...;
-a one-joint node also keeps the plain names, in step), with the designed values as
-defaults, as ros2_controllers' ``__map_joints`` declares a controller's per-joint gains.
-
-"""
+"""The parameters of ``controller_node`` (node ``pip_controller``)."""
 
 from hydro_sdp.core.control.idz import IDZ_MODES
 from hydro_sdp.core.control.plausibility import FEEDBACK_MARGIN

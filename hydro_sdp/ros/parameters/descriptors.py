@@ -1,12 +1,4 @@
-"""
-Parameter descriptors from a table's rows, and integers taken for doubles.
-
-:func:`descriptor` gives rclpy what ``ros2 param describe`` shows and what rclpy checks on
-every set (type, read-only, range); the length and choices go into
-``additional_constraints`` (the node checks them, :meth:`ParameterSpec.check`).
-:func:`as_double` turns an integer given for a double into the double users mean.
-
-"""
+"""Parameter descriptors from a table's rows, and integers taken for doubles."""
 
 from __future__ import annotations
 

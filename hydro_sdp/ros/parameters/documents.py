@@ -1,17 +1,4 @@
-"""
-The parameter tables of the documentation and the shipped parameter file, from the nodes' tables.
-
-Run from a checkout (``python -m hydro_sdp.ros.parameters.documents --write``) after changing
-a table: it rewrites, between their markers, the reference tables of docs/interfaces.md
-section 3 and the tables of the user guide (docs/guide/nodes.md), and the whole of
-``config/hydro_sdp.yaml``. Without ``--write`` it only says which files differ from the
-tables (exit 1), which the test suite checks.
-
-A generated block in a Markdown file sits between ``<!-- parameters: STYLE EXECUTABLE -->``
-and ``<!-- end parameters -->``; STYLE is ``reference`` (type, default, unit and range,
-run time, meaning) or ``guide`` (default, unit and range, run time, what it sets).
-
-"""
+"""The documentation's parameter tables and the shipped parameter file, from the nodes' tables."""
 
 from __future__ import annotations
 

@@ -1,13 +1,4 @@
-"""
-The parameters of ``identifier_node`` (node ``sdp_identifier``).
-
-The node is :mod:`hydro_sdp.ros.identifier_node`.
-
-The five recalibration thresholds are the fields of
-:class:`~hydro_sdp.core.control.idz_recalibration.RecalibrationPolicy`, with its defaults
-(``min_change`` scaled to the valve's input range).
-
-"""
+"""The parameters of ``identifier_node`` (node ``sdp_identifier``)."""
 
 from hydro_sdp.core.control.idz_recalibration import RecalibrationPolicy
 from hydro_sdp.ros.parameters.spec import ParameterSpec, ParameterTable

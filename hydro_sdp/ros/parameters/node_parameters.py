@@ -1,32 +1,4 @@
-"""
-A node's parameters declared from its table, checked whole and applied whole.
-
-:class:`NodeParameters` is what generate_parameter_library's ``ParamListener`` is to a
-ros2_controllers controller: the node owns one, built from its
-:class:`~hydro_sdp.ros.parameters.spec.ParameterTable`. It
-
-* declares every parameter with a descriptor made from the table (description,
-  ``read_only``, range, and the length or choices as ``additional_constraints``);
-* makes a double parameter take an integer, as users of ``ros2 param set NODE gains.k_i 1``
-  or ``-p feedback_timeout:=1`` expect (rclpy alone refuses it as the wrong type): an
-  override given at start-up is converted before the declaration, a value set at run time
-  by the pre-set callback, so the declared range still applies;
-* keeps the two names of a one-joint node's per-joint parameters in step (a request naming
-  either sets both);
-* checks a set request whole (the table's checks of each value, then the node's own check
-  of the request) before anything is applied, and applies an accepted request whole in the
-  post-set callback, through one handler per writable parameter: a table whose writable
-  parameter has no handler is refused when the node is built;
-* refuses an array or string larger than the table allows on its length alone, before
-  any of its values is read: a request to the parameter services is answered from its
-  message, before rclpy turns it into parameters (a million gains would otherwise hold
-  the node, and its control loop, for seconds), and a request set in the process in the
-  pre-set callback; a request naming more than :data:`~.spec.MAX_NAMES` parameters is
-  answered with nothing (reading services) or refused (set services);
-* refuses ``use_sim_time`` once the node runs: a clock switched at run time (to a
-  ``/clock`` nobody publishes) would stop the node's timers and its watchdog.
-
-"""
+"""A node's parameters declared from its table, checked whole and applied whole."""
 
 from __future__ import annotations
 
@@ -71,9 +43,9 @@ class NodeParameters:
         The node's own check of a request, after the table's: raises
         :class:`~hydro_sdp.core.errors.HydroSdpError` (or ``ValueError``) to refuse it.
     apply : mapping of str to callable
-        For every writable parameter declared once per node, what makes a new value take
-        effect (called with no argument, once per accepted request however many of its
-        names share it, after the values are set; it reads them back).
+        For every writable parameter declared once per node, what makes a new value take effect
+        (called with no argument, once per accepted request however many of its names share it,
+        after the values are set; it reads them back).
     apply_joint : callable or None
         What makes a request of per-joint parameters take effect (required when the table
         has writable per-joint parameters); called with the request.
@@ -281,9 +253,6 @@ class NodeParameters:
     def start(self) -> None:
         """
         Check the declared values with the node's check, apply each once, then go live.
-
-        Values given at start-up take effect through the same handlers as run-time
-        changes; from here on every set request is checked whole and applied whole.
 
         Raises
         ------

@@ -1,10 +1,4 @@
-"""
-A set request of parameters, read by name with the type each use needs.
-
-:class:`ParameterRequest` is what a node's own check and its handlers see of a request (or
-of the values in force): a value by name, or the one in force when the request leaves it out.
-
-"""
+"""A set request of parameters, read by name with the type each use needs."""
 
 from __future__ import annotations
 

@@ -1,14 +1,4 @@
-"""
-A node's parameters as one declarative table: name, type, default, range, read-only, description.
-
-As ros2_controllers declares each controller's parameters once (generate_parameter_library's
-YAML), each hydro_sdp node has one :class:`ParameterTable`; from it come the declarations
-with their descriptors (:mod:`hydro_sdp.ros.parameters.node_parameters`), the checks of every
-value given at start-up or set at run time (:meth:`ParameterSpec.check`), and the parameter
-tables of the documentation and the shipped parameter file
-(:mod:`hydro_sdp.ros.parameters.documents`).
-
-"""
+"""A node's parameters as one table: name, type, default, range, read-only, description."""
 
 from __future__ import annotations
 
