@@ -4,7 +4,7 @@ Benchmark the SDP analysis: the banded smoother against a dense solve, and a one
 Run with ``make bench`` or ``python bench/bench_sdp.py``. Prints, from one run:
 
 * the fixed-interval smoother of a random walk on a short record (2000 groups), as the
-  banded solution of :mod:`hydro_sdp.core.identification.state_dependence.banded` (estimates, standard
+  banded solution of :mod:`.banded` (estimates, standard
   errors and likelihood) against a dense solve of the same quadratic problem (the normal
   equations and their inverse): the ratio, and that both agree;
 * the banded smoother alone over 360 000 distinct state values (no pooling);
@@ -23,7 +23,8 @@ import time  # noqa: E402
 from typing import Callable  # noqa: E402
 
 from hydro_sdp.core.identification.state_dependence import analyse  # noqa: E402
-from hydro_sdp.core.identification.state_dependence.banded import fit_banded, penalty_bands  # noqa: E402
+from hydro_sdp.core.identification.state_dependence.banded import (  # noqa: E402
+    fit_banded, penalty_bands)
 from hydro_sdp.core.identification.state_dependence.random_walk import group_stats  # noqa: E402
 from hydro_sdp.core.synthetic.joint_experiments import experiment_record  # noqa: E402
 from hydro_sdp.io.model_files import default_model_path, load_model  # noqa: E402

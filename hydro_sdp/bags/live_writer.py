@@ -94,32 +94,7 @@ class Sqlite3BagWriter:
     def add_topic(self, name: str, msgtype: str, *, msgdef: str = '',
                   msgdef_encoding: str = 'ros2msg', type_hash: str = '',
                   offered_qos_profiles: str = '', serialization_format: str = 'cdr') -> int:
-        """
-        Declare a topic and return its id for :meth:`write`.
-
-        Parameters
-        ----------
-        name : str
-            Absolute topic name.
-        msgtype : str
-            Message type, e.g. ``sensor_msgs/msg/JointState``.
-        msgdef : str
-            Message definition text (empty if unknown).
-        msgdef_encoding : str
-            ``ros2msg`` or ``ros2idl``.
-        type_hash : str
-            ``RIHS01_...`` hash of the type, or empty.
-        offered_qos_profiles : str
-            QoS text as rosbag2 writes it in version 8, or empty.
-        serialization_format : str
-            ``cdr``.
-
-        Returns
-        -------
-        int
-            Topic id.
-
-        """
+        """Declare a topic and return its id for :meth:`write`."""
         db = self._connection()
         with self._writing(db):
             return self._add_topic(db, name, msgtype, msgdef, msgdef_encoding, type_hash,

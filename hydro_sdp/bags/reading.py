@@ -335,22 +335,5 @@ def seconds_since(stamps: IntArray, start: int) -> FloatArray:
 
 def read_record(path: str | os.PathLike[str], joint: str | None = None,
                 command_topic: str | None = None) -> Record:
-    """
-    Read one joint's record from a bag (see :meth:`BagData.record`).
-
-    Parameters
-    ----------
-    path : str or PathLike
-        The bag.
-    joint : str or None
-        Joint name; default: the only one.
-    command_topic : str or None
-        Command topic; default: the only ``valve_command`` topic.
-
-    Returns
-    -------
-    Record
-        The record.
-
-    """
+    """Read one joint's record from a bag (see :meth:`BagData.record`)."""
     return read_bag(path).record(joint, command_topic)

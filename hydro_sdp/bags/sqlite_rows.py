@@ -18,22 +18,7 @@ TopicRows = tuple[list[int], list[bytes]]
 
 
 def matches(wanted: Connection, stored: Connection) -> bool:
-    """
-    Whether a storage file's connection feeds a wanted connection (rosbags' rule).
-
-    Parameters
-    ----------
-    wanted : rosbags Connection
-        A connection of the bag as opened (its folder or its storage file).
-    stored : rosbags Connection
-        A connection of one storage file.
-
-    Returns
-    -------
-    bool
-        Same topic, type, serialisation and QoS, and type hashes that agree.
-
-    """
+    """Whether a storage file's connection feeds a wanted connection (rosbags' rule)."""
     return bool(wanted.topic == stored.topic and wanted.msgtype == stored.msgtype and
                 wanted.ext == stored.ext and digests_agree(wanted.digest, stored.digest))
 

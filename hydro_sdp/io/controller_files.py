@@ -43,26 +43,7 @@ def load_controller(path: str | os.PathLike[str]) -> ControllerSpec:
 
 def controller_for(model: JointModel, path: str | os.PathLike[str] | None,
                    control_period: float) -> ControllerSpec:
-    """
-    Return the controller of ``path`` checked against ``model``, or one designed from it.
-
-    Parameters
-    ----------
-    model : JointModel
-        The joint's model.
-    path : str, PathLike or None
-        Controller file (checked to be for this joint and to command the valve within the model's
-        range, and given that range when it has none), or None to design the PIP-IDZ controller
-        from the model.
-    control_period : float
-        Control period of a designed controller, s.
-
-    Returns
-    -------
-    ControllerSpec
-        The controller.
-
-    """
+    """Return the controller of ``path`` checked against ``model``, or one designed from it."""
     if path:
         return controller_within_model(load_controller(path), model)
     return design_from_model(model, control_period=control_period)

@@ -62,27 +62,7 @@ def load_kinematics(path: str | os.PathLike[str]) -> TwoLinkArm:
 
 def load_trajectory(path: str | os.PathLike[str],
                     kinematics: str | os.PathLike[str] | None = None) -> TrajectoryFile:
-    """
-    Load a trajectory file, YAML or CSV (by its suffix ``.csv``).
-
-    Parameters
-    ----------
-    path : str or PathLike
-        File.
-    kinematics : str or PathLike or None
-        Kinematics file for a line, instead of the one the file names.
-
-    Returns
-    -------
-    TrajectoryFile
-        The trajectory.
-
-    Raises
-    ------
-    ModelFileError
-        Naming the file, the key or line, and the reason.
-
-    """
+    """Load a trajectory file, YAML or CSV (by its suffix ``.csv``)."""
     source = Path(path)
     try:
         if source.suffix.lower() == '.csv':

@@ -58,24 +58,7 @@ def new_figure(rows: int = 1, *, height: float = 2.6, width: float = 9.0,
 
 
 def save_figure(figure: Figure, path: str | os.PathLike[str], *, dpi: int = 130) -> Path:
-    """
-    Save a figure as PNG, whole or not at all.
-
-    Parameters
-    ----------
-    figure : Figure
-        The figure.
-    path : str or PathLike
-        Target PNG file.
-    dpi : int
-        Resolution.
-
-    Returns
-    -------
-    Path
-        The target path.
-
-    """
+    """Save a figure as PNG, whole or not at all."""
     buffer = io.BytesIO()
     # zlib's fastest level: files a tenth larger; the default level's compression took
     # about a seventh of a figure's time.

@@ -71,28 +71,7 @@ def fill_stamp(stamp: TimeField, stamp_ns: int) -> None:
 
 
 def joint_angle(message: JointStateMessage, joint: str) -> tuple[int, float]:
-    """
-    Return the stamp (ns) and the angle (degrees) of ``joint`` in a JointState.
-
-    Parameters
-    ----------
-    message : sensor_msgs/JointState
-        The message.
-    joint : str
-        Joint name.
-
-    Returns
-    -------
-    tuple[int, float]
-        ``(stamp_ns, angle_deg)``.
-
-    Raises
-    ------
-    DataError
-        If the names and positions differ in length, the joint is missing, or its
-        position is not finite.
-
-    """
+    """Return the stamp (ns) and the angle (degrees) of ``joint`` in a JointState."""
     return stamp_to_ns(message.header.stamp), position_of(message.name, message.position, joint)
 
 
@@ -137,28 +116,7 @@ def position_of(names: Sequence[str], positions: Sequence[float], joint: str) ->
 def fill_joint_state(message: JointStateT, stamp_ns: int, names: Sequence[str],
                      angles_deg: Sequence[float],
                      speeds_deg: Sequence[float] | None = None) -> JointStateT:
-    """
-    Fill a JointState message (stamp, names, positions and velocities in radians).
-
-    Parameters
-    ----------
-    message : sensor_msgs/JointState
-        Message to fill.
-    stamp_ns : int
-        Stamp, nanoseconds.
-    names : sequence of str
-        Joint names.
-    angles_deg : sequence of float
-        Angles, degrees.
-    speeds_deg : sequence of float or None
-        Angular velocities, deg/s.
-
-    Returns
-    -------
-    sensor_msgs/JointState
-        The message.
-
-    """
+    """Fill a JointState message (stamp, names, positions and velocities in radians)."""
     fill_stamp(message.header.stamp, stamp_ns)
     message.name = list(names)
     message.position = [math.radians(a) for a in angles_deg]

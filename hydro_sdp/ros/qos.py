@@ -38,19 +38,5 @@ def mark_in_process(context: Context) -> None:
 
 
 def subscription_events(context: Context) -> SubscriptionEventCallbacks | None:
-    """
-    Return the event callbacks for a node's subscription in ``context``.
-
-    Parameters
-    ----------
-    context : Context
-        The node's context.
-
-    Returns
-    -------
-    SubscriptionEventCallbacks or None
-        :data:`QUIET_SUBSCRIPTION` in a context marked by :func:`mark_in_process`; else
-        None, rclpy's defaults, which warn of a publisher whose QoS or type cannot match.
-
-    """
+    """Return the event callbacks for a node's subscription in ``context``."""
     return QUIET_SUBSCRIPTION if context in _IN_PROCESS else None

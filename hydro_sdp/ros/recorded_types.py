@@ -67,25 +67,7 @@ def choose_type(topic: str, advertised: Sequence[str]) -> tuple[str | None, str]
 
 
 def message_class(msgtype: str) -> type:
-    """
-    Import the Python class of a type of :data:`RECORDABLE`.
-
-    Parameters
-    ----------
-    msgtype : str
-        ``package/msg/Name``.
-
-    Returns
-    -------
-    type
-        The message class.
-
-    Raises
-    ------
-    KeyError
-        If the type is not one the recorder records (nothing is imported).
-
-    """
+    """Import the Python class of a type of :data:`RECORDABLE`."""
     module, name = RECORDABLE[msgtype]
     cls: type = getattr(importlib.import_module(module), name)
     return cls

@@ -160,22 +160,7 @@ class RosHarness:
             self.executor.spin_once(timeout_sec=0.005)
 
     def transition(self, node: LifecycleNode, transition: str) -> str:
-        """
-        Run a lifecycle transition of ``node`` in this thread; return the state reached.
-
-        Parameters
-        ----------
-        node : rclpy.lifecycle.LifecycleNode
-            The node.
-        transition : str
-            ``configure``, ``activate``, ``deactivate``, ``cleanup`` or ``shutdown``.
-
-        Returns
-        -------
-        str
-            Label of the state after the transition (``active``, ``inactive``...).
-
-        """
+        """Run a lifecycle transition of ``node`` in this thread; return the state reached."""
         getattr(node, f'trigger_{transition}')()
         return str(node._state_machine.current_state[1])
 

@@ -77,24 +77,7 @@ class TrajectoryFollower:
 
     def setpoint(self, loop: JointLoop, t: float,
                  feedforward: bool) -> tuple[float, float | None]:
-        """
-        Return a joint's set-point (deg) at ``t`` (s), and its rate fed forward.
-
-        Parameters
-        ----------
-        loop : JointLoop
-            A joint that follows a trajectory.
-        t : float
-            Time, s (the sample's stamp).
-        feedforward : bool
-            Whether the set-point rate is fed forward.
-
-        Returns
-        -------
-        tuple[float, float or None]
-            The set-point, and the feed-forward in deg per control sample (None without).
-
-        """
+        """Return a joint's set-point (deg) at ``t`` (s), and its rate fed forward."""
         sampler = self.sampler
         setpoint = sampler.setpoint(loop.joint, t)
         if not feedforward:

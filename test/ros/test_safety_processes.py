@@ -272,7 +272,8 @@ def test_trajectories_faster_than_the_joint_are_refused(rig, kind):
 
 # 5. Impossible feedback.
 def _answers_while_moving(rig, inject):
-    """Send a bad JointState three times, 0.4 s apart, while the joint moves up.
+    """
+    Send a bad JointState three times, 0.4 s apart, while the joint moves up.
 
     Returns the time of the first and the valve commands within :data:`WITHIN` of each.
     """

@@ -118,22 +118,7 @@ def model_lag(model: JointModel) -> float | None:
 
 
 def plant_for_model(model: JointModel, control_period: float) -> DiscretePlant:
-    """
-    Return the design plant of a model: its delay and its valve lag at the control period.
-
-    Parameters
-    ----------
-    model : JointModel
-        The joint.
-    control_period : float
-        Control period, s.
-
-    Returns
-    -------
-    DiscretePlant
-        :func:`lagged_integrator` of the model's delay in control samples, lag and mode.
-
-    """
+    """Return the design plant of a model: its delay and its valve lag at the control period."""
     period = check_sample_period(control_period)
     return lagged_integrator(model.delay_samples(period), model_lag(model), period,
                              model_mode(model))

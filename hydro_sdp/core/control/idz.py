@@ -14,25 +14,7 @@ IDZ_MODES: tuple[IdzMode, ...] = get_args(IdzMode)
 
 
 def idz_mode(value: object) -> IdzMode:
-    """
-    Return ``value`` as an IDZ mode name, or raise.
-
-    Parameters
-    ----------
-    value : object
-        A mode name read from a file, a parameter or the command line.
-
-    Returns
-    -------
-    IdzMode
-        The same name, typed.
-
-    Raises
-    ------
-    ConfigurationError
-        If ``value`` is not one of :data:`IDZ_MODES`.
-
-    """
+    """Return ``value`` as an IDZ mode name, or raise."""
     for mode in IDZ_MODES:
         if value == mode:
             return mode

@@ -204,27 +204,7 @@ def with_dead_zone(model: JointModel, edges: tuple[float, float]) -> JointModel:
 
 def recalibrated_idz(estimate: JointModel, edges: tuple[float, float], control_period: float,
                      form: IdzForm | None = None) -> Idz:
-    """
-    IDZ of the estimated model with the decided edges, at the control period.
-
-    Parameters
-    ----------
-    estimate : JointModel
-        The online estimate as a model (any family with explicit edges).
-    edges : tuple[float, float]
-        Dead-zone edges to use (:attr:`Decision.edges`), input units.
-    control_period : float
-        Control period of the controller, s.
-    form : str or None
-        ``chord`` or ``table``: the controller's IDZ form, whose ``idz.slopes`` the
-        result's slopes are (default: the family's, :func:`.idz_design.default_form`).
-
-    Returns
-    -------
-    InverseDeadZone or TableInverseDeadZone
-        Edges and slopes (deg per control sample per input unit) to set.
-
-    """
+    """IDZ of the estimated model with the decided edges, at the control period."""
     model = with_dead_zone(estimate, edges)
     form = default_form(estimate) if form is None else form
     if form == 'chord':

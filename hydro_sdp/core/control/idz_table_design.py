@@ -76,30 +76,7 @@ def command_span(model: JointModel,
 
 def table_beta(dead_zone: tuple[float, float], plant: DiscretePlant, gains: PipGains,
                lag: float | None, control_period: float, noise_std: float) -> float:
-    """
-    Return the default chatter band of an IDZ table, degrees per control sample.
-
-    Parameters
-    ----------
-    dead_zone : tuple[float, float]
-        The table's edges, input units.
-    plant : DiscretePlant
-        The design plant (its delay, control samples).
-    gains : PipGains
-        The PIP gains.
-    lag : float or None
-        Valve lag of the model, s.
-    control_period : float
-        Control period, s.
-    noise_std : float
-        Standard deviation of the angle noise the controller reads, degrees.
-
-    Returns
-    -------
-    float
-        The band.
-
-    """
+    """Return the default chatter band of an IDZ table, degrees per control sample."""
     if dead_zone[1] <= dead_zone[0]:
         return 0.0
     samples = plant.delay + (0.0 if lag is None else lag / check_sample_period(control_period))
@@ -146,29 +123,7 @@ def _branch(model: JointModel, rest: float, end: float,
 def table_idz(model: JointModel, control_period: float, *, beta: float,
               mode: IdzMode = 'zero',
               v_range: tuple[float, float] | None = None) -> TableInverseDeadZone:
-    """
-    Return the map's own inverse as the IDZ table at the control period (methods.md 5.4).
-
-    Parameters
-    ----------
-    model : JointModel
-        The joint (any map family; effects at their nominal values).
-    control_period : float
-        Control period, s.
-    beta : float
-        Chatter band, degrees per control sample (:func:`table_beta` is the default
-        :func:`~hydro_sdp.core.control.controller_spec.design_from_model` gives it).
-    mode : str
-        IDZ mode.
-    v_range : tuple[float, float] or None
-        Commands the table covers (default :func:`command_span`: the input limits).
-
-    Returns
-    -------
-    TableInverseDeadZone
-        Up to :data:`TABLE_POINTS` points per branch.
-
-    """
+    """Return the map's own inverse as the IDZ table at the control period (methods.md 5.4)."""
     period = check_sample_period(control_period)
     low, high = command_span(model, v_range)
     rest = model.rest_command

@@ -50,21 +50,7 @@ def valve_states(v: FloatArray, edges: tuple[float, float], rest: float) -> np.n
 
 
 def pulse_starts(states: np.ndarray) -> np.ndarray:
-    """
-    Return where the valve opens in a sequence of :func:`valve_states`.
-
-    Parameters
-    ----------
-    states : numpy.ndarray
-        States, in time order.
-
-    Returns
-    -------
-    numpy.ndarray
-        Indices of the commands that open the valve beyond an edge from closed or
-        from the other side (a valve open at the start does not count).
-
-    """
+    """Return where the valve opens in a sequence of :func:`valve_states`."""
     known = np.flatnonzero(states != BETWEEN)
     side = states[known]
     return known[1:][(side[1:] != 0) & (side[1:] != side[:-1])]
@@ -133,26 +119,7 @@ def hold_pulses(trace: LoopTrace, edges: tuple[float, float], rest: float, *,
 
 def holds(trace: LoopTrace, edges: tuple[float, float], rest: float, *,
           band: float = 0.5) -> list[Hold]:
-    """
-    Return the holds of a run: each level's part after the joint settled, if long enough.
-
-    Parameters
-    ----------
-    trace : LoopTrace
-        The closed-loop run (the true angle judges the band).
-    edges : tuple[float, float]
-        The valve's dead-zone edges, input units.
-    rest : float
-        The rest command.
-    band : float
-        Band around the set-point, degrees.
-
-    Returns
-    -------
-    list of Hold
-        Levels that never settle, or settle for less than :data:`MIN_HOLD`, are left out.
-
-    """
+    """Return the holds of a run: each level's part after the joint settled, if long enough."""
     dt = float(trace.t[1] - trace.t[0]) if trace.t.size > 1 else 1.0
     states = valve_states(trace.v, edges, rest)
     return [Hold(float(trace.t[start]), (end - start) * dt,
@@ -230,22 +197,7 @@ class Chatter:
 
 
 def chatter_edges(model: JointModel, idz: Idz | None) -> tuple[float, float] | None:
-    """
-    Return the dead-zone edges a joint's valve is judged by: the model's, else the IDZ's.
-
-    Parameters
-    ----------
-    model : JointModel
-        The joint the loop ran on.
-    idz : InverseDeadZone, TableInverseDeadZone or None
-        The controller's IDZ.
-
-    Returns
-    -------
-    tuple[float, float] or None
-        The edges, or None when neither has a dead-zone.
-
-    """
+    """Return the dead-zone edges a joint's valve is judged by: the model's, else the IDZ's."""
     edges = model.dead_zone if model.dead_zone is not None else (
         None if idz is None else idz.dead_zone)
     if edges is None or not edges[1] > edges[0]:

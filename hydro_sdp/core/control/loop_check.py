@@ -238,24 +238,7 @@ def check_loop(model: JointModel, spec: ControllerSpec, stroke: tuple[float, flo
 
 def slower_poles(poles: Sequence[complex], factor: float = 0.7,
                  keep: Sequence[complex] = ()) -> list[complex]:
-    """
-    Move the dominant poles toward 1: ``p -> 1 - factor (1 - p)``.
-
-    Parameters
-    ----------
-    poles : sequence of complex
-        Closed-loop poles of a design.
-    factor : float
-        Fraction of the distance to 1 kept, in (0, 1).
-    keep : sequence of complex
-        Poles left where they are (within 1e-6).
-
-    Returns
-    -------
-    list of complex
-        The slower poles.
-
-    """
+    """Move the dominant poles toward 1: ``p -> 1 - factor (1 - p)``."""
     if not 0.0 < factor < 1.0:
         raise ConfigurationError(f'the pole factor must be in (0, 1), got {factor}')
     values = [complex(p) for p in poles]

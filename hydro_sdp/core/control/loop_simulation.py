@@ -167,24 +167,7 @@ def run_closed_loop(joints: Sequence[LoopJoint], *, dt: float, control_period: f
 
 
 def step_setpoints(levels: Sequence[float], hold: float, dt: float) -> FloatArray:
-    """
-    Set-point array holding each level for ``hold`` seconds.
-
-    Parameters
-    ----------
-    levels : sequence of float
-        Angles, degrees.
-    hold : float
-        Time each is held, s.
-    dt : float
-        Plant sample period, s.
-
-    Returns
-    -------
-    FloatArray
-        One value per plant sample.
-
-    """
+    """Set-point array holding each level for ``hold`` seconds."""
     if not levels:
         raise ConfigurationError('at least one set-point is needed')
     per_level = max(1, int(round(check_sample_period(hold) / check_sample_period(dt))))
@@ -271,22 +254,7 @@ def step_metrics(trace: LoopTrace, *, band: float = 0.5, initial: float | None =
 
 
 def valve_reversals(v: FloatArray, rest: float = 0.0) -> int:
-    """
-    Count how often the valve command changes side of ``rest`` (docs/methods.md section 5.2).
-
-    Parameters
-    ----------
-    v : FloatArray
-        Valve commands.
-    rest : float
-        Command that holds the valve closed.
-
-    Returns
-    -------
-    int
-        Sign changes of ``v - rest``, ignoring samples at rest.
-
-    """
+    """Count how often the valve command changes side of ``rest`` (docs/methods.md section 5.2)."""
     side = np.sign(np.asarray(v, dtype=np.float64) - rest)
     side = side[side != 0]
     return int(np.count_nonzero(np.diff(side)))

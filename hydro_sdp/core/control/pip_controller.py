@@ -206,21 +206,7 @@ class PipIdzController:
         self.steps += 1
 
     def pending(self, delay: int) -> float:
-        """
-        Return the increments issued that the angle cannot show yet, degrees.
-
-        Parameters
-        ----------
-        delay : int
-            The plant's delay, control samples: the last ``delay - 1`` increments are
-            still on their way (the design plant's ``y_k = y_{k-1} + u_{k-delay}``).
-
-        Returns
-        -------
-        float
-            Their sum: where the joint is headed beyond where it is.
-
-        """
+        """Return the increments issued that the angle cannot show yet, degrees."""
         return float(sum(self._u[:max(delay - 1, 0)]))
 
     def update_idz(self, idz: Idz) -> None:

@@ -44,22 +44,7 @@ class DiscretePlant:
 
     @classmethod
     def integrator(cls, delay: int, gain: float = 1.0) -> DiscretePlant:
-        """
-        Return ``y_k = y_{k-1} + gain u_{k-delay}``, the plant a PIP-IDZ loop sees.
-
-        Parameters
-        ----------
-        delay : int
-            Delay in control samples (>= 1).
-        gain : float
-            Numerator ``b_delay``.
-
-        Returns
-        -------
-        DiscretePlant
-            The plant.
-
-        """
+        """Return ``y_k = y_{k-1} + gain u_{k-delay}``, the plant a PIP-IDZ loop sees."""
         if delay < 1:
             raise ConfigurationError(f'the delay must be at least one sample, got {delay}')
         return cls(a=(-1.0,), b=(0.0,) * (delay - 1) + (float(gain),))

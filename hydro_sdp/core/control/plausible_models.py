@@ -259,26 +259,7 @@ class PlausibleCheck:
 
 def check_over(models: Sequence[Plausible], spec: ControllerSpec,
                stroke: tuple[float, float], settings: CheckSettings) -> PlausibleCheck:
-    """
-    Run the closed-loop check of ``spec`` on each of ``models``.
-
-    Parameters
-    ----------
-    models : sequence of Plausible
-        The models (:func:`plausible_models`).
-    spec : ControllerSpec
-        The controller, designed on the identified model and unchanged.
-    stroke : tuple[float, float]
-        Range the check's set-points span, degrees.
-    settings : CheckSettings
-        The check's bounds, timing and noise.
-
-    Returns
-    -------
-    PlausibleCheck
-        Every check, the failures and the worst figures.
-
-    """
+    """Run the closed-loop check of ``spec`` on each of ``models``."""
     return PlausibleCheck(tuple((plausible, check_loop(plausible.model, spec, stroke,
                                                        settings=settings))
                                 for plausible in models))

@@ -58,24 +58,7 @@ def setpoint_range(angle_limits: tuple[float, float] | None,
 
 def clamp_setpoint(setpoint: float, angle_limits: tuple[float, float] | None,
                    margin: float = SETPOINT_MARGIN) -> float:
-    """
-    Return ``setpoint`` kept ``margin`` degrees inside the end stops.
-
-    Parameters
-    ----------
-    setpoint : float
-        Desired angle, degrees.
-    angle_limits : tuple[float, float] or None
-        End stops, degrees.
-    margin : float
-        Distance kept from each stop, degrees.
-
-    Returns
-    -------
-    float
-        The set-point to use, degrees (``setpoint`` itself when inside the range).
-
-    """
+    """Return ``setpoint`` kept ``margin`` degrees inside the end stops."""
     allowed = setpoint_range(angle_limits, margin)
     if allowed is None:
         return float(setpoint)
@@ -116,27 +99,7 @@ def check_controller_fits(spec: ControllerSpec, model: JointModel) -> None:
 
 
 def controller_within_model(spec: ControllerSpec, model: JointModel) -> ControllerSpec:
-    """
-    Return the controller to run on ``model``: checked, and limited to its valve range.
-
-    Parameters
-    ----------
-    spec : ControllerSpec
-        The controller.
-    model : JointModel
-        The joint it is to control.
-
-    Returns
-    -------
-    ControllerSpec
-        ``spec``, with the model's valve range when it has none of its own.
-
-    Raises
-    ------
-    ConfigurationError
-        As :func:`check_controller_fits`.
-
-    """
+    """Return the controller to run on ``model``: checked, and limited to its valve range."""
     check_controller_fits(spec, model)
     if spec.v_limits is None and model.input_limits is not None:
         return replace(spec, v_limits=model.input_limits)
@@ -144,21 +107,7 @@ def controller_within_model(spec: ControllerSpec, model: JointModel) -> Controll
 
 
 def top_speeds(model: JointModel) -> tuple[float, float] | None:
-    """
-    Return the joint's identified top speeds down and up, deg/s, over its valve range.
-
-    Parameters
-    ----------
-    model : JointModel
-        The joint.
-
-    Returns
-    -------
-    tuple[float, float] or None
-        ``(down, up)``: the lowest (<= 0) and highest (>= 0) speed of the map over
-        ``input_limits``; None without a valve range (the map alone has no top speed).
-
-    """
+    """Return the joint's identified top speeds down and up, deg/s, over its valve range."""
     if model.input_limits is None:
         return None
     rates = model.rate(np.linspace(*model.input_limits, 2 * _SLOPE_POINTS + 1))

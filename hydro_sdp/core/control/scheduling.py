@@ -163,22 +163,7 @@ class FeedbackGate:
 
 
 def watchdog_period_ns(timeout_ns: int, longest_ns: int = 100_000_000) -> int:
-    """
-    Return how often to run a watchdog of ``timeout_ns``: half of it, at most ``longest_ns``.
-
-    Parameters
-    ----------
-    timeout_ns : int
-        Feedback timeout, ns.
-    longest_ns : int
-        Longest check period, ns (0.1 s).
-
-    Returns
-    -------
-    int
-        Check period, ns.
-
-    """
+    """Return how often to run a watchdog of ``timeout_ns``: half of it, at most ``longest_ns``."""
     return max(1, min(_positive_ns(timeout_ns, 'timeout_ns') // 2, longest_ns))
 
 
@@ -200,24 +185,7 @@ class ControlSchedule:
         self._from_rest = True
 
     def tick(self, stamp_ns: int) -> Tick:
-        """
-        Decide whether the sample stamped ``stamp_ns`` is controlled.
-
-        Parameters
-        ----------
-        stamp_ns : int
-            Stamp of an admitted sample, ns.
-
-        Returns
-        -------
-        Tick
-            ``wait`` before the next control instant; ``step`` at or after it;
-            ``resume`` instead of ``step`` for the first step after
-            :meth:`hold` (and the first of all): the caller resets its
-            controller to rest, ``u = 0``, before stepping. Call :meth:`stepped`
-            once the command is out.
-
-        """
+        """Decide whether the sample stamped ``stamp_ns`` is controlled."""
         if self.next_instant is None:
             self.next_instant = stamp_ns
         if stamp_ns < self.next_instant:

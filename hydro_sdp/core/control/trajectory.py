@@ -161,22 +161,7 @@ def check_trajectory_speeds(rates: Mapping[str, tuple[float, float]],
 
 
 def start_time(stamp: float, now: float) -> float:
-    """
-    Return when a trajectory starts: its stamp, or ``now`` when the stamp is zero.
-
-    Parameters
-    ----------
-    stamp : float
-        Header stamp, s (0: start now).
-    now : float
-        Time of arrival, s.
-
-    Returns
-    -------
-    float
-        Start time, s.
-
-    """
+    """Return when a trajectory starts: its stamp, or ``now`` when the stamp is zero."""
     return float(now) if stamp == 0.0 else float(stamp)
 
 
@@ -258,22 +243,7 @@ class TrajectorySampler:
         return tuple(self._hold)
 
     def sample(self, joint: str, t: float) -> tuple[float, float]:
-        """
-        Return the set-point (deg) and its rate (deg/s) of ``joint`` at time ``t`` (s).
-
-        Parameters
-        ----------
-        joint : str
-            Joint name.
-        t : float
-            Time, s.
-
-        Returns
-        -------
-        tuple[float, float]
-            ``(setpoint, rate)``.
-
-        """
+        """Return the set-point (deg) and its rate (deg/s) of ``joint`` at time ``t`` (s)."""
         pieces = self._pieces[joint]
         for piece in reversed(pieces):
             if piece.start <= t:
@@ -289,26 +259,7 @@ class TrajectorySampler:
         return self.sample(joint, t)[0]
 
     def feedforward(self, joint: str, t: float, control_period: float, lead: int) -> float:
-        """
-        Set-point increment over one control period ending ``lead`` periods after ``t``.
-
-        Parameters
-        ----------
-        joint : str
-            Joint name.
-        t : float
-            Control instant, s.
-        control_period : float
-            Control period, s.
-        lead : int
-            Delay of the loop, control samples (>= 1).
-
-        Returns
-        -------
-        float
-            Degrees per control sample.
-
-        """
+        """Set-point increment over one control period ending ``lead`` periods after ``t``."""
         ahead = t + lead * control_period
         return self.setpoint(joint, ahead) - self.setpoint(joint, ahead - control_period)
 
@@ -335,22 +286,7 @@ class TrajectorySampler:
         self.replace(JointTrajectory((joint,), np.zeros(1), point), start)
 
     def replace(self, trajectory: JointTrajectory, start: float) -> None:
-        """
-        Follow ``trajectory`` from ``start`` on, replacing the rest of what was planned.
-
-        Parameters
-        ----------
-        trajectory : JointTrajectory
-            The new trajectory; check it first with :func:`check_trajectory`.
-        start : float
-            Its start time, s (see :func:`start_time`).
-
-        Raises
-        ------
-        DataError
-            If it names a joint not controlled here, or ``start`` is not finite.
-
-        """
+        """Follow ``trajectory`` from ``start`` on, replacing the rest of what was planned."""
         for name, piece in self._planned(trajectory, start).items():
             kept = [old for old in self._pieces[name] if old.start < start]
             kept.append(piece)
@@ -408,20 +344,5 @@ class TrajectorySampler:
                 self._pieces[name] = pieces[in_force[-1]:]
 
     def setpoints(self, joint: str, times: Sequence[float] | FloatArray) -> FloatArray:
-        """
-        Return the set-points of ``joint`` at many times.
-
-        Parameters
-        ----------
-        joint : str
-            Joint name.
-        times : sequence of float
-            Times, s.
-
-        Returns
-        -------
-        FloatArray
-            Set-points, degrees.
-
-        """
+        """Return the set-points of ``joint`` at many times."""
         return np.array([self.setpoint(joint, float(t)) for t in times], dtype=np.float64)

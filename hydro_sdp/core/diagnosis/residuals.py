@@ -90,22 +90,7 @@ def runs_of(records: Sequence[Record], max_delay: float, settle: float = 1.0) ->
 
 
 def mae(model: JointModel, runs: Sequence[Run]) -> float:
-    """
-    Return the mean absolute simulation error, averaged per record, degrees.
-
-    Parameters
-    ----------
-    model : JointModel
-        The model.
-    runs : sequence of Run
-        Validation runs.
-
-    Returns
-    -------
-    float
-        Mean over records of each record's MAE, degrees.
-
-    """
+    """Return the mean absolute simulation error, averaged per record, degrees."""
     return float(np.mean([record_mae(model, run.record, run.dt, run.exogenous) for run in runs]))
 
 

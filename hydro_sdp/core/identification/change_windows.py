@@ -281,24 +281,7 @@ def _rows(experiments: Sequence[Experiment], delay: int, window: int
 
 
 def lagged_residual(experiments: Sequence[Experiment], delay: int, pole: float) -> float:
-    """
-    Squared error of the increments explained by lagged per-level mean speeds.
-
-    Parameters
-    ----------
-    experiments : sequence of Experiment
-        The experiments.
-    delay : int
-        Dead time, samples.
-    pole : float
-        Lag pole ``p`` (0: pure delay).
-
-    Returns
-    -------
-    float
-        Sum of squared residuals of the increments, degrees squared.
-
-    """
+    """Squared error of the increments explained by lagged per-level mean speeds."""
     return _residual(*_rows(experiments, delay, 2 * delay + 50), pole)
 
 

@@ -133,31 +133,7 @@ def _xcorr(experiments: Sequence[Experiment], max_delay: int, pole: float) -> in
 def estimate_delay(experiments: Sequence[Experiment], dt: float, *, max_delay: int,
                    rest: float = 0.0, noise: float = 0.0,
                    windows: ChangeWindows | None = None) -> DelayEstimate:
-    """
-    Estimate the pure delay from experiments.
-
-    Parameters
-    ----------
-    experiments : sequence of Experiment
-        Step or run experiments, each with at least ``max_delay`` samples of history.
-    dt : float
-        Sample period, s.
-    max_delay : int
-        Largest delay considered, samples.
-    rest : float
-        Rest command.
-    noise : float
-        Angle noise standard deviation, degrees.
-    windows : ChangeWindows or None
-        Change windows of these experiments or more, whose fits are shared with
-        later checks (:meth:`~.change_windows.ChangeWindows.part`).
-
-    Returns
-    -------
-    DelayEstimate
-        The delay (from the fit) and the other estimators' answers.
-
-    """
+    """Estimate the pure delay from experiments."""
     if not experiments:
         raise DataError('no experiments to estimate the delay from')
     shared = None if windows is None else windows.part(experiments, max_delay)

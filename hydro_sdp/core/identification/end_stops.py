@@ -180,28 +180,7 @@ def stop_reach(noise: float) -> float:
 
 def arrival_at_stop(y: FloatArray, level: float, rest: float,
                     stops: tuple[float | None, float | None], reach: float) -> int | None:
-    """
-    First sample at which a step reaches the stop its command drives it into, if it does.
-
-    Parameters
-    ----------
-    y : FloatArray
-        Angles of the step from its initial state on, degrees.
-    level : float
-        The held command.
-    rest : float
-        Rest command: above it the joint is driven up, below it down.
-    stops : tuple[float | None, float | None]
-        Lower and upper end stop, degrees; None where unknown.
-    reach : float
-        How near the stop counts as at it, degrees (:func:`stop_reach`).
-
-    Returns
-    -------
-    int or None
-        Index into ``y`` of the first sample at the stop (after the first), or None.
-
-    """
+    """First sample at which a step reaches the stop its command drives it into, if it does."""
     target = driven_stop(level, rest, stops)
     if y.size < 2 or target is None:
         return None

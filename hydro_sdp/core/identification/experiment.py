@@ -93,22 +93,7 @@ def split_long(experiments: Sequence[Experiment], max_samples: int,
 
 
 def thin(experiments: Sequence[Experiment], max_samples: int) -> list[Experiment]:
-    """
-    Keep evenly spread experiments up to about ``max_samples`` predicted samples.
-
-    Parameters
-    ----------
-    experiments : sequence of Experiment
-        The experiments.
-    max_samples : int
-        Sample budget.
-
-    Returns
-    -------
-    list of Experiment
-        All of them when within budget, else every k-th.
-
-    """
+    """Keep evenly spread experiments up to about ``max_samples`` predicted samples."""
     total = sum(e.samples for e in experiments)
     if total <= max_samples:
         return list(experiments)

@@ -188,23 +188,7 @@ class WindowErrors:
 
     def compare(self, models: Sequence[JointModel],
                 seconds: float | None = WINDOW_SECONDS) -> list[float]:
-        """
-        Return each model's mean absolute simulation error, averaged per record, deg.
-
-        Parameters
-        ----------
-        models : sequence of JointModel
-            The models compared, over the same samples: from the later of the samples
-            at which each model's state no longer depends on the past.
-        seconds : float or None
-            Window length, s; None: one window, the whole record from that sample.
-
-        Returns
-        -------
-        list[float]
-            One error per model, degrees.
-
-        """
+        """Return each model's mean absolute simulation error, averaged per record, deg."""
         return self.per_record(models, seconds).mean(axis=0).tolist()
 
     def per_record(self, models: Sequence[JointModel],

@@ -98,25 +98,7 @@ class Identification:
     method: FitMethod = 'rr'
 
     def family_map(self, kind: FittedKind) -> StaticMap:
-        """
-        Return the map of family ``kind`` fitted on the same data at the same timing.
-
-        Parameters
-        ----------
-        kind : str
-            A map family (``sdp``, ``pwl``, ``poly``, ``power_sat``).
-
-        Returns
-        -------
-        StaticMap
-            The chosen map for the chosen family, else the other family's fit.
-
-        Raises
-        ------
-        DataError
-            Where the identification kept no fit data (routine operation).
-
-        """
+        """Return the map of family ``kind`` fitted on the same data at the same timing."""
         if kind == self.model.kind:
             return self.fit.static_map
         if self.fit_data is None or self.sdp_map is None:

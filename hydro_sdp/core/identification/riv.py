@@ -288,37 +288,7 @@ def _estimate(problem: _IvProblem, rho: FloatArray, noise: FloatArray, factor: F
 def sriv(y: FloatArray | Sequence[FloatArray], u: FloatArray | Sequence[FloatArray], n: int,
          m: int, delay: int, *, known_factor: Sequence[float] = (1.0,), noise_order: int = 0,
          tol: float = 1e-4, max_iterations: int = 20, warm_up: int | None = None) -> TfEstimate:
-    """
-    Estimate ``B/A`` by simplified (or, with ``noise_order``, full) refined IV.
-
-    Parameters
-    ----------
-    y, u : array or sequence of arrays
-        Output and input of one experiment, or lists of several experiments.
-        Each experiment should start at rest (deviations from an operating point).
-    n : int
-        Order of the estimated part of ``A`` (the known factor excluded; may be 0).
-    m : int
-        Numerator order (``m + 1`` coefficients).
-    delay : int
-        Pure delay, samples.
-    known_factor : sequence of float
-        Known factor ``K`` of ``A`` as ``[1, k_1, ..]``; ``[1, -1]`` is an integrator.
-    noise_order : int
-        AR order of the noise model (RIV); 0 for SRIV.
-    tol : float
-        Relative parameter change that ends the iterations.
-    max_iterations : int
-        Iteration limit.
-    warm_up : int or None
-        Samples skipped at each experiment's start (default ``max(n, delay + m)``).
-
-    Returns
-    -------
-    TfEstimate
-        The estimate and its diagnostics.
-
-    """
+    """Estimate ``B/A`` by simplified (or, with ``noise_order``, full) refined IV."""
     factor = np.asarray(known_factor, dtype=np.float64)
     problem = _problem(y, u, n, m, delay, factor, warm_up)
     rho, noise, iterations, converged = _iterate(

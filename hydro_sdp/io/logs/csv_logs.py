@@ -76,35 +76,7 @@ def parse_csv_log(text: str, *, joint: str, time: str, angle: str, command: str,
                   command_negative: str | None = None, angle_unit: str = 'deg',
                   delimiter: str | None = None, source: str = 'csv',
                   header_row: int | None = None) -> CsvLog:
-    """
-    Parse the text of one CSV log.
-
-    Parameters
-    ----------
-    text : str
-        The file's content.
-    joint : str
-        Joint name for the record.
-    time, angle, command : str
-        Columns (header name or 0-based index) of the time (s), the angle and the command.
-    command_negative : str or None
-        Column subtracted from ``command`` (one-sided duty of the other direction's valve).
-    angle_unit : str
-        ``deg`` or ``rad``.
-    delimiter : str or None
-        Cell delimiter, one character (see :func:`.text_rows.delimiter_character`);
-        default: sniffed.
-    source : str
-        Name of the file, for messages.
-    header_row : int or None
-        Spreadsheet number of the header row (default: found).
-
-    Returns
-    -------
-    CsvLog
-        The record and the time shift.
-
-    """
+    """Parse the text of one CSV log."""
     spec = single_joint_spec(joint, angle, command, time=time,
                              command_negative=command_negative, angle_unit=angle_unit)
     table = text_table(text, time, delimiter=delimiter, source=source, header_row=header_row)
@@ -116,24 +88,7 @@ def read_csv_log(path: str | os.PathLike[str], *, joint: str, time: str, angle: 
                  command: str, command_negative: str | None = None, angle_unit: str = 'deg',
                  delimiter: str | None = None, header_row: int | None = None,
                  encoding: str | None = None) -> CsvLog:
-    """
-    Read one CSV log file (any common encoding, :mod:`.text_rows`).
-
-    Parameters
-    ----------
-    path : str or PathLike
-        The file.
-    joint, time, angle, command, command_negative, angle_unit, delimiter, header_row
-        As for :func:`parse_csv_log`.
-    encoding : str or None
-        The file's encoding (default: detected).
-
-    Returns
-    -------
-    CsvLog
-        The record and the time shift.
-
-    """
+    """Read one CSV log file (any common encoding, :mod:`.text_rows`)."""
     source = Path(path)
     text = read_log_text(source, encoding).text
     return parse_csv_log(text, joint=joint, time=time, angle=angle, command=command,

@@ -168,28 +168,7 @@ def machine_log(table: LogTable, spec: MachineSpec) -> MachineLog:
 def read_machine_log(path: str | os.PathLike[str], spec: MachineSpec, *,
                      header_row: int | None = None, delimiter: str | None = None,
                      encoding: str | None = None) -> MachineLog:
-    """
-    Read a logger's file (CSV, MDF4 or MATLAB) as a machine's records.
-
-    Parameters
-    ----------
-    path : str or PathLike
-        The file.
-    spec : MachineSpec
-        Which channels are which.
-    header_row : int or None
-        CSV names row (spreadsheet number; default: found).
-    delimiter : str or None
-        CSV cell delimiter (default: sniffed).
-    encoding : str or None
-        CSV text encoding (default: detected).
-
-    Returns
-    -------
-    MachineLog
-        The records and signals.
-
-    """
+    """Read a logger's file (CSV, MDF4 or MATLAB) as a machine's records."""
     role = '--time' if spec.source == 'command line' else 'time'
     with open_table(path, spec.time, time_role=role, header_row=header_row,
                     delimiter=delimiter, encoding=encoding) as table:

@@ -45,22 +45,7 @@ class LogTable(Protocol):
     source: str
 
     def channel(self, name: str, role: str) -> Channel:
-        """
-        Return the channel ``name``, or raise a one-line :class:`DataError`.
-
-        Parameters
-        ----------
-        name : str
-            Channel, column or variable name (a 0-based index for a CSV column).
-        role : str
-            What it is for, for messages (``--angle``, ``joints.boom.angle``).
-
-        Returns
-        -------
-        Channel
-            Its values and their times.
-
-        """
+        """Return the channel ``name``, or raise a one-line :class:`DataError`."""
 
 
 def check_channel(source: str, channel: Channel) -> Channel:
@@ -138,26 +123,7 @@ def nanoseconds(t: FloatArray, origin: float) -> IntArray:
 
 
 def held_at(samples: IntArray, channel: Channel, origin: float, *, command: bool) -> FloatArray:
-    """
-    Return the value of a channel in force at each sample, holding its last value.
-
-    Parameters
-    ----------
-    samples : IntArray
-        Sample instants, ns from ``origin``.
-    channel : Channel
-        The channel.
-    origin : float
-        Time the nanoseconds count from, s (in the channel's clock).
-    command : bool
-        A command counts strictly before the sample; a measurement at or before it.
-
-    Returns
-    -------
-    FloatArray
-        One value per sample.
-
-    """
+    """Return the value of a channel in force at each sample, holding its last value."""
     stamps = nanoseconds(channel.t, origin)
     index = np.searchsorted(stamps, samples, side='left' if command else 'right') - 1
     return channel.values[np.maximum(index, 0)]

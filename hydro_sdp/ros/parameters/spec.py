@@ -110,22 +110,7 @@ class ParameterSpec:
         return self.kind.endswith('_array')
 
     def check(self, value: object, name: str | None = None) -> None:
-        """
-        Refuse a value that breaks the table: wrong type, length, choice, range, or a NaN.
-
-        Parameters
-        ----------
-        value : object
-            The value (as rclpy gives it: arrays may be ``array.array``).
-        name : str or None
-            The name it was given under (``boom.idz.beta``), for the message.
-
-        Raises
-        ------
-        ConfigurationError
-            Naming the parameter and what is wrong.
-
-        """
+        """Refuse a value that breaks the table: wrong type, length, choice, range, or a NaN."""
         self._check_shape(value, name or self.name)
 
     def _wrong(self, value: object, label: str) -> ConfigurationError:

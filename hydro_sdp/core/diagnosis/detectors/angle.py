@@ -132,24 +132,7 @@ def outermost_dwell(outward: FloatArray, band: float, needed: int) -> float | No
 
 def directional_signature(word: str, model: JointModel, augmented: JointModel,
                           run: Run) -> Signature:
-    """
-    Return the residual against the angle with the direction of the model's motion.
-
-    Parameters
-    ----------
-    word : str
-        Vocabulary word.
-    model, augmented : JointModel
-        The model given and the augmented model.
-    run : Run
-        The run to draw.
-
-    Returns
-    -------
-    Signature
-        The residuals, the angle and the direction of motion, aligned sample by sample.
-
-    """
+    """Return the residual against the angle with the direction of the model's motion."""
     signature = feature_signature(word, 'angle', model, augmented, run)
     record = run.record
     speed = speed_profile(model, record.v, run.dt, v_before=float(record.v[0]))

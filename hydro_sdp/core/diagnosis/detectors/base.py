@@ -58,24 +58,7 @@ class Detector(ABC):
         """
 
     def signature(self, model: JointModel, augmented: JointModel, run: Run) -> Signature:
-        """
-        Return the residual signature of the effect on one run, before and after adding it.
-
-        Parameters
-        ----------
-        model : JointModel
-            The model given.
-        augmented : JointModel
-            The model with the effect (and any others kept).
-        run : Run
-            The run to draw.
-
-        Returns
-        -------
-        Signature
-            The residuals and what they are drawn against.
-
-        """
+        """Return the residual signature of the effect on one run, before and after adding it."""
         return feature_signature(self.word, self.feature, model, augmented, run)
 
 

@@ -145,22 +145,7 @@ class FitData:
         return [self._increments(bucket, per_level) for bucket in range(len(self.buckets))]
 
     def residuals(self, rate: RateFunction, beta: float = 0.0) -> FloatArray:
-        """
-        Prediction errors ``Z`` of every sample, concatenated (regret-regression form).
-
-        Parameters
-        ----------
-        rate : callable
-            The map, commands to deg/s.
-        beta : float
-            Gain on the state residuals (0: simulation error).
-
-        Returns
-        -------
-        FloatArray
-            One residual per predicted sample.
-
-        """
+        """Prediction errors ``Z`` of every sample, concatenated (regret-regression form)."""
         return self.evaluate([(rate, beta)])[0].residuals
 
     def residuals_of_many(self, maps: Sequence[tuple[RateFunction, float]]

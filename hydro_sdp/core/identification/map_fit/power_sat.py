@@ -62,24 +62,7 @@ def _bounds(levels: FloatArray, speeds: FloatArray, errors: FloatArray, rest: fl
 
 def power_sat_start(points: Sequence[LevelSpeed], rest: float, start: SdpMap
                     ) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """
-    Return the starting parameters and their bounds from the per-level speeds.
-
-    Parameters
-    ----------
-    points : sequence of LevelSpeed
-        Per-level speeds.
-    rest : float
-        Rest command.
-    start : SdpMap
-        An ``sdp`` fit: its edges and saturation speeds start the search.
-
-    Returns
-    -------
-    tuple of FloatArray
-        ``(x0, lower, upper)`` of ``(vn, cn, nn, a3, vp, cp, np, a6)``.
-
-    """
+    """Return the starting parameters and their bounds from the per-level speeds."""
     # Keyed by the bits of the numbers: -0.0 is not 0.0, and a NaN is itself.
     table = np.array([[p.level, p.speed, p.standard_error] for p in points], dtype=np.float64)
     given = np.array([rest, start.dead_zone[0], start.dead_zone[1]], dtype=np.float64)

@@ -41,21 +41,7 @@ class PwlLayout:
     positive: int
 
     def speeds(self, x: FloatArray) -> FloatArray:
-        """
-        Speed at each knot, deg/s, from the increments ``x`` (``beta`` may follow them).
-
-        Parameters
-        ----------
-        x : FloatArray
-            Non-negative speed increments between neighbouring knots, outward from
-            the plateau: ``negative`` of them, then ``positive``, deg/s.
-
-        Returns
-        -------
-        FloatArray
-            Speeds, 0 on the plateau.
-
-        """
+        """Speed at each knot, deg/s, from the increments ``x`` (``beta`` may follow them)."""
         n_neg, n_pos = self.negative, self.positive
         negative = -np.cumsum(x[:n_neg][::-1])[::-1]       # outward from the lower edge
         positive = np.cumsum(x[n_neg:n_neg + n_pos])

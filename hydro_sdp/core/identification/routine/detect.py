@@ -50,23 +50,5 @@ def held_share(records: Sequence[Record], rest: float, hold: int) -> float:
 
 
 def routine_operation(records: Sequence[Record], rest: float, hold: int) -> bool:
-    """
-    Whether records are routine operation rather than experiments with held levels.
-
-    Parameters
-    ----------
-    records : sequence of Record
-        The records.
-    rest : float
-        Rest command.
-    hold : int
-        Samples a level must last to show its speed after any delay considered (the
-        largest delay considered).
-
-    Returns
-    -------
-    bool
-        True when held levels carry less than :data:`HELD_SHARE` of the driven samples.
-
-    """
+    """Whether records are routine operation rather than experiments with held levels."""
     return held_share(records, rest, hold) < HELD_SHARE

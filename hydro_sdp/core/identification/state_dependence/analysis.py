@@ -15,14 +15,15 @@ from hydro_sdp.core.errors import DataError, HydroSdpError
 from hydro_sdp.core.identification.delay import estimate_delay
 from hydro_sdp.core.identification.experiment import split_long, thin
 from hydro_sdp.core.identification.rest import estimate_rest_command
+from hydro_sdp.core.identification.segmentation import check_records, segment_records
 from hydro_sdp.core.identification.state_dependence.backfit import (
     Backfit, backfit, base_fit, Term, with_tests)
-from hydro_sdp.core.identification.state_dependence.ordering import MAX_GROUPS
-from hydro_sdp.core.identification.state_dependence.random_walk import order_of, TvpKind
 from hydro_sdp.core.identification.state_dependence.dependence import (
     ordered, ParameterSummary, SdpAnalysis, StateDependence)
-from hydro_sdp.core.identification.state_dependence.states import check_states, Rows, rows_of, STATES
-from hydro_sdp.core.identification.segmentation import check_records, segment_records
+from hydro_sdp.core.identification.state_dependence.ordering import MAX_GROUPS
+from hydro_sdp.core.identification.state_dependence.random_walk import order_of, TvpKind
+from hydro_sdp.core.identification.state_dependence.states import (
+    check_states, Rows, rows_of, STATES)
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.records import Record
 import numpy as np

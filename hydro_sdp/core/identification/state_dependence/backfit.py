@@ -14,11 +14,14 @@ from typing import Sequence
 from hydro_sdp.core.arrays import FloatArray, IntArray
 from hydro_sdp.core.errors import DataError
 from hydro_sdp.core.identification.state_dependence.nvr import NvrEstimate
-from hydro_sdp.core.identification.state_dependence.ordering import MAX_GROUPS, order_by_state, Ordering
-from hydro_sdp.core.identification.state_dependence.random_walk import group_stats, inner, order_of, TvpKind
+from hydro_sdp.core.identification.state_dependence.ordering import (
+    MAX_GROUPS, order_by_state, Ordering)
+from hydro_sdp.core.identification.state_dependence.random_walk import (
+    group_stats, inner, order_of, TvpKind)
 from hydro_sdp.core.identification.state_dependence.shares import held_out_reduction
 from hydro_sdp.core.identification.state_dependence.significance import dependence_test
-from hydro_sdp.core.identification.state_dependence.smoothing import smooth_parameter, SmoothedParameter
+from hydro_sdp.core.identification.state_dependence.smoothing import (
+    smooth_parameter, SmoothedParameter)
 import numpy as np
 
 #: Passes in which the NVRs are re-estimated (CAPTAIN's ``nvr = -2``).
@@ -227,7 +230,7 @@ def backfit(z: FloatArray, terms: Sequence[Term], *, max_groups: int | None = MA
     terms : sequence of Term
         The terms; each parameter follows its own state.
     max_groups : int or None
-        Most groups per state (:func:`~hydro_sdp.core.identification.state_dependence.ordering.order_by_state`).
+        Most groups per state (:func:`.ordering.order_by_state`).
     replicates : int
         Bootstrap replicates of each term's test (0: no test, p-values NaN).
     seed : int

@@ -6,7 +6,8 @@ from dataclasses import dataclass
 import math
 
 from hydro_sdp.core.errors import DataError
-from hydro_sdp.core.identification.state_dependence.banded import fit_banded, fit_flat, penalty_bands
+from hydro_sdp.core.identification.state_dependence.banded import (
+    fit_banded, fit_flat, penalty_bands)
 from hydro_sdp.core.identification.state_dependence.random_walk import GroupStats
 import numpy as np
 from scipy.optimize import minimize_scalar

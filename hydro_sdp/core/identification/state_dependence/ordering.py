@@ -58,18 +58,6 @@ class Ordering:
         Ordered samples take their group's value; the others (regressor zero) the
         value interpolated at their state.
 
-        Parameters
-        ----------
-        per_group : FloatArray
-            One value per group.
-        state : FloatArray
-            The state at every sample.
-
-        Returns
-        -------
-        FloatArray
-            One value per sample.
-
         """
         out = np.interp(np.asarray(state, dtype=np.float64), self.values, per_group)
         out[self.samples] = np.asarray(per_group)[self.group]
