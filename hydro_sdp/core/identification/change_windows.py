@@ -309,17 +309,6 @@ def _residual(dy: FloatArray, group: np.ndarray, mask: np.ndarray, time: FloatAr
     return float(np.sum(((dy - predicted) * mask) ** 2))
 
 
-def fit_delay_and_lag(experiments: Sequence[Experiment], dt: float, max_delay: int
-                      ) -> tuple[int, float, FloatArray]:
-    """
-    Dead time and lag time constant that explain the increments best.
-
-    As :func:`fit_delay_lag_and_pure`, without the best pure delay.
-    """
-    delay, lag, explained, _ = fit_delay_lag_and_pure(experiments, dt, max_delay)
-    return delay, lag, explained
-
-
 def fit_delay_lag_and_pure(experiments: Sequence[Experiment], dt: float, max_delay: int,
                            windows: ChangeWindows | None = None
                            ) -> tuple[int, float, FloatArray, int]:

@@ -3,7 +3,8 @@
 from dataclasses import replace
 import math
 
-from hydro_sdp.core.identification.change_windows import ChangeWindows, fit_delay_and_lag, lag_pole
+from hydro_sdp.core.identification.change_windows import (
+    ChangeWindows, fit_delay_lag_and_pure, lag_pole)
 from hydro_sdp.core.identification.delay import estimate_delay
 from hydro_sdp.core.identification.experiment import Experiment, split_long
 from hydro_sdp.core.identification.identify import identify
@@ -61,7 +62,7 @@ def test_identify_puts_the_lag_into_the_model(j2: JointModel) -> None:
 
 def test_no_lag_is_found_where_there_is_none(j2: JointModel) -> None:
     segmentation, pieces = j2_steps(j2, 0.15, None, 0.03)
-    delay, lag, explained = fit_delay_and_lag(pieces, DT, 50)
+    delay, lag, explained, _ = fit_delay_lag_and_pure(pieces, DT, 50)
     assert (delay, lag) == (15, 0.0)
     assert int(np.argmax(explained)) + 1 == 15
 
@@ -136,4 +137,4 @@ def test_a_command_that_never_changes_gives_no_delay():
     from hydro_sdp.core.errors import DataError
     flat = Experiment(np.full(400, 2.0), np.linspace(0.0, 10.0, 400), 30, 'run', 2.0, 0.0)
     with pytest.raises(DataError, match='never changes'):
-        fit_delay_and_lag([flat], 0.01, 20)
+        fit_delay_lag_and_pure([flat], 0.01, 20)
