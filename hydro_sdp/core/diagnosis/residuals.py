@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cached_property
 from typing import Sequence
 
 from hydro_sdp.core.arrays import FloatArray
+from hydro_sdp.core.identification.end_stops import stop_window
 from hydro_sdp.core.identification.evaluation import record_mae
+from hydro_sdp.core.identification.sdp.states import holds_of
 from hydro_sdp.core.identification.segmentation import check_record
 from hydro_sdp.core.model.effects import AngleDependentVelocity, Backlash, Oscillation
 from hydro_sdp.core.model.exogenous_signals import Exogenous, exogenous_of
@@ -35,12 +37,22 @@ class Run:
         Its sample period, s.
     start : int
         First sample at which the joint's state is settled.
+    free : numpy.ndarray or None
+        Whether the joint can move over each increment from ``start`` (None: all).
 
     """
 
     record: Record
     dt: float
     start: int
+    free: np.ndarray | None = None
+
+    @cached_property
+    def free_samples(self) -> np.ndarray | None:
+        """Return whether each sample is free (None: all): ``free`` by the increment's end."""
+        if self.free is None:
+            return None
+        return np.r_[np.ones(self.start + 1, dtype=bool), self.free]
 
     # Fits simulate a run hundreds of times; its signals do not change.
     @cached_property
@@ -107,7 +119,41 @@ def velocity_residuals(model: JointModel, runs: Sequence[Run]) -> list[FloatArra
     for run in runs:
         predicted = _play_at_stops(model, run) if _plays_at_stops(model) else \
             run_increments(model, run)
-        out.append(np.diff(run.record.y[run.start:]) - predicted)
+        residual = np.diff(run.record.y[run.start:]) - predicted
+        out.append(residual if run.free is None else np.where(run.free, residual, 0.0))
+    return out
+
+
+def free_runs(runs: Sequence[Run], model: JointModel, max_delay: int, rest: float
+              ) -> list[Run]:
+    """
+    Mark the increments where the joint can move: not at a stop, not stalled.
+
+    Held at a stop or stalled (:func:`~hydro_sdp.core.identification.sdp.states.holds_of`,
+    as the SDP analysis leaves them out), and for :func:`stop_window` after arriving at a
+    stop under the same command, while the link rings on the stop's compliance.
+    """
+    if not runs:
+        return []
+    extremes = (min(float(np.min(r.record.y)) for r in runs),
+                max(float(np.max(r.record.y)) for r in runs))
+    out = []
+    for run in runs:
+        record = run.record
+        delay = max(1, min(max_delay, model.delay_samples(run.dt)))
+        code = holds_of(record, delay, rest, model, extremes)
+        held = code != 0
+        # Ringing on the stop after arriving: held from arrival for a window, until the
+        # delayed command changes.
+        window = stop_window(run.dt)
+        delayed = np.r_[np.full(delay, np.nan), record.v[:-delay]]
+        arrivals = np.flatnonzero(held[1:] & ~held[:-1]) + 1
+        for first in arrivals:
+            last = min(first + window, held.size)
+            same = np.flatnonzero(delayed[first:last] != delayed[first])
+            held[first:first + (same[0] if same.size else last - first)] = True
+        # Residual i is the increment ending at sample start + 1 + i.
+        out.append(replace(run, free=~held[run.start + 1:]))
     return out
 
 

@@ -12,7 +12,7 @@ from hydro_sdp.core.diagnosis.detectors import detector, DETECTORS
 from hydro_sdp.core.diagnosis.naming import name_states, Naming
 from hydro_sdp.core.diagnosis.reduction import bootstrap_block
 from hydro_sdp.core.diagnosis.residuals import (
-    BLOCK_SECONDS, mae, Run, runs_of, velocity_residuals)
+    BLOCK_SECONDS, free_runs, mae, Run, runs_of, velocity_residuals)
 from hydro_sdp.core.diagnosis.results import (
     Candidate, Diagnosis, GapTraces, LedgerStep, Signature, StateEvidence)
 from hydro_sdp.core.errors import DataError, HydroSdpError
@@ -68,18 +68,33 @@ def hold_out(records: Sequence[Record]) -> tuple[list[Record], list[Record], str
                                 '(every third)')
 
 
-def _round(context: Context, checks: Sequence[Run], progress: Callable[[str], None] | None,
+#: The state of the words judged on the samples where the joint can move: how it moves
+#: after a command change (held at a stop or stalled, it does not).
+MOVING = 'since_change'
+
+
+def _round(whole: Context, all_checks: Sequence[Run],
+           progress: Callable[[str], None] | None,
            every: bool = True) -> list[tuple[Candidate, JointModel | None]]:
     """Fit the detectors on the estimation runs, judge each on the held-out runs, rank."""
-    base = velocity_residuals(context.model, checks)
-    block = bootstrap_block(base, max(2, int(round(BLOCK_SECONDS / checks[0].dt))))
-    errors = WindowErrors(checks)
+    model = whole.model
+    free = Context(model, free_runs(whole.runs, model, whole.max_delay, whole.rest),
+                   whole.max_delay, whole.naming)
+    free_checks = free_runs(all_checks, model, whole.max_delay, whole.rest)
+    block = bootstrap_block(velocity_residuals(model, all_checks),
+                            max(2, int(round(BLOCK_SECONDS / all_checks[0].dt))))
+    # Per side (all samples, free ones): context, held-out runs, residuals, errors.
+    sides = {False: (whole, all_checks, velocity_residuals(model, all_checks),
+                     WindowErrors(all_checks), WindowErrors(whole.runs)),
+             True: (free, free_checks, velocity_residuals(model, free_checks),
+                    WindowErrors(free_checks), WindowErrors(free.runs))}
     judged: list[tuple[Candidate, JointModel | None]] = []
     # Judged on the estimation runs (the records' own factors): compared apart.
     on_own: list[tuple[Candidate, JointModel | None]] = []
     for each in DETECTORS:
         if progress is not None:
             progress(each.word)
+        context, checks, base, errors, _ = sides[each.state == MOVING]
         again = getattr(each, 'refits', False) and context.model.effect(each.word) is not None
         if not (every or again or each.word == 'angle_limits' or
                 context.naming.named(each.state)):
@@ -104,13 +119,16 @@ def _round(context: Context, checks: Sequence[Run], progress: Callable[[str], No
             continue
         judged.append((judge(trial, context.model, checks, base, block, context.naming,
                              each.state, errors), trial[1]))
-    own_errors = WindowErrors(context.runs)
-    judged = explained_away([(carry_over(candidate, context.model, augmented, own_errors),
+    judged = explained_away([(carry_over(candidate, model, augmented,
+                                         sides[detector(candidate.effect).state == MOVING][4]),
                               augmented) for candidate, augmented in judged])
-    judged = confounded_by_records(on_common_samples(judged, context.model, errors), on_own)
-    judged += on_own
-    models = {id(candidate): model for candidate, model in judged}
-    ranked = rank([candidate for candidate, _ in judged], context.naming)
+    # Each side compared over its own samples.
+    judged = [pair for moving in (False, True) for pair in on_common_samples(
+        [pair for pair in judged if (detector(pair[0].effect).state == MOVING) == moving],
+        model, sides[moving][3])]
+    judged = confounded_by_records(judged, on_own) + list(on_own)
+    models = {id(candidate): augmented for candidate, augmented in judged}
+    ranked = rank([candidate for candidate, _ in judged], whole.naming)
     return [(candidate, models[id(candidate)]) for candidate in ranked]
 
 

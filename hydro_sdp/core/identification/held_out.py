@@ -183,7 +183,12 @@ class WindowErrors:
             simulated = simulate_windows(model, record.v, record.y, run.dt,
                                          list(range(start, len(record) - 1, width)),
                                          v_before=float(record.v[0]), exogenous=run.exogenous)
-            self._cache[key] = float(np.mean(np.abs(record.y[start:] - simulated[start:])))
+            error = np.abs(record.y[start:] - simulated[start:])
+            # Samples a run marks as not free (held at a stop, stalled) are not scored.
+            free = getattr(run, 'free_samples', None)
+            kept = None if free is None else free[start:]
+            self._cache[key] = float(np.mean(error if kept is None or not kept.any()
+                                             else error[kept]))
         return self._cache[key]
 
     def compare(self, models: Sequence[JointModel],

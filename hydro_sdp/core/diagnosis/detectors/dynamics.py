@@ -106,12 +106,14 @@ class OscillationDetector(EffectDetector):
             timed = with_mode(delay, np.array([0.0, 0.5])).without_effect(Oscillation.name)
             steps = [(OneStep(timed, run.record.v, run.record.y, dt, start=run.start,
                               v_before=float(run.record.v[0]), exogenous=run.exogenous),
-                      np.diff(run.record.y[run.start:])) for run in context.runs]
+                      np.diff(run.record.y[run.start:]), run.free) for run in context.runs]
 
             def cost(x: FloatArray) -> float:
                 mode = with_mode(delay, x).effect(Oscillation.name)
                 assert isinstance(mode, Oscillation)
-                residuals = [measured - step.increments(mode) for step, measured in steps]
+                residuals = [measured - step.increments(mode) if free is None else
+                             np.where(free, measured - step.increments(mode), 0.0)
+                             for step, measured, free in steps]
                 return float(block_sums(residuals, context.block).sum())
             seeds = [start] if start is not None else _seeds(context, cost, low, high)
             best: tuple[float, FloatArray] = (math.inf, np.zeros(2))
