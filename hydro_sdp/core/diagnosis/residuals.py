@@ -9,8 +9,8 @@ from typing import Sequence
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.identification.end_stops import stop_window
 from hydro_sdp.core.identification.evaluation import record_mae
-from hydro_sdp.core.identification.sdp.states import holds_of
 from hydro_sdp.core.identification.segmentation import check_record
+from hydro_sdp.core.identification.state_dependence.states import holds_of
 from hydro_sdp.core.model.effects import AngleDependentVelocity, Backlash, Oscillation
 from hydro_sdp.core.model.exogenous_signals import Exogenous, exogenous_of
 from hydro_sdp.core.model.joint_model import JointModel
@@ -129,7 +129,7 @@ def free_runs(runs: Sequence[Run], model: JointModel, max_delay: int, rest: floa
     """
     Mark the increments where the joint can move: not at a stop, not stalled.
 
-    Held at a stop or stalled (:func:`~hydro_sdp.core.identification.sdp.states.holds_of`,
+    Held at a stop or stalled (:func:`.states.holds_of`,
     as the SDP analysis leaves them out), and for :func:`stop_window` after arriving at a
     stop under the same command, while the link rings on the stop's compliance.
     """
