@@ -1,10 +1,8 @@
 """
-Small checks shared by the model-file and configuration readers and by settings objects.
+Small checks shared by the file and configuration readers and by settings objects.
 
-Each file helper raises :class:`ModelFileError` whose message names the key and
-the reason, so that a user can fix the file from the message alone; the
-settings helper raises :class:`ConfigurationError` naming the field.
-
+File helpers raise :class:`ModelFileError` naming the key; the settings helper raises
+:class:`ConfigurationError` naming the field.
 """
 
 from __future__ import annotations
@@ -19,22 +17,7 @@ Document = Mapping[str, object]
 
 
 def require_float(value: object, key: str) -> float:
-    """
-    Return ``value`` as a finite float, or raise naming ``key``.
-
-    Parameters
-    ----------
-    value : object
-        Value read from the file.
-    key : str
-        Dotted key name used in the error message.
-
-    Returns
-    -------
-    float
-        The value as a float.
-
-    """
+    """Return ``value`` as a finite float, or raise naming the dotted ``key``."""
     # YAML reads 'true' as bool, which Python would happily treat as 1.
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise ModelFileError(f'key {key!r}: expected a number, got {_describe(value)}')
@@ -45,22 +28,7 @@ def require_float(value: object, key: str) -> float:
 
 
 def require_pair(value: object, key: str) -> tuple[float, float]:
-    """
-    Return ``value`` as a pair of finite floats, or raise naming ``key``.
-
-    Parameters
-    ----------
-    value : object
-        Value read from the file; a two-element list.
-    key : str
-        Key name used in the error message.
-
-    Returns
-    -------
-    tuple[float, float]
-        The two numbers.
-
-    """
+    """Return ``value`` as a pair of finite floats, or raise naming ``key``."""
     if not isinstance(value, (list, tuple)) or len(value) != 2:
         raise ModelFileError(
             f'key {key!r}: expected a list of two numbers, got {_describe(value)}')
@@ -69,7 +37,7 @@ def require_pair(value: object, key: str) -> tuple[float, float]:
 
 def require_ordered_pair(value: object, key: str, *, strict: bool = True) -> tuple[float, float]:
     """
-    Return a pair whose first element is below (or at most, if not strict) the second.
+    Return a pair whose first element is below the second (or equal, unless ``strict``).
 
     Parameters
     ----------
@@ -95,22 +63,7 @@ def require_ordered_pair(value: object, key: str, *, strict: bool = True) -> tup
 
 
 def require_float_list(value: object, key: str) -> tuple[float, ...]:
-    """
-    Return ``value`` as a tuple of finite floats, or raise naming ``key``.
-
-    Parameters
-    ----------
-    value : object
-        Value read from the file; a list of numbers.
-    key : str
-        Key name used in the error message.
-
-    Returns
-    -------
-    tuple[float, ...]
-        The numbers.
-
-    """
+    """Return ``value`` as a tuple of finite floats, or raise naming ``key``."""
     if not isinstance(value, (list, tuple)):
         raise ModelFileError(f'key {key!r}: expected a list of numbers')
     return tuple(require_float(item, f'{key}[{i}]') for i, item in enumerate(value))
@@ -132,13 +85,12 @@ def read_document(data: object, what: str, file_format: str, known: Collection[s
     known : collection of str
         The keys the file may have.
     required : collection of str
-        The keys it must have (a missing ``format`` not named here is reported
-        as a wrong format).
+        The keys it must have (a missing ``format`` not named is a wrong format).
 
     Returns
     -------
     Document
-        The document, now known to be a mapping of the file's keys.
+        The document.
 
     """
     if not isinstance(data, Mapping):

@@ -1,14 +1,7 @@
 """
-The serial integration of a speed that depends on the angle just reached.
+The serial integration of a speed that depends on the angle just reached (methods 3.6).
 
-With ``stroke_geometry`` or ``angle_dependent_velocity`` the speed of a sample
-depends on the angle at its start, so the angles follow one from the other and
-cannot be summed as a whole array. The loop is the heaviest part of such a
-simulation; it therefore evaluates the stroke factor inline, the arithmetic of
-:meth:`~hydro_sdp.core.model.effects.StrokeGeometry.factor_at` in the same order
-on the same floats, rather than through a method call per sample.
-:class:`~hydro_sdp.core.model.simulation.JointSimulator` steps the same arithmetic.
-
+The stroke factor is inlined: the arithmetic of ``StrokeGeometry.factor_at`` in the same order.
 """
 
 from __future__ import annotations

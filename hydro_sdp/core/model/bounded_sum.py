@@ -1,11 +1,4 @@
-"""
-A cumulative sum clamped between two bounds: the end-stop recursion of the simulation.
-
-``x_k = min(max(x_{k-1} + d_k, low), high)`` solved for a whole sequence with
-numpy (:func:`bounded_cumsum`): held levels in closed form run by run, other
-sequences by one-sided reflections.
-
-"""
+"""A cumulative sum clamped between two bounds: the end-stop recursion (methods 3.7)."""
 
 from __future__ import annotations
 
@@ -20,13 +13,7 @@ _CHUNK = 8192
 
 def bounded_cumsum(x0: float, increments: FloatArray, low: float, high: float) -> FloatArray:
     """
-    Solve ``x_k = min(max(x_{k-1} + d_k, low), high)`` for a whole sequence.
-
-    Hydraulic commands are mostly held levels, so the increments come in runs
-    of equal values; inside a run the path is monotone and meets at most one
-    bound, so each run is solved in closed form and only the run boundaries
-    are visited in Python. Increments that change at nearly every sample are
-    handled by reflection instead (:func:`_reflected_cumsum`).
+    Solve ``x_k = min(max(x_{k-1} + d_k, low), high)`` for a whole sequence (methods 3.7).
 
     Parameters
     ----------
@@ -66,15 +53,7 @@ def bounded_cumsum(x0: float, increments: FloatArray, low: float, high: float) -
 
 
 def _reflected_cumsum(x: float, increments: FloatArray, low: float, high: float) -> FloatArray:
-    """
-    Two-sided clamped cumulative sum by one-sided reflections.
-
-    Between switches from one bound to the other, the recursion equals a
-    one-sided reflection, which has the closed form
-    ``x = s - max(0, running_max(s - high))`` (Skorokhod/Lindley) of the plain
-    cumulative sum ``s``. The sequence is processed in chunks, restarting from
-    the last value, so each switch costs at most one chunk.
-    """
+    """Two-sided clamped cumulative sum by one-sided reflections, chunk by chunk."""
     n = increments.size
     out = np.empty(n + 1)
     out[0] = x

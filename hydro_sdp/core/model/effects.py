@@ -1,12 +1,8 @@
 """
-Effects: composable additions to a joint model.
+Effects: composable additions to a joint model, one per vocabulary word (methods 3.6).
 
-Each effect is one word of the discrepancy vocabulary (docs/interfaces.md section 5)
-that cannot be expressed by the base parameters of a static map. An effect is a
-frozen dataclass whose fields are its parameters in the model file's
-``effects`` mapping, e.g. ``effects: {valve_lag: {time_constant: 0.08}}``. The
-simulation in :mod:`hydro_sdp.core.model.simulation` applies them.
-
+Each is a frozen dataclass whose fields are its model-file parameters, e.g.
+``effects: {valve_lag: {time_constant: 0.08}}``.
 """
 
 from __future__ import annotations
@@ -26,10 +22,7 @@ import numpy as np
 @dataclass(frozen=True)
 class ValveLag:
     """
-    First-order lag between the static map and the joint speed.
-
-    ``w_k = p w_{k-1} + (1 - p) rate(v_{k-tau})`` with ``p = exp(-dt / time_constant)``;
-    the joint integrates ``w``.
+    First-order lag between the static map and the joint speed (methods 3.6).
 
     Parameters
     ----------
@@ -52,9 +45,6 @@ class Backlash:
     """
     Play between actuator and angle sensor (a play operator on the output).
 
-    After a reversal the measured angle stands still until the actuator has
-    taken up the play, then follows it again.
-
     Parameters
     ----------
     play : float
@@ -73,11 +63,7 @@ class Backlash:
 @dataclass(frozen=True)
 class AngleDependentVelocity:
     """
-    Speed that depends on the joint angle (linkage geometry, gravity load).
-
-    The speed becomes ``w + amplitude |w| cos(y + phase)``, i.e. motion is faster
-    by the factor ``1 + amplitude cos(y + phase)`` in the positive direction and
-    ``1 - amplitude cos(y + phase)`` in the negative one.
+    Speed ``w + amplitude |w| cos(y + phase)``: linkage geometry, gravity load (methods 3.6).
 
     Parameters
     ----------
@@ -102,11 +88,7 @@ class AngleDependentVelocity:
 @dataclass(frozen=True)
 class Oscillation:
     """
-    The link rings on the oil column: a second-order mode between actuator and link.
-
-    The measured angle ``y`` follows the actuator's angle ``x`` through
-    ``y'' + 2 damping w y' + w^2 y = w^2 x``, ``w = 2 pi frequency``
-    (docs/methods.md section 3.6).
+    The link rings on the oil column: a second-order mode between actuator and link (methods 3.6).
 
     Parameters
     ----------
@@ -133,10 +115,7 @@ class Oscillation:
 @dataclass(frozen=True)
 class DirectionDependentDelay:
     """
-    Different pure delays for the two directions of motion.
-
-    The positive part of the speed is delayed by ``positive`` seconds and the
-    negative part by ``negative`` seconds; they replace the model's ``delay``.
+    Separate pure delays for the two directions of motion; they replace the model's ``delay``.
 
     Parameters
     ----------
@@ -162,29 +141,20 @@ class DirectionDependentDelay:
 @dataclass(frozen=True)
 class StrokeGeometry:
     """
-    Speed scaled by a smooth factor of the angle along the stroke (linkage geometry, cushions).
-
-    The cylinder's stroke maps to the joint angle through the linkage, so at
-    one valve flow the joint moves faster in some parts of its range than in
-    others, the same way for both directions (unlike the gravity-like
-    ``angle_dependent_velocity``). The speed becomes ``w f(y, sign w)`` with
-    ``f = interp(y, knots, factors) (1 + sign(w) interp(y, knots, asymmetry))``,
-    held flat beyond the end knots, and within ``cushion`` degrees of the end
-    knot the joint is heading for, times a factor falling linearly to
-    ``cushion_factor`` at that knot (the cylinder's end cushions).
+    Speed scaled by a smooth factor of the angle along the stroke (methods 3.6).
 
     Parameters
     ----------
     knots : tuple[float, ...]
-        Angles, degrees, strictly increasing (two or more); model-file key ``knots``.
+        Angles, degrees, strictly increasing (two or more).
     factors : tuple[float, ...]
-        Shared speed factor at each knot (> 0); key ``factors``.
+        Shared speed factor at each knot (> 0).
     asymmetry : tuple[float, ...]
-        Per-direction part at each knot, inside (-1, 1), or empty for none; key ``asymmetry``.
+        Per-direction part at each knot, inside (-1, 1), or empty for none.
     cushion : float
-        Length of the end cushions, degrees (>= 0, 0: none); key ``cushion``.
+        Length of the end cushions, degrees (>= 0, 0: none).
     cushion_factor : float
-        Speed factor at the very end of a cushion, in (0, 1]; key ``cushion_factor``.
+        Speed factor at the very end of a cushion, in (0, 1].
 
     """
 
@@ -217,12 +187,7 @@ class StrokeGeometry:
         object.__setattr__(self, 'asymmetry', asymmetry)
 
     def factor_at(self, angle: float, speed: float) -> float:
-        """
-        Return the speed factor at ``angle`` (degrees) for motion of sign ``speed``.
-
-        Plain float arithmetic, so that the sample-by-sample and the vectorised
-        simulations give the same numbers.
-        """
+        """Return the speed factor at ``angle`` (degrees) for motion of sign ``speed``."""
         knots = self.knots
         if angle <= knots[0]:
             index, weight = 0, 0.0
@@ -244,12 +209,7 @@ class StrokeGeometry:
         return factor
 
     def factor(self, angles: FloatArray, speeds: FloatArray) -> FloatArray:
-        """
-        Return :meth:`factor_at` for arrays of angles and speeds.
-
-        The same operations in the same order on whole arrays, so the numbers are
-        those of :meth:`factor_at`.
-        """
+        """Return :meth:`factor_at` for arrays (same operations in the same order)."""
         angle = np.asarray(angles, dtype=np.float64)
         speed = np.asarray(speeds, dtype=np.float64)
         knots = np.asarray(self.knots)
@@ -287,12 +247,12 @@ EFFECT_TYPES: dict[str, type[Effect]] = {
 
 def effect_from_mapping(name: str, params: object) -> Effect:
     """
-    Build one effect from its model-file entry.
+    Build one validated effect from its model-file entry (``name`` a key of :data:`EFFECT_TYPES`).
 
     Parameters
     ----------
     name : str
-        Vocabulary word, a key of :data:`EFFECT_TYPES`.
+        Vocabulary word.
     params : object
         The mapping of parameters read from the file.
 

@@ -1,16 +1,8 @@
 """
-Signals beyond a joint's own command and angle, and the effects that use them.
+Signals beyond a joint's own command and angle, and the effects that use them (methods 3.6).
 
-A record may carry a measured load and the angles of the machine's other
-joints (:class:`~hydro_sdp.core.model.records.Record` ``load``, ``others``).
-:func:`exogenous_of` turns them into what the simulation needs: the load at
-each sample, the other joints' speeds over each sample interval (a trailing
-mean over 0.1 s, so that sensor noise does not read as motion) and the record's key,
-by which a model holds per-record load factors. :func:`exogenous_factor` is
-the speed factor of the effects ``flow_sharing`` and ``load_dependence``
-(:mod:`hydro_sdp.core.model.effects`); without the signals it is 1 for the load (the
-measured-load forms need the load) and what the other joints standing still give.
-
+:func:`exogenous_of` gives a record's load, other joints' speeds and key;
+:func:`exogenous_factor` is the speed factor of ``flow_sharing`` and ``load_dependence``.
 """
 
 from __future__ import annotations
@@ -41,8 +33,7 @@ class Exogenous:
     load : FloatArray or None
         Measured load at each sample, load units.
     other_speeds : FloatArray or None
-        Speed of each other joint over the interval ending at each sample, deg/s,
-        shape ``(n, joints)`` (the first row is zero).
+        Other joints' speeds over the interval ending at each sample, deg/s, ``(n, joints)``.
     key : str
         The record's key (:func:`record_key`).
 
@@ -60,26 +51,14 @@ class Exogenous:
 
 
 def record_key(record: Record) -> str:
-    """
-    Return the name a model gives a record's own factors: source, joint and start, s.
-
-    The source is the bag's folder name, not the path as typed, so that the same bag
-    given as ``run1``, ``./run1`` or an absolute path (or moved) keeps its factors.
-    """
+    """Return the name of a record's own factors: source folder name, joint and start (s)."""
     start = record.since_start(float(record.t[0])) if len(record) else 0.0
     source = PurePath(record.source).name if record.source else 'record'
     return f'{source} {record.joint} at {start:.3f} s'
 
 
 def smoothed_speeds(angles: FloatArray, dt: float, t: FloatArray | None = None) -> FloatArray:
-    """
-    Return the speed of each column of ``angles`` over each sample interval, deg/s.
-
-    A trailing mean over :data:`SMOOTHING` seconds (the interval ending at the
-    sample and those before it), so that sensor noise does not read as motion.
-    With the time stamps ``t`` (s) the span is the time between the samples, so a
-    sample missing from a recording does not read as faster motion.
-    """
+    """Return each column's speed over each sample interval, deg/s (:data:`SMOOTHING` s mean)."""
     angles = np.asarray(angles, dtype=np.float64).reshape(len(angles), -1)
     n = angles.shape[0]
     if n < 2:
@@ -104,7 +83,7 @@ def exogenous_of(record: Record, dt: float | None = None) -> Exogenous:
     record : Record
         The record.
     dt : float or None
-        Its sample period, s; default: the median spacing of its time stamps.
+        Its sample period, s; None: the median spacing of its time stamps.
 
     Returns
     -------
@@ -119,12 +98,7 @@ def exogenous_of(record: Record, dt: float | None = None) -> Exogenous:
 
 
 def summed_other_speeds(signals: Exogenous, start: int) -> FloatArray | None:
-    """
-    Return the other joints' speeds summed, per increment from sample ``start`` on, deg/s.
-
-    Absolute speeds (:func:`smoothed_speeds`, from :func:`exogenous_of`) added over
-    the other joints: how much of the pump they draw; None without other joints.
-    """
+    """Return the other joints' speeds summed per increment from ``start``, deg/s, or None."""
     speeds = signals.other_speeds
     return None if speeds is None else np.abs(speeds).sum(axis=1)[start + 1:]
 
@@ -132,11 +106,7 @@ def summed_other_speeds(signals: Exogenous, start: int) -> FloatArray | None:
 def load_factor(load: FloatArray, slope: float, reference: float, overrun: float = 0.0,
                 onset: float = 0.0) -> FloatArray:
     """
-    Return one direction's speed factor of ``load_dependence`` at a measured load.
-
-    ``max(0.05, 1 + slope (L - reference)) sqrt(1 + max(0, overrun (L - onset)))``:
-    a change per load unit, and an overrunning load metered by the outlet edge
-    (:class:`~hydro_sdp.core.model.effects.LoadDependence`).
+    Return one direction's speed factor of ``load_dependence`` at a measured load (methods 3.6).
 
     Parameters
     ----------

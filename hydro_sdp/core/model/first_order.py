@@ -1,16 +1,4 @@
-"""
-The first-order recursion ``y_k = a y_{k-1} + b x_k`` along the last axis, in numpy.
-
-A valve lag, the regret-regression's correction and the lag's step response are
-all this one recursion, run over arrays of up to an hour of samples. Written
-here in a few lines of numpy instead of ``scipy.signal.lfilter``, whose import
-costs a command more time than the filtering itself.
-
-Within blocks short enough that ``a^-k`` stays finite, the recursion is
-``y_k = a^(k+1) (y_{-1} + b sum_{j<=k} a^-(j+1) x_j)``, a cumulative sum; its
-rounding error stays below ``eps max|x| |b| / (1 - a)``.
-
-"""
+"""The first-order recursion ``y_k = a y_{k-1} + b x_k``, in numpy (methods 2.3)."""
 
 from __future__ import annotations
 
@@ -122,16 +110,7 @@ def first_order(x: FloatArray, a: float, b: float = 1.0,
 
 
 def _carried(ends: FloatArray, last: float, before: float | FloatArray) -> FloatArray | None:
-    """
-    Return the state entering each block, all blocks at once, or None where it cannot.
-
-    ``ends`` are the scaled sums at the end of every block but the last. The
-    state entering block ``i + 1`` is ``(ends_i + start_i) last``. A block's
-    scaled sum ``ends_i`` is of order ``e^600`` times the state, which it then
-    absorbs exactly: ``ends_i + start_i == ends_i``. Where every block after the
-    first does so (checked), the states are ``ends_i last``, bit for bit the
-    block-by-block recursion; otherwise (a block ending in zeros) None.
-    """
+    """Return the state entering each block, all blocks at once, or None where it cannot."""
     first = np.broadcast_to(np.asarray(before, dtype=np.float64), ends.shape[:-1])
     starts = np.empty(ends.shape[:-1] + (ends.shape[-1] + 1,))
     starts[..., 0] = first

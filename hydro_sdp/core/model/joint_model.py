@@ -1,12 +1,4 @@
-"""
-The joint model: the model file of docs/interfaces.md section 1 as a frozen object.
-
-A :class:`JointModel` is a static map (the ``kind``), a pure delay, optional end
-stops and input limits, and a tuple of effects. It is built from and turned
-back into the plain mapping stored in YAML; reading and writing the file itself
-is :mod:`hydro_sdp.files`.
-
-"""
+"""The joint model: the model file of docs/interfaces.md section 1, frozen (methods 3)."""
 
 from __future__ import annotations
 
@@ -47,26 +39,17 @@ class JointModel:
     delay : float
         Pure time delay between command and motion, s.
     angle_limits : tuple[float, float] | None
-        Hardware end stops, degrees (an infinite side where only one was seen; null in
-        the file), or ``None``.
+        Hardware end stops, degrees (a side may be infinite), or ``None``.
     input_limits : tuple[float, float] | None
         Command range accepted by the valve interface, input units, or ``None``.
     effects : tuple[Effect, ...]
         Effects beyond the static map, at most one of each kind.
     command_topic : str or None
-        Float64 topic the joint's commands were recorded on when the model was
-        identified from bags (key ``command_topic``, next to ``joint``; e.g.
-        ``/arm/pwm``), or ``None`` (key absent: the bag readers' default, the
-        only topic ending in ``valve_command``). Commands that read bags use it
-        when no ``--command-topic`` is given.
+        Float64 topic the commands were recorded on; None: the bag readers' default.
     load_topic : str or None
-        Float64 topic of the measured load a ``load_dependence`` effect was fitted
-        on (key ``load_topic``, written by ``diagnose --load-topic``), or ``None``.
-        ``evaluate`` and ``diagnose`` read it when no ``--load-topic`` is given.
+        Float64 topic of the load a ``load_dependence`` effect was fitted on, or None.
     undetermined : tuple[Undetermined, ...]
-        Parameters the data it was identified from bound but do not pin (key
-        ``undetermined``): for a map without a dead-zone (``poly``), where its speed
-        leaves zero.
+        Parameters the data bound but do not pin (methods 13).
 
     See Also
     --------
@@ -138,20 +121,7 @@ class JointModel:
         return 0.5 * (dead_zone[0] + dead_zone[1])
 
     def rate(self, v: FloatArray | float) -> FloatArray:
-        """
-        Steady angular velocity (deg/s) for commands ``v``.
-
-        Parameters
-        ----------
-        v : FloatArray or float
-            Commands in input units.
-
-        Returns
-        -------
-        FloatArray
-            Velocities in deg/s.
-
-        """
+        """Steady angular velocity (deg/s) for commands ``v`` (input units)."""
         return self.static_map.rate(np.asarray(v, dtype=np.float64))
 
     def alpha(self, dt: float) -> tuple[float, float, float, float, float, float]:
@@ -189,15 +159,7 @@ class JointModel:
         return replace(self, effects=tuple(e for e in self.effects if e.name != name))
 
     def to_mapping(self) -> dict[str, object]:
-        """
-        Return the model as the plain mapping stored in a model file.
-
-        Returns
-        -------
-        dict[str, object]
-            Keys in the order of docs/interfaces.md section 1.
-
-        """
+        """Return the model as the plain mapping of a model file (keys in interfaces.md order)."""
         data: dict[str, object] = {
             'format': MODEL_FORMAT,
             'joint': self.joint,
@@ -224,16 +186,6 @@ class JointModel:
     def from_mapping(cls, data: object) -> JointModel:
         """
         Validate a mapping read from a model file and build the model.
-
-        Parameters
-        ----------
-        data : object
-            The parsed YAML document.
-
-        Returns
-        -------
-        JointModel
-            The validated model.
 
         Raises
         ------

@@ -1,14 +1,4 @@
-"""
-The link's mode on the oil column (effect ``oscillation``), exact at the sample period.
-
-The measured angle ``y`` follows the actuator's angle ``x`` through
-``y'' + 2 d w y' + w^2 y = w^2 x``. Between samples the actuator moves at the
-speed of its interval, ``x' = w_k``, so with ``e = y - x`` and ``u = y'`` the state
-``s = [e, u]`` obeys ``s' = A s + [-1, 0]' w_k``, ``A = [[0, 1], [-w^2, -2 d w]]``,
-whose zero-order hold, ``s_k = P s_{k-1} + G w_k``, is exact (docs/methods.md
-section 3.6). A settled state at speed ``w`` is ``e = -2 d w / w_n``, ``u = w``.
-
-"""
+"""The link's mode on the oil column (effect ``oscillation``), exact per sample (methods 3.6)."""
 
 from __future__ import annotations
 
@@ -65,7 +55,7 @@ class LinkMode:
 
     def deviation(self, speeds: FloatArray, before: float) -> FloatArray:
         """
-        Return ``e_k = y_k - x_k`` for the actuator's speeds ``w_k``, from settled at ``before``.
+        Return ``e_k = y_k - x_k``, deg, for actuator speeds ``w_k``, settled at ``before``.
 
         Parameters
         ----------

@@ -1,12 +1,4 @@
-"""
-Effects that need signals beyond the joint's own: one pump shared, a measured load.
-
-``flow_sharing`` and ``load_dependence`` of the model file (docs/interfaces.md
-section 1.3); :mod:`hydro_sdp.core.model.exogenous_signals` turns a record's other
-joints and load into the factors they put on the speed, and
-:mod:`hydro_sdp.core.model.effects` lists them with the other effects.
-
-"""
+"""Effects that need signals of a shared pump and a measured load (methods 3.6)."""
 
 from __future__ import annotations
 
@@ -21,30 +13,16 @@ import numpy as np
 @dataclass(frozen=True)
 class FlowSharing:
     """
-    Speed cut when other joints draw on the same pump (a shared pump-flow limit).
-
-    Demands are normalised: the joint's own is ``w / full_positive`` or
-    ``-w / full_negative`` (1 at its top speed in that direction, where one
-    joint alone takes the whole pump), the other joints' ``sum_j (s_j+ / other_positive + s_j- /
-    other_negative)`` with ``s_j+`` and ``s_j-`` the measured speed of other joint
-    ``j`` in its positive and negative direction (deg/s, from the record's
-    ``others``, smoothed over 0.1 s; a joint lowered by gravity draws less flow
-    than one lifted). The speed becomes
-    ``w min(1, limit / (own demand + other joints' demand))``: when the demands
-    add up to more than the pump's ``limit``, every joint gets its share. The
-    full speeds are set to the model's top speeds at the commands recorded, so
-    that ``limit`` reads in full demands of this joint.
+    Speed cut when other joints draw on the same pump: ``w min(1, limit / demands)`` (methods 3.6).
 
     Parameters
     ----------
     limit : float
-        Pump flow in full demands of this joint (> 0; >= 1 leaves the joint alone
-        as fast as its map says).
+        Pump flow in full demands of this joint (> 0).
     full_positive, full_negative : float
         Speed of this joint in each direction that counts as one full demand, deg/s (> 0).
     other_positive, other_negative : float
-        Speed of the other joints in their positive and negative directions that
-        counts as one full demand, deg/s (> 0).
+        Speed of the other joints per direction that counts as one full demand, deg/s (> 0).
 
     """
 
@@ -66,9 +44,7 @@ class FlowSharing:
 
 def power_allowed(load: FloatArray, limit: float, offset: float) -> FloatArray:
     """
-    Return the speed a power-limited pump allows at each load: ``limit / (load + offset)``.
-
-    No cap (infinity) where ``load + offset <= 0``.
+    Return the speed a power-limited pump allows, ``limit / (load + offset)`` (inf where <= 0).
 
     Parameters
     ----------
@@ -92,31 +68,9 @@ def power_allowed(load: FloatArray, limit: float, offset: float) -> FloatArray:
 @dataclass(frozen=True)
 class LoadDependence:
     """
-    Speed scaled by the load, each direction on its own (payload, digging force).
+    Speed scaled by the load, each direction on its own (methods 3.6).
 
-    With a measured load ``L`` (the record's ``load``, e.g. the signed load
-    pressure of the cylinder in bar) the speed ``w`` becomes
-    ``w max(0.05, 1 + k (L - reference)) sqrt(1 + max(0, g (L - onset))) f(L)``,
-    with ``k``, ``g``, ``onset`` and ``f`` those of the direction of ``w``. The first
-    factor is a speed change per load unit; the second is the overrunning load of a
-    load-sensing valve: its pressure compensator holds the meter-in flow, so the
-    load leaves the speed alone until it pulls the actuator along, and beyond
-    ``onset`` the meter-out edge meters it, ``Q = Cd A(x) sqrt(2 dp / rho)`` with
-    ``dp`` growing with the load: the same factor at every opening. The third is a
-    smooth factor of any shape and either sign, ``f = interp(L, knots,
-    factors_positive or factors_negative)`` held flat beyond the end knots (1 when
-    there are no knots): the shape the data show, as the SDP analysis of the speed
-    against the load draws it (a valve without pressure compensation, a pump whose
-    power binds). A fourth factor caps the speed where the pump's power binds:
-    ``min(1, limit / ((L + offset) |w|))``, with ``limit`` and ``offset`` those of the
-    direction of ``w`` (no cap where ``limit`` is 0 or ``L + offset <= 0``): a
-    pump whose torque limiter holds flow x pressure at its power ``P`` gives at most
-    ``Q = P / p``, its pressure ``p`` the load pressure plus its load-sensing margin,
-    so the speed the pump allows falls as ``1 / (L + margin)`` and caps fast commands
-    while slow ones, whose flow stays below it, keep their speed (a factor of the load
-    alone would slow both alike). A record without a load signal takes the factors fitted to it by
-    name (``records``, with ``record_positive`` and ``record_negative``); other
-    records keep factor 1.
+    A record without a load signal takes the factors fitted to it by key; others keep 1.
 
     Parameters
     ----------
@@ -129,21 +83,17 @@ class LoadDependence:
     record_positive, record_negative : tuple[float, ...]
         Speed factor of each of those records per direction (> 0).
     overrun_positive, overrun_negative : float
-        ``g`` in each direction, 1/load unit: the squared speed factor grows by
-        ``|g|`` per load unit beyond the onset (``g < 0``: as the load falls
-        below it); 0 leaves the direction alone.
+        Growth of the squared factor per load unit beyond the onset, 1/load unit (0: none).
     onset_positive, onset_negative : float
         Load at which the load begins to overrun in each direction, load units.
     knots : tuple[float, ...]
-        Loads of the smooth factor, load units, strictly increasing (two or more), or
-        empty for none.
+        Loads of the smooth factor, strictly increasing (two or more), or empty.
     factors_positive, factors_negative : tuple[float, ...]
         The smooth factor at each knot in each direction (> 0).
     limit_positive, limit_negative : float
-        The pump's power cap in each direction, deg/s x load unit (>= 0; 0: none).
+        The pump's power cap in each direction, deg/s x load unit (0: none).
     limit_offset_positive, limit_offset_negative : float
-        Load added to the measured one where the cap acts (the pump's margin above the
-        load pressure), load units.
+        Load added to the measured one where the cap acts, load units.
 
     """
 

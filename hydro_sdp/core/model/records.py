@@ -1,23 +1,8 @@
 """
-Records: aligned samples of one joint (time, command, angle).
+Records: aligned samples of one joint (time s, command in its units, angle degrees).
 
-A :class:`Record` is what a bag becomes once a joint and its command topic are
-chosen: ``t`` in seconds, ``v`` in the command's own units (volts, percent
-duty...) and ``y`` in degrees, one entry per angle sample. Messages give
-times relative to the record's ``origin`` (the start of its bag), never in
-epoch seconds.
-
-A recording whose timer stalled has a hole in its time stamps; the samples
-either side are not one sample period apart, so no fit or simulation may run
-across it. :func:`split_at_gaps` cuts a record there into pieces that each
-keep the origin of the whole.
-
-A record may carry signals beyond the joint's own (the effects
-``load_dependence`` and ``flow_sharing`` need them): ``load``, a measured load
-(a cylinder pressure, say) held at each sample, and ``others``, the angles of
-the other joints of the same machine at each sample, one column per joint
-named in ``other_joints``.
-
+Times in messages count from the record's ``origin`` (the start of its bag);
+:func:`split_at_gaps` cuts a record where its stamps jump (methods 2.6).
 """
 
 from __future__ import annotations
@@ -150,20 +135,7 @@ class Record:
                                     f'infinite (first at sample {bad[0]})')
 
     def since_start(self, t: float) -> float:
-        """
-        Time ``t`` counted from the record's origin, for messages.
-
-        Parameters
-        ----------
-        t : float
-            Record time, s.
-
-        Returns
-        -------
-        float
-            Seconds after the origin (the start of the bag).
-
-        """
+        """Time ``t`` (s) counted from the record's origin (the start of the bag), for messages."""
         if self.origin is not None:
             return float(t - self.origin)
         return float(t - self.t[0]) if self.t.size else float(t)
@@ -262,13 +234,9 @@ class Pieces:
 def split_at_gaps(record: Record, *, max_gap: float = 3.0,
                   min_samples: int = MIN_PIECE_SAMPLES) -> Pieces:
     """
-    Cut a record where its time stamps jump by more than ``max_gap`` sample periods.
+    Cut a record where its time stamps jump by more than ``max_gap`` sample periods (methods 2.6).
 
-    The sample period is the median spacing of the whole record. Each piece
-    keeps the record's joint, source and origin, so its messages still count
-    time from the start of the bag. A record without gaps comes back whole,
-    however short; of a cut record, the pieces shorter than ``min_samples``
-    are left out (and counted).
+    The period is the record's median spacing; pieces keep its joint, source and origin.
 
     Parameters
     ----------

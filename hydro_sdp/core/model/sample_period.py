@@ -1,31 +1,8 @@
 """
-The nominal sample period of time stamps written by a real timer.
+The nominal sample period of time stamps written by a real timer (methods 3.4).
 
-A machine's stamps are never exactly regular: a ROS timer on a loaded computer
-fires a fraction of a millisecond late or early (timer jitter), and a stamp of
-1.76e9 s held as a float has a resolution of 0.24 us. Every command needs one
-sample period ``dt`` (speeds, delays in whole samples, the controller's period
-as a whole multiple of it), so it is the *nominal* period the stamps were
-written at: the median spacing, rounded to the fewest significant digits that
-stay within what the stamps support (docs/methods.md section 3.4):
-
-* the median's standard error, ``1.2533 sigma / sqrt(n)``, with ``sigma`` the
-  robust spread (1.4826 times the median absolute deviation) of the regular
-  spacings (those within half a period of the median; holes and doubled
-  stamps say nothing about the timer);
-* and never finer than :data:`RELATIVE_FLOOR` of the period, the drift of a
-  quartz clock, below which no result here changes.
-
-A 100 Hz stream with +-0.5 ms jitter gives 0.01 s; one written every 12.5 ms
-gives 0.0125 s, whatever its jitter, once it has a few hundred samples.
-Periods are only ever compared with a tolerance, never exactly.
-
-A controller acts every whole number of plant samples: the control period is
-the nearest whole multiple of the period the records give
-(:func:`control_period_on`), so a recording whose clock runs a fraction of a
-percent off a round period (0.0099909 s on a 10 ms raster, 0.00998 s from a
-DDS timer) gets the controller of the round one.
-
+The median spacing rounded to the digits the stamps support; the control period is a
+whole multiple of it (:func:`control_period_on`).
 """
 
 from __future__ import annotations
@@ -83,22 +60,7 @@ def nominal_period(steps: FloatArray | IntArray) -> float:
 
 
 def round_within(value: float, tolerance: float) -> float:
-    """
-    Round a positive number to the fewest significant digits that stay within ``tolerance``.
-
-    Parameters
-    ----------
-    value : float
-        The number, > 0.
-    tolerance : float
-        Largest change allowed, >= 0.
-
-    Returns
-    -------
-    float
-        ``value`` with 1 to :data:`MOST_DIGITS` significant digits.
-
-    """
+    """Round a positive ``value`` to the fewest significant digits within ``tolerance`` (>= 0)."""
     for digits in range(1, MOST_DIGITS + 1):
         rounded = float(f'{value:.{digits}g}')
         if abs(rounded - value) <= tolerance:
@@ -107,40 +69,12 @@ def round_within(value: float, tolerance: float) -> float:
 
 
 def period_of_stamps(t: FloatArray | IntArray) -> float:
-    """
-    Return the nominal period of increasing time stamps (their unit).
-
-    Parameters
-    ----------
-    t : array
-        Time stamps, at least two.
-
-    Returns
-    -------
-    float
-        :func:`nominal_period` of their spacings.
-
-    """
+    """Return :func:`nominal_period` of increasing time stamps ``t`` (at least two; their unit)."""
     return nominal_period(np.diff(np.asarray(t)))
 
 
 def whole_samples_seconds(samples: int, dt: float) -> float:
-    """
-    Return ``samples`` periods in seconds, written cleanly (``12 x 0.01`` is ``0.12``).
-
-    Parameters
-    ----------
-    samples : int
-        A whole number of samples (a delay).
-    dt : float
-        Nominal sample period, s.
-
-    Returns
-    -------
-    float
-        The product rounded to the significant digits of ``dt`` and the count.
-
-    """
+    """Return ``samples`` periods of ``dt`` in seconds (``12 x 0.01`` is ``0.12``)."""
     digits = len(f'{dt:.{MOST_DIGITS}g}'.replace('.', '').lstrip('0').split('e')[0])
     return float(f'{samples * dt:.{digits + len(str(abs(int(samples))))}g}')
 

@@ -1,22 +1,9 @@
 """
-Simulation of a joint model at any sample period.
+Simulation of a joint model at any sample period (methods 3.1-3.4).
 
-``y_k = clamp(y_{k-1} + dt * w_k, y_min, y_max)`` with ``w_k = rate(v_{k-tau})``
-(eqs. (3)-(4) of West et al., docs/methods.md sections 3.1-3.2) plus the model's effects.
-:func:`simulate` processes a whole command sequence with numpy; the end-stop
-clamp, a recursion, is solved exactly by reflecting the cumulative sum at one
-stop at a time (:func:`hydro_sdp.core.model.bounded_sum.bounded_cumsum`). Effects that need
-signals beyond the joint's own (other joints' motion, a measured load) take them
-as an :class:`~hydro_sdp.core.model.exogenous_signals.Exogenous` (``exogenous=``).
-:class:`JointSimulator` steps the same equations one sample at a time for
-closed loops and the plant node; both give the same trajectory.
-
-``v_k`` is the command in force over the sample interval that ends at ``t_k``:
-the one issued during ``[t_{k-1}, t_k)`` (in a bag, the last command received
-before ``t_k``). A controller that reads ``y_k`` therefore issues ``v_{k+1}``.
-This is the timing of the verified closed loops of docs/methods.md section 4.6 and of the
-ROS nodes, and ``tau = delay / dt`` (15 at 0.01 s, 3 at 0.05 s for J2).
-
+:func:`simulate` runs a whole command sequence; :class:`JointSimulator` steps the
+same equations one sample at a time. ``v_k`` is the command in force over the
+interval that ends at ``t_k`` (methods 3.4).
 """
 
 from __future__ import annotations
@@ -162,11 +149,7 @@ def _link_mode(model: JointModel, dt: float) -> LinkMode | None:
 def speed_profile(model: JointModel, v: FloatArray, dt: float, *,
                   v_before: float = 0.0, exogenous: Exogenous | None = None) -> FloatArray:
     """
-    Speed ``w_k`` (deg/s) that moves the joint from ``y_{k-1}`` to ``y_k``, before end stops.
-
-    The static map of the delayed command, with separate delays per direction and
-    the valve lag applied, scaled by flow sharing and load; angle-dependent speed
-    and backlash act on top of it.
+    Speed ``w_k`` (deg/s) from ``y_{k-1}`` to ``y_k``, before end stops (methods 3.6).
 
     Parameters
     ----------
@@ -212,12 +195,7 @@ def one_step_increments(model: JointModel, v: FloatArray, y: FloatArray, dt: flo
                         start: int = 0, v_before: float = 0.0,
                         exogenous: Exogenous | None = None) -> FloatArray:
     """
-    Return the increments ``y^_k - y_{k-1}`` the model predicts from each measured angle.
-
-    Unlike a simulation these do not drift: angle-dependent speed and end stops
-    use the measured ``y_{k-1}``, so a discrepancy shows where it happens
-    (docs/methods.md section 8.1, the velocity residual). Backlash and the link's mode
-    (``oscillation``) follow the model's own state.
+    Return the increments ``y^_k - y_{k-1}`` predicted from each measured angle (methods 8.1).
 
     Parameters
     ----------
@@ -244,9 +222,6 @@ def one_step_increments(model: JointModel, v: FloatArray, y: FloatArray, dt: flo
 class OneStep:
     """
     The one-step increments of a model for any link mode added to it.
-
-    What does not depend on the mode (the speed profile, the actuator's increments) is
-    worked out once, for a fit that tries many modes (:func:`one_step_increments`).
 
     Parameters
     ----------
@@ -308,17 +283,7 @@ def _actuator_increments(model: JointModel, speed: FloatArray, previous: FloatAr
 
 def _ringing_increments(mode: LinkMode, increment: FloatArray, previous: FloatArray,
                         dt: float, before: float, low: float, high: float) -> FloatArray:
-    """
-    Return the link's increments for the actuator's, the mode's state the model's own.
-
-    The mode starts settled at ``before`` (deg/s). With stops, the actuator is the
-    measured angle less the mode's deviation; its increment is cut where it meets a
-    stop, and it stays pressed there until the drive turns away (a link ringing below
-    the stop, or the noise on the angle read, does not move it). While it is pressed and
-    the mode swings the link beyond the stop, the link is the stop plus the mode's
-    deviation, read within the stops (a sensor at the stop does not show how far beyond
-    it the link swings).
-    """
+    """Return the link's increments for the actuator's; the mode starts settled at ``before``."""
     deviation, speed = mode.states(increment / dt, before)
     out = increment + np.diff(np.r_[mode.settled(before)[0], deviation])
     # Until the actuator first meets a stop this is the recursion below, all at once.
@@ -366,12 +331,7 @@ def _angle_effects(model: JointModel) -> AngleEffects:
 
 class JointSimulator:
     """
-    Step a joint model one sample at a time: issue a command, get the next angle.
-
-    The command given to :meth:`step` is the one in force over the next sample
-    (``v_{k+1}``), so ``[y0] + [sim.step(v) for v in commands[1:]]`` equals
-    ``simulate(model, commands, dt, y0, v_before=commands[0])``. Closed loops and
-    the plant node use it: the command computed from ``y_k`` is ``v_{k+1}``.
+    Step a joint model one sample at a time; :meth:`step` takes ``v_{k+1}``.
 
     Parameters
     ----------
@@ -418,9 +378,7 @@ class JointSimulator:
 
     def set_static_map(self, static_map: StaticMap) -> None:
         """
-        Swap the command-to-speed map from now on (valve wear or replacement).
-
-        Commands already in the delay line keep the speeds they were given.
+        Swap the command-to-speed map from now on; commands in the delay line keep their speeds.
 
         Parameters
         ----------

@@ -1,10 +1,4 @@
-"""
-A model parameter the data bound but do not pin (model file key ``undetermined``).
-
-The model carries a value for it, which is all a simulation needs; reports give the
-bound, and design says which value it used (docs/methods.md section 13.9).
-
-"""
+"""A model parameter the data bound but do not pin (key ``undetermined``, methods 13.9)."""
 
 from __future__ import annotations
 
@@ -35,8 +29,7 @@ class Undetermined:
     record : str
         What to record to pin it.
     motion : float
-        The speed the joint showed at the end of the bound where it moved, as a share
-        of its fastest (0 when unknown).
+        Speed at the bound's end where the joint moved, share of its fastest (0: unknown).
 
     """
 

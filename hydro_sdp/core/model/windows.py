@@ -1,12 +1,4 @@
-"""
-Simulations restarted from the measured angle: windows whose error does not drift.
-
-A whole record's simulation integrates every error of the model over the record;
-restarted at the measured angle every few seconds it shows what a model gets right
-over a few seconds (docs/methods.md section 8.4). The model's delays and lag run on
-through the record; only the angle (and the play) start afresh.
-
-"""
+"""Simulations restarted from the measured angle every few seconds: no drift (methods 8.4)."""
 
 from __future__ import annotations
 
@@ -24,13 +16,7 @@ def simulate_windows(model: JointModel, v: FloatArray, y: FloatArray, dt: float,
                      starts: Sequence[int], *, v_before: float = 0.0,
                      exogenous: Exogenous | None = None) -> FloatArray:
     """
-    Simulate the joint afresh from the measured angle at each of ``starts``.
-
-    Each window runs from one start to the next (the last to the end of the
-    record); the model's delays and lag run on through the whole record, only the
-    angle is set back to the measured one at every start (and the play to the side
-    the model's last motion took it up on). The error over such windows does not
-    drift as a whole record's does.
+    Simulate afresh from the measured angle at each of ``starts``; delays and lag run on.
 
     Parameters
     ----------

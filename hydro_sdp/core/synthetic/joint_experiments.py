@@ -1,10 +1,4 @@
-"""
-Simulated open-loop experiments: the step and random-level programs, recorded with noise.
-
-These are the records the demo, the benchmarks and the tests identify and
-diagnose from, and what ``hydro-sdp simulate`` writes as a bag.
-
-"""
+"""Simulated open-loop experiments: the step and random-level programs, recorded with noise."""
 
 from __future__ import annotations
 

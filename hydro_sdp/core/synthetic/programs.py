@@ -1,14 +1,7 @@
 """
-Open-loop input programs for identification and evaluation experiments.
+Open-loop input programs: steps (West et al. 2018 Fig. 1) and random levels (Fig. 4).
 
-``steps`` reproduces the step experiments of West et al. (2018) Fig. 1: steps
-from rest of increasing size, alternating in sign, separated by rests.
-``random`` reproduces their evaluation runs (Fig. 4, Table 2): random levels
-held for random times. Both take their command range from the model (its
-dead-zone, saturation and input limits), so nothing assumes +-10 V, and both
-choose each level's sign from where the joint is predicted to be, so that an
-integrating joint stays inside its end stops.
-
+Command ranges come from the model; each level's sign keeps the joint inside its stops.
 """
 
 from __future__ import annotations
@@ -29,13 +22,10 @@ _USABLE_RANGE = 0.8
 def command_span(model: JointModel, *, saturation: float = 0.99
                  ) -> tuple[tuple[float, float], tuple[float, float]]:
     """
-    Smallest and largest step commands for each direction.
+    Signed ``((small_neg, large_neg), (small_pos, large_pos))`` step commands per direction.
 
-    The small end lies inside the dead-zone (60 % of the way to the edge), so
-    the experiments show it; the large end is where an exponential map reaches
-    ``saturation`` of its saturation speed, three dead-zone widths beyond a
-    linear edge, or the end of a piecewise-linear or polynomial map's range,
-    and never beyond 95 % of the input limits.
+    Small ends lie 60 % of the way to the dead-zone's edge; large ends reach ``saturation``
+    of an ``sdp`` map's speed, within 95 % of the input limits.
 
     Parameters
     ----------
@@ -47,7 +37,7 @@ def command_span(model: JointModel, *, saturation: float = 0.99
     Returns
     -------
     tuple of two (float, float)
-        ``((small_neg, large_neg), (small_pos, large_pos))`` as signed commands.
+        The spans, negative then positive.
 
     """
     rest = model.rest_command
@@ -109,8 +99,7 @@ def step_program(model: JointModel, dt: float, *, steps: int = 40, hold: float =
     steps : int
         Number of step experiments (at least 2).
     hold : float
-        Longest time a step is held, s; shortened for fast steps so that the
-        joint does not reach an end stop.
+        Longest time a step is held, s (shortened before an end stop).
     rest : float
         Rest before each step, s (also after the last one).
     y0 : float
@@ -165,12 +154,7 @@ def random_program(model: JointModel, dt: float, duration: float, *, seed: int =
     """
     Make random command levels held for random times (evaluation runs).
 
-    Each level's size is uniform over the model's command span up to 90 % of
-    saturation (dead-zone included), where an evaluation run tells models
-    apart rather than only their saturation speeds; its sign is drawn with a
-    probability that pulls the joint back towards the middle of its travel, and
-    its hold time is cut short before the predicted angle would leave the
-    usable band.
+    Sizes are uniform up to 90 % of saturation; signs pull the joint to mid-travel.
 
     Parameters
     ----------
@@ -228,20 +212,7 @@ def random_program(model: JointModel, dt: float, duration: float, *, seed: int =
 
 
 def start_angle(model: JointModel) -> float:
-    """
-    Angle at which programs start by default: mid-travel, or 0 without end stops.
-
-    Parameters
-    ----------
-    model : JointModel
-        The joint.
-
-    Returns
-    -------
-    float
-        Angle in degrees.
-
-    """
+    """Angle (degrees) at which programs start by default: mid-travel, or 0 without end stops."""
     if model.angle_limits is None:
         return 0.0
     low, high = model.angle_limits

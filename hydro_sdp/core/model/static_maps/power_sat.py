@@ -1,13 +1,7 @@
 """
-The saturating power-law map (kind ``power_sat``): convex from the dead-zone, then saturating.
+The saturating power-law map (kind ``power_sat``, methods 2.7 and 13.4).
 
-Real proportional valves open through notches: the flow rises convexly from
-the edge of the overlap and then saturates hard at the pump's or the relief's
-limit, which the concave eq. (5) cannot follow. This family is the smooth
-saturation of a power law, ``V (1 - exp(-(c u)^n))`` with ``u`` the distance
-beyond the dead-zone edge: for ``n = 1`` it is eq. (5), for ``n > 1`` it starts
-as the power ``V (c u)^n`` and saturates at ``V``.
-
+``V (1 - exp(-(c u)^n))`` with ``u`` the distance beyond the dead-zone edge; ``n = 1`` is eq. (5).
 """
 
 from __future__ import annotations

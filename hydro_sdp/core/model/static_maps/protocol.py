@@ -1,11 +1,4 @@
-"""
-What every static map is: the :class:`StaticMap` protocol and the kind names.
-
-A map family is one frozen dataclass that satisfies :class:`StaticMap`, named by
-one of :data:`MapKind` and registered in
-:data:`~hydro_sdp.core.model.static_maps.registry.MAP_KINDS`.
-
-"""
+"""What every static map is: the :class:`StaticMap` protocol and the kind names (methods 3.5)."""
 
 from __future__ import annotations
 
@@ -21,12 +14,9 @@ MapKind = Literal['sdp', 'sdp_dz', 'linear', 'pwl', 'poly', 'power_sat']
 
 class StaticMap(Protocol):
     """
-    A static map from the delayed valve command to the joint's angular velocity.
+    A static map from the delayed valve command to the joint's angular velocity (deg/s).
 
-    Class attributes ``kind`` (the model file's ``kind``) and ``keys`` (the
-    model-file keys of its parameters) name the family; parameters are in rate
-    units (deg/s), so one map serves every sample period.
-
+    Class attributes ``kind`` and ``keys`` name the family and its model-file keys.
     """
 
     kind: ClassVar[MapKind]
@@ -37,20 +27,7 @@ class StaticMap(Protocol):
         """Edges ``(low, high)`` of the zero-speed band, input units, or None."""
 
     def rate(self, v: FloatArray) -> FloatArray:
-        """
-        Angular velocity (deg/s) for steady commands ``v``.
-
-        Parameters
-        ----------
-        v : FloatArray
-            Commands in input units.
-
-        Returns
-        -------
-        FloatArray
-            Velocities, same shape as ``v``.
-
-        """
+        """Angular velocity (deg/s, same shape) for steady commands ``v`` (input units)."""
 
     def to_mapping(self) -> dict[str, float | list[float]]:
         """Return the model-file keys of this map."""
@@ -69,20 +46,7 @@ class ShiftableMap(Protocol):
 
 
 def check_dead_zone(dead_zone: tuple[float, float]) -> None:
-    """
-    Refuse dead-zone edges in the wrong order.
-
-    Parameters
-    ----------
-    dead_zone : tuple[float, float]
-        ``(low, high)``, input units.
-
-    Raises
-    ------
-    ModelFileError
-        If ``low > high``.
-
-    """
+    """Refuse dead-zone edges ``(low, high)`` in the wrong order (:class:`ModelFileError`)."""
     if dead_zone[0] > dead_zone[1]:
         raise ModelFileError(
             f"key 'dead_zone': lower edge {dead_zone[0]} is above upper edge {dead_zone[1]}")

@@ -1,11 +1,4 @@
-"""
-The map families by kind name, and what applies to any map.
-
-Adding a family is one class satisfying
-:class:`~hydro_sdp.core.model.static_maps.protocol.StaticMap`, its name added to
-``MapKind`` and the class added to :data:`MAP_KINDS`.
-
-"""
+"""The map families by kind name (:data:`MAP_KINDS`), and what applies to any map."""
 
 from __future__ import annotations
 

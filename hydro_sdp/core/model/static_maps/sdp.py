@@ -1,11 +1,7 @@
 """
-The exponential SDP map, eq. (5) of West et al. (2018), and its chords.
+The exponential SDP map, eq. (5) of West et al. (2018) as corrected in methods 3.1, and its chords.
 
-The equation is coded once, in :func:`sdp_rate`: the map class, the offline fit
-and the online estimator all call it. The maths is eq. (5) as corrected in
-docs/methods.md section 3.1; :func:`linearise` is its dead-zone linearisation eq. (6)
-between the edges and the commands :func:`chord_commands` picks.
-
+:func:`sdp_rate` is the one coding of the equation; :func:`linearise` is eq. (6) (methods 3.3).
 """
 
 from __future__ import annotations
@@ -59,10 +55,7 @@ def sdp_rate(v: FloatArray | float, vn: float, cn: float, a3: float, vp: float, 
 @dataclass(frozen=True)
 class SdpMap:
     """
-    Exponential SDP map with dead-zone and asymmetric saturation (kind ``sdp``).
-
-    ``rate(v) = vn (1 - exp(cn (v - a3)))`` below the dead-zone, ``0`` inside it
-    and ``vp (1 - exp(-cp (v - a6)))`` above it.
+    Exponential SDP map with dead-zone and asymmetric saturation (kind ``sdp``, methods 3.1).
 
     Parameters
     ----------
@@ -71,7 +64,7 @@ class SdpMap:
     saturation_velocity : tuple[float, float]
         Speeds ``(vn, vp)`` approached for large commands, deg/s; ``vn < 0 < vp``.
     curvature : tuple[float, float]
-        ``(cn, cp)``, 1/input unit: how fast each branch approaches its saturation.
+        ``(cn, cp)``, 1/input unit.
 
     """
 
@@ -117,20 +110,7 @@ class SdpMap:
         )
 
     def alpha(self, dt: float) -> tuple[float, float, float, float, float, float]:
-        """
-        Return the paper's coefficients ``alpha_1..alpha_6`` at sample period ``dt``.
-
-        Parameters
-        ----------
-        dt : float
-            Sample period, s.
-
-        Returns
-        -------
-        tuple of six floats
-            ``(vn dt, cn, a3, vp dt, cp, a6)``.
-
-        """
+        """Return the paper's ``(vn dt, cn, a3, vp dt, cp, a6)`` at sample period ``dt`` (s)."""
         return (self.saturation_velocity[0] * dt, self.curvature[0], self.dead_zone[0],
                 self.saturation_velocity[1] * dt, self.curvature[1], self.dead_zone[1])
 
@@ -147,8 +127,7 @@ class SdpMap:
         dt : float
             Sample period the coefficients refer to, s.
         convention : str
-            ``signed`` (the paper's text: ``a1 < 0``) or ``magnitude`` (its Table 1:
-            ``a1 > 0`` is the size of the negative saturation; docs/methods.md section 2.3).
+            ``signed`` (``a1 < 0``) or ``magnitude`` (Table 1's ``a1 > 0``; methods 2.3).
 
         Returns
         -------
@@ -168,7 +147,7 @@ class SdpMap:
 
 def chord_commands(sdp: SdpMap, fraction: float = CHORD_SPEED_FRACTION) -> tuple[float, float]:
     """
-    Commands where an exponential map reaches ``fraction`` of its saturation speed.
+    Commands ``(v_min, v_max)`` where an exponential map reaches ``fraction`` of saturation.
 
     Parameters
     ----------

@@ -1,32 +1,8 @@
 """
-Quasi-static hydraulics of one valve-and-cylinder: speed, pump flow, pressures.
+Quasi-static hydraulics of one valve-and-cylinder: speed, pump flow, pressures (methods 11).
 
-Chamber pressures are taken as settled at every sample (quasi-static): oil
-compressibility is left out because the pressure transients it causes (tens of
-milliseconds) are shorter than the spool lag and the sample periods used. The
-speed follows from the orifice equation ``Q = Cd A sqrt(2 dp / rho)`` at both
-metering edges together with the force balance on the piston:
-
-* a load-sensing pump holds ``margin`` across the meter-in orifice, so
-  ``v = Cd A_in sqrt(2 margin / rho) / A_inlet_chamber``, unless
-* the pump would have to exceed its relief pressure: then supply is at relief
-  and ``relief A_in - p_tank A_out - F = rho/2 v^2 (A_in^3/(Cd A_i)^2 +
-  A_out^3/(Cd A_o)^2)`` gives a lower speed (stall when the left side is <= 0);
-* an overrunning load that would pull the inlet chamber below 0 bar runs at
-  the speed the meter-out orifice allows with the inlet at 0 bar (cavitation).
-
-In the last part of the stroke the cushion throttles the outflow in series with
-the meter-out edge, which lowers the relief-limited speed. The head-end cushion
-is ``(piston / annulus)^2`` times the rod-end one, which brakes both ends to the
-same cylinder speed at relief.
-
-A valve without pressure compensation sees what the pump pressure ``p_s`` leaves
-above the load: the same two orifices and force balance give
-``p_s A_in - p_tank A_out - F = rho/2 v^2 (A_in^3/(Cd A_i)^2 + A_out^3/(Cd A_o)^2)``
-at any supply (:meth:`Actuator.supplied`; at relief it is the relief-limited speed
-above), so the machine (:mod:`.machine`) finds the supply at which the pump's flow
-meets what the valves pass.
-
+Orifice flow at both metering edges with the force balance on the piston; load-sensing,
+relief-limited, cavitating and uncompensated cases as methods 11 describes.
 """
 
 from __future__ import annotations
@@ -99,7 +75,7 @@ class Actuator:
 
     def blocked(self, area: float, extension: float) -> bool:
         """
-        Whether the cylinder cannot move: its spool closed or driving it into the end it is at.
+        Whether the cylinder cannot move: spool closed, or driving into the end it is at.
 
         Parameters
         ----------
@@ -119,7 +95,7 @@ class Actuator:
 
     def demand(self, area: float, extension: float) -> tuple[float, float]:
         """
-        Cylinder speed and pump flow before flow sharing.
+        Cylinder speed (m/s, signed) and pump flow (m^3/s) before flow sharing.
 
         Parameters
         ----------
@@ -131,7 +107,7 @@ class Actuator:
         Returns
         -------
         tuple[float, float]
-            Speed, m/s (signed), and the flow drawn from the pump, m^3/s.
+            Speed, m/s, and the flow drawn from the pump, m^3/s.
 
         """
         if self.blocked(area, extension):
@@ -167,8 +143,7 @@ class Actuator:
         Returns
         -------
         tuple[float, float]
-            Speed, m/s (signed), and the flow drawn from the pump, m^3/s (0 when the
-            load holds the pressure off: a load check valve stops backflow).
+            Speed, m/s, and pump flow, m^3/s (0 when the load holds the pressure off).
 
         """
         return self.supplied_at(area, extension)(supply)
@@ -176,10 +151,7 @@ class Actuator:
     def supplied_at(self, area: float, extension: float
                     ) -> Callable[[float], tuple[float, float]]:
         """
-        :meth:`supplied` at one area and extension, as a function of the pump pressure.
-
-        The orifices and the load are worked out once, for the many pressures the
-        machine tries at one sample (:mod:`.supply`).
+        :meth:`supplied` at one area and extension, as a function of the pump pressure (Pa).
 
         Parameters
         ----------
@@ -191,7 +163,7 @@ class Actuator:
         Returns
         -------
         Callable[[float], tuple[float, float]]
-            Pump pressure, Pa, to speed, m/s, and flow, m^3/s, as :meth:`supplied` gives.
+            Pump pressure to speed and flow, as :meth:`supplied` gives.
 
         """
         if self.blocked(area, extension):
@@ -214,7 +186,7 @@ class Actuator:
 
     def inlet_pressure(self, area: float, extension: float, speed: float) -> float:
         """
-        Pressure the inlet chamber needs to move at ``speed``, Pa (force balance).
+        Pressure (Pa, at least 0) the inlet chamber needs to move at ``speed`` (force balance).
 
         Parameters
         ----------
@@ -228,7 +200,7 @@ class Actuator:
         Returns
         -------
         float
-            ``(F + p_out A_out) / A_in``, at least 0.
+            ``(F + p_out A_out) / A_in``, Pa.
 
         """
         inlet, outlet, force, _, a_out = self._sides(area, extension)
@@ -237,7 +209,7 @@ class Actuator:
 
     def pressures(self, area: float, extension: float, speed: float) -> tuple[float, float]:
         """
-        Piston-side and rod-side pressures, bar.
+        Piston-side and rod-side pressures ``(p_piston, p_rod)``, bar.
 
         Parameters
         ----------

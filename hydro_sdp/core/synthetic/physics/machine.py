@@ -1,19 +1,8 @@
 """
-The physics plant: joints sharing one pump, simulated over a command array.
+The physics plant: joints sharing one pump, simulated over a command array (methods 11).
 
-Each sample: the spools (dead time and lag, :mod:`.valve`) set the metering
-areas; each actuator asks for a speed and a pump flow (:mod:`.hydraulics`);
-when the flows add up to more than the pump delivers, every speed is scaled by
-the same factor (flow sharing); the cylinders move and stop at their stroke
-ends. The link rides on a compliance (a second-order mode of ``stop``
-frequency and damping) over the angle the cylinder sets, so it overshoots and
-rings when the cylinder meets an end; the sensor adds white noise.
-
-``commands[k]`` is the command in force over the interval that ends at sample
-``k`` (the timing rule of :mod:`hydro_sdp.core.model.timing`): :class:`PlantSimulator`
-``.step(commands[k + 1])`` returns the angles at sample ``k + 1``, and both
-paths give the same trajectory.
-
+``commands[k]`` is in force over the interval ending at sample ``k`` (methods 3.4);
+:func:`simulate_plant` and :class:`PlantSimulator` give the same trajectory.
 """
 
 from __future__ import annotations
@@ -46,8 +35,7 @@ class PlantRun:
     angles : FloatArray
         Measured joint angles, degrees, shape (n, joints).
     speeds : FloatArray
-        Joint speed the cylinders set over the interval ending at each sample,
-        deg/s (before the link's compliance and the noise).
+        Joint speed the cylinders set, deg/s (before the link's compliance and noise).
     extensions : FloatArray
         Cylinder extensions from fully retracted, mm.
     pressures : FloatArray or None
@@ -148,14 +136,13 @@ def simulate_plant(machine: Machine, commands: FloatArray, dt: float, *,
     machine : Machine
         The plant.
     commands : FloatArray
-        Commands, shape (samples, joints), each joint's valve units; a 1-D
-        array for a one-joint machine.
+        Commands, shape (samples, joints) or 1-D for one joint, valve units.
     dt : float
         Sample period, s.
     angles0 : sequence of float or None
-        Angles at sample 0, degrees (default: mid-stroke); clamped to the stops.
+        Angles at sample 0, degrees (None: mid-stroke).
     command_before : sequence of float or None
-        Command in force before sample 0, per joint (default: each valve's neutral).
+        Command in force before sample 0 per joint (None: each valve's neutral).
     seed : int or None
         Seed of the sensor noise.
     noise : bool
@@ -234,11 +221,7 @@ def simulate_plant(machine: Machine, commands: FloatArray, dt: float, *,
 
 class PlantSimulator:
     """
-    Step the plant one sample at a time: issue commands, get the next angles.
-
-    ``[sim.angles] + [sim.step(v) for v in commands[1:]]`` equals
-    ``simulate_plant(machine, commands, dt, command_before=commands[0]).angles``
-    for the same seed.
+    Step the plant one sample at a time, as :func:`simulate_plant` does for the same seed.
 
     Parameters
     ----------
@@ -247,7 +230,7 @@ class PlantSimulator:
     dt : float
         Sample period, s.
     angles0 : sequence of float or None
-        Angles at the first sample, degrees (default: mid-stroke).
+        Angles at the first sample, degrees (None: mid-stroke).
     command_before : sequence of float or None
         Commands in force up to and including the first sample.
     seed : int or None
@@ -309,20 +292,7 @@ class PlantSimulator:
         return [act.geometry.angle_limits for act in self._actuators]
 
     def step(self, commands: Sequence[float]) -> list[float]:
-        """
-        Issue one command per joint for the next sample and advance.
-
-        Parameters
-        ----------
-        commands : sequence of float
-            Command in force over the next sample, per joint, valve units.
-
-        Returns
-        -------
-        list[float]
-            Angles at the next sample, degrees.
-
-        """
+        """Issue one command per joint (valve units); return the next angles, degrees."""
         if len(commands) != len(self._actuators):
             raise DataError(f'step needs {len(self._actuators)} commands, got {len(commands)}')
         if not all(math.isfinite(c) for c in commands):

@@ -1,18 +1,4 @@
-"""
-The link on a compressible oil column: chamber pressures and link speed as states.
-
-With a joint's ``compressibility`` section the pressures are no longer settled at
-every sample. Each chamber's pressure follows its continuity equation,
-``V / beta dp/dt = Q - A ds/dt`` (the meter-in edge passes the flow the compensated
-valve and the pump give, :mod:`.supply`; the meter-out edge ``Cd A sqrt(2 dp / rho)``
-from the outlet chamber to tank), and the link its force balance,
-``J d^2gamma/dt^2 = r (p_a A_a - p_b A_b - F_load - F_friction)``, ``r`` the moment
-arm of the linkage and ``gamma`` the triangle's angle at the pivot. A pressure is kept
-between 0 (anti-cavitation) and the relief; the cylinder stops dead at its stroke ends.
-Integrated by semi-implicit Euler in sub-steps short against the hydraulic mode and
-the orifices' linearised time constants (docs/methods.md section 11).
-
-"""
+"""The link on a compressible oil column: pressures and link speed as states (methods 11)."""
 
 from __future__ import annotations
 
@@ -134,8 +120,7 @@ class OilColumn:
         area : float
             Signed effective meter-in area of the valve, m^2 (0: closed).
         speed : float
-            The cylinder speed the valve and pump pass at settled pressures, m/s: its flow
-            into the inlet chamber is that times the chamber's area.
+            Cylinder speed the valve and pump pass at settled pressures, m/s.
         dt : float
             Sample period, s.
 

@@ -1,12 +1,8 @@
 """
-Sections of a physics plant file: pump, valve, cylinder, linkage and load.
+Sections of a physics plant file: pump, valve, cylinder, linkage and load (methods 11).
 
-Values are in the units a hydraulics data sheet uses (mm, mm^2, bar, l/min,
-kg, degrees); :mod:`hydro_sdp.core.synthetic.physics.hydraulics` turns them into SI.
-Every key is documented on the dataclass that holds it, and an invalid value is
-refused with an error naming the key (as for model files). The whole file is
-:class:`hydro_sdp.core.synthetic.physics.plant.Machine`.
-
+Values are in data-sheet units (mm, mm^2, bar, l/min, kg, degrees); an invalid value
+is refused with an error naming the key.
 """
 
 from __future__ import annotations
@@ -53,21 +49,17 @@ class Pump:
     Parameters
     ----------
     flow : float
-        Largest total flow, l/min. When the joints ask for more, every joint's
-        flow is scaled by the same factor (flow sharing, LUDV-like).
+        Largest total flow, l/min; above it every joint's flow is scaled alike.
     margin : float
-        Load-sensing margin, bar: the pressure drop held across each meter-in
-        orifice while the pump is below its relief pressure.
+        Load-sensing margin across each meter-in orifice, bar.
     relief_pressure : float
-        Main relief, bar: the highest pressure the pump delivers.
+        Main relief, bar.
     tank_pressure : float
         Return line pressure, bar.
     oil_density : float
         Oil density, kg/m^3.
     power : float
-        Largest hydraulic power, kW (0: no limit): the torque limiter of a pump on an
-        engine turns its displacement back so that flow times pressure stays below
-        it, so at pressure ``p`` the pump gives at most ``power / p``.
+        Largest hydraulic power, kW (0: no limit); flow at pressure ``p`` <= ``power / p``.
 
     """
 
@@ -81,20 +73,7 @@ class Pump:
     keys = ('flow', 'margin', 'relief_pressure', 'tank_pressure', 'oil_density', 'power')
 
     def available(self, pressure: float) -> float:
-        """
-        Return the flow the pump gives at a pressure, m^3/s.
-
-        Parameters
-        ----------
-        pressure : float
-            Pump pressure, Pa.
-
-        Returns
-        -------
-        float
-            ``min(flow, power / pressure)`` in SI units.
-
-        """
+        """Return the flow the pump gives at ``pressure`` (Pa), m^3/s."""
         largest = self.flow * 1e-3 / 60.0
         if self.power > 0.0 and pressure > 0.0:
             return min(largest, self.power * 1e3 / pressure)
@@ -124,34 +103,25 @@ class Valve:
     Parameters
     ----------
     neutral : float
-        Command at which the spool is centred (50 for 0..100 % duty, 0 for a
-        symmetric range), command units.
+        Command at which the spool is centred, command units.
     limits : tuple[float, float]
-        Commands that drive the spool fully one way and the other; commands
-        beyond them are clipped. Above ``neutral`` the cylinder extends.
+        Commands driving the spool fully each way (clipped beyond); above ``neutral`` extends.
     overlap : float
-        Spool overlap as a fraction of full spool travel, 0..1: no orifice opens
-        while ``|spool| <= overlap`` (the dead-zone).
+        Spool overlap, fraction of full travel 0..1 (the dead-zone).
     dead_time : float
         Pure delay of the electronics and pilot stage, s.
     time_constant : float
-        First-order lag of the spool, s (10-90 % rise is 2.2 times this).
+        First-order lag of the spool, s.
     discharge_coefficient : float
         Orifice discharge coefficient Cd.
     opening : tuple[tuple[float, float], ...]
-        Metering notch: pairs (spool travel fraction, meter-in area in mm^2),
-        travel increasing up to 1, area non-decreasing; linear in between and
-        zero at ``overlap``.
+        Metering notch: (travel fraction, meter-in area mm^2) pairs, linear between.
     outlet_ratio : float
         Meter-out area over meter-in area at the same spool travel.
     retract_ratio : float
         Areas of the retracting side's notches over those of ``opening``.
     compensated : bool
-        Whether a pressure compensator holds the pump's margin across the meter-in
-        edge (default). Without one the drop across the edge is what the pump
-        pressure leaves above the load: a joint under a lighter load than another's
-        takes more flow, and when the pump cannot hold its margin (flow or power
-        limit) the flow follows the pressure left.
+        Whether a pressure compensator holds the pump's margin across the meter-in edge.
 
     """
 
@@ -237,23 +207,21 @@ class Cylinder:
     Parameters
     ----------
     bore : float
-        Piston diameter, mm (piston side area).
+        Piston diameter, mm.
     rod : float
-        Rod diameter, mm (rod side area is the annulus).
+        Rod diameter, mm.
     min_length : float
         Pin-to-pin length fully retracted, mm.
     stroke : float
         Stroke, mm.
     cushion_length : float
-        Length of each cushion at the stroke ends, mm; the outflow is throttled there.
+        Length of each cushion at the stroke ends, mm.
     cushion_area : float
-        Rod-end cushion bleed area at the very end of the stroke, mm^2 (the
-        head end's is scaled by ``(piston / annulus)^2``).
+        Rod-end cushion bleed area at the end of the stroke, mm^2.
     cushion_entry_area : float
-        Cushion area where the cushion begins, mm^2: the area in series with
-        the meter-out edge shrinks linearly from this to ``cushion_area``.
+        Cushion area where the cushion begins, mm^2 (shrinks linearly to ``cushion_area``).
     friction : float
-        Seal friction force, N, opposing motion.
+        Seal friction force, N.
 
     """
 
@@ -302,9 +270,7 @@ class Linkage:
     rod_distance : float
         Joint pivot to rod-end pivot, mm.
     angle_offset : float
-        The triangle's angle at the joint pivot minus the joint angle, degrees:
-        the joint angle is that angle less ``angle_offset`` (extending the
-        cylinder raises the angle).
+        The triangle's angle at the joint pivot minus the joint angle, degrees.
 
     """
 
@@ -334,13 +300,11 @@ class Load:
     distance : float
         Joint pivot to the link's centre of mass, mm.
     payload : float
-        Payload mass, kg (change it to change the load).
+        Payload mass, kg.
     payload_distance : float
         Joint pivot to the payload, mm.
     phase : float
-        Angle of the centre of mass above horizontal at joint angle 0, degrees:
-        gravity resists extension while ``cos(angle + phase) > 0`` and helps it
-        beyond.
+        Angle of the centre of mass above horizontal at joint angle 0, degrees.
 
     """
 
@@ -366,23 +330,16 @@ class Load:
 @dataclass(frozen=True)
 class Compressibility:
     """
-    The oil's compressibility and the link's inertia: the link rings on the oil column.
-
-    With this section the chamber pressures and the link's speed are states
-    (docs/methods.md section 11): the pressures follow the continuity equations of the
-    two chambers, the link the force balance on it, so the link rings at the hydraulic
-    natural frequency ``sqrt(k_h r^2 / J)``, ``k_h = beta (A_a^2 / V_a + A_b^2 / V_b)``.
+    Oil compressibility and link inertia: the link rings on the oil column (methods 11).
 
     Parameters
     ----------
     bulk_modulus : float
         Effective bulk modulus of the oil with its hoses, bar.
     dead_volume_piston, dead_volume_rod : float
-        Oil between the valve and each chamber at its end of stroke (hoses, ports), cm^3
-        (> 0): each chamber holds its dead volume plus its area times its stroke.
+        Oil between the valve and each chamber at its end of stroke, cm^3 (> 0).
     inertia : float
-        Moment of inertia of the link and payload about the joint, kg m^2 (0: the load's
-        masses as points at their distances).
+        Link and payload inertia about the joint, kg m^2 (0: point masses of the load).
     viscous_friction : float
         Viscous friction of the seals, N s/m of cylinder speed.
 

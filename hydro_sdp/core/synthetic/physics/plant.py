@@ -1,12 +1,4 @@
-"""
-A physics plant file (format ``hydro_sdp/physics/v1``): one pump and its joints.
-
-A machine is one pump shared by one or more joints; each joint is a spool
-valve, a double-acting cylinder, a two-pivot linkage, a gravity load and a
-compliant end stop (:mod:`hydro_sdp.core.synthetic.physics.parameters` holds the
-sections). An invalid file is refused with an error naming the key.
-
-"""
+"""A physics plant file (format ``hydro_sdp/physics/v1``): one pump and its joints (methods 11)."""
 
 from __future__ import annotations
 
@@ -33,17 +25,13 @@ class Joint:
     valve, cylinder, linkage, load : Valve, Cylinder, Linkage, Load
         The sections of the same names.
     stop_frequency : float
-        Natural frequency of the link on its compliance, Hz (key
-        ``stop.frequency``): the link overshoots and rings when the cylinder
-        meets its stroke end.
+        Natural frequency of the link on its end-stop compliance, Hz (``stop.frequency``).
     stop_damping : float
-        Damping ratio of that mode (key ``stop.damping``), 0 < d < 1.
+        Damping ratio of that mode (``stop.damping``), 0 < d < 1.
     noise : float
         Standard deviation of the angle sensor noise, degrees.
     compressibility : Compressibility or None
-        The oil's compressibility and the link's inertia (key ``compressibility``):
-        the link rings on the oil column; None (the default): the pressures settle
-        at every sample.
+        The oil column; None: the pressures settle at every sample.
 
     """
 
@@ -126,16 +114,6 @@ class Machine:
         """
         Validate a parsed physics file and build the machine.
 
-        Parameters
-        ----------
-        data : object
-            The parsed YAML document.
-
-        Returns
-        -------
-        Machine
-            The validated machine.
-
         Raises
         ------
         ModelFileError
@@ -156,24 +134,7 @@ class Machine:
 
 
 def with_payload(machine: Machine, payload: float, joint: int = 0) -> Machine:
-    """
-    Return a copy of the machine with another payload on one joint.
-
-    Parameters
-    ----------
-    machine : Machine
-        The plant.
-    payload : float
-        New payload, kg (>= 0).
-    joint : int
-        Index of the joint whose load changes.
-
-    Returns
-    -------
-    Machine
-        The changed copy.
-
-    """
+    """Return a copy of the machine with ``payload`` (kg, >= 0) on joint index ``joint``."""
     if not (math.isfinite(payload) and payload >= 0.0):
         raise ModelFileError(f"key 'joints[{joint}].load.payload': must be >= 0, got {payload}")
     joints = list(machine.joints)

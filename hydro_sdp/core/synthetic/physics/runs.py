@@ -1,19 +1,8 @@
 """
-Experiments on the physics plant shaped like those recorded on real machines.
+Experiments on the physics plant shaped like those recorded on real machines (methods 11).
 
-* :func:`full_stroke_runs`: one constant duty held from one end stop to the
-  other (and on against the stop for a while), at several duties, in both
-  directions, each run its own record;
-* :func:`step_and_return`: steps of increasing size from mid-stroke, each
-  followed by a return move at one fixed command back to the start angle;
-* :func:`random_levels`: random duties held for random times, the sign chosen
-  to stay away from the stops.
-
-Duties are percent of the command travel from the valve's neutral to its
-limit on the side of the motion (positive extends the cylinder). Every program
-returns :class:`~hydro_sdp.core.model.records.Record` objects of one joint, stamped
-from ``dt`` on, so that :func:`hydro_sdp.bags.write_bag` can store them.
-
+Full strokes, step-and-return and random levels; duties are percent of the travel from
+neutral to the limit on the side of the motion (positive extends).
 """
 
 from __future__ import annotations
@@ -31,24 +20,7 @@ import numpy as np
 
 
 def duty_command(machine: Machine, joint: int, duty: float) -> float:
-    """
-    Command in the valve's units for a signed duty in percent.
-
-    Parameters
-    ----------
-    machine : Machine
-        The plant.
-    joint : int
-        Joint index.
-    duty : float
-        Percent of the travel from neutral to the limit, -100..100 (sign: direction).
-
-    Returns
-    -------
-    float
-        The command.
-
-    """
+    """Command in the valve's units for a signed ``duty`` in percent (-100..100) of ``joint``."""
     if not -100.0 <= duty <= 100.0:
         raise ConfigurationError(f'duty must lie in [-100, 100] %, got {duty}')
     valve = machine.joints[joint].valve
@@ -75,11 +47,7 @@ def full_stroke_runs(machine: Machine, dt: float, duties: Sequence[float], *, jo
                      rest: float = 1.0, on_stop: float = 1.2, longest: float = 240.0,
                      seed: int = 0) -> list[Record]:
     """
-    Constant-duty runs from one end stop to the other, both directions.
-
-    Each run rests ``rest`` s at the starting stop, then holds the duty until
-    the cylinder reaches its other end and ``on_stop`` s beyond (the real runs
-    keep driving against the stop), or ``longest`` s.
+    Constant-duty runs from one end stop to the other and on against it, both directions.
 
     Parameters
     ----------
@@ -92,7 +60,7 @@ def full_stroke_runs(machine: Machine, dt: float, duties: Sequence[float], *, jo
     joint : int
         Joint that moves; the others stay at neutral.
     rest, on_stop, longest : float
-        Durations, s.
+        Rest at the start, drive beyond the stop, longest run; s.
     seed : int
         Seed of the first run's noise (the next runs use the following seeds).
 
@@ -137,10 +105,6 @@ def step_and_return(machine: Machine, dt: float, duties: Sequence[float], *, joi
                     seed: int = 0) -> Record:
     """
     Step from mid-stroke and back: each step is followed by a return at one fixed duty.
-
-    For each duty (signed: its sign is the direction): rest, hold the duty for
-    ``hold`` s, rest, then drive at ``return_duty`` towards the start angle
-    until the joint has passed it, and rest again.
 
     Parameters
     ----------
@@ -214,8 +178,7 @@ def random_levels(machine: Machine, dt: float, duration: float, *, joint: int = 
     seed : int
         Seed of the levels, the holds and the sensor noise.
     pressure : bool
-        Whether the record's ``load`` is the joint's piston-side pressure, bar, as a
-        sensor on that chamber reads it (the load signal a machine logs).
+        Whether the record's ``load`` is the joint's piston-side pressure, bar.
 
     Returns
     -------

@@ -1,22 +1,7 @@
 """
 What the pump gives the valves: flow sharing, the power limit, valves without compensation.
 
-A load-sensing pump sets its pressure to the highest inlet pressure the moving joints
-need plus its margin (at most the relief). It gives at most its ``flow``, and with a
-``power`` limit at most ``power / pressure`` (:meth:`~.parameters.Pump.available`).
-
-* Every valve compensated and the pump able to give what they ask: each joint gets its
-  compensated flow (:meth:`~.hydraulics.Actuator.demand`).
-* Every valve compensated and the pump short: every joint's speed is scaled by the same
-  share (flow sharing, LUDV-like), the pump's flow taken at its load-sensing pressure: a
-  heavier load raises that pressure, and where the power binds, lowers the flow.
-* A valve without compensation passes what the pump pressure leaves above its load
-  (:meth:`~.hydraulics.Actuator.supplied`); a compensated one its compensated flow, or
-  that when the pressure left is below the margin. When the pump cannot give what they
-  pass at its load-sensing pressure, the pressure falls to where the flow the valves
-  pass equals what the pump gives there (the flow passed grows with the pressure, the
-  pump's falls with it: one crossing, found by bisection).
-
+The pump's pressure, flow and the valves' shares as methods 11 (Pump) describes.
 """
 
 from __future__ import annotations
@@ -47,7 +32,7 @@ def _passed(actuators: Sequence[Actuator], curves: Sequence[Callable[[float], Fl
 def speeds(actuators: Sequence[Actuator], pump: Pump, areas: Sequence[float],
            extensions: Sequence[float]) -> list[float]:
     """
-    Return every cylinder's speed, m/s, with the pump shared as the module says.
+    Return every cylinder's speed, m/s (signed), with the pump shared (methods 11).
 
     Parameters
     ----------
@@ -73,10 +58,6 @@ class Supply:
     """
     The pump and the joints it feeds, for :func:`speeds` sample after sample.
 
-    What stays the same over a run is worked out once: whether every valve is
-    compensated and, when the pump has no power limit either, the pump's flow (the
-    pressure then changes nothing).
-
     Parameters
     ----------
     actuators : sequence of Actuator
@@ -94,22 +75,7 @@ class Supply:
         self.largest = pump.available(0.0) if self.compensated and pump.power <= 0.0 else None
 
     def speeds(self, areas: Sequence[float], extensions: Sequence[float]) -> list[float]:
-        """
-        Return every cylinder's speed, m/s: :func:`speeds` of these joints and pump.
-
-        Parameters
-        ----------
-        areas : sequence of float
-            Signed effective meter-in area of each valve, m^2.
-        extensions : sequence of float
-            Cylinder extensions, m.
-
-        Returns
-        -------
-        list[float]
-            Speeds, m/s (signed).
-
-        """
+        """Return every cylinder's speed, m/s: :func:`speeds` of these joints and pump."""
         actuators, pump, largest = self.actuators, self.pump, self.largest
         if largest is not None and len(actuators) == 1:
             # One joint, its valve compensated: its demand, scaled if the pump is short.

@@ -1,13 +1,4 @@
-"""
-Spool valve: command to spool travel, spool dynamics and metering area.
-
-The command is mapped linearly onto spool travel in [-1, 1] (neutral at 0,
-the command limits at the ends, positive extends the cylinder). The spool
-follows the command after a pure dead time (electronics and pilot stage) and a
-first-order lag. No orifice opens while the travel is within the overlap;
-beyond it the metering notch opens the area of the valve's ``opening`` table.
-
-"""
+"""Spool valve: command to spool travel, spool dynamics and metering area (methods 11)."""
 
 from __future__ import annotations
 
@@ -25,22 +16,7 @@ _MM2 = 1e-6
 
 
 def spool_command(valve: Valve, commands: FloatArray) -> FloatArray:
-    """
-    Map commands (valve units) to the spool travel they ask for.
-
-    Parameters
-    ----------
-    valve : Valve
-        The valve.
-    commands : FloatArray
-        Commands in the valve's own units (percent duty, volts...).
-
-    Returns
-    -------
-    FloatArray
-        Spool travel, fraction of full travel, in [-1, 1].
-
-    """
+    """Map commands (valve units) to the spool travel they ask for, fraction in [-1, 1]."""
     v = np.asarray(commands, dtype=np.float64)
     low, high = valve.limits
     above = (v - valve.neutral) / (high - valve.neutral)
@@ -57,11 +33,7 @@ def lag_pole(valve: Valve, dt: float) -> float:
 def spool_travel(valve: Valve, commands: FloatArray, dt: float, *,
                  command_before: float) -> FloatArray:
     """
-    Spool travel over each sample interval for a command sequence.
-
-    ``x_k = p x_{k-1} + (1 - p) u_{k-tau}``: the command in force over the
-    interval ending at ``t_k`` reaches the spool ``tau`` samples (the dead
-    time) later, through the lag.
+    Spool travel over each sample interval: dead time, then a first-order lag.
 
     Parameters
     ----------
@@ -132,24 +104,7 @@ class Spool:
 
 
 def metering_area(valve: Valve, travel: FloatArray) -> FloatArray:
-    """
-    Effective meter-in area ``Cd * A(|x|)`` with the sign of the travel.
-
-    The retracting side's notches are ``retract_ratio`` times the opening table.
-
-    Parameters
-    ----------
-    valve : Valve
-        The valve.
-    travel : FloatArray
-        Spool travel, fraction of full travel.
-
-    Returns
-    -------
-    FloatArray
-        Signed effective area, m^2 (0 inside the overlap).
-
-    """
+    """Signed meter-in area ``Cd A(|x|)``, m^2, at spool ``travel`` (0 in the overlap)."""
     x = np.asarray(travel, dtype=np.float64)
     travels = np.array([valve.overlap] + [row[0] for row in valve.opening])
     areas = np.array([0.0] + [row[1] for row in valve.opening]) * _MM2
@@ -160,11 +115,7 @@ def metering_area(valve: Valve, travel: FloatArray) -> FloatArray:
 
 class Notch:
     """
-    :func:`metering_area` of one valve at one travel at a time, as :class:`Spool` steps.
-
-    The same table and arithmetic as :func:`numpy.interp` (the slope of the segment
-    times the distance from its lower knot, plus the knot's area; a knot's own area
-    at a knot), so both give the same bits.
+    :func:`metering_area` of one valve at one travel at a time, (as :func:`numpy.interp`).
 
     Parameters
     ----------
