@@ -36,24 +36,7 @@ def require_pair(value: object, key: str) -> tuple[float, float]:
 
 
 def require_ordered_pair(value: object, key: str, *, strict: bool = True) -> tuple[float, float]:
-    """
-    Return a pair whose first element is below the second (or equal, unless ``strict``).
-
-    Parameters
-    ----------
-    value : object
-        Value read from the file.
-    key : str
-        Key name used in the error message.
-    strict : bool
-        Whether equal elements are refused.
-
-    Returns
-    -------
-    tuple[float, float]
-        The ordered pair.
-
-    """
+    """Return a pair whose first element is below the second (or equal, unless ``strict``)."""
     low, high = require_pair(value, key)
     if low > high or (strict and low == high):
         relation = '<' if strict else '<='
@@ -105,26 +88,7 @@ def read_document(data: object, what: str, file_format: str, known: Collection[s
 def require_mapping(value: object, where: str, known: Collection[str],
                     required: Collection[str] = (), *,
                     expected: str = 'a mapping of keys') -> Document:
-    """
-    Return a nested ``value`` as a mapping with known keys and the required ones.
-
-    Parameters
-    ----------
-    value : object
-        Value read from the file.
-    where : str
-        Dotted key name of ``value``, e.g. ``'links[0]'``.
-    known, required : collection of str
-        The keys ``value`` may have, and those it must have.
-    expected : str
-        What the message says is expected when ``value`` is not a mapping.
-
-    Returns
-    -------
-    Document
-        ``value``.
-
-    """
+    """Return a nested ``value`` as a mapping with known keys and the required ones."""
     if not isinstance(value, Mapping):
         raise ModelFileError(f'key {where!r}: expected {expected}')
     _check_keys(value, known, required, where)
@@ -149,24 +113,7 @@ def _key_name(key: object, where: str) -> str:
 
 def require_positive_fields(settings: object, names: Collection[str], *,
                             zero_allowed: bool = False) -> None:
-    """
-    Refuse a field of ``settings`` that is not a finite number above 0 (or at least 0).
-
-    Parameters
-    ----------
-    settings : object
-        The settings object, e.g. a frozen dataclass in its ``__post_init__``.
-    names : collection of str
-        The fields to check, in the order they are reported.
-    zero_allowed : bool
-        Whether 0 is accepted.
-
-    Raises
-    ------
-    ConfigurationError
-        Naming the first field that fails and its value.
-
-    """
+    """Refuse a field of ``settings`` that is not a finite number above 0 (or at least 0)."""
     for name in names:
         value = getattr(settings, name)
         if not (math.isfinite(value) and (value >= 0.0 if zero_allowed else value > 0.0)):

@@ -129,7 +129,7 @@ def free_runs(runs: Sequence[Run], model: JointModel, max_delay: int, rest: floa
     """
     Mark the increments where the joint can move: not at a stop, not stalled.
 
-    Held at a stop or stalled (:func:`.states.holds_of`,
+    Held at a stop or stalled (``state_dependence.states.holds_of``,
     as the SDP analysis leaves them out), and for :func:`stop_window` after arriving at a
     stop under the same command, while the link rings on the stop's compliance.
     """

@@ -75,22 +75,7 @@ def smoothed_speeds(angles: FloatArray, dt: float, t: FloatArray | None = None) 
 
 
 def exogenous_of(record: Record, dt: float | None = None) -> Exogenous:
-    """
-    Return a record's load, other joints' speeds and key for the simulation.
-
-    Parameters
-    ----------
-    record : Record
-        The record.
-    dt : float or None
-        Its sample period, s; None: the median spacing of its time stamps.
-
-    Returns
-    -------
-    Exogenous
-        The signals (None where the record has none).
-
-    """
+    """Return a record's load, other joints' speeds and key for the simulation."""
     speeds = None
     if record.others is not None and record.others.shape[1] and len(record) > 1:
         speeds = smoothed_speeds(record.others, dt or record.sample_period, record.t)

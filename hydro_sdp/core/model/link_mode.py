@@ -54,22 +54,7 @@ class LinkMode:
         return -self.lead * speed, speed
 
     def deviation(self, speeds: FloatArray, before: float) -> FloatArray:
-        """
-        Return ``e_k = y_k - x_k``, deg, for actuator speeds ``w_k``, settled at ``before``.
-
-        Parameters
-        ----------
-        speeds : FloatArray
-            Actuator speed over each interval, deg/s.
-        before : float
-            Speed the link was settled at before the first interval, deg/s.
-
-        Returns
-        -------
-        FloatArray
-            The link's deviation from the actuator after each interval, deg.
-
-        """
+        """Return ``e_k = y_k - x_k``, deg, for actuator speeds ``w_k``, settled at ``before``."""
         return self.states(speeds, before)[0]
 
     def states(self, speeds: FloatArray, before: float) -> tuple[FloatArray, FloatArray]:

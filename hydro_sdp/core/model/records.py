@@ -290,24 +290,7 @@ def split_at_gaps(record: Record, *, max_gap: float = 3.0,
 
 def split_records(records: Sequence[Record], *, max_gap: float = 3.0,
                   min_samples: int = MIN_PIECE_SAMPLES) -> tuple[list[Record], list[Pieces]]:
-    """
-    Cut every record at its gaps (:func:`split_at_gaps`) and pool the pieces.
-
-    Parameters
-    ----------
-    records : sequence of Record
-        The records.
-    max_gap : float
-        Largest spacing kept inside one piece, in sample periods.
-    min_samples : int
-        Fewest samples a piece needs to be kept.
-
-    Returns
-    -------
-    tuple
-        All pieces in order, and the split of each record.
-
-    """
+    """Cut every record at its gaps (:func:`split_at_gaps`) and pool the pieces."""
     splits = [split_at_gaps(record, max_gap=max_gap, min_samples=min_samples)
               for record in records]
     return [piece for split in splits for piece in split.records], splits

@@ -101,48 +101,13 @@ class ControlPeriod:
 
 
 def control_period_on(asked: float, dt: float) -> ControlPeriod:
-    """
-    Return the whole multiple of the plant period nearest the control period asked for.
-
-    Parameters
-    ----------
-    asked : float
-        Control period asked for, s, > 0.
-    dt : float
-        Plant (records') sample period, s, > 0.
-
-    Returns
-    -------
-    ControlPeriod
-        At least one sample; ties go up, as delays do.
-
-    """
+    """Return the whole multiple of the plant period nearest the control period asked for."""
     samples = max(1, int(math.floor(asked / dt + 0.5 + 1e-9)))
     return ControlPeriod(samples, whole_samples_seconds(samples, dt), float(asked))
 
 
 def control_steps(control_period: float, dt: float) -> int:
-    """
-    Return the plant samples per control step of a controller run on a plant.
-
-    Parameters
-    ----------
-    control_period : float
-        The controller's period, s.
-    dt : float
-        The plant's sample period, s.
-
-    Returns
-    -------
-    int
-        The nearest whole number of samples.
-
-    Raises
-    ------
-    ConfigurationError
-        When the ratio is more than :data:`PERIOD_TOLERANCE` from a whole number.
-
-    """
+    """Return the plant samples per control step of a controller run on a plant."""
     period = control_period_on(control_period, dt)
     ratio = control_period / dt
     if abs(ratio - period.samples) > PERIOD_TOLERANCE * period.samples:

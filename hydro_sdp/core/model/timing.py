@@ -23,22 +23,7 @@ def check_sample_period(dt: float) -> float:
 
 
 def delay_samples(delay: float, dt: float) -> int:
-    """
-    Convert a delay (s) to whole samples at period ``dt`` (nearest, ties up, at least one).
-
-    Parameters
-    ----------
-    delay : float
-        Pure time delay, s.
-    dt : float
-        Sample period, s.
-
-    Returns
-    -------
-    int
-        Delay in samples.
-
-    """
+    """Convert a delay (s) to whole samples at period ``dt`` (nearest, ties up, at least one)."""
     check_sample_period(dt)
     # The small tolerance keeps 0.15 / 0.05 = 2.9999999999999996 at 3.
     return max(1, int(math.floor(delay / dt + 0.5 + 1e-9)))
@@ -99,22 +84,7 @@ def delayed_at(values: FloatArray, indices: IntArray, tau: int) -> FloatArray:
 
 def command_in_force(sample_stamps: FloatArray | IntArray,
                      command_stamps: FloatArray | IntArray) -> IntArray:
-    """
-    Index of the command in force at each sample: the last one received strictly before it.
-
-    Parameters
-    ----------
-    sample_stamps : array
-        Time of each sample (same unit as ``command_stamps``).
-    command_stamps : array
-        Time of each command, sorted.
-
-    Returns
-    -------
-    IntArray
-        Index into the commands per sample; -1 where no command came before.
-
-    """
+    """Index of the command in force at each sample: the last one received strictly before it."""
     return np.searchsorted(command_stamps, sample_stamps, side='left') - 1
 
 

@@ -18,27 +18,7 @@ MAP_KINDS: dict[str, type[StaticMap]] = {
 
 
 def shifted_map(static_map: StaticMap, shift: tuple[float, float]) -> StaticMap:
-    """
-    Return ``static_map`` with its dead-zone edges moved by ``shift`` (input units).
-
-    Parameters
-    ----------
-    static_map : StaticMap
-        A map whose edges can move (``sdp``, ``sdp_dz`` or ``power_sat``).
-    shift : tuple[float, float]
-        Added to the lower and upper edge.
-
-    Returns
-    -------
-    StaticMap
-        The moved map (``static_map`` itself for no shift).
-
-    Raises
-    ------
-    ConfigurationError
-        If the map's family has no edges to move.
-
-    """
+    """Return ``static_map`` with its dead-zone edges moved by ``shift`` (input units)."""
     if shift == (0.0, 0.0):
         return static_map
     if not isinstance(static_map, ShiftableMap):

@@ -146,22 +146,7 @@ class SdpMap:
 
 
 def chord_commands(sdp: SdpMap, fraction: float = CHORD_SPEED_FRACTION) -> tuple[float, float]:
-    """
-    Commands ``(v_min, v_max)`` where an exponential map reaches ``fraction`` of saturation.
-
-    Parameters
-    ----------
-    sdp : SdpMap
-        The map.
-    fraction : float
-        Fraction of the saturation speed, in (0, 1).
-
-    Returns
-    -------
-    tuple[float, float]
-        ``(v_min, v_max)``, the ends of the IDZ chords.
-
-    """
+    """Commands ``(v_min, v_max)`` where an exponential map reaches ``fraction`` of saturation."""
     if not 0.0 < fraction < 1.0:
         raise ConfigurationError(f'the chord speed fraction must be in (0, 1), got {fraction}')
     distance = -math.log(1.0 - fraction)

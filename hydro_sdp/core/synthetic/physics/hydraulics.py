@@ -74,22 +74,7 @@ class Actuator:
         return inlet, outlet, force + self.friction, area, out_area
 
     def blocked(self, area: float, extension: float) -> bool:
-        """
-        Whether the cylinder cannot move: spool closed, or driving into the end it is at.
-
-        Parameters
-        ----------
-        area : float
-            Signed effective meter-in area, m^2 (positive extends).
-        extension : float
-            Cylinder extension, m.
-
-        Returns
-        -------
-        bool
-            True when :meth:`demand` and :meth:`supplied` give no speed and no flow.
-
-        """
+        """Whether the cylinder cannot move: spool closed, or driving into the end it is at."""
         return area == 0.0 or (area > 0.0 and extension >= self.stroke) or (
             area < 0.0 and extension <= 0.0)
 
@@ -128,24 +113,7 @@ class Actuator:
         return (speed if area > 0.0 else -speed), pumped
 
     def supplied(self, area: float, extension: float, supply: float) -> tuple[float, float]:
-        """
-        Cylinder speed and flow through a meter-in edge without compensation.
-
-        Parameters
-        ----------
-        area : float
-            Signed effective meter-in area ``Cd A``, m^2 (positive extends).
-        extension : float
-            Cylinder extension, m.
-        supply : float
-            Pump pressure, Pa.
-
-        Returns
-        -------
-        tuple[float, float]
-            Speed, m/s, and pump flow, m^3/s (0 when the load holds the pressure off).
-
-        """
+        """Cylinder speed and flow through a meter-in edge without compensation."""
         return self.supplied_at(area, extension)(supply)
 
     def supplied_at(self, area: float, extension: float

@@ -31,26 +31,7 @@ def _passed(actuators: Sequence[Actuator], curves: Sequence[Callable[[float], Fl
 
 def speeds(actuators: Sequence[Actuator], pump: Pump, areas: Sequence[float],
            extensions: Sequence[float]) -> list[float]:
-    """
-    Return every cylinder's speed, m/s (signed), with the pump shared (methods 11).
-
-    Parameters
-    ----------
-    actuators : sequence of Actuator
-        The joints.
-    pump : Pump
-        The pump.
-    areas : sequence of float
-        Signed effective meter-in area of each valve, m^2.
-    extensions : sequence of float
-        Cylinder extensions, m.
-
-    Returns
-    -------
-    list[float]
-        Speeds, m/s (signed).
-
-    """
+    """Return every cylinder's speed, m/s (signed), with the pump shared (methods 11)."""
     return Supply(actuators, pump).speeds(areas, extensions)
 
 
