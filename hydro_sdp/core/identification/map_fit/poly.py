@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from typing import Sequence
+import warnings
 
 from hydro_sdp.core.errors import DataError
 from hydro_sdp.core.identification.delay import LevelSpeed
@@ -50,8 +51,12 @@ def fit_poly(points: Sequence[LevelSpeed], rest: float, *, degree: int = 3,
         gain = speeds[side] / levels[side]
         weights = np.abs(levels[side]) / np.maximum(errors[side], 1e-9)
         # Fitted on the commands scaled to [-1, 1] (40-100 % cubed is ill-conditioned
-        # otherwise), then expressed in the map's own coefficients.
-        scaled = np.polynomial.Polynomial.fit(levels[side], gain, order, w=weights)
+        # otherwise), then expressed in the map's own coefficients. Levels a hair apart
+        # still leave it ill-posed: the held-out family choice judges the result, and
+        # numpy's warning would only reach the user as noise.
+        with warnings.catch_warnings():
+            warnings.simplefilter('ignore', np.exceptions.RankWarning)
+            scaled = np.polynomial.Polynomial.fit(levels[side], gain, order, w=weights)
         fit = np.pad(scaled.convert().coef, (0, order + 1))[:order + 1]
         coefficients.append(tuple(fit.tolist()))
         predicted = levels[side] * np.polynomial.polynomial.polyval(levels[side], fit)
