@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 import math
 
 from hydro_sdp.core.arrays import FloatArray
@@ -62,20 +63,35 @@ class LinkMode:
         w = np.asarray(speeds, dtype=np.float64)
         if w.size == 0:
             return np.zeros(0), np.zeros(0)
-        p00, p01, p10, p11 = self.transition
-        matrix = np.array([[p00, p01], [p10, p11]])
-        poles, vectors = np.linalg.eig(matrix)
-        pole = complex(poles[0])
-        inverse = np.linalg.inv(vectors)
+        pole, column, row = self.modal
         # Modal coordinates: m_k = pole m_{k-1} + g w_k, and e = 2 Re(V[0, 0] m).
-        gain = complex(inverse[0] @ np.array(self.input_gain))
-        state = complex(inverse[0] @ np.array(self.settled(before)))
+        gain = row[0] * self.input_gain[0] + row[1] * self.input_gain[1]
+        settled = self.settled(before)
+        state = row[0] * settled[0] + row[1] * settled[1]
         # The recursion as a first-order filter in C; imported here, as the light command
         # paths (identify) never need it.
         from scipy.signal import lfilter
         out = lfilter([gain], [1.0, -pole], w.astype(np.complex128), zi=[pole * state])[0]
-        return (2.0 * (complex(vectors[0, 0]) * out).real,
-                2.0 * (complex(vectors[1, 0]) * out).real)
+        return 2.0 * (column[0] * out).real, 2.0 * (column[1] * out).real
+
+    @cached_property
+    def modal(self) -> tuple[complex, tuple[complex, complex], tuple[complex, complex]]:
+        """Return a pole of ``P``, its eigenvector and the matching row of the inverse."""
+        p00, p01, p10, p11 = self.transition
+        half = 0.5 * (p00 + p11)
+        spread = (p00 * p11 - p01 * p10) - half * half
+        if not (spread > 0.0 and p01 != 0.0):
+            # Not a ringing pair (a mode this package builds always is): numpy's answer.
+            poles, vectors = np.linalg.eig(np.array([[p00, p01], [p10, p11]]))
+            inverse = np.linalg.inv(vectors)
+            return (complex(poles[0]), (complex(vectors[0, 0]), complex(vectors[1, 0])),
+                    (complex(inverse[0, 0]), complex(inverse[0, 1])))
+        # The pair lambda, conj(lambda) with eigenvectors (p01, lambda - p00): the 2 x 2
+        # in closed form, without two LAPACK calls per simulated run.
+        pole = complex(half, math.sqrt(spread))
+        other = pole.conjugate()
+        scale = p01 * (other - pole)
+        return pole, (complex(p01), pole - p00), ((other - p00) / scale, -p01 / scale)
 
     def ring(self, x: FloatArray, dt: float, before: float) -> FloatArray:
         """Return the link's angles for the actuator's angles ``x`` (first one settled)."""

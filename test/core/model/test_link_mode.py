@@ -5,7 +5,7 @@ import math
 from hydro_sdp.core.errors import DataError, ModelFileError
 from hydro_sdp.core.model.effects import Backlash, Oscillation
 from hydro_sdp.core.model.joint_model import JointModel
-from hydro_sdp.core.model.link_mode import LinkMode
+from hydro_sdp.core.model.link_mode import LinkMode, LinkState
 from hydro_sdp.core.model.simulation import one_step_increments, simulate
 from hydro_sdp.core.model.static_maps import SdpMap
 import numpy as np
@@ -117,3 +117,26 @@ def test_a_mode_above_the_nyquist_frequency_is_refused(j2):
     model = j2.with_effect(Oscillation(12.0, 0.1))
     with pytest.raises(DataError, match='12 Hz is not below the Nyquist frequency of .* 0.05 s'):
         simulate(model, np.zeros(10), 0.05, 0.0)
+
+
+@pytest.mark.parametrize('frequency, damping, dt', [
+    (0.5, 0.02, 0.01), (2.0, 0.1, 0.01), (4.5, 0.6, 0.005), (20.0, 0.95, 0.01)])
+def test_the_closed_form_modes_match_stepping_the_state_and_numpys_eigenvectors(
+        frequency, damping, dt):
+    # states() filters the actuator's speeds in the modal coordinates it forms in closed
+    # form; stepped one sample at a time (LinkState) and through numpy's eig and inv
+    # (the modal form it replaced) the link goes the same way.
+    mode = LinkMode.of(Oscillation(frequency, damping), dt)
+    speeds = np.random.default_rng(3).normal(0.0, 20.0, 400).cumsum() * 0.05
+    e, u = mode.states(speeds, 7.0)
+    state = LinkState(mode, 7.0)
+    stepped = np.array([state.step(w) for w in speeds])
+    np.testing.assert_allclose(e, stepped, rtol=1e-9, atol=1e-9 * np.max(np.abs(stepped)))
+    poles, vectors = np.linalg.eig(np.array(mode.transition).reshape(2, 2))
+    inverse = np.linalg.inv(vectors)
+    pole, column, row = mode.modal
+    k = int(np.argmin(np.abs(poles - pole)))
+    assert poles[k] == pytest.approx(pole, rel=1e-12)
+    # An eigenvector's scale is free; the projection column x row is not.
+    np.testing.assert_allclose(np.outer(column, row), np.outer(vectors[:, k], inverse[k]),
+                               rtol=1e-9, atol=1e-12)
