@@ -39,7 +39,7 @@ from hydro_sdp.core.model.records import Record
 from hydro_sdp.core.model.simulation import simulate
 from hydro_sdp.core.model.static_maps import SdpMap
 from hydro_sdp.core.synthetic.joint_experiments import experiment_record
-from hydro_sdp.core.synthetic.programs import command_span
+from hydro_sdp.core.synthetic.programs import level_bounds
 from hydro_sdp.io.model_files import default_model_path, load_model
 import numpy as np
 from scipy.optimize import minimize
@@ -82,7 +82,7 @@ def step_experiments(model: JointModel, rng: np.random.Generator, count: int = 4
                      seconds: float = 3.0, rest: float = 0.5, dt: float = 0.01,
                      noise: float = 0.03) -> list[Experiment]:
     """Return ``count`` step experiments of ``seconds`` each, as in Fig. 1 of the paper."""
-    (small_neg, large_neg), (small_pos, large_pos) = command_span(model)
+    (small_neg, large_neg), (small_pos, large_pos) = level_bounds(model)
     free = replace(model, angle_limits=None)     # each experiment starts from 0, as Fig. 1
     experiments = []
     for index in range(count):

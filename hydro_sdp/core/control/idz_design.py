@@ -8,10 +8,10 @@ from typing import get_args, Literal
 from hydro_sdp.core.control.design_plant import model_lag, plant_for_model
 from hydro_sdp.core.control.idz import IdzMode, InverseDeadZone
 from hydro_sdp.core.control.idz_table import Idz, TableInverseDeadZone
-from hydro_sdp.core.control.idz_table_design import (
-    command_span, DEFAULT_NOISE, table_beta, table_idz)
+from hydro_sdp.core.control.idz_table_design import DEFAULT_NOISE, table_beta, table_idz
 from hydro_sdp.core.control.pip_design import DiscretePlant, lq_design, PipGains
 from hydro_sdp.core.errors import ConfigurationError, DataError
+from hydro_sdp.core.model.command_span import command_span
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.static_maps import (
     chord_commands, CHORD_SPEED_FRACTION, linearise, LinearMap, SdpDzMap, SdpMap)

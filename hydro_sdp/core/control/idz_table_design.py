@@ -6,15 +6,14 @@ See methods 5.4-5.5.
 
 from __future__ import annotations
 
-import math
 
 from hydro_sdp.core.control.idz import IdzMode
 from hydro_sdp.core.control.idz_table import TableInverseDeadZone
 from hydro_sdp.core.control.loop_noise import noise_gain
 from hydro_sdp.core.control.pip_design import DiscretePlant, PipGains
-from hydro_sdp.core.errors import ConfigurationError, DataError
+from hydro_sdp.core.errors import DataError
+from hydro_sdp.core.model.command_span import command_span
 from hydro_sdp.core.model.joint_model import JointModel
-from hydro_sdp.core.model.static_maps import PolyMap, PowerSatMap, PwlMap, SdpMap
 from hydro_sdp.core.model.timing import check_sample_period
 import numpy as np
 
@@ -27,51 +26,6 @@ NOISE_MULTIPLE = 3.0
 DEFAULT_NOISE = 0.03
 #: Points of each branch of an IDZ table.
 TABLE_POINTS = 40
-#: Fraction of saturation where a table of a saturating map without input limits ends.
-TABLE_SATURATION = 0.99
-
-
-def command_span(model: JointModel,
-                 v_range: tuple[float, float] | None = None) -> tuple[float, float]:
-    """
-    Return the commands an IDZ table (or the chords of ``chord_map``) covers, input units.
-
-    Parameters
-    ----------
-    model : JointModel
-        The joint.
-    v_range : tuple[float, float] or None
-        Commands to cover.
-
-    Returns
-    -------
-    tuple[float, float]
-        ``(low, high)`` with the rest command strictly between.
-
-    """
-    static_map = model.static_map
-    if v_range is not None:
-        span = (float(v_range[0]), float(v_range[1]))
-    elif model.input_limits is not None:
-        span = model.input_limits
-    elif isinstance(static_map, PwlMap):
-        span = (static_map.knots[0], static_map.knots[-1])
-    elif isinstance(static_map, PolyMap):
-        span = static_map.command_range
-    elif isinstance(static_map, (SdpMap, PowerSatMap)):
-        reach = -math.log(1.0 - TABLE_SATURATION)
-        power = static_map.exponent if isinstance(static_map, PowerSatMap) else (1.0, 1.0)
-        low, high = static_map.dead_zone
-        span = (low - reach ** (1.0 / power[0]) / static_map.curvature[0],
-                high + reach ** (1.0 / power[1]) / static_map.curvature[1])
-    else:
-        raise ConfigurationError(f'an IDZ table of a {model.kind} map needs the command range: '
-                                 'give the model input_limits (or --v-range)')
-    rest = model.rest_command
-    if not (math.isfinite(span[0]) and math.isfinite(span[1]) and span[0] < rest < span[1]):
-        raise ConfigurationError(f'the command range {list(span)} must contain the rest '
-                                 f'command {rest} strictly inside')
-    return span
 
 
 def table_beta(dead_zone: tuple[float, float], plant: DiscretePlant, gains: PipGains,

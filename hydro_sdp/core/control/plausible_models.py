@@ -11,9 +11,9 @@ import math
 from typing import Callable, Mapping, Sequence
 
 from hydro_sdp.core.control.controller_spec import ControllerSpec
-from hydro_sdp.core.control.idz_table_design import command_span
 from hydro_sdp.core.control.loop_check import check_loop, CheckSettings, LoopCheck
 from hydro_sdp.core.errors import HydroSdpError
+from hydro_sdp.core.model.command_span import command_span
 from hydro_sdp.core.model.effects import ValveLag
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.static_maps.pwl import PwlMap

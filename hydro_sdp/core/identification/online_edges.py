@@ -10,11 +10,11 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 import math
 
-from hydro_sdp.core.control.idz_table_design import command_span
 from hydro_sdp.core.errors import ConfigurationError
 from hydro_sdp.core.identification.online import (
     EstimatedEdges, NOISE_VARIANCE_RATIOS, OnlineMapFilter, OnlineSdpIdentifier, OnlineSettings)
 from hydro_sdp.core.identification.scalar_kalman import Six
+from hydro_sdp.core.model.command_span import command_span
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.static_maps import (
     PowerSatMap, PwlMap, SdpDzMap, SdpMap, StaticMap)

@@ -19,7 +19,7 @@ import numpy as np
 _USABLE_RANGE = 0.8
 
 
-def command_span(model: JointModel, *, saturation: float = 0.99
+def level_bounds(model: JointModel, *, saturation: float = 0.99
                  ) -> tuple[tuple[float, float], tuple[float, float]]:
     """
     Signed ``((small_neg, large_neg), (small_pos, large_pos))`` step commands per direction.
@@ -116,7 +116,7 @@ def step_program(model: JointModel, dt: float, *, steps: int = 40, hold: float =
         raise ConfigurationError(f'a step program needs at least 2 steps, got {steps}')
     if not (hold > 0.0 and rest > 0.0):
         raise ConfigurationError(f'hold and rest must be > 0 s, got {hold} and {rest}')
-    (small_neg, large_neg), (small_pos, large_pos) = command_span(model)
+    (small_neg, large_neg), (small_pos, large_pos) = level_bounds(model)
     per_side = (steps + 1) // 2
     magnitudes = np.linspace(0.0, 1.0, per_side)
     low, high = _travel_band(model, y0)
@@ -181,7 +181,7 @@ def random_program(model: JointModel, dt: float, duration: float, *, seed: int =
     if not duration > 0.0:
         raise ConfigurationError(f'duration must be > 0 s, got {duration}')
     rng = np.random.default_rng(seed)
-    (small_neg, large_neg), (small_pos, large_pos) = command_span(model, saturation=0.9)
+    (small_neg, large_neg), (small_pos, large_pos) = level_bounds(model, saturation=0.9)
     base = model.rest_command
     low, high = _travel_band(model, y0)
     total = max(1, round(duration / dt))

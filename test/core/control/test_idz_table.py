@@ -7,12 +7,13 @@ from hydro_sdp.core.control.idz import InverseDeadZone
 from hydro_sdp.core.control.idz_design import chord_idz, default_form, idz_for_model
 from hydro_sdp.core.control.idz_recalibration import recalibrated_idz
 from hydro_sdp.core.control.idz_table import chord_as_table, TableInverseDeadZone
-from hydro_sdp.core.control.idz_table_design import command_span, table_idz
+from hydro_sdp.core.control.idz_table_design import table_idz
 from hydro_sdp.core.control.loop_simulation import (
     LoopJoint, run_closed_loop, step_setpoints, valve_reversals)
 from hydro_sdp.core.control.pip_controller import ControllerSettings, PipIdzController
 from hydro_sdp.core.control.pip_design import PipGains
 from hydro_sdp.core.errors import ConfigurationError, DataError, ModelFileError
+from hydro_sdp.core.model.command_span import command_span
 from hydro_sdp.core.model.effects import ValveLag
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.static_maps import PwlMap, shifted_map

@@ -5,7 +5,7 @@ from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.simulation import simulate
 from hydro_sdp.core.model.static_maps import LinearMap, SdpDzMap, SdpMap
 from hydro_sdp.core.synthetic.programs import (
-    command_span, random_program, start_angle, step_program)
+    level_bounds, random_program, start_angle, step_program)
 import numpy as np
 import pytest
 
@@ -56,7 +56,7 @@ def test_random_program_is_seeded_and_varied(j2):
 
 def test_percent_duty_valve(rng):
     assert DUTY.rest_command == pytest.approx(49.0)
-    (small_neg, large_neg), (small_pos, large_pos) = command_span(DUTY)
+    (small_neg, large_neg), (small_pos, large_pos) = level_bounds(DUTY)
     assert 40.0 < small_neg < 49.0 < small_pos < 58.0
     assert 0.0 <= large_neg < 40.0 and 58.0 < large_pos <= 100.0
     y0 = start_angle(DUTY)
