@@ -285,38 +285,86 @@ def _ringing_increments(mode: LinkMode, increment: FloatArray, previous: FloatAr
                         dt: float, before: float, low: float, high: float) -> FloatArray:
     """Return the link's increments for the actuator's; the mode starts settled at ``before``."""
     deviation, speed = mode.states(increment / dt, before)
-    out = increment + np.diff(np.r_[mode.settled(before)[0], deviation])
-    # Until the actuator first meets a stop this is the recursion below, all at once.
-    actuator = previous - np.r_[mode.settled(before)[0], deviation[:-1]]
-    meets = np.flatnonzero(((increment > 0.0) & (actuator + increment >= high))
-                           | ((increment < 0.0) & (actuator + increment <= low)))
+    settled = mode.settled(before)
+    out = increment + np.diff(np.concatenate(([settled[0]], deviation)))
+    # Until the actuator first meets a stop this is the recursion of methods 3.6, all at once.
+    actuator = previous - np.concatenate(([settled[0]], deviation[:-1]))
+    meets = _meets(increment, actuator, low, high)
     if meets.size == 0:
         return out
-    first = int(meets[0])
-    state = LinkState(mode, before, None if first == 0 else (float(deviation[first - 1]),
-                                                             float(speed[first - 1])))
-    pressed = 0.0
-    for k, (step, angle) in enumerate(zip(increment[first:].tolist(),
-                                          previous[first:].tolist()), start=first):
-        if pressed * step > 0.0:
-            moved = 0.0
-        else:
-            # Leaving a stop it starts from the stop, whatever a sensor there reads.
-            actuator = angle - state.e if not pressed else high if pressed > 0.0 else low
-            moved, pressed = step, 0.0
-            if step > 0.0 and actuator + step >= high:
-                moved, pressed = max(high - actuator, 0.0), 1.0
-            elif step < 0.0 and actuator + step <= low:
-                moved, pressed = min(low - actuator, 0.0), -1.0
-        e = state.e
-        swung = state.step(moved / dt)
-        stop = high if pressed > 0.0 else low
-        if pressed and not low <= stop + e <= high:
+    # From there the actuator alternates between moving freely and pressing a stop. The
+    # mode is linear: a free stretch is the pass above plus the free ringing of the
+    # difference of the states where the stretch starts, a pressed one the free ringing of
+    # its own; only the samples that meet or leave a stop are stepped one at a time.
+    pole, column, row = mode.modal
+    powers = pole ** np.arange(1, min(_CHUNK, increment.size) + 1)
+    towards = 2.0 * column[0] * powers, 2.0 * column[1] * powers
+
+    def ringing(state: tuple[float, float], count: int) -> tuple[FloatArray, FloatArray]:
+        modal = row[0] * state[0] + row[1] * state[1]
+        return ((modal * towards[0][:count]).real, (modal * towards[1][:count]).real)
+
+    k, size, pressed = int(meets[0]), increment.size, 0.0
+    state = settled if k == 0 else (float(deviation[k - 1]), float(speed[k - 1]))
+    while k < size:
+        # A chunk at a time, so that a record that meets its stops often does not
+        # follow its whole remainder at every meeting.
+        limit = min(k + _CHUNK, size)
+        if pressed:
+            held = np.flatnonzero(pressed * increment[k:limit] <= 0.0)
+            turns = held.size > 0
+            end = k + int(held[0]) if turns else limit
+            stop = high if pressed > 0.0 else low
+            e, u = ringing(state, end - k)
+            e_before = np.concatenate(([state[0]], e[:-1]))
             # The link swung beyond the stop, where the sensor cannot follow it.
+            beyond = (stop + e_before < low) | (stop + e_before > high)
+            out[k:end] = np.where(beyond, np.clip(stop + e, low, high) - previous[k:end],
+                                  e - e_before)
+            actuator_k = stop
+        else:
+            passed = settled if k == 0 else (deviation[k - 1], speed[k - 1])
+            e, u = ringing((state[0] - passed[0], state[1] - passed[1]), limit - k)
+            e, u = e + deviation[k:limit], u + speed[k:limit]
+            e_before = np.concatenate(([state[0]], e[:-1]))
+            meets = _meets(increment[k:limit], previous[k:limit] - e_before, low, high)
+            turns = meets.size > 0
+            end = k + int(meets[0]) if turns else limit
+            out[k:end] = increment[k:end] + e[:end - k] - e_before[:end - k]
+            actuator_k = float(previous[end] - e_before[end - k]) if turns else 0.0
+        if end > k:
+            state = (float(e[end - k - 1]), float(u[end - k - 1]))
+        k = end
+        if not turns:
+            continue
+        # The sample that meets (or leaves) a stop, as the recursion steps it.
+        step, angle = float(increment[k]), float(previous[k])
+        moved, pressed = step, 0.0
+        if step > 0.0 and actuator_k + step >= high:
+            moved, pressed = max(high - actuator_k, 0.0), 1.0
+        elif step < 0.0 and actuator_k + step <= low:
+            moved, pressed = min(low - actuator_k, 0.0), -1.0
+        link = LinkState(mode, 0.0, state)
+        swung = link.step(moved / dt)
+        stop = high if pressed > 0.0 else low
+        if pressed and not low <= stop + state[0] <= high:
             out[k] = min(max(stop + swung, low), high) - angle
         else:
-            out[k] = moved + swung - e
+            out[k] = moved + swung - state[0]
+        state = (link.e, link.u)
+        k += 1
     return out
+
+
+#: Samples followed at once between the meetings with a stop.
+_CHUNK = 256
+
+
+def _meets(increment: FloatArray, actuator: FloatArray, low: float,
+           high: float) -> np.ndarray:
+    """Return where an actuator at ``actuator`` meets a stop over its ``increment``."""
+    return np.flatnonzero(((increment > 0.0) & (actuator + increment >= high))
+                          | ((increment < 0.0) & (actuator + increment <= low)))
 
 
 AngleEffects = tuple[AngleDependentVelocity | None, StrokeGeometry | None]

@@ -6,13 +6,14 @@ from hydro_sdp.core.errors import DataError, ModelFileError
 from hydro_sdp.core.model.effects import Backlash, Oscillation
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.link_mode import LinkMode, LinkState
-from hydro_sdp.core.model.simulation import one_step_increments, simulate
+from hydro_sdp.core.model.simulation import _ringing_increments, one_step_increments, simulate
 from hydro_sdp.core.model.static_maps import SdpMap
 import numpy as np
 import pytest
 from scipy.linalg import expm
 from support.joint_generator import Joint, Machine, SpeedMap
 from support.joint_generator import simulate as generate
+from support.stepped_ringing import stepped_ringing_increments, strokes_into_stops
 
 MAP = SdpMap(dead_zone=(-1.0, 1.2), saturation_velocity=(-30.0, 35.0), curvature=(0.8, 0.9))
 
@@ -140,3 +141,19 @@ def test_the_closed_form_modes_match_stepping_the_state_and_numpys_eigenvectors(
     # An eigenvector's scale is free; the projection column x row is not.
     np.testing.assert_allclose(np.outer(column, row), np.outer(vectors[:, k], inverse[k]),
                                rtol=1e-9, atol=1e-12)
+
+
+@pytest.mark.parametrize('frequency, damping', [(0.6, 0.03), (2.0, 0.1), (4.0, 0.5)])
+def test_the_stretches_at_the_stops_follow_the_recursion_stepped_sample_by_sample(
+        frequency, damping):
+    # Records that press and leave their stops many times, each stretch longer or shorter
+    # than the chunks the fast form follows at once.
+    mode = LinkMode.of(Oscillation(frequency, damping), 0.01)
+    pressed = 0
+    for seed in range(40):
+        increment, angles, before, (low, high) = strokes_into_stops(seed)
+        stepped = stepped_ringing_increments(mode, increment, angles, 0.01, before, low, high)
+        fast = _ringing_increments(mode, increment, angles, 0.01, before, low, high)
+        np.testing.assert_allclose(fast, stepped, rtol=0.0, atol=1e-9)
+        pressed += int(np.sum(angles == high) + np.sum(angles == low))
+    assert pressed > 1000
