@@ -17,7 +17,7 @@ from hydro_sdp.core.identification.experiment import split_long, thin
 from hydro_sdp.core.identification.rest import estimate_rest_command
 from hydro_sdp.core.identification.segmentation import check_records, segment_records
 from hydro_sdp.core.identification.state_dependence.backfit import (
-    Backfit, backfit, base_fit, Term, with_tests)
+    Backfit, backfit, Term, with_tests)
 from hydro_sdp.core.identification.state_dependence.dependence import (
     ordered, ParameterSummary, SdpAnalysis, StateDependence)
 from hydro_sdp.core.identification.state_dependence.ordering import MAX_GROUPS
@@ -57,29 +57,22 @@ def rest_of(records: Sequence[Record]) -> float:
 
 def data_delay(records: Sequence[Record], dt: float, max_delay: float,
                rest: float) -> int:
-    """Return the delay of model (2) found in the records, samples."""
+    """Return the delay of model (2) found in the records, samples, as identify finds it."""
+    # Imported here, as the routine pipeline imports this package's back-fit.
+    from hydro_sdp.core.identification.routine import routine_operation
+    from hydro_sdp.core.identification.routine.increments import increment_delay
     longest = max(2, int(round(max_delay / dt)))
-    try:
-        segmentation = segment_records(records, max_delay=longest, rest=rest)
-        if segmentation.experiments:
-            pieces = split_long(segmentation.experiments, 3000, longest)
-            found = estimate_delay(thin(pieces, 100_000), dt, max_delay=longest, rest=rest,
+    segmentation = segment_records(records, max_delay=longest, rest=rest)
+    pieces = thin(split_long(segmentation.experiments, 3000, longest), 100_000)
+    if not routine_operation(records, rest, longest):
+        try:
+            found = estimate_delay(pieces, dt, max_delay=longest, rest=rest,
                                    noise=segmentation.noise_std)
             return found.samples + int(round(found.lag / dt))
-    except HydroSdpError:
-        pass
-    best, best_rss = 1, np.inf
-    for delay in range(1, longest + 1):
-        rows = rows_of(records, delay, rest)
-        drive = rows.drive
-        X = np.column_stack([np.maximum(drive, 0.0), np.minimum(drive, 0.0)])
-        X = X[:, np.any(X != 0.0, axis=0)]
-        if X.shape[1] == 0:
-            raise DataError('the command never leaves rest: nothing drives the joint')
-        rss = base_fit(rows.increment, X)[2]
-        if rss < best_rss:
-            best, best_rss = delay, rss
-    return best
+        except HydroSdpError:
+            pass
+    # Commands that are seldom held have few change windows: the delay of routine operation.
+    return increment_delay(pieces, dt, max_delay=longest, rest=rest).samples
 
 
 def _split(values: FloatArray) -> list[tuple[str, FloatArray]]:
