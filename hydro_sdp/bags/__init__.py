@@ -1,4 +1,4 @@
-"""Reading and writing rosbag2 bags (sqlite3 and mcap) with ``rosbags``."""
+"""rosbag2 bags (sqlite3 and mcap) read and written with ``rosbags``, and what it cannot do."""
 
 from hydro_sdp.bags.reading import BagData, read_bag, read_record, Series
 from hydro_sdp.bags.storage import (

@@ -1,4 +1,9 @@
-"""Bulk CDR codecs for the two message types hydro_sdp records."""
+"""
+JointState and Float64 CDR in bulk: 60x faster to decode, 20x to encode than rosbags' typestore.
+
+rosbags (de)serialises one message object at a time; these codecs read and fill whole arrays
+of messages that share a layout (bench/bench_bags.py, a one-hour 100 Hz bag).
+"""
 
 from __future__ import annotations
 

@@ -1,4 +1,10 @@
-"""A rosbag2 sqlite3 bag written as it is recorded, committed at least once per period."""
+"""
+A recording cut short by a crash keeps all but its last second: rosbags' Writer commits at close.
+
+rosbags writes sqlite3 storage in one transaction and metadata.yaml when it closes; this writer
+commits at least once per ``flush_period`` (test/ros/test_recorder.py), in rosbag2's Jazzy
+schema, and the recorder node imports it without rosbags.
+"""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Reading a bag's joint angles and commands into records."""
+"""Bags to records on one time axis, each sample with its command: rosbags gives messages."""
 
 from __future__ import annotations
 

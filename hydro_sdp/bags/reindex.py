@@ -1,4 +1,9 @@
-"""Rebuild a bag's ``metadata.yaml`` from its sqlite3 storage files (``hydro-sdp reindex``)."""
+"""
+Rebuild ``metadata.yaml`` of a bag whose recorder was killed: rosbags has no reindex.
+
+``hydro-sdp reindex`` and :class:`.live_writer.Sqlite3BagWriter` count the sqlite3 storage
+files' messages per topic, as ``ros2 bag reindex`` does.
+"""
 
 from __future__ import annotations
 

@@ -1,4 +1,10 @@
-"""Finding and opening a bag's storage: folders, storage files, split bags."""
+"""
+Any bag path read one way: rosbags' Reader refuses split files without metadata.yaml.
+
+Each storage source goes to one reader: :mod:`.sqlite_reader` takes sqlite3 storage, rosbags'
+Reader the rest (mcap, compression, what the sqlite3 reader leaves); rosbags' errors become
+one-line ones.
+"""
 
 from __future__ import annotations
 
@@ -7,8 +13,7 @@ import os
 from pathlib import Path
 from typing import Callable, Iterable
 
-from hydro_sdp.bags.plain_sqlite import read_plain
-from hydro_sdp.bags.sqlite_rows import read_rows, TopicRows
+from hydro_sdp.bags.sqlite_reader import read_sqlite
 from hydro_sdp.core.errors import BagError, BagFormatError, BagNotFoundError, BagReadError
 
 JOINT_STATE = 'sensor_msgs/msg/JointState'
@@ -120,63 +125,66 @@ class Collected:
         return sum(len(raws) for raws in self.raws.values())
 
 
-def _collect_rows(collected: Collected, files: list[dict[str, TopicRows]] | None,
-                  progress: Progress | None) -> bool:
-    """Add rows read in bulk; False when there are none (read message by message)."""
-    if files is None:
+def _read_sqlite(source: Path, keep: Callable[[str], bool], collected: Collected,
+                 progress: Progress | None) -> bool:
+    """Read an sqlite3 source in bulk; False when it is left to rosbags."""
+    bag = read_sqlite(source, lambda msgtype: keep(_normalise_type(msgtype)))
+    if bag is None:
         return False
-    for rows in files:
+    collected.declared += bag.declared
+    for topic, msgtype in bag.topics:
+        collected.topics.setdefault(topic, [_normalise_type(msgtype), 0])
+    for rows in bag.files:
         for topic, (stamps, raws) in rows.items():
-            collected.topics[topic][1] += len(raws)
-            collected.stamps.setdefault(topic, []).extend(stamps)
-            collected.raws.setdefault(topic, []).extend(raws)
+            if raws:
+                collected.topics[topic][1] += len(raws)
+                collected.stamps.setdefault(topic, []).extend(stamps)
+                collected.raws.setdefault(topic, []).extend(raws)
         if progress is not None:
             progress(collected.kept)
     return True
+
+
+def _read_with_rosbags(source: Path, keep: Callable[[str], bool], collected: Collected,
+                       progress: Progress | None) -> None:
+    """Read any source rosbags opens (mcap, compressed, what the sqlite3 reader leaves)."""
+    from rosbags.rosbag2 import Reader, ReaderError
+
+    try:
+        with Reader(source) as reader:
+            collected.declared += reader.message_count
+            for connection in reader.connections:
+                msgtype = _normalise_type(connection.msgtype)
+                collected.topics.setdefault(connection.topic, [msgtype, 0])
+            wanted = [c for c in reader.connections if keep(_normalise_type(c.msgtype))]
+            for connection, timestamp, raw in reader.messages(connections=wanted):
+                topic = connection.topic
+                collected.topics[topic][1] += 1
+                collected.stamps.setdefault(topic, []).append(timestamp)
+                collected.raws.setdefault(topic, []).append(raw)
+                if progress is not None and collected.kept % 50_000 == 0:
+                    progress(collected.kept)
+    except ReaderError as error:
+        text = str(error)
+        if 'format' in text.lower() and 'not supported' in text.lower():
+            raise BagFormatError(f'{source}: {text}') from None
+        raise BagReadError(f'{source}: cannot read bag: {text}') from None
+    except BagError:
+        raise
+    except FileNotFoundError as error:
+        raise BagNotFoundError(f'{source}: {error}') from None
+    except Exception as error:  # noqa: B902 - storage libraries raise anything
+        raise BagReadError(
+            f'{source}: cannot read bag ({type(error).__name__}: {error})') from None
 
 
 def _collect_from(sources: Iterable[Path], keep: Callable[[str], bool],
                   progress: Progress | None) -> Collected:
     collected = Collected({}, {}, {})
     for source in sources:
-        plain = read_plain(source, lambda msgtype: keep(_normalise_type(msgtype)))
-        if plain is not None:
-            collected.declared += plain.declared
-            for topic, msgtype in plain.topics:
-                collected.topics.setdefault(topic, [_normalise_type(msgtype), 0])
-            _collect_rows(collected, plain.files, progress)
-            continue
-        from rosbags.rosbag2 import Reader, ReaderError
-
-        try:
-            with Reader(source) as reader:
-                collected.declared += reader.message_count
-                for connection in reader.connections:
-                    msgtype = _normalise_type(connection.msgtype)
-                    collected.topics.setdefault(connection.topic, [msgtype, 0])
-                wanted = [c for c in reader.connections
-                          if keep(_normalise_type(c.msgtype))]
-                if _collect_rows(collected, read_rows(reader, wanted), progress):
-                    continue
-                for connection, timestamp, raw in reader.messages(connections=wanted):
-                    topic = connection.topic
-                    collected.topics[topic][1] += 1
-                    collected.stamps.setdefault(topic, []).append(timestamp)
-                    collected.raws.setdefault(topic, []).append(raw)
-                    if progress is not None and collected.kept % 50_000 == 0:
-                        progress(collected.kept)
-        except ReaderError as error:
-            text = str(error)
-            if 'format' in text.lower() and 'not supported' in text.lower():
-                raise BagFormatError(f'{source}: {text}') from None
-            raise BagReadError(f'{source}: cannot read bag: {text}') from None
-        except BagError:
-            raise
-        except FileNotFoundError as error:
-            raise BagNotFoundError(f'{source}: {error}') from None
-        except Exception as error:  # noqa: B902 - storage libraries raise anything
-            raise BagReadError(
-                f'{source}: cannot read bag ({type(error).__name__}: {error})') from None
+        # The one choice of reader: sqlite3 storage in bulk when it takes the source.
+        if not _read_sqlite(source, keep, collected, progress):
+            _read_with_rosbags(source, keep, collected, progress)
     return collected
 
 
@@ -202,6 +210,8 @@ def collect(path: Path, keep: Callable[[str], bool],
     """
     sources, is_folder = _sources(path)
     collected = _collect_from(sources, keep, progress)
+    # A folder whose metadata names topics its storage files do not match (QoS of another
+    # spelling, in rosbag2's own test bags) reads empty: its storage files are read then.
     if is_folder and collected.kept == 0:
         files = _storage_files(path)
         if files:

@@ -1,4 +1,4 @@
-"""Writing records as a rosbag2 bag (sqlite3 or mcap), whole or not at all."""
+"""Records to bags, whole or not at all: rosbags' Writer leaves a partial folder when it fails."""
 
 from __future__ import annotations
 
