@@ -31,13 +31,14 @@ def test_a_node_in_its_own_context_warns_of_a_best_effort_joint_states():
     rclpy.init(context=context, domain_id=fresh_domain())
     executor = SingleThreadedExecutor(context=context)
     try:
-        node = PipControllerNode(context=context)
+        # The listener first, so that the controller's log finds it already there.
         driver = Node('sensor_driver', context=context)
         warnings = []
         driver.create_subscription(
             Log, '/rosout', lambda log: warnings.append(log.msg) if log.name == node.get_name()
             and 'incompatible QoS' in log.msg else None,
             QoSProfile(depth=100, durability=DurabilityPolicy.TRANSIENT_LOCAL))
+        node = PipControllerNode(context=context)
         driver.create_publisher(JointState, '/joint_states',
                                 QoSProfile(depth=10, reliability=ReliabilityPolicy.BEST_EFFORT))
         executor.add_node(node)
