@@ -23,7 +23,7 @@ def read_text(path: str | os.PathLike[str], error: type[HydroSdpError] = ModelFi
 
     ``kind``: what the file should be, for the message on a directory.
     ``byte_order_mark``: whether a leading byte-order mark is dropped.
-    Raises HydroSdpError: of type ``error``, if the file is missing, a directory, unreadable or not
+    Raises ``error`` (a HydroSdpError) if the file is missing, a directory, unreadable or not
     UTF-8.
     """
     source = Path(path)

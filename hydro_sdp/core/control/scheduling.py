@@ -61,7 +61,7 @@ class FeedbackGate:
         Decide on one sample stamped ``stamp_ns`` arriving at clock reading ``now_ns``.
 
         ``stamp_ns``: stamp of the sample, ns.
-        ``now_ns``: Reader's clock, ns; 0 means simulated time has not started, and the freshness
+        ``now_ns``: reader's clock, ns; 0 means simulated time has not started, and the freshness
         check is skipped.
         ``steady_ns``: a steady clock's reading, ns, for the watchdog (None: not kept).
         Returns: ``ignored`` for a duplicate or overtaken sample (nothing changes), ``accepted``,

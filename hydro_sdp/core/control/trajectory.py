@@ -86,8 +86,8 @@ def check_trajectory(trajectory: JointTrajectory,
 
     ``angle_limits``: end stops of each controlled joint, degrees (``None``: no stops).
     ``margin``: distance kept from the stops, degrees (as :func:`~.safety.setpoint_range`).
-    Raises DataError: one message naming every joint not controlled and every joint whose positions
-    leave the allowed range (its extreme position and the range).
+    Raises DataError with one message naming every joint not controlled and every joint whose
+    positions leave the allowed range (its extreme position and the range).
     """
     unknown = [name for name in trajectory.joint_names if name not in angle_limits]
     beyond = []
@@ -120,7 +120,7 @@ def check_trajectory_speeds(rates: Mapping[str, tuple[float, float]],
     ``rates``: lowest and highest set-point rate of each joint it names, deg/s
     (:meth:`TrajectorySampler.planned_rates`).
     ``top_speeds``: each joint's identified top speeds down (<= 0) and up, deg/s (None: unknown).
-    Raises DataError: one message naming every joint too fast, its rate and its top speed.
+    Raises DataError with one message naming every joint too fast, its rate and its top speed.
     """
     fast = []
     for name, (low, high) in rates.items():

@@ -138,6 +138,8 @@ class SdpEstimate(EstimatedEdges):
     """
     The online estimate of an SDP map by name, with standard deviations.
 
+    Each ``<name>_std`` is the standard deviation of ``<name>``, in its units.
+
     Attributes
     ----------
     dead_zone_lower, dead_zone_upper : float
@@ -146,8 +148,6 @@ class SdpEstimate(EstimatedEdges):
         Saturation speeds, deg/s.
     curvature_negative, curvature_positive : float
         Curvatures, 1/input unit.
-    saturation_positive_std, curvature_negative_std, curvature_positive_std : float
-        Their standard deviations, same units.
 
     """
 

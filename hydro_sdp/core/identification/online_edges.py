@@ -33,14 +33,14 @@ class EdgeEstimate(EstimatedEdges):
     """
     The online estimate of a map's edges and the speeds near them, with standard deviations.
 
+    Each ``<name>_std`` is the standard deviation of ``<name>``, in its units.
+
     Attributes
     ----------
     dead_zone_lower, dead_zone_upper : float
         Dead-zone edges, input units.
     speed_scale_negative, speed_scale_positive : float
         Speeds beyond each edge relative to the model's (1: unchanged).
-    speed_scale_positive_std : float
-        Their standard deviations.
 
     """
 

@@ -61,7 +61,7 @@ def banded_factor(bands: FloatArray) -> FloatArray:
     """
     Return the lower banded Cholesky factor of ``bands`` (lower banded storage).
 
-    Raises LinAlgError: the matrix is not positive definite.
+    Raises LinAlgError if the matrix is not positive definite.
     """
     factor, info = dpbtrf(bands, lower=1)
     if info > 0:
