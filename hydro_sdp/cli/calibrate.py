@@ -147,23 +147,10 @@ def read_inputs(paths: list[str], args: argparse.Namespace, label: str,
     """
     Read bags and CSV logs as records of one joint, with a progress bar.
 
-    Parameters
-    ----------
-    paths : list of str
-        Bags and CSV logs.
-    args : argparse.Namespace
-        The command line (bag and CSV options).
-    label : str
-        Progress bar label.
-    preferred_topic : str or None
-        Command topic used without ``--command-topic`` where a bag has it.
-
-    Returns
-    -------
-    tuple
-        ``(records, topic)``: the command topic every bag was read from, or
-        ``None`` when there are no bags or they used different topics.
-
+    ``label``: progress bar label.
+    ``preferred_topic``: command topic used without ``--command-topic`` where a bag has it.
+    Returns: ``(records, topic)``: the command topic every bag was read from, or ``None`` when
+    there are no bags or they used different topics.
     """
     records = []
     topics: set[str] = set()
@@ -204,23 +191,7 @@ def check_out(out: Path, force: bool) -> None:
 
 
 def ros_parameters(result: CalibrationResult, folder: Path) -> ParameterFile:
-    """
-    Return the ROS 2 parameter file for this joint's nodes.
-
-    Parameters
-    ----------
-    result : CalibrationResult
-        The calibration.
-    folder : Path
-        Final (absolute) output folder, where model.yaml and controller.yaml live.
-
-    Returns
-    -------
-    dict
-        ``/**/pip_controller``, ``/**/hydro_plant`` and ``/**/sdp_identifier``, with
-        the values that differ from the defaults.
-
-    """
+    """Return the ROS 2 parameter file for this joint's nodes."""
     model_file = str(folder / 'model.yaml')
     dt = result.identification.sample_period
     plant: dict[str, ParameterValue] = {'model_file': model_file}

@@ -97,22 +97,7 @@ def to_json(value: object) -> Json:
 
 
 def table(rows: list[list[str]], header: list[str]) -> list[str]:
-    """
-    Format rows as a plain-text table with aligned columns.
-
-    Parameters
-    ----------
-    rows : list of list of str
-        Cells.
-    header : list of str
-        Column titles.
-
-    Returns
-    -------
-    list of str
-        Lines of the table.
-
-    """
+    """Format rows as a plain-text table with aligned columns."""
     widths = [max(len(str(row[i])) for row in [header] + rows) for i in range(len(header))]
     lines = ['  '.join(str(cell).ljust(width) for cell, width in zip(header, widths)).rstrip(),
              '  '.join('-' * width for width in widths)]
@@ -127,31 +112,16 @@ def read_records(bags: list[str], joint: str | None, command_topic: str | None,
     """
     Read one joint's record from each bag, cut at gaps in its time stamps, with a progress bar.
 
-    Parameters
-    ----------
-    bags : list of str
-        Bag paths.
-    joint : str or None
-        Joint name (default: the only joint of each bag).
-    command_topic : str or None
-        Command topic (default: ``preferred_topic`` where the bag has it, else the
-        only ``valve_command`` topic).
-    label : str
-        Progress bar label.
-    preferred_topic : str or None
-        Topic remembered by a model file (its ``command_topic``).
-    load_topic : str or None
-        Float64 topic of a measured load, carried as the records' ``load``.
-    others : bool
-        Carry the other joints' angles of the JointState as the records' ``others``
-        (what ``flow_sharing`` needs).
-
-    Returns
-    -------
-    list of Record
-        One per bag, or several where a stalled recording left a hole
-        (:func:`hydro_sdp.core.model.records.split_at_gaps`).
-
+    ``joint``: joint name (default: the only joint of each bag).
+    ``command_topic``: command topic (default: ``preferred_topic`` where the bag has it, else the
+    only ``valve_command`` topic).
+    ``label``: progress bar label.
+    ``preferred_topic``: topic remembered by a model file (its ``command_topic``).
+    ``load_topic``: Float64 topic of a measured load, carried as the records' ``load``.
+    ``others``: carry the other joints' angles of the JointState as the records' ``others`` (what
+    ``flow_sharing`` needs).
+    Returns: one per bag, or several where a stalled recording left a hole
+    (:func:`hydro_sdp.core.model.records.split_at_gaps`).
     """
     return read_records_and_topic(bags, joint, command_topic, label,
                                   preferred_topic=preferred_topic, load_topic=load_topic,
@@ -172,27 +142,12 @@ def read_records_and_topic(bags: list[str], joint: str | None, command_topic: st
     """
     Read records as :func:`read_records` does, and name the command topic they came from.
 
-    Parameters
-    ----------
-    bags : list of str
-        Bag paths.
-    joint : str or None
-        Joint name (default: the only joint of each bag).
-    command_topic : str or None
-        Command topic asked for by the user.
-    label : str
-        Progress bar label.
-    preferred_topic : str or None
-        Topic used when ``command_topic`` is None and the bag has it.
-    load_topic, others
-        As :func:`read_records`.
-
-    Returns
-    -------
-    tuple
-        ``(records, topic)``: the topic every bag was read from, or ``None`` when
-        the bags used different topics.
-
+    ``joint``: joint name (default: the only joint of each bag).
+    ``command_topic``: command topic asked for by the user.
+    ``label``: progress bar label.
+    ``preferred_topic``: topic used when ``command_topic`` is None and the bag has it.
+    Returns: ``(records, topic)``: the topic every bag was read from, or ``None`` when the bags
+    used different topics.
     """
     from hydro_sdp.cli.progress import ProgressBar
 
@@ -215,19 +170,8 @@ def read_bag_records(bag: str, joint: str | None, command_topic: str | None, *,
     """
     Read one joint's record from one bag, cut at gaps in its time stamps.
 
-    Parameters
-    ----------
-    bag : str
-        Bag path.
-    joint, command_topic, preferred_topic, load_topic, others
-        As :func:`read_records_and_topic`.
-
-    Returns
-    -------
-    tuple
-        ``(pieces, topic)``: the record, or its pieces where a stalled recording
-        left a hole, and the command topic read.
-
+    Returns: ``(pieces, topic)``: the record, or its pieces where a stalled recording left a hole,
+    and the command topic read.
     """
     from hydro_sdp.bags import read_bag
     from hydro_sdp.core.model.records import split_at_gaps

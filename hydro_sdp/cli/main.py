@@ -43,18 +43,9 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
     """
     Build the argument parser with every command.
 
-    Parameters
-    ----------
-    only : str or None
-        Give only this command its options and description; the others are listed by name, and with
-        their one-line help (all ``hydro-sdp --help`` shows) unless ``only`` names a command;
-        default: every command in full.
-
-    Returns
-    -------
-    argparse.ArgumentParser
-        The parser.
-
+    ``only``: give only this command its options and description; the others are listed by name,
+    and with their one-line help (all ``hydro-sdp --help`` shows) unless ``only`` names a command;
+    default: every command in full.
     """
     parser = argparse.ArgumentParser(
         prog='hydro-sdp', description=DESCRIPTION,
@@ -118,16 +109,7 @@ def main(argv: list[str] | None = None) -> int:
     """
     Run one ``hydro-sdp`` command.
 
-    Parameters
-    ----------
-    argv : list of str or None
-        Arguments without the program name; default ``sys.argv[1:]``.
-
-    Returns
-    -------
-    int
-        Exit code.
-
+    ``argv``: arguments without the program name; default ``sys.argv[1:]``.
     """
     with _Interrupts() as interrupts:
         return _main(argv, interrupts)

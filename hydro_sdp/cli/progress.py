@@ -12,17 +12,9 @@ class ProgressBar:
     """
     Text progress bar: ``label [#####.....]  52%  3.1 s``.
 
-    Parameters
-    ----------
-    label : str
-        What is being done.
-    total : float
-        Amount of work at 100 %.
-    stream : TextIO or None
-        Where to draw; default ``sys.stderr``.
-    delay : float
-        Seconds before the bar first appears.
-
+    ``total``: amount of work at 100 %.
+    ``stream``: where to draw; default ``sys.stderr``.
+    ``delay``: seconds before the bar first appears.
     """
 
     def __init__(self, label: str, total: float, *, stream: TextIO | None = None,
@@ -38,17 +30,7 @@ class ProgressBar:
         self._last = 0.0
 
     def update(self, done: float, *, force: bool = False) -> None:
-        """
-        Show that ``done`` of ``total`` is finished.
-
-        Parameters
-        ----------
-        done : float
-            Work finished so far.
-        force : bool
-            Draw even if the last drawing was very recent.
-
-        """
+        """Show that ``done`` of ``total`` is finished."""
         if not self.enabled:
             return
         now = time.monotonic()

@@ -94,32 +94,11 @@ def simulate_trajectory(models: list[JointModel], specs: list[ControllerSpec],
     """
     Run the joints through the trajectory and measure how well they follow it.
 
-    Parameters
-    ----------
-    models, specs : list
-        Joint models and their controllers, same order, one control period.
-    plan : TrajectoryFile
-        The trajectory (and line).
-    dt : float
-        Plant sample period, s.
-    start_at, settle : float
-        Start of the trajectory and time simulated after its end, s.
-    feedforward : bool
-        Whether the set-point rate is fed forward.
-    noise_std : float
-        Angle measurement noise, degrees.
-    seed : int
-        Noise seed.
-    margin : float
-        Set-point margin inside the end stops, degrees.
-    bar : ProgressBar or None
-        Progress.
-
-    Returns
-    -------
-    TrajectoryRun
-        Traces and figures.
-
+    ``models``, ``specs``: joint models and their controllers, same order, one control period.
+    ``dt``: plant sample period, s.
+    ``start_at``, ``settle``: start of the trajectory and time simulated after its end, s.
+    ``noise_std``: angle measurement noise, degrees.
+    ``margin``: set-point margin inside the end stops, degrees.
     """
     check_trajectory(plan.trajectory, {m.joint: m.angle_limits for m in models}, margin)
     periods = {spec.control_period for spec in specs}

@@ -37,7 +37,7 @@ class CalibrationSettings:
     """
     Choices of a calibration.
 
-    Parameters
+    Attributes
     ----------
     rest : float or None
         Rest command to identify with (default: what ``identify`` finds).
@@ -46,17 +46,13 @@ class CalibrationSettings:
     angle_limits : tuple[float, float] or None
         Known end stops, degrees (default: those seen in the data).
     control_period : float
-        Control period asked for, s; the controller runs at the nearest whole
-        multiple of the records' sample period (:func:`.sample_period.control_period_on`).
+        Control period asked for, s; the controller runs at the nearest whole multiple of the
+        records' sample period (:func:`.sample_period.control_period_on`).
     poles : tuple[complex, ...] or None
-        Closed-loop poles to start from (default: the LQ design); fewer than the
-        design needs (``1 +`` the delay in control samples) are completed with
-        poles at 0.
-    iterations : int
-        Most effects the diagnosis adds.
+        Closed-loop poles to start from (default: the LQ design); fewer than the design needs
+        (``1 +`` the delay in control samples) are completed with poles at 0.
     check : CheckSettings or None
-        The closed-loop check (default: :class:`CheckSettings` at the records'
-        sample period).
+        The closed-loop check (default: :class:`CheckSettings` at the records' sample period).
 
     """
 
@@ -74,12 +70,10 @@ class DesignFigures:
     """
     One design's closed-loop figures, for the trade of settling against chatter.
 
-    Parameters
+    Attributes
     ----------
     fade : float
         The IDZ's fade-in band, degrees per control sample (0: the chatter band alone).
-    passed : bool
-        Whether its check passed.
     settling : tuple[float, float]
         Shortest and longest settling time of the steps, s.
     overshoot : float
@@ -116,28 +110,14 @@ class CalibrationResult:
     """
     Everything a calibration found.
 
-    Parameters
+    Attributes
     ----------
-    identification : Identification
-        The identification and its evidence.
     validation_note : str
         Which records the MAE is measured on (given, held out, or in-sample).
-    estimation, validation : tuple[Record, ...]
-        The records identified from and evaluated on.
     scores_identified, scores_final : tuple[RecordScore, ...]
         Table-2 scores of the identified and the final model on the validation records.
-    diagnosis : Diagnosis
-        The named effects.
-    spec : ControllerSpec
-        The controller written (the last design tried).
-    check : LoopCheck
-        Its closed-loop check on the final model.
-    designs : tuple[tuple[str, ...], ...]
-        Poles of every design tried, first to last.
     stroke : tuple[float, float]
         Angle range the check stepped across, degrees.
-    warnings : tuple[str, ...]
-        What the user should know, one line each.
     forms : tuple[str, ...]
         IDZ form of every design tried (``chord`` or ``table``), first to last.
     obstacles : tuple[Obstacle, ...]
@@ -145,8 +125,8 @@ class CalibrationResult:
     control : ControlPeriod or None
         The control period, as whole samples of the records' period.
     trade : tuple[DesignFigures, ...]
-        When the IDZ pulsed at hold: the design with the chatter band alone, then the
-        one whose compensation fades in (settling against chatter); else empty.
+        When the IDZ pulsed at hold: the design with the chatter band alone, then the one whose
+        compensation fades in (settling against chatter); else empty.
     fades : tuple[float, ...]
         IDZ fade-in band of every design tried, first to last (0: none).
     plausible : PlausibleCheck or None
@@ -212,17 +192,9 @@ def split_records(records: Sequence[Record]) -> tuple[list[Record], list[Record]
     """
     Hold out whole recordings for validation: every third one, at least one of two.
 
-    Parameters
-    ----------
-    records : sequence of Record
-        The inputs, in the order given.
-
-    Returns
-    -------
-    tuple
-        ``(estimation, validation, note)``; with one recording both are all of its
-        records and the note says the MAE is in-sample.
-
+    ``records``: the inputs, in the order given.
+    Returns: ``(estimation, validation, note)``; with one recording both are all of its records and
+    the note says the MAE is in-sample.
     """
     # A record without a source is a recording of its own.
     keys = [record.source or f'#{index}' for index, record in enumerate(records)]

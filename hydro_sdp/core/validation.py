@@ -54,28 +54,7 @@ def require_float_list(value: object, key: str) -> tuple[float, ...]:
 
 def read_document(data: object, what: str, file_format: str, known: Collection[str],
                   required: Collection[str] = ()) -> Document:
-    """
-    Return a parsed file as a mapping with known keys, the required ones and the right format.
-
-    Parameters
-    ----------
-    data : object
-        The parsed YAML document.
-    what : str
-        What the file is, for the message, e.g. ``'a model file'``.
-    file_format : str
-        The value the ``format`` key must have.
-    known : collection of str
-        The keys the file may have.
-    required : collection of str
-        The keys it must have (a missing ``format`` not named is a wrong format).
-
-    Returns
-    -------
-    Document
-        The document.
-
-    """
+    """Return a parsed file as a mapping with known keys, the required ones, the right format."""
     if not isinstance(data, Mapping):
         raise ModelFileError(f'{what} must be a mapping of keys, got {type(data).__name__}')
     _check_keys(data, known, required)

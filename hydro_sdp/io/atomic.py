@@ -44,22 +44,7 @@ def interrupts_deferred() -> Iterator[None]:
 
 
 def atomic_write_bytes(path: str | os.PathLike[str], data: bytes) -> Path:
-    """
-    Write ``data`` to ``path`` so that the file appears whole or not at all.
-
-    Parameters
-    ----------
-    path : str or PathLike
-        Target file; its folder is created if missing.
-    data : bytes
-        Content.
-
-    Returns
-    -------
-    Path
-        The target path.
-
-    """
+    """Write ``data`` to ``path`` so that the file appears whole or not at all."""
     target = Path(path)
     if target.is_dir():
         raise IsADirectoryError(f'{target} is a directory')
@@ -91,20 +76,7 @@ def atomic_write_text(path: str | os.PathLike[str], text: str) -> Path:
 
 @contextmanager
 def atomic_directory(path: str | os.PathLike[str]) -> Iterator[Path]:
-    """
-    Build a directory under a temporary name and move it to ``path`` when done.
-
-    Parameters
-    ----------
-    path : str or PathLike
-        Final directory.
-
-    Yields
-    ------
-    Path
-        Where to build the directory.
-
-    """
+    """Build a directory under a temporary name and move it to ``path`` when done."""
     target = Path(path)
     if target.exists() and not target.is_dir():
         raise FileExistsError(f'{target} exists and is not a directory')

@@ -21,27 +21,10 @@ def read_text(path: str | os.PathLike[str], error: type[HydroSdpError] = ModelFi
     """
     Read a whole UTF-8 text file; each failure is one line naming the file.
 
-    Parameters
-    ----------
-    path : str or PathLike
-        File to read.
-    error : type of HydroSdpError
-        The error raised.
-    kind : str
-        What the file should be, for the message on a directory.
-    byte_order_mark : bool
-        Whether a leading byte-order mark is dropped.
-
-    Returns
-    -------
-    str
-        The text.
-
-    Raises
-    ------
-    HydroSdpError
-        Of type ``error``, if the file is missing, a directory, unreadable or not UTF-8.
-
+    ``kind``: what the file should be, for the message on a directory.
+    ``byte_order_mark``: whether a leading byte-order mark is dropped.
+    Raises ``error`` (a HydroSdpError) if the file is missing, a directory, unreadable or not
+    UTF-8.
     """
     source = Path(path)
     if source.is_dir():
@@ -60,22 +43,9 @@ def load_yaml(path: str | os.PathLike[str]) -> object:
     """
     Read a YAML document with safe loading.
 
-    Parameters
-    ----------
-    path : str or PathLike
-        File to read.
-
-    Returns
-    -------
-    object
-        The parsed document, for a validator to check (mappings, lists, strings,
-        numbers, booleans or None).
-
-    Raises
-    ------
-    ModelFileError
-        If the file is missing, a directory, empty or not YAML.
-
+    Returns: the parsed document, for a validator to check (mappings, lists, strings, numbers,
+    booleans or None).
+    Raises ModelFileError if the file is missing, a directory, empty or not YAML.
     """
     source = Path(path)
     text = read_text(source)
@@ -104,20 +74,7 @@ def yaml_text(data: Mapping[str, object]) -> str:
 
 
 def shipped_config(name: str) -> Path:
-    """
-    Path of a file shipped in the package's ``config`` folder.
-
-    Parameters
-    ----------
-    name : str
-        File name, e.g. ``brokk_j2.yaml``.
-
-    Returns
-    -------
-    Path
-        The file.
-
-    """
+    """Path of a file shipped in the package's ``config`` folder."""
     candidates = [SOURCE_CONFIG / name]
     try:
         from ament_index_python.packages import get_package_share_directory

@@ -22,12 +22,10 @@ class TrajectoryFile:
     """
     What a trajectory file asks for.
 
-    Parameters
+    Attributes
     ----------
     trajectory : JointTrajectory
         The joint trajectory (for a line: dense points on it).
-    arm : TwoLinkArm or None
-        The kinematics of a line file.
     line : tuple of two (x, z) points or None
         Ends of the tip line, m.
 
@@ -39,20 +37,7 @@ class TrajectoryFile:
 
 
 def load_kinematics(path: str | os.PathLike[str]) -> TwoLinkArm:
-    """
-    Load a kinematics file (``hydro_sdp/kinematics/v1``); errors name the file and the key.
-
-    Parameters
-    ----------
-    path : str or PathLike
-        File.
-
-    Returns
-    -------
-    TwoLinkArm
-        The arm.
-
-    """
+    """Load a kinematics file (``hydro_sdp/kinematics/v1``); errors name the file and the key."""
     data = load_yaml(path)
     try:
         return TwoLinkArm.from_mapping(data)

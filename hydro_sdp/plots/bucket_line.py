@@ -43,30 +43,15 @@ def plot_bucket_line(x: FloatArray, z: FloatArray,
     """
     Draw the bucket tip against its straight line, the path error and each joint's tracking.
 
-    Parameters
-    ----------
-    x, z : FloatArray
-        Tip at every plant sample, m (``traces[0].t`` is the time).
-    line : tuple of two (x, z) points
-        Start and end of the demanded line, m.
-    path_error_mm : FloatArray
-        Distance of the tip from the line at every sample, mm.
-    traces : sequence of LoopTrace
-        The joints' traces (boom, dipper), angles in degrees.
-    motion : tuple[float, float]
-        Start and end of the motion along the line, s (shaded).
-    magnify : float
-        Factor the tip's sideways deviation from the line is drawn at in the
-        path panel (a millimetre error is invisible on a metre line).
-    title : str
-        Figure title.
-
-    Returns
-    -------
-    Figure
-        Top: the tip path in the arm's plane (equal scales) and the path error in mm against time;
-        below, the demanded and actual angle of each joint (as the paper's Fig. 7 (a) and (b)).
-
+    ``x``, ``z``: tip at every plant sample, m (``traces[0].t`` is the time).
+    ``line``: start and end of the demanded line, m.
+    ``path_error_mm``: distance of the tip from the line at every sample, mm.
+    ``traces``: the joints' traces (boom, dipper), angles in degrees.
+    ``motion``: start and end of the motion along the line, s (shaded).
+    ``magnify``: factor the tip's sideways deviation from the line is drawn at in the path panel (a
+    millimetre error is invisible on a metre line).
+    Returns: top: the tip path in the arm's plane (equal scales) and the path error in mm against
+    time; below, the demanded and actual angle of each joint (as the paper's Fig. 7 (a) and (b)).
     """
     rows = 1 + (len(traces) + 1) // 2
     figure = Figure(figsize=(11.0, 0.6 + 3.4 * rows), layout='constrained')

@@ -28,26 +28,10 @@ def plot_idz(model: JointModel, idz: InverseDeadZone, control_period: float, *,
     """
     IDZ approximation, as the paper's Fig. 6.
 
-    Parameters
-    ----------
-    model : JointModel
-        The joint.
-    idz : InverseDeadZone
-        The inverse dead-zone of the controller.
-    control_period : float
-        Control period, s.
-    u_limits : tuple[float, float] or None
-        Limits of the controller's ``u``, drawn as dotted lines.
-    v_range : tuple[float, float] or None
-        Command range to draw; default: to where the model saturates (99 %).
-    command_unit : str or None
-        Unit of the command; default: from the model's input range.
-
-    Returns
-    -------
-    Figure
-        The figure.
-
+    ``control_period``: control period, s.
+    ``u_limits``: limits of the controller's ``u``, drawn as dotted lines.
+    ``v_range``: command range to draw; default: to where the model saturates (99 %).
+    ``command_unit``: unit of the command; default: from the model's input range.
     """
     figure, (ax,) = new_figure(1, height=4.2, width=7.5)
     low, high = idz.dead_zone
@@ -86,24 +70,8 @@ def plot_idz_table(model: JointModel, table: TableInverseDeadZone, chord: Invers
     """
     Draw the map's table IDZ next to the paper's chord IDZ, and the loop gain each leaves.
 
-    Parameters
-    ----------
-    model : JointModel
-        The joint.
-    table : TableInverseDeadZone
-        The table IDZ.
-    chord : InverseDeadZone
-        The chord IDZ of the same model, for comparison.
-    control_period : float
-        Control period, s.
-    command_unit : str or None
-        Unit of the command; default: from the model's input range.
-
-    Returns
-    -------
-    Figure
-        The figure.
-
+    ``control_period``: control period, s.
+    ``command_unit``: unit of the command; default: from the model's input range.
     """
     figure, (ax, gain_ax) = new_figure(2, height=3.4, width=7.5, sharex=False)
     v = np.linspace(table.v[0], table.v[-1], 1201)
@@ -140,27 +108,12 @@ def plot_closed_loop(traces: Sequence[LoopTrace], *, title: str = '',
     """
     Closed-loop response, as the paper's Fig. 7: angle, u and v against time.
 
-    Parameters
-    ----------
-    traces : sequence of LoopTrace
-        One or more joints' traces.
-    title : str
-        Figure title.
-    command_unit : str or None
-        Unit of the valve command (default: ``input units``; see
-        :func:`~hydro_sdp.plots.units.command_unit_of` for a model's).
-    valve : tuple or None
-        ``(edges, rest)`` of the valve's dead-zone: its edges are drawn and the
-        valve's pulses across it at hold marked (methods.md section 5.7).
-    worst : tuple or None
-        ``(trace, name)``: the same controller on the worst of the models the data do not
-        rule out (methods.md section 5.8), drawn beside the first trace.
-
-    Returns
-    -------
-    Figure
-        The figure.
-
+    ``command_unit``: unit of the valve command (default: ``input units``; see
+    :func:`~hydro_sdp.plots.units.command_unit_of` for a model's).
+    ``valve``: ``(edges, rest)`` of the valve's dead-zone: its edges are drawn and the valve's
+    pulses across it at hold marked (methods.md section 5.7).
+    ``worst``: ``(trace, name)``: the same controller on the worst of the models the data do not
+    rule out (methods.md section 5.8), drawn beside the first trace.
     """
     # Joints at different angles hide each other's errors: give them a panel of their own.
     several = len(traces) > 1
@@ -213,26 +166,11 @@ def plot_recalibration(t: np.ndarray, angle: np.ndarray, setpoint: np.ndarray,
     """
     Draw a loop whose dead-zone drifts and whose IDZ the identifier recalibrates.
 
-    Parameters
-    ----------
-    t : numpy.ndarray
-        Time, s.
-    angle, setpoint : numpy.ndarray
-        Joint angle and set-point, degrees.
-    command : numpy.ndarray
-        Valve command, input units.
-    edges : numpy.ndarray
-        ``(samples, 2)`` IDZ edges the controller used, input units.
-    drift : float
-        Time the plant's dead-zone moved, s.
-    command_unit : str
-        Unit of the command (the recalibration scenario runs the J2 joint, in V).
-
-    Returns
-    -------
-    Figure
-        The figure.
-
+    ``angle``, ``setpoint``: joint angle and set-point, degrees.
+    ``command``: valve command, input units.
+    ``edges``: ``(samples, 2)`` IDZ edges the controller used, input units.
+    ``drift``: time the plant's dead-zone moved, s.
+    ``command_unit``: unit of the command (the recalibration scenario runs the J2 joint, in V).
     """
     figure, (angle_ax, command_ax, edge_ax) = new_figure(3, height=2.3)
     angle_ax.plot(t, setpoint, color=LIMIT, linestyle='--', linewidth=1.0, label='set-point')

@@ -42,20 +42,10 @@ def plot_signature(signature: Signature, *, command_unit: str | None = None) -> 
     """
     Draw the residual signature that named an effect, before and after adding it.
 
-    Parameters
-    ----------
-    signature : Signature
-        Residuals before and after, and what they are drawn against (from
-        :attr:`hydro_sdp.core.diagnosis.Diagnosis.signature`).
-    command_unit : str or None
-        Unit of the command, added to the label when the residual is drawn
-        against it (default: none added).
-
-    Returns
-    -------
-    Figure
-        The figure.
-
+    ``signature``: residuals before and after, and what they are drawn against (from
+    :attr:`hydro_sdp.core.diagnosis.Diagnosis.signature`).
+    ``command_unit``: unit of the command, added to the label when the residual is drawn against it
+    (default: none added).
     """
     figure, (ax,) = new_figure(1, height=3.8, width=8.0)
     dt = signature.dt
@@ -104,24 +94,7 @@ def _plot_by_direction(ax: Axes, signature: Signature) -> None:
 
 def plot_gap(t: FloatArray, measured: FloatArray, before: FloatArray, after: FloatArray, *,
              title: str = '') -> Figure:
-    """
-    Measured angle against the model before and after the named effects.
-
-    Parameters
-    ----------
-    t : numpy.ndarray
-        Time, s.
-    measured, before, after : numpy.ndarray
-        Angles, degrees.
-    title : str
-        Figure title.
-
-    Returns
-    -------
-    Figure
-        The figure.
-
-    """
+    """Measured angle against the model before and after the named effects."""
     figure, (angle_ax, error_ax) = new_figure(2, height=2.8)
     time = t - t[0]
     angle_ax.plot(time, measured, color='black', linewidth=1.6, label='measured')
@@ -144,18 +117,7 @@ def plot_ledger(mae_start: float, steps: Sequence[LedgerStep]) -> Figure:
     """
     Draw the validation MAE after each effect added (the gap ledger).
 
-    Parameters
-    ----------
-    mae_start : float
-        MAE of the model given, degrees.
-    steps : sequence of LedgerStep
-        The effects added in turn.
-
-    Returns
-    -------
-    Figure
-        The figure.
-
+    ``mae_start``: MAE of the model given, degrees.
     """
     figure, (ax,) = new_figure(1, height=3.2, width=7.0)
     labels = ['model given'] + [f'+ {step.effect}' for step in steps]
@@ -174,18 +136,9 @@ def plot_record_scales(candidate: Candidate) -> Figure | None:
     """
     Draw each record's speed scale per direction with its error bars (``load_dependence``).
 
-    Parameters
-    ----------
-    candidate : Candidate
-        The ``load_dependence`` candidate; its parameters hold ``scales_positive``,
-        ``errors_positive`` and the same for ``negative`` (None where a record does not move that
-        way).
-
-    Returns
-    -------
-    Figure or None
-        The figure, or None when the candidate holds no scales.
-
+    ``candidate``: the ``load_dependence`` candidate; its parameters hold ``scales_positive``,
+    ``errors_positive`` and the same for ``negative`` (None where a record does not move that way).
+    Returns: the figure, or None when the candidate holds no scales.
     """
     if 'scales_positive' not in candidate.parameters:
         return None

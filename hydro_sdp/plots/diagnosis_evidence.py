@@ -16,19 +16,10 @@ def plot_state_evidence(evidence: StateEvidence, *, command_unit: str | None = N
     """
     Draw what the model misses along the state that named the effect, before and after.
 
-    Parameters
-    ----------
-    evidence : StateEvidence
-        The SDP estimates of the model given and of the model with the effect.
-    command_unit : str or None
-        Unit of the command, for the axis label.
-
-    Returns
-    -------
-    Figure
-        One panel for the ratio (each direction its colour), one for the residual;
-        before solid with its band, after dashed with its band.
-
+    ``evidence``: the SDP estimates of the model given and of the model with the effect.
+    ``command_unit``: unit of the command, for the axis label.
+    Returns: one panel for the ratio (each direction its colour), one for the residual; before
+    solid with its band, after dashed with its band.
     """
     parameters = [p for p in ('ratio', 'residual')
                   if any(e.parameter == p for e in evidence.before + evidence.after)]
@@ -53,22 +44,7 @@ def plot_state_evidence(evidence: StateEvidence, *, command_unit: str | None = N
 
 
 def plot_candidates(candidates: Sequence[Candidate], named: str) -> Figure:
-    """
-    Draw what every word of the vocabulary explains on held-out data, and how sure that is.
-
-    Parameters
-    ----------
-    candidates : sequence of Candidate
-        The candidates of the first round, ranked.
-    named : str
-        The word named (``none``: nothing).
-
-    Returns
-    -------
-    Figure
-        The figure.
-
-    """
+    """Draw what every word of the vocabulary explains on held-out data, and how sure that is."""
     shown = [c for c in candidates if c.applicable]
     figure, (size_ax, z_ax) = new_figure(2, height=2.6, width=8.0)
     place = np.arange(len(shown))

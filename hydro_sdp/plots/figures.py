@@ -31,22 +31,8 @@ def new_figure(rows: int = 1, *, height: float = 2.6, width: float = 9.0,
     """
     Create a figure with ``rows`` stacked axes sharing the time axis.
 
-    Parameters
-    ----------
-    rows : int
-        Number of stacked subplots.
-    height : float
-        Height of each subplot, inches.
-    width : float
-        Figure width, inches.
-    sharex : bool
-        Whether the subplots share their x axis.
-
-    Returns
-    -------
-    tuple
-        The figure and a list of its axes.
-
+    ``sharex``: whether the subplots share their x axis.
+    Returns: the figure and a list of its axes.
     """
     figure = Figure(figsize=(width, height * rows + 0.6), layout='constrained')
     FigureCanvasAgg(figure)

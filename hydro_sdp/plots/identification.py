@@ -25,25 +25,10 @@ def plot_record(record: Record, model: JointModel | None = None, *,
     """
     Angle (upper) and command (lower) against time, as the paper's Fig. 4.
 
-    Parameters
-    ----------
-    record : Record
-        Measured (or simulated) data.
-    model : JointModel or None
-        Marks end stops and the dead-zone when given.
-    simulated : numpy.ndarray or None
-        Model response to overlay on the angle, degrees.
-    title : str
-        Figure title.
-    command_unit : str or None
-        Unit of the command, for the axis label; default: from the model's input
-        range (:func:`~hydro_sdp.plots.units.command_unit_of`).
-
-    Returns
-    -------
-    Figure
-        The figure.
-
+    ``model``: marks end stops and the dead-zone when given.
+    ``simulated``: model response to overlay on the angle, degrees.
+    ``command_unit``: unit of the command, for the axis label; default: from the model's input
+    range (:func:`~hydro_sdp.plots.units.command_unit_of`).
     """
     figure, (angle_ax, command_ax) = new_figure(2)
     time = record.t - record.t[0]
@@ -74,26 +59,10 @@ def plot_velocity_map(model: JointModel, *, v_range: tuple[float, float] | None 
     """
     Angular velocity against steady command, as the paper's Fig. 3.
 
-    Parameters
-    ----------
-    model : JointModel
-        The joint; its map is drawn, with dead-zone and saturation marked.
-    v_range : tuple[float, float] or None
-        Command range; default: the input limits, or +-5 units.
-    title : str
-        Figure title.
-    command_unit : str or None
-        Unit of the command; default: from the model's input range.
-    points : tuple of array_like or None
-        Per-experiment ``(v, velocity)`` estimates to show as circles.
-    points_label : str
-        What the points are, for the legend.
-
-    Returns
-    -------
-    Figure
-        The figure.
-
+    ``model``: the joint; its map is drawn, with dead-zone and saturation marked.
+    ``v_range``: command range; default: the input limits, or +-5 units.
+    ``command_unit``: unit of the command; default: from the model's input range.
+    ``points``: per-experiment ``(v, velocity)`` estimates to show as circles.
     """
     figure, (ax,) = new_figure(1, height=4.0, width=7.0)
     low, high = v_range or model.input_limits or (-5.0, 5.0)
@@ -118,22 +87,9 @@ def plot_step_responses(experiments: Sequence[Experiment], delay: int, dt: float
     """
     Step responses and differenced angles against sample, as the paper's Fig. 1.
 
-    Parameters
-    ----------
-    experiments : sequence of Experiment
-        Experiments; only steps are drawn, each normalised to start at 0.
-    delay : int
-        Estimated delay, samples, drawn dashed.
-    dt : float
-        Sample period, s.
-    title : str
-        Figure title.
-
-    Returns
-    -------
-    Figure
-        The figure.
-
+    ``experiments``: experiments; only steps are drawn, each normalised to start at 0.
+    ``delay``: estimated delay, samples, drawn dashed.
+    ``dt``: sample period, s.
     """
     figure, (angle_ax, step_ax) = new_figure(2, height=2.8)
     steps = [e for e in experiments if e.kind == 'step']
@@ -165,29 +121,11 @@ def plot_gains(points: Sequence[LevelSpeed], model: JointModel, dt: float, *, re
     """
     State-dependent gain against command, as the paper's Fig. 2.
 
-    Parameters
-    ----------
-    points : sequence of LevelSpeed
-        Per-experiment gains ``b_tau``.
-    model : JointModel
-        The identified model; its ``b_tau(v) = dt rate(v) / (v - rest)`` is drawn.
-    dt : float
-        Sample period, s.
-    rest : float
-        Rest command.
-    command_unit : str or None
-        Unit of the command; default: from the model's input range.
-    measured : sequence of StateDependence
-        The gain estimated along the delayed command without a map family (the SDP
-        analysis, one entry per direction), drawn with its +-2 standard-error band.
-    points_label : str
-        What the points are, for the legend.
-
-    Returns
-    -------
-    Figure
-        The figure.
-
+    ``model``: the identified model; its ``b_tau(v) = dt rate(v) / (v - rest)`` is drawn.
+    ``dt``: sample period, s.
+    ``command_unit``: unit of the command; default: from the model's input range.
+    ``measured``: the gain estimated along the delayed command without a map family (the SDP
+    analysis, one entry per direction), drawn with its +-2 standard-error band.
     """
     figure, (ax,) = new_figure(1, height=4.0, width=7.0)
     for entry in measured:

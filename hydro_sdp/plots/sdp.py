@@ -37,17 +37,7 @@ def draw_dependence(ax: Axes, entry: StateDependence, *, label: str | None = Non
     """
     Draw one parameter against its state: the estimate, its +-2 SE band, its constant.
 
-    Parameters
-    ----------
-    ax : Axes
-        Where to draw.
-    entry : StateDependence
-        The parameter along the state.
-    label : str or None
-        Legend label; default: its direction, share and significance.
-    constant : bool
-        Also draw the parameter held constant (dashed).
-
+    ``label``: legend label; default: its direction, share and significance.
     """
     colour = DIRECTION_COLOURS.get(entry.direction, MEASURED)
     values, estimate, se = entry.values, entry.estimate, entry.se
@@ -76,22 +66,7 @@ def plot_state(analysis: SdpAnalysis, state: str, *, command_unit: str | None = 
     """
     Draw every parameter of the analysis against one state.
 
-    Parameters
-    ----------
-    analysis : SdpAnalysis
-        The analysis.
-    state : str
-        The state.
-    command_unit : str or None
-        Unit of the command, for the axis label.
-    title : str
-        Figure title.
-
-    Returns
-    -------
-    Figure
-        The figure.
-
+    ``command_unit``: unit of the command, for the axis label.
     """
     gains = [e for e in analysis.states if e.state == state]
     residual = [e for e in analysis.residual if e.state == state]
@@ -121,18 +96,7 @@ def plot_shares(analysis: SdpAnalysis, *, title: str = '') -> Figure:
     """
     Draw the share of the squared residual each state explains, per direction.
 
-    Parameters
-    ----------
-    analysis : SdpAnalysis
-        The analysis.
-    title : str
-        Figure title.
-
-    Returns
-    -------
-    Figure
-        The figure: one bar per state and direction, hatched when not significant.
-
+    Returns: the figure: one bar per state and direction, hatched when not significant.
     """
     entries: Sequence[StateDependence] = analysis.states
     figure, (ax,) = new_figure(1, height=0.35 * max(len(entries), 3) + 1.0, width=7.0)

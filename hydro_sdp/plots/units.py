@@ -16,19 +16,10 @@ def command_unit_of(model: JointModel | tuple[float, float] | None,
     """
     Return the label of a joint's command unit.
 
-    Parameters
-    ----------
-    model : JointModel, tuple[float, float] or None
-        The joint, or its input limits.
-    given : str or None
-        The unit the user named; wins when given.
-
-    Returns
-    -------
-    str
-        ``given``; else ``%`` for input limits [0, 100] or [-100, 100], ``V``
-        for [-10, 10] or [0, 10]; else ``input units``.
-
+    ``model``: the joint, or its input limits.
+    ``given``: the unit the user named; wins when given.
+    Returns: ``given``; else ``%`` for input limits [0, 100] or [-100, 100], ``V`` for [-10, 10] or
+    [0, 10]; else ``input units``.
     """
     if given:
         return given

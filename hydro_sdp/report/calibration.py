@@ -91,20 +91,7 @@ def summary_lines(result: CalibrationResult, unit: str, figures: list[str]) -> l
     """
     Return the lines of ``summary.md``.
 
-    Parameters
-    ----------
-    result : CalibrationResult
-        The calibration.
-    unit : str
-        Unit of the command.
-    figures : list of str
-        Figure paths relative to the report folder.
-
-    Returns
-    -------
-    list of str
-        Markdown lines.
-
+    ``figures``: figure paths relative to the report folder.
     """
     model, spec, check = result.model, result.spec, result.check
     identified = result.identification
@@ -185,24 +172,7 @@ def summary_lines(result: CalibrationResult, unit: str, figures: list[str]) -> l
 
 
 def write_report(folder: Path, result: CalibrationResult, unit: str) -> list[str]:
-    """
-    Write the figures and ``summary.md`` of a calibration.
-
-    Parameters
-    ----------
-    folder : Path
-        Report folder (created if missing).
-    result : CalibrationResult
-        What :func:`hydro_sdp.core.calibration.calibrate` found.
-    unit : str
-        Unit of the command, for every label.
-
-    Returns
-    -------
-    list of str
-        The paths written.
-
-    """
+    """Write the figures and ``summary.md`` of a calibration."""
     record = result.validation[0]
     name = record.source or 'first'
     edges = result.check.chatter.edges

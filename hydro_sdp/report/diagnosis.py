@@ -38,22 +38,10 @@ def write_report(folder: Path, result: Diagnosis, *, command_unit: str | None = 
     """
     Write the figures and ``summary.md`` of a diagnosis.
 
-    Parameters
-    ----------
-    folder : Path
-        Report folder (created if missing).
-    result : Diagnosis
-        What :func:`hydro_sdp.core.diagnosis.diagnose` found, with its evidence.
-    command_unit : str or None
-        Unit of the command for the labels; default: from the model's input range.
-
-    Returns
-    -------
-    list[str]
-        The paths written: ``gap.png``, ``ledger.png``, ``signature.png`` and ``evidence.png`` when
-        an effect was named, ``candidates.png``, ``record_scales.png`` for per-record load factors,
-        and ``summary.md``.
-
+    ``command_unit``: unit of the command for the labels; default: from the model's input range.
+    Returns: the paths written: ``gap.png``, ``ledger.png``, ``signature.png`` and ``evidence.png``
+    when an effect was named, ``candidates.png``, ``record_scales.png`` for per-record load
+    factors, and ``summary.md``.
     """
     gap = result.gap
     unit = command_unit_of(result.model, command_unit)

@@ -27,17 +27,7 @@ TYPES = {JOINT_STATE: JointState, FLOAT64: Float64}
 
 
 class BagPlayerNode(Node):
-    """
-    Publish a bag's JointState and Float64 topics.
-
-    Parameters
-    ----------
-    node_name : str
-        ROS node name.
-    **kwargs : NodeOptions
-        Forwarded to :class:`rclpy.node.Node`.
-
-    """
+    """Publish a bag's JointState and Float64 topics."""
 
     def __init__(self, *, node_name: str = 'bag_player', **kwargs: Unpack[NodeOptions]) -> None:
         super().__init__(node_name, **kwargs)
@@ -90,20 +80,7 @@ class BagPlayerNode(Node):
         return self._publish_next()
 
     def play_until(self, bag_time_ns: int) -> int:
-        """
-        Publish every message stamped at or before ``bag_time_ns``.
-
-        Parameters
-        ----------
-        bag_time_ns : int
-            Bag time, ns.
-
-        Returns
-        -------
-        int
-            Messages published by this call.
-
-        """
+        """Publish every message stamped at or before ``bag_time_ns``."""
         count = 0
         while not self.finished and self._messages[self.published][2] <= bag_time_ns:
             self._publish_next()

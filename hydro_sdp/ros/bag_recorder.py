@@ -49,17 +49,7 @@ def qos_text(endpoints: list[TopicEndpointInfo]) -> str:
 
 
 class BagRecorderNode(Node):
-    """
-    Write chosen topics to a new bag, each with its advertised type.
-
-    Parameters
-    ----------
-    node_name : str
-        ROS node name.
-    **kwargs : NodeOptions
-        Forwarded to :class:`rclpy.node.Node`.
-
-    """
+    """Write chosen topics to a new bag, each with its advertised type."""
 
     def __init__(self, *, node_name: str = 'bag_recorder', **kwargs: Unpack[NodeOptions]) -> None:
         super().__init__(node_name, **kwargs)

@@ -17,13 +17,11 @@ class JointFiles:
     """
     The files of one joint.
 
-    Parameters
+    Attributes
     ----------
     joint : str
-        Joint name, or '' for the one joint of a node without ``joints`` (named by the
-        ``joint`` parameter, whose default is the controller's joint).
-    model_file : str
-        Its model file.
+        Joint name, or '' for the one joint of a node without ``joints`` (named by the ``joint``
+        parameter, whose default is the controller's joint).
     controller_file : str or None
         Its controller file, or None to design from the model.
 
@@ -38,22 +36,10 @@ def joint_files(parameters: NodeParameters) -> list[JointFiles]:
     """
     Return the files of every joint, from ``joints``, ``model_files``, ``controller_files``.
 
-    Parameters
-    ----------
-    parameters : NodeParameters
-        The controller's parameters.
-
-    Returns
-    -------
-    list of JointFiles
-        One per joint; one (unnamed) from ``model_file`` and ``controller_file`` when
-        ``joints`` is not set.
-
-    Raises
-    ------
-    ConfigurationError
-        If the lists do not match ``joints`` or a joint is named twice.
-
+    ``parameters``: the controller's parameters.
+    Returns: one per joint; one (unnamed) from ``model_file`` and ``controller_file`` when
+    ``joints`` is not set.
+    Raises ConfigurationError if the lists do not match ``joints`` or a joint is named twice.
     """
     joints = parameters.texts('joints')
     if not joints:
@@ -77,11 +63,7 @@ class ControllerConfiguration:
     """
     Build the controller's joints from its file parameters, and declare their parameters.
 
-    Parameters
-    ----------
-    parameters : NodeParameters
-        The controller's parameters.
-
+    ``parameters``: the controller's parameters.
     """
 
     def __init__(self, parameters: NodeParameters) -> None:
@@ -92,28 +74,13 @@ class ControllerConfiguration:
         """
         Load the files and design; declare each joint's parameters; return the loops.
 
-        Parameters
-        ----------
-        timeout_ns : int
-            Feedback timeout, ns.
-        margin : float
-            Set-point margin, deg (it must leave room between the end stops).
-        now_ns : int
-            The node clock's reading, ns.
-        feedback_margin, stop_band : float
-            Allowance of the feedback checks and band of the stop-side hold, degrees.
-
-        Returns
-        -------
-        list of JointLoop
-            One per joint.
-
-        Raises
-        ------
-        HydroSdpError
-            If a file cannot be used or a value given at start-up is refused (nothing
-            stays declared).
-
+        ``margin``: set-point margin, deg (it must leave room between the end stops).
+        ``now_ns``: the node clock's reading, ns.
+        ``feedback_margin``, ``stop_band``: allowance of the feedback checks and band of the
+        stop-side hold, degrees.
+        Returns: one per joint.
+        Raises HydroSdpError if a file cannot be used or a value given at start-up is refused
+        (nothing stays declared).
         """
         parameters = self.parameters
         period = parameters.double('control_period')

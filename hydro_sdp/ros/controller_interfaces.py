@@ -29,23 +29,8 @@ class ControllerInterfaces:
     """
     Publishers, subscriptions and the watchdog of a configured controller.
 
-    Parameters
-    ----------
-    node : Node
-        The controller node.
-    loops : list of JointLoop
-        Its joints (each gets its publishers here).
-    on_state : callable
-        Called with every ``joint_states`` message.
-    on_setpoint : callable
-        Called with a ``<joint>/setpoint`` message and the joint's loop.
-    on_trajectory : callable
-        Called with every ``joint_trajectory`` message.
-    on_watchdog : callable
-        Called every watchdog period.
-    timeout_ns : int
-        Feedback timeout, ns (the watchdog runs at :func:`watchdog_period_ns` of it).
-
+    ``on_setpoint``: called with a ``<joint>/setpoint`` message and the joint's loop.
+    ``timeout_ns``: feedback timeout, ns (the watchdog runs at :func:`watchdog_period_ns` of it).
     """
 
     def __init__(self, node: Node, loops: list[JointLoop], *,

@@ -79,26 +79,11 @@ def position_of(names: Sequence[str], positions: Sequence[float], joint: str) ->
     """
     Return the angle (degrees) of ``joint`` from a JointState's ``name`` and ``position``.
 
-    Parameters
-    ----------
-    names : sequence of str
-        The message's joint names.
-    positions : sequence of float
-        Its positions, rad.
-    joint : str
-        Joint name.
-
-    Returns
-    -------
-    float
-        The angle, degrees.
-
-    Raises
-    ------
-    DataError
-        If the names and positions differ in length, the joint is missing, or its
-        position is not finite.
-
+    ``names``: the message's joint names.
+    ``positions``: its positions, rad.
+    Returns: the angle, degrees.
+    Raises DataError if the names and positions differ in length, the joint is missing, or its
+    position is not finite.
     """
     # The controller calls this for every sample and joint: nothing is copied.
     if len(names) != len(positions):
@@ -129,22 +114,10 @@ def trajectory_from_message(message: TrajectoryMessage) -> tuple[JointTrajectory
     """
     Return a ``trajectory_msgs/JointTrajectory`` in core units, and its stamp.
 
-    Parameters
-    ----------
-    message : trajectory_msgs/JointTrajectory
-        Positions in rad, velocities in rad/s, ``time_from_start`` per point.
-
-    Returns
-    -------
-    tuple[JointTrajectory, float]
-        The trajectory in degrees (velocities in deg/s, kept only when every
-        point gives one per joint) and the header stamp, s (0: start now).
-
-    Raises
-    ------
-    DataError
-        If a point has the wrong number of positions, or the trajectory is not valid.
-
+    ``message``: positions in rad, velocities in rad/s, ``time_from_start`` per point.
+    Returns: the trajectory in degrees (velocities in deg/s, kept only when every point gives one
+    per joint) and the header stamp, s (0: start now).
+    Raises DataError if a point has the wrong number of positions, or the trajectory is not valid.
     """
     names = tuple(message.joint_names)
     points = list(message.points)
@@ -172,24 +145,10 @@ def fill_trajectory(message: TrajectoryT, names: Sequence[str], times: Sequence[
     """
     Fill a ``trajectory_msgs/JointTrajectory`` (positions in rad).
 
-    Parameters
-    ----------
-    message : trajectory_msgs/JointTrajectory
-        Message to fill (its points are built with its own point type).
-    names : sequence of str
-        Joint names.
-    times : sequence of float
-        Time from start of each point, s.
-    positions_deg : sequence of sequence of float
-        One row of angles (deg) per point, one value per joint.
-    stamp_ns : int
-        Header stamp, ns (0: start on arrival).
-
-    Returns
-    -------
-    trajectory_msgs/JointTrajectory
-        The message.
-
+    ``message``: message to fill (its points are built with its own point type).
+    ``times``: time from start of each point, s.
+    ``positions_deg``: one row of angles (deg) per point, one value per joint.
+    ``stamp_ns``: header stamp, ns (0: start on arrival).
     """
     from trajectory_msgs.msg import JointTrajectoryPoint
     fill_stamp(message.header.stamp, stamp_ns)
@@ -218,22 +177,10 @@ def fill_controller_state(message: ArrayT, setpoint_deg: float, angle_deg: float
     """
     Fill a ``Float64MultiArray`` with one control step (layout: :data:`CONTROLLER_STATE_LABELS`).
 
-    Parameters
-    ----------
-    message : std_msgs/Float64MultiArray
-        Message whose ``layout`` is already set (:data:`CONTROLLER_STATE_LABELS`).
-    setpoint_deg, angle_deg : float
-        Set-point and measured angle, degrees.
-    u_deg : float
-        Increment applied, degrees per control sample.
-    v : float
-        Valve command, input units.
-
-    Returns
-    -------
-    std_msgs/Float64MultiArray
-        The message.
-
+    ``message``: message whose ``layout`` is already set (:data:`CONTROLLER_STATE_LABELS`).
+    ``setpoint_deg``, ``angle_deg``: set-point and measured angle, degrees.
+    ``u_deg``: increment applied, degrees per control sample.
+    ``v``: valve command, input units.
     """
     setpoint, angle = math.radians(setpoint_deg), math.radians(angle_deg)
     message.data = [setpoint, angle, setpoint - angle, math.radians(u_deg), float(v)]

@@ -32,15 +32,9 @@ class DiagnosticsReporter:
     """
     A node's ``/diagnostics``: one status per joint every ``period`` seconds.
 
-    Parameters
-    ----------
-    node : Node
-        The reporting node (its clock stamps the reports).
-    period : float
-        Time between reports, s.
-    statuses : callable
-        Called with the node clock's reading (ns); returns ``(joint, HealthStatus)`` pairs.
-
+    ``period``: time between reports, s.
+    ``statuses``: called with the node clock's reading (ns); returns ``(joint, HealthStatus)``
+    pairs.
     """
 
     def __init__(self, node: Node, period: float,

@@ -7,23 +7,12 @@ def first_joint(joints: str, path: str, doc: str, *, settable: bool = False) -> 
     """
     Return a node property that reads ``path`` on the first of the node's per-joint objects.
 
-    Parameters
-    ----------
-    joints : str
-        Name of the node attribute holding the per-joint objects (``loops``, ``identified``).
-    path : str
-        Attribute of the first joint; dotted for a nested one (``gate.blind``).
-    doc : str
-        Docstring of the property.
-    settable : bool
-        Whether assigning the property assigns that attribute of the first joint (``path``
-        must then be a plain name).
-
-    Returns
-    -------
-    property
-        Read-only unless ``settable``.
-
+    ``joints``: name of the node attribute holding the per-joint objects (``loops``,
+    ``identified``); ``path`` is dotted for a nested attribute (``gate.blind``).
+    The property is read-only unless ``settable`` (``path`` must then be a plain name).
+    ``path``: attribute of the first joint; dotted for a nested one (``gate.blind``).
+    ``settable``: whether assigning the property assigns that attribute of the first joint
+    (``path`` must then be a plain name).
     """
     read = attrgetter(path)
 

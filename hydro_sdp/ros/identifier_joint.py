@@ -43,16 +43,8 @@ def estimate_topics(estimate: SdpEstimate | EdgeEstimate) -> dict[str, float]:
     """
     Return the estimate as topic values: saturation speeds in rad/s, the rest as they are.
 
-    Parameters
-    ----------
-    estimate : SdpEstimate or EdgeEstimate
-        The estimate (speeds in deg/s).
-
-    Returns
-    -------
-    dict[str, float]
-        Value by topic name under ``<joint>/sdp/``.
-
+    ``estimate``: the estimate (speeds in deg/s).
+    Returns: value by topic name under ``<joint>/sdp/``.
     """
     values = {}
     for name, value in asdict(estimate).items():
@@ -85,17 +77,7 @@ class IdentifiedJoint:
     """
     The online identification of one joint.
 
-    Parameters
-    ----------
-    joint : str
-        Joint name in JointState, topics, and the controller's parameters.
-    model : JointModel
-        The model to start from.
-    estimator : OnlineEstimator
-        The online filter.
-    policy : RecalibrationPolicy
-        The recalibration thresholds.
-
+    ``joint``: joint name in JointState, topics, and the controller's parameters.
     """
 
     def __init__(self, joint: str, model: JointModel, estimator: OnlineEstimator,

@@ -27,24 +27,13 @@ class JointLoop:
     """
     The control of one joint.
 
-    Parameters
-    ----------
-    joint : str
-        Joint name in JointState and in topic and parameter names.
-    model : JointModel
-        The joint's model (end stops, valve range).
-    spec : ControllerSpec
-        The controller design.
-    timeout_ns : int
-        Feedback watchdog timeout, ns.
-    now_ns : int
-        The node clock's reading, ns.
-    feedback_margin : float
-        Allowance of the feedback checks, degrees
-        (:class:`~hydro_sdp.core.control.plausibility.FeedbackPlausibility`).
-    stop_band : float
-        Band of the stop-side hold, degrees (:class:`~hydro_sdp.core.control.safety.StopHold`).
-
+    ``joint``: joint name in JointState and in topic and parameter names.
+    ``model``: the joint's model (end stops, valve range).
+    ``now_ns``: the node clock's reading, ns.
+    ``feedback_margin``: allowance of the feedback checks, degrees
+    (:class:`~hydro_sdp.core.control.plausibility.FeedbackPlausibility`).
+    ``stop_band``: band of the stop-side hold, degrees
+    (:class:`~hydro_sdp.core.control.safety.StopHold`).
     """
 
     def __init__(self, joint: str, model: JointModel, spec: ControllerSpec, timeout_ns: int,
@@ -123,16 +112,8 @@ class JointLoop:
         """
         Return the spec a set request would give; raises if it is not valid.
 
-        Parameters
-        ----------
-        request : ParameterRequest
-            The request (names under the joint, ``<joint>.gains.k_i``...).
-
-        Returns
-        -------
-        ControllerSpec
-            The spec after the request (this loop's own if it names none of its parameters).
-
+        ``request``: the request (names under the joint, ``<joint>.gains.k_i``...).
+        Returns: the spec after the request (this loop's own if it names none of its parameters).
         """
         prefix = self.prefix
         names = {name[len(prefix):] for name in request.names if name.startswith(prefix)}

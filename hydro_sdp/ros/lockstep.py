@@ -74,19 +74,8 @@ class Lockstep:
     """
     Advance a plant node one period at a time and wait until the graph has settled.
 
-    Parameters
-    ----------
-    harness : SteppingHarness
-        The harness (a :class:`~hydro_sdp.ros.testing.RosHarness`).
-    plant : PlantNode
-        The plant node (its ``sample_period`` is the step).
-    controllers : iterable of PipControllerNode
-        Controllers in the loop.
-    observers : iterable of Node
-        Nodes with ``samples`` (and ``commands_received``) counters, e.g. identifiers.
-    timeout : float
-        Wall-clock limit of one step, s.
-
+    ``observers``: nodes with ``samples`` (and ``commands_received``) counters, e.g. identifiers.
+    ``timeout``: wall-clock limit of one step, s.
     """
 
     def __init__(self, harness: SteppingHarness, plant: SteppedPlant, *,

@@ -30,17 +30,7 @@ from std_msgs.msg import Float64
 
 
 class PlantNode(Node):
-    """
-    One or several simulated joints publishing ``joint_states`` every ``sample_period``.
-
-    Parameters
-    ----------
-    node_name : str
-        ROS node name.
-    **kwargs : NodeOptions
-        Forwarded to :class:`rclpy.node.Node` (``context``, ``parameter_overrides``...).
-
-    """
+    """One or several simulated joints publishing ``joint_states`` every ``sample_period``."""
 
     def __init__(self, *, node_name: str = 'hydro_plant', **kwargs: Unpack[NodeOptions]) -> None:
         super().__init__(node_name, **kwargs)

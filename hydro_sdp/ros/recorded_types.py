@@ -37,18 +37,8 @@ def choose_type(topic: str, advertised: Sequence[str]) -> tuple[str | None, str]
     """
     Return the type to record ``topic`` with, from the types it is advertised with.
 
-    Parameters
-    ----------
-    topic : str
-        Absolute topic name.
-    advertised : sequence of str
-        Its types in the ROS graph.
-
-    Returns
-    -------
-    tuple[str or None, str]
-        The type (None: none can be recorded) and, when there is a problem, why ('' otherwise).
-
+    Returns: the type (None: none can be recorded) and, when there is a problem, why (''
+    otherwise).
     """
     expected = expected_type(topic)
     if expected is not None:

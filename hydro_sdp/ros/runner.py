@@ -60,13 +60,7 @@ def run_node(node_cls: Callable[[], Node], args: list[str] | None = None) -> Non
     """
     Initialise rclpy, spin one node of ``node_cls`` and always clean up.
 
-    Parameters
-    ----------
-    node_cls : callable returning Node
-        Node class constructed with no arguments.
-    args : list[str] or None
-        Command-line arguments (``--ros-args`` included) passed to ``rclpy.init``.
-
+    ``args``: command-line arguments (``--ros-args`` included) passed to ``rclpy.init``.
     """
     # A crash in compiled code (rclpy, the middleware) prints where every thread was, the
     # first thing a bug report needs, instead of ending the process without a word.

@@ -22,10 +22,8 @@ class WearRun:
     """
     A set-point sequence through the three nodes while the valve wears.
 
-    Parameters
+    Attributes
     ----------
-    t : numpy.ndarray
-        Time, s.
     angle, setpoint : numpy.ndarray
         True joint angle and set-point, degrees.
     command : numpy.ndarray
@@ -34,8 +32,6 @@ class WearRun:
         ``(samples, 2)`` IDZ edges the controller used, V.
     drift_time : float
         When the dead-zone moved, s.
-    recalibrations : int
-        IDZ updates the identifier made.
     recalibration_times : tuple of float
         When the accepted updates were requested, s.
 
@@ -65,30 +61,13 @@ def wear_and_recalibration(*, holds: int = 20, steps: int = 400, drift_at: int =
     """
     Track set-points while the plant's dead-zone moves; the identifier recalibrates.
 
-    Parameters
-    ----------
-    holds : int
-        Number of set-points, each held ``steps`` plant samples (0.01 s).
-    steps : int
-        Samples per set-point.
-    drift_at : int
-        Set-point at whose start the dead-zone edges move by ``shift``.
-    shift : sequence of float
-        Movement of the lower and upper edge, V.
-    seed : int
-        Seed of the measurement noise.
-    levels : sequence of float
-        Set-points, degrees, used in turn.
-    noise_std : float
-        Angle measurement noise of the plant, and the identifier's ``noise_std``, deg.
-    identifier : mapping or None
-        More identifier parameters (``significance``, ``cooldown``...).
-
-    Returns
-    -------
-    WearRun
-        The run.
-
+    ``holds``: number of set-points, each held ``steps`` plant samples (0.01 s).
+    ``steps``: samples per set-point.
+    ``drift_at``: set-point at whose start the dead-zone edges move by ``shift``.
+    ``shift``: movement of the lower and upper edge, V.
+    ``levels``: set-points, degrees, used in turn.
+    ``noise_std``: angle measurement noise of the plant, and the identifier's ``noise_std``, deg.
+    ``identifier``: more identifier parameters (``significance``, ``cooldown``...).
     """
     rows = []
     with RosHarness() as ros:

@@ -51,14 +51,9 @@ class RosHarness:
     """
     A private ROS context with an executor and the nodes added to it.
 
-    Parameters
-    ----------
-    domain_id : int or None
-        DDS domain; default: a random one, so parallel test runs do not meet.
-    args : list of str or None
-        Command-line arguments of the context, as ``ros2 run`` passes them to every node of
-        a process (``['--ros-args', '-r', '__ns:=/arm2', '--params-file', 'p.yaml']``).
-
+    ``domain_id``: DDS domain; default: a random one, so parallel test runs do not meet.
+    ``args``: command-line arguments of the context, as ``ros2 run`` passes them to every node of a
+    process (``['--ros-args', '-r', '__ns:=/arm2', '--params-file', 'p.yaml']``).
     """
 
     def __init__(self, domain_id: int | None = None, args: list[str] | None = None) -> None:
@@ -82,27 +77,11 @@ class RosHarness:
         """
         Create a node in the harness and add it to the executor.
 
-        Parameters
-        ----------
-        node_cls : type
-            A node class that forwards ``**kwargs`` to :class:`rclpy.node.Node` (its
-            options, :class:`~hydro_sdp.ros.node_options.NodeOptions`).
-        parameters : dict or None
-            Parameter overrides by name.
-        sim_time : bool
-            Whether the node's clock is set by the harness.
-        cli_args : list of str or None
-            ROS command-line arguments (``--ros-args --params-file ...``).
-        services : bool
-            Whether the node answers parameter and type description requests.
-        **kwargs : object
-            More constructor arguments (``node_name``...).
-
-        Returns
-        -------
-        Node
-            The node, of class ``node_cls``.
-
+        ``node_cls``: a node class that forwards ``**kwargs`` to :class:`rclpy.node.Node` (its
+        options, :class:`~hydro_sdp.ros.node_options.NodeOptions`).
+        ``parameters``: parameter overrides by name.
+        ``sim_time``: whether the node's clock is set by the harness.
+        ``cli_args``: ROS command-line arguments (``--ros-args --params-file ...``).
         """
         overrides = [Parameter(name, value=value) for name, value in (parameters or {}).items()]
         if sim_time:
@@ -133,18 +112,7 @@ class RosHarness:
         """
         Spin until ``predicate()`` holds or ``timeout`` seconds of wall time pass.
 
-        Parameters
-        ----------
-        predicate : callable
-            Condition to wait for.
-        timeout : float
-            Wall-clock limit, s.
-
-        Returns
-        -------
-        bool
-            Whether the condition holds.
-
+        ``timeout``: wall-clock limit, s.
         """
         deadline = time.monotonic() + timeout
         while not predicate():
@@ -179,21 +147,9 @@ class RosHarness:
         """
         Publish a ``JointTrajectory`` (angles in degrees) and wait until every controller took it.
 
-        Parameters
-        ----------
-        publisher : Publisher
-            A ``trajectory_msgs/JointTrajectory`` publisher on ``joint_trajectory``.
-        controllers : iterable of PipControllerNode
-            Controllers that must receive it (``trajectories_received`` counts).
-        names : list of str
-            Joint names.
-        times : list of float
-            Time from start of each point, s.
-        positions_deg : list of list of float
-            One row of angles per point, degrees.
-        stamp_ns : int
-            Header stamp, ns (0: start on arrival).
-
+        ``times``: time from start of each point, s.
+        ``positions_deg``: one row of angles per point, degrees.
+        ``stamp_ns``: header stamp, ns (0: start on arrival).
         """
         from hydro_sdp.ros.conversions import fill_trajectory
         from trajectory_msgs.msg import JointTrajectory
@@ -224,13 +180,7 @@ class ParameterClient:
     """
     A node's parameter services, called as ``ros2 param`` calls them, in a harness.
 
-    Parameters
-    ----------
-    harness : RosHarness
-        The harness holding the node.
-    node_name : str
-        Full name of the node (``/pip_controller``, or without the slash).
-
+    ``node_name``: full name of the node (``/pip_controller``, or without the slash).
     """
 
     def __init__(self, harness: RosHarness, node_name: str) -> None:

@@ -13,11 +13,7 @@ class TrajectoryFollower:
     """
     The trajectories of the joints of one controller.
 
-    Parameters
-    ----------
-    loops : list of JointLoop
-        The controller's joints.
-
+    ``loops``: the controller's joints.
     """
 
     def __init__(self, loops: list[JointLoop]) -> None:
@@ -29,25 +25,13 @@ class TrajectoryFollower:
         """
         Follow a trajectory from its start on, for the joints it names.
 
-        Parameters
-        ----------
-        message : trajectory_msgs/JointTrajectory
-            The trajectory, in rad.
-        now : float
-            The node clock's reading, s.
-        margin : float
-            Set-point margin inside the end stops, deg.
-        active : bool
-            Whether the controller is commanding.
-
-        Raises
-        ------
-        DataError
-            Naming every reason it is refused (nothing changes then): a message that is not a valid
-            trajectory, a joint not controlled, a position beyond the end stops less ``margin``,
-            the controller not active, a named joint without feedback yet, a set-point faster than
-            a joint's identified top speed.
-
+        ``message``: the trajectory, in rad.
+        ``now``: the node clock's reading, s.
+        ``margin``: set-point margin inside the end stops, deg.
+        Raises DataError naming every reason it is refused (nothing changes then): a message that
+        is not a valid trajectory, a joint not controlled, a position beyond the end stops less
+        ``margin``, the controller not active, a named joint without feedback yet, a set-point
+        faster than a joint's identified top speed.
         """
         trajectory, stamp = trajectory_from_message(message)
         check_trajectory(trajectory, {joint: loop.model.angle_limits

@@ -15,20 +15,11 @@ class CommandGate:
     """
     The acceptance rule of one joint's valve commands.
 
-    Parameters
-    ----------
-    limits : tuple[float, float] or None
-        Valve range, input units (commands are clamped to it).
-    source : str
-        Fully qualified name of the only node allowed (``/pip_controller``); '' allows any
-        one node, as long as it is the only publisher.
-    rate_limit : float
-        Most commands per second taken (> 0).
-    timeout_ns : int
-        Silence of the source after which the valve is closed, ns (0: never).
-    burst : int
-        Commands taken at once above the rate.
-
+    ``limits``: valve range, input units (commands are clamped to it).
+    ``source``: fully qualified name of the only node allowed (``/pip_controller``); '' allows any
+    one node, as long as it is the only publisher.
+    ``rate_limit``: most commands per second taken (> 0).
+    ``timeout_ns``: silence of the source after which the valve is closed, ns (0: never).
     """
 
     def __init__(self, limits: tuple[float, float] | None, *, source: str = '',
@@ -50,28 +41,14 @@ class CommandGate:
         """
         Decide on one command.
 
-        Parameters
-        ----------
-        value : float
-            The command, input units.
-        now_ns : int
-            The caller's clock, ns.
-        publishers : sequence of str
-            The publishers of the command topic now: fully qualified node names ('' for
-            one whose name is not known; with no source named, only their number counts).
-
-        Returns
-        -------
-        float or None
-            The command to put in force (clamped to the range), or None to drop it
-            (above the rate limit: the command in force stays).
-
-        Raises
-        ------
-        DataError
-            If the command is not finite or its publishers are not the one source: the
-            caller closes the valve.
-
+        ``value``: the command, input units.
+        ``now_ns``: the caller's clock, ns.
+        ``publishers``: the publishers of the command topic now: fully qualified node names ('' for
+        one whose name is not known; with no source named, only their number counts).
+        Returns: the command to put in force (clamped to the range), or None to drop it (above the
+        rate limit: the command in force stays).
+        Raises DataError if the command is not finite or its publishers are not the one source: the
+        caller closes the valve.
         """
         if not math.isfinite(value):
             raise DataError(f'a command that is not finite ({value})')

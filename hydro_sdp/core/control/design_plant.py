@@ -26,22 +26,11 @@ def lagged_integrator(delay: int, time_constant: float | None,
     """
     Return the integrator behind ``delay`` control samples, a first-order lag and a mode.
 
-    Parameters
-    ----------
-    delay : int
-        Delay in control samples (>= 1), as :meth:`DiscretePlant.integrator`.
-    time_constant : float or None
-        Lag time constant, s (``None``: no lag, the plain integrator).
-    control_period : float
-        Control period, s.
-    mode : tuple[float, float] or None
-        The link's mode, frequency (Hz) and damping ratio (``None``: none).
-
-    Returns
-    -------
-    DiscretePlant
-        ``n`` = 1, plus 1 with the lag, plus 2 with the mode; ``m = delay + n - 1``.
-
+    ``delay``: delay in control samples (>= 1), as :meth:`DiscretePlant.integrator`.
+    ``time_constant``: lag time constant, s (``None``: no lag, the plain integrator).
+    ``control_period``: control period, s.
+    ``mode``: the link's mode, frequency (Hz) and damping ratio (``None``: none).
+    Returns: ``n`` = 1, plus 1 with the lag, plus 2 with the mode; ``m = delay + n - 1``.
     """
     period = check_sample_period(control_period)
     if time_constant is not None and not (math.isfinite(time_constant)
@@ -125,22 +114,7 @@ def plant_for_model(model: JointModel, control_period: float) -> DiscretePlant:
 
 
 def completed_poles(plant: DiscretePlant, poles: Sequence[complex]) -> list[complex]:
-    """
-    Complete dominant ``poles`` to the ``n + m`` a plant needs.
-
-    Parameters
-    ----------
-    plant : DiscretePlant
-        The design plant.
-    poles : sequence of complex
-        The poles asked for, the dominant ones.
-
-    Returns
-    -------
-    list of complex
-        ``poles``, then the lag pole (if room), then zeros.
-
-    """
+    """Complete dominant ``poles`` to the ``n + m`` a plant needs."""
     wanted = [complex(p) for p in poles]
     size = plant.n + plant.m
     if plant.n == 2 and len(wanted) < size:
@@ -157,17 +131,10 @@ def check_plant_lag(plant: DiscretePlant, time_constant: float | None,
     """
     Raise :class:`ConfigurationError` unless ``plant`` is the integrator of its lag and mode.
 
-    Parameters
-    ----------
-    plant : DiscretePlant
-        A controller file's plant.
-    time_constant : float or None
-        The valve lag the file says the plant was made from, s.
-    control_period : float
-        The file's control period, s.
-    mode : tuple[float, float] or None
-        The link's mode the file says the plant was made from, Hz and damping ratio.
-
+    ``plant``: a controller file's plant.
+    ``time_constant``: the valve lag the file says the plant was made from, s.
+    ``control_period``: the file's control period, s.
+    ``mode``: the link's mode the file says the plant was made from, Hz and damping ratio.
     """
     expected = lagged_integrator(plant.delay, time_constant, control_period, mode)
     same = (len(expected.a) == len(plant.a) and len(expected.b) == len(plant.b)

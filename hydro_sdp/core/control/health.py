@@ -15,22 +15,16 @@ class JointSnapshot:
     """
     What a node knows about one joint at a report.
 
-    Parameters
+    Attributes
     ----------
-    joint : str
-        Joint name.
     feedback_age : float or None
         Time since the last valid feedback sample, s (``None``: none yet).
     stale_after : float
         Age beyond which feedback counts as stale, s.
-    watchdog_closed : bool
-        Whether the watchdog holds the valve closed.
     refused : int
         Feedback samples refused since the last report.
     clamped : bool
         Whether the set-point in force was clamped to the end stops.
-    recalibration_needed : bool
-        Whether the estimates call for a new IDZ.
     active : bool
         Whether the node is commanding (False: a lifecycle node not active).
     setpoint, angle : float or None
@@ -64,14 +58,10 @@ class HealthStatus:
     """
     A joint's status: level (:data:`OK`, :data:`WARN`, :data:`ERROR`), message, key-values.
 
-    Parameters
+    Attributes
     ----------
-    level : int
-        Severity.
     message : str
         One line: what is wrong, or ``ok``.
-    values : tuple of (str, str)
-        Key-values, numbers formatted with six significant digits.
 
     """
 
@@ -109,19 +99,11 @@ def joint_health(snapshot: JointSnapshot) -> HealthStatus:
     """
     Return the status of one joint from a snapshot of its state.
 
-    Parameters
-    ----------
-    snapshot : JointSnapshot
-        The joint's state at the report.
-
-    Returns
-    -------
-    HealthStatus
-        Level, message (the problems joined by ``; ``, ``ok``, or ``inactive``) and
-        key-values: ``active``, ``feedback age [s]``, ``set-point [deg]``,
-        ``angle [deg]``, ``error [deg]`` (set-point less angle), ``command``,
-        the IDZ edges when known, then each estimate and ``<name> std``.
-
+    ``snapshot``: the joint's state at the report.
+    Returns: level, message (the problems joined by ``; ``, ``ok``, or ``inactive``) and
+    key-values: ``active``, ``feedback age [s]``, ``set-point [deg]``, ``angle [deg]``,
+    ``error [deg]`` (set-point less angle), ``command``, the IDZ edges when known, then each
+    estimate and ``<name> std``.
     """
     level, problems = _problems(snapshot)
     message = '; '.join(problems) if problems else ('ok' if snapshot.active else 'inactive')

@@ -59,18 +59,9 @@ class TwoBranchInverse:
         """
         Valve command for the desired increment ``u``.
 
-        Parameters
-        ----------
-        u : float
-            Desired increment, degrees per control sample.
-        branch : int
-            Branch used last time (-1, 0 or +1); only the hysteresis mode uses it.
-
-        Returns
-        -------
-        tuple[float, int]
-            The command and the branch now in use.
-
+        ``u``: desired increment, degrees per control sample.
+        ``branch``: branch used last time (-1, 0 or +1); only the hysteresis mode uses it.
+        Returns: the command and the branch now in use.
         """
         beta = self.beta
         if self.mode == 'smooth' and beta > 0.0:
@@ -161,16 +152,8 @@ class InverseDeadZone(TwoBranchInverse):
         """
         Increment the chord model predicts for command ``v`` (the inverse of the IDZ).
 
-        Parameters
-        ----------
-        v : float
-            Valve command, input units.
-
-        Returns
-        -------
-        float
-            ``q_lin(v)``, angle per control sample.
-
+        ``v``: valve command, input units.
+        Returns: ``q_lin(v)``, angle per control sample.
         """
         low, high = self.dead_zone
         if v < low:

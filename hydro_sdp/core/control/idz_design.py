@@ -49,18 +49,7 @@ def chord_map(model: JointModel, span: tuple[float, float]) -> SdpDzMap:
     """
     SDP-DZ chords of any monotone map, as the IDZ of an ``sdp`` map (docs/methods.md 3.3).
 
-    Parameters
-    ----------
-    model : JointModel
-        The joint (any map family).
-    span : tuple[float, float]
-        Commands the map is trusted over (the measured levels), input units.
-
-    Returns
-    -------
-    SdpDzMap
-        Dead-zone edges and chord slopes.
-
+    ``span``: commands the map is trusted over (the measured levels), input units.
     """
     rest = model.rest_command
     edges, slopes = [], []
@@ -89,29 +78,14 @@ def chord_idz(model: JointModel, control_period: float, *, beta: float | None = 
     """
     Return the paper's chord IDZ of a model at the control period (docs/methods.md section 3.3).
 
-    Parameters
-    ----------
-    model : JointModel
-        The joint.
-    control_period : float
-        Control period, s.
-    beta : float or None
-        Chatter band, degrees per control sample; default 0.05 for maps with a
-        dead-zone (the paper's value) and 0 for a linear map.
-    mode : str
-        IDZ mode.
-    v_range : tuple[float, float] or None
-        For an ``sdp`` map, ``(v_min, v_max)`` where the chords meet it (default:
-        where its speed reaches two thirds of saturation; J2 in the paper: -2.2,
-        1.75); for ``pwl``, ``poly`` and ``power_sat`` maps the commands whose
-        speeds the chords of :func:`chord_map` refer to (default
-        :func:`command_span`).
-
-    Returns
-    -------
-    InverseDeadZone
-        Slopes in degrees per control sample per input unit.
-
+    ``control_period``: control period, s.
+    ``beta``: chatter band, degrees per control sample; default 0.05 for maps with a dead-zone (the
+    paper's value) and 0 for a linear map.
+    ``v_range``: for an ``sdp`` map, ``(v_min, v_max)`` where the chords meet it (default: where
+    its speed reaches two thirds of saturation; J2 in the paper: -2.2, 1.75); for ``pwl``, ``poly``
+    and ``power_sat`` maps the commands whose speeds the chords of :func:`chord_map` refer to
+    (default :func:`command_span`).
+    Returns: slopes in degrees per control sample per input unit.
     """
     period = check_sample_period(control_period)
     static_map = model.static_map
@@ -142,32 +116,14 @@ def idz_for_model(model: JointModel, control_period: float, *, form: IdzForm | N
     """
     Return the IDZ of a model in either form (default :func:`default_form`).
 
-    Parameters
-    ----------
-    model : JointModel
-        The joint.
-    control_period : float
-        Control period, s.
-    form : str or None
-        ``chord`` or ``table``.
-    beta : float or None
-        Chatter band; default 0.05 for chords (0 for a linear map) and
-        :func:`.idz_table_design.table_beta` for a table.
-    mode : str
-        IDZ mode.
-    v_range : tuple[float, float] or None
-        As in :func:`chord_idz` and :func:`.idz_table_design.table_idz`.
-    design : tuple or None
-        ``(plant, gains, valve lag)`` of the design, for a table's default band
-        (default: the model's plant with the default LQ gains).
-    noise_std : float
-        Angle noise the controller reads, degrees, for a table's default band.
-
-    Returns
-    -------
-    InverseDeadZone or TableInverseDeadZone
-        The IDZ.
-
+    ``control_period``: control period, s.
+    ``form``: ``chord`` or ``table``.
+    ``beta``: chatter band; default 0.05 for chords (0 for a linear map) and
+    :func:`.idz_table_design.table_beta` for a table.
+    ``v_range``: as in :func:`chord_idz` and :func:`.idz_table_design.table_idz`.
+    ``design``: ``(plant, gains, valve lag)`` of the design, for a table's default band (default:
+    the model's plant with the default LQ gains).
+    ``noise_std``: angle noise the controller reads, degrees, for a table's default band.
     """
     form = default_form(model) if form is None else idz_form(form)
     if form == 'chord':
@@ -183,20 +139,7 @@ def idz_for_model(model: JointModel, control_period: float, *, form: IdzForm | N
 
 
 def faded(idz: Idz) -> Idz:
-    """
-    Return the IDZ with the fade-in band a design takes when it pulses at hold (methods.md 5.2).
-
-    Parameters
-    ----------
-    idz : InverseDeadZone or TableInverseDeadZone
-        The IDZ that pulses.
-
-    Returns
-    -------
-    InverseDeadZone or TableInverseDeadZone
-        The same IDZ with ``fade = 2 beta`` (unchanged without a band).
-
-    """
+    """Return the IDZ with the fade-in band a design takes when it pulses at hold (methods 5.2)."""
     return replace(idz, mode='zero', fade=FADE_MULTIPLE * idz.beta)
 
 
@@ -205,20 +148,8 @@ def default_u_limits(model: JointModel, idz: Idz,
     """
     Return the default limits of ``u`` for a model and its IDZ.
 
-    Parameters
-    ----------
-    model : JointModel
-        The joint.
-    idz : InverseDeadZone or TableInverseDeadZone
-        Its inverse dead-zone.
-    control_period : float
-        Control period, s.
-
-    Returns
-    -------
-    tuple[float, float] or None
-        ``(u_min, u_max)`` in degrees per control sample.
-
+    ``control_period``: control period, s.
+    Returns: ``(u_min, u_max)`` in degrees per control sample.
     """
     if isinstance(idz, TableInverseDeadZone):
         return idz.u_range

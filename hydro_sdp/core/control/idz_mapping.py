@@ -30,21 +30,8 @@ def idz_from_mapping(data: object) -> Idz | None:
     """
     Validate a controller file's ``idz`` value and build the IDZ.
 
-    Parameters
-    ----------
-    data : object
-        The parsed value: null, a chord mapping or a table mapping.
-
-    Returns
-    -------
-    InverseDeadZone, TableInverseDeadZone or None
-        The IDZ.
-
-    Raises
-    ------
-    ModelFileError
-        Naming the key when anything is missing, unknown or invalid.
-
+    ``data``: the parsed value: null, a chord mapping or a table mapping.
+    Raises ModelFileError naming the key when anything is missing, unknown or invalid.
     """
     if data is None:
         return None

@@ -33,16 +33,14 @@ class RecalibrationPolicy:
     """
     Thresholds of the recalibration decision.
 
-    Parameters
+    Attributes
     ----------
     significance : float
         Change of an edge, in its standard deviations, that counts as real.
     settle : float
-        Time over which an edge estimate must have moved less than its standard
-        deviation, s.
+        Time over which an edge estimate must have moved less than its standard deviation, s.
     confidence : float
-        Largest edge standard deviation to act on, as a fraction of the estimated
-        dead-zone width.
+        Largest edge standard deviation to act on, as a fraction of the estimated dead-zone width.
     min_change : float
         Smallest edge change worth a recalibration, input units.
     cooldown : float
@@ -90,13 +88,8 @@ class Recalibration:
     """
     The recalibration decision of one joint, fed with successive estimates.
 
-    Parameters
-    ----------
-    reference : tuple[float, float]
-        The IDZ edges the controller uses, input units.
-    policy : RecalibrationPolicy
-        Thresholds; may be replaced at any time (``self.policy = ...``).
-
+    ``reference``: the IDZ edges the controller uses, input units.
+    ``policy``: thresholds; may be replaced at any time (``self.policy = ...``).
     """
 
     def __init__(self, reference: tuple[float, float],
@@ -117,18 +110,7 @@ class Recalibration:
         """
         Take the estimate at ``time`` and decide.
 
-        Parameters
-        ----------
-        time : float
-            Time of the estimate, s (any origin; increasing).
-        estimate : SdpEstimate or EdgeEstimate
-            The online estimate.
-
-        Returns
-        -------
-        Decision
-            Whether a recalibration is needed and due, and to which edges.
-
+        ``time``: time of the estimate, s (any origin; increasing).
         """
         policy = self.policy
         edges, stds = estimate.edges, estimate.edges_std
@@ -168,19 +150,9 @@ def with_dead_zone(model: JointModel, edges: tuple[float, float]) -> JointModel:
     """
     Return the model with its dead-zone edges at ``edges``, each side moved with its edge.
 
-    Parameters
-    ----------
-    model : JointModel
-        A model whose map has explicit edges (``sdp``, ``sdp_dz``, ``power_sat``, or a
-        ``pwl`` with a zero plateau).
-    edges : tuple[float, float]
-        The new ``(a3, a6)``, input units.
-
-    Returns
-    -------
-    JointModel
-        The moved model.
-
+    ``model``: a model whose map has explicit edges (``sdp``, ``sdp_dz``, ``power_sat``, or a
+    ``pwl`` with a zero plateau).
+    ``edges``: the new ``(a3, a6)``, input units.
     """
     low, high = (float(x) for x in edges)
     if not (math.isfinite(low) and math.isfinite(high) and low <= high):

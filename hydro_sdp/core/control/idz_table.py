@@ -137,16 +137,8 @@ class TableInverseDeadZone(TwoBranchInverse):
         """
         Increment the map gives for command ``v`` (the inverse of :meth:`command`).
 
-        Parameters
-        ----------
-        v : float
-            Valve command, input units.
-
-        Returns
-        -------
-        float
-            Degrees per control sample; 0 on the dead-zone, the end values beyond the table.
-
+        ``v``: valve command, input units.
+        Returns: degrees per control sample; 0 on the dead-zone, the end values beyond the table.
         """
         return float(np.interp(v, self.v, self.u))
 
@@ -154,16 +146,7 @@ class TableInverseDeadZone(TwoBranchInverse):
         """
         Return the table with its edges moved to ``edges``: each branch shifts with its edge.
 
-        Parameters
-        ----------
-        edges : tuple[float, float]
-            New ``(a3, a6)``, input units.
-
-        Returns
-        -------
-        TableInverseDeadZone
-            The shifted table (same increments, beta, mode and rest).
-
+        ``edges``: new ``(a3, a6)``, input units.
         """
         low, high = (float(x) for x in edges)
         if not (math.isfinite(low) and math.isfinite(high)):
@@ -180,16 +163,7 @@ class TableInverseDeadZone(TwoBranchInverse):
         """
         Return the table with each branch's increments scaled to the chord slopes ``slopes``.
 
-        Parameters
-        ----------
-        slopes : tuple[float, float]
-            New :attr:`slopes`, degrees per control sample per input unit (> 0).
-
-        Returns
-        -------
-        TableInverseDeadZone
-            The scaled table (same commands, beta, mode and rest).
-
+        ``slopes``: new :attr:`slopes`, degrees per control sample per input unit (> 0).
         """
         new_n, new_p = (float(x) for x in slopes)
         if not (new_n > 0.0 and new_p > 0.0 and math.isfinite(new_n) and math.isfinite(new_p)):

@@ -29,10 +29,8 @@ class TwoLinkArm:
     """
     Boom and dipper as a planar two-link arm.
 
-    Parameters
+    Attributes
     ----------
-    joints : tuple[str, str]
-        Joint names of the boom and the dipper.
     lengths : tuple[float, float]
         Link lengths (pivot to pivot, dipper pivot to bucket tip), m.
     offsets : tuple[float, float]
@@ -58,21 +56,7 @@ class TwoLinkArm:
         """
         Validate a mapping read from a kinematics file and build the arm.
 
-        Parameters
-        ----------
-        data : object
-            The parsed YAML document.
-
-        Returns
-        -------
-        TwoLinkArm
-            The arm.
-
-        Raises
-        ------
-        ModelFileError
-            Naming the key and the reason.
-
+        Raises ModelFileError naming the key and the reason.
         """
         data = read_document(data, 'a kinematics file', KINEMATICS_FORMAT,
                              known=('format', 'links'), required=('format', 'links'))
@@ -107,16 +91,8 @@ class TwoLinkArm:
         """
         Return the tip ``(x, z)`` (m) for the joint angles (deg).
 
-        Parameters
-        ----------
-        boom, dipper : float
-            Joint angles, degrees.
-
-        Returns
-        -------
-        tuple[float, float]
-            Tip position, m.
-
+        ``boom``, ``dipper``: joint angles, degrees.
+        Returns: tip position, m.
         """
         phi1 = math.radians(boom + self.offsets[0])
         phi2 = phi1 + math.radians(dipper + self.offsets[1])
@@ -134,23 +110,10 @@ class TwoLinkArm:
         """
         Return the joint angles (deg) that put the tip at ``(x, z)`` (m).
 
-        Parameters
-        ----------
-        x, z : float
-            Tip position, m.
-        elbow : str
-            ``'up'`` (dipper angle relative to the boom <= 0) or ``'down'``.
-
-        Returns
-        -------
-        tuple[float, float]
-            Boom and dipper angles, degrees, each in (-180, 180].
-
-        Raises
-        ------
-        DataError
-            If the point is out of reach (with the reach) or ``elbow`` is unknown.
-
+        ``x``, ``z``: tip position, m.
+        ``elbow``: ``'up'`` (dipper angle relative to the boom <= 0) or ``'down'``.
+        Returns: boom and dipper angles, degrees, each in (-180, 180].
+        Raises DataError if the point is out of reach (with the reach) or ``elbow`` is unknown.
         """
         if elbow not in ELBOWS:
             raise DataError(f"elbow must be one of {', '.join(ELBOWS)}, got {elbow!r}")
@@ -193,31 +156,12 @@ def line_trajectory(arm: TwoLinkArm, start: tuple[float, float], end: tuple[floa
     """
     Joint trajectory that moves the tip along a straight line at constant speed.
 
-    Parameters
-    ----------
-    arm : TwoLinkArm
-        The arm.
-    start, end : tuple[float, float]
-        Ends of the line ``(x, z)``, m.
-    speed : float or None
-        Tip speed, m/s (give this or ``duration``).
-    duration : float or None
-        Time from start to end, s.
-    point_period : float
-        Time between points, s.
-    elbow : str
-        Elbow choice of the inverse.
-
-    Returns
-    -------
-    JointTrajectory
-        For ``arm.joints``, from time 0 at ``start`` to ``duration`` at ``end``.
-
-    Raises
-    ------
-    DataError
-        If the line is empty, the timing is missing or invalid, or a point is out of reach.
-
+    ``start``, ``end``: ends of the line ``(x, z)``, m.
+    ``speed``: tip speed, m/s (give this or ``duration``).
+    ``duration``: time from start to end, s.
+    ``point_period``: time between points, s.
+    Raises DataError if the line is empty, the timing is missing or invalid, or a point is out of
+    reach.
     """
     p0, p1 = np.asarray(start, dtype=np.float64), np.asarray(end, dtype=np.float64)
     length = float(np.hypot(*(p1 - p0)))
@@ -250,22 +194,7 @@ def line_trajectory(arm: TwoLinkArm, start: tuple[float, float], end: tuple[floa
 
 def distance_to_segment(x: np.ndarray, z: np.ndarray, start: tuple[float, float],
                         end: tuple[float, float]) -> np.ndarray:
-    """
-    Return the distance of points from the segment ``start``-``end``, same unit.
-
-    Parameters
-    ----------
-    x, z : np.ndarray
-        Points.
-    start, end : tuple[float, float]
-        Ends of the segment.
-
-    Returns
-    -------
-    np.ndarray
-        Distances.
-
-    """
+    """Return the distance of points from the segment ``start``-``end``, same unit."""
     p0, p1 = np.asarray(start, dtype=np.float64), np.asarray(end, dtype=np.float64)
     direction = p1 - p0
     points = np.stack([np.asarray(x, dtype=np.float64), np.asarray(z, dtype=np.float64)], -1)

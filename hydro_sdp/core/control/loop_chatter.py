@@ -25,20 +25,8 @@ def valve_states(v: FloatArray, edges: tuple[float, float], rest: float) -> np.n
     """
     Return the state of each command: -1 or +1 open beyond an edge, 0 closed, 2 between.
 
-    Parameters
-    ----------
-    v : FloatArray
-        Valve commands.
-    edges : tuple[float, float]
-        The valve's dead-zone edges ``(a3, a6)``, input units.
-    rest : float
-        The rest command, between the edges.
-
-    Returns
-    -------
-    numpy.ndarray
-        One state per command (closed: within the inner half of the dead-zone around rest).
-
+    ``edges``: the valve's dead-zone edges ``(a3, a6)``, input units.
+    Returns: one state per command (closed: within the inner half of the dead-zone around rest).
     """
     v = np.asarray(v, dtype=np.float64)
     low, high = edges
@@ -61,14 +49,12 @@ class Hold:
     """
     One hold of a run.
 
-    Parameters
+    Attributes
     ----------
     start : float
         When the joint settled into its band, s.
     duration : float
         Settled time to the end of the level, s.
-    pulses : int
-        Valve openings across the dead-zone during the hold.
     travel : float
         Sum of the command's changes during the hold, input units.
 
@@ -84,18 +70,8 @@ def hold_starts(trace: LoopTrace, band: float = 0.5) -> list[tuple[int, int]]:
     """
     Return each hold of a run as samples ``(settled, end)``: a level after the joint settled.
 
-    Parameters
-    ----------
-    trace : LoopTrace
-        The closed-loop run (the true angle judges the band).
-    band : float
-        Band around the set-point, degrees.
-
-    Returns
-    -------
-    list of tuple
-        Levels that never settle, or settle for less than :data:`MIN_HOLD`, are left out.
-
+    ``band``: band around the set-point, degrees.
+    Levels that never settle, or settle for less than :data:`MIN_HOLD`, are left out.
     """
     setpoint = trace.setpoint
     dt = float(trace.t[1] - trace.t[0]) if trace.t.size > 1 else 1.0
@@ -133,10 +109,8 @@ class Chatter:
     """
     The valve's work at hold over a check's runs, and its verdict.
 
-    Parameters
+    Attributes
     ----------
-    holds : tuple[Hold, ...]
-        The holds measured.
     edges : tuple[float, float] or None
         The valve's dead-zone edges (None: the map has none, nothing is bounded).
     valve_range : tuple[float, float] or None
@@ -211,24 +185,10 @@ def loop_chatter(traces: Sequence[LoopTrace], model: JointModel, idz: Idz | None
     """
     Measure the valve's work at hold over closed-loop runs of a joint.
 
-    Parameters
-    ----------
-    traces : sequence of LoopTrace
-        The runs.
-    model : JointModel
-        The joint they ran on (its dead-zone judges the pulses).
-    idz : InverseDeadZone, TableInverseDeadZone or None
-        The controller's IDZ (its rest command; its edges when the model has none).
-    valve_range : tuple[float, float] or None
-        The valve range (default: the model's input limits).
-    band : float
-        Band around the set-point, degrees.
-
-    Returns
-    -------
-    Chatter
-        The holds, their pooled rates and the verdict.
-
+    ``model``: the joint they ran on (its dead-zone judges the pulses).
+    ``idz``: the controller's IDZ (its rest command; its edges when the model has none).
+    ``valve_range``: the valve range (default: the model's input limits).
+    ``band``: band around the set-point, degrees.
     """
     edges = chatter_edges(model, idz)
     valve_range = valve_range if valve_range is not None else model.input_limits

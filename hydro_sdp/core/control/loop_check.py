@@ -27,7 +27,7 @@ class CheckSettings:
     """
     What the closed-loop check asks of a controller.
 
-    Parameters
+    Attributes
     ----------
     dt : float
         Plant sample period, s.
@@ -40,10 +40,8 @@ class CheckSettings:
     tail : float
         Last seconds of each hold watched for a limit cycle, s.
     noise_std : float
-        Angle measurement noise, standard deviation, degrees (``calibrate``: the
-        noise identify found in the records).
-    seed : int
-        Seed of the noise.
+        Angle measurement noise, standard deviation, degrees (``calibrate``: the noise identify
+        found in the records).
 
     """
 
@@ -61,10 +59,8 @@ class LoopCheck:
     """
     The verdict of one closed-loop check.
 
-    Parameters
+    Attributes
     ----------
-    passed : bool
-        Whether every step and the ramp passed.
     steps : tuple[StepMetrics, ...]
         Settling time and overshoot of each step across the stroke.
     bounds : tuple[float, ...]
@@ -73,12 +69,8 @@ class LoopCheck:
         Largest tracking error while following the ramp, degrees.
     ramp_settling : float
         Settling time after the ramp ends, s (``inf``: never).
-    cycles : int
-        Holds that end in a limit cycle.
     failures : tuple[str, ...]
         Why it failed, one line each (empty when it passed).
-    steps_trace, ramp_trace : LoopTrace
-        The two runs, for the report.
     chatter : Chatter
         The valve's pulses and travel at hold over both runs.
 
@@ -111,20 +103,7 @@ def stroke_levels(stroke: tuple[float, float]) -> tuple[float, ...]:
 
 
 def full_speed(model: JointModel) -> float:
-    """
-    Slower of the two directions' largest speeds, deg/s.
-
-    Parameters
-    ----------
-    model : JointModel
-        The joint.
-
-    Returns
-    -------
-    float
-        The speed at the input limits (or the saturation speed), the smaller direction.
-
-    """
+    """Slower of the two directions' largest speeds, deg/s."""
     saturation = getattr(model.static_map, 'saturation_velocity', None)
     if saturation is not None:
         return float(min(abs(saturation[0]), abs(saturation[1])))
@@ -156,24 +135,9 @@ def check_loop(model: JointModel, spec: ControllerSpec, stroke: tuple[float, flo
     """
     Run a controller on a model over steps across the stroke and a ramp, and judge it.
 
-    Parameters
-    ----------
-    model : JointModel
-        The simulated joint, with its effects.
-    spec : ControllerSpec
-        The controller.
-    stroke : tuple[float, float]
-        Range between the end stops (or the angles the joint was seen at), degrees.
-    settings : CheckSettings or None
-        Bounds and timing; default :class:`CheckSettings`.
-    on_sample : callable or None
-        Progress, as ``on_sample(done, total)``.
-
-    Returns
-    -------
-    LoopCheck
-        The metrics, the verdict and the traces.
-
+    ``stroke``: range between the end stops (or the angles the joint was seen at), degrees.
+    ``settings``: bounds and timing; default :class:`CheckSettings`.
+    ``on_sample``: progress, as ``on_sample(done, total)``.
     """
     settings = settings if settings is not None else CheckSettings()
     low, middle, high = stroke_levels(stroke)

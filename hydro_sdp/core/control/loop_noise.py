@@ -10,22 +10,7 @@ DOUBLINGS = 64
 
 
 def noise_gain(plant: DiscretePlant, gains: PipGains) -> float:
-    """
-    Return the standard deviation of ``u`` per degree of white noise on the measured angle.
-
-    Parameters
-    ----------
-    plant : DiscretePlant
-        The design plant.
-    gains : PipGains
-        The PIP gains (a stable closed loop).
-
-    Returns
-    -------
-    float
-        ``sqrt(sum h_k^2)`` of the impulse response ``h`` from the noise to ``u``.
-
-    """
+    """Return the standard deviation of ``u`` per degree of white noise on the measured angle."""
     denominator = np.real(np.poly(closed_loop_poles(plant, gains)))
     delta = np.array([1.0, -1.0])
     feedback = np.convolve(delta, np.asarray(gains.f, dtype=np.float64))

@@ -27,16 +27,10 @@ class Obstacle:
     """
     The check with one element idealised.
 
-    Parameters
+    Attributes
     ----------
     element : str
         One of :data:`ELEMENTS`.
-    idealised : str
-        What the element was made, in words.
-    passed : bool
-        Whether the check then passes.
-    failures : int
-        How many failures are left.
 
     """
 
@@ -99,25 +93,11 @@ def obstacles(model: JointModel, spec: ControllerSpec, stroke: tuple[float, floa
     """
     Run the check with each element idealised in turn.
 
-    Parameters
-    ----------
-    model : JointModel
-        The model the check failed on.
-    spec : ControllerSpec
-        The controller that failed.
-    stroke : tuple[float, float]
-        The check's stroke, degrees.
-    settings : CheckSettings
-        The check's settings (noise included).
-    redesign : callable
-        Designs the controller for an idealised model with given poles (the same
-        IDZ form and options as ``spec``).
-
-    Returns
-    -------
-    tuple of Obstacle
-        One per element that applies, in the order of :data:`ELEMENTS`.
-
+    ``stroke``: the check's stroke, degrees.
+    ``settings``: the check's settings (noise included).
+    ``redesign``: designs the controller for an idealised model with given poles (the same IDZ form
+    and options as ``spec``).
+    Returns: one per element that applies, in the order of :data:`ELEMENTS`.
     """
     found = []
     for element, words, ideal, again, ideal_settings in _idealised(model, spec, settings):

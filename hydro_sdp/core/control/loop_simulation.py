@@ -22,19 +22,15 @@ class LoopJoint:
     """
     One joint in a closed loop.
 
-    Parameters
+    Attributes
     ----------
-    model : JointModel
-        The simulated joint (its effects included).
-    controller : PipIdzController
-        The controller; it is stepped in place.
     setpoint : FloatArray
         Desired angle at every plant sample, degrees.
     y0 : float
         Starting angle, degrees.
     feedforward : FloatArray or None
-        Feed-forward at every plant sample, degrees per control sample (used at
-        the control instants, see :meth:`PipIdzController.step`); ``None``: none.
+        Feed-forward at every plant sample, degrees per control sample (used at the control
+        instants, see :meth:`PipIdzController.step`); ``None``: none.
 
     """
 
@@ -50,10 +46,8 @@ class LoopTrace:
     """
     What happened to one joint.
 
-    Parameters
+    Attributes
     ----------
-    joint : str
-        Joint name.
     t : FloatArray
         Plant sample times, s.
     y : FloatArray
@@ -62,8 +56,8 @@ class LoopTrace:
         Angle the controller saw (with noise), degrees.
     v : FloatArray
         Valve command in force over the interval ending at each sample (as in a
-        :class:`~hydro_sdp.core.model.records.Record`): the controller's answer to
-        ``y_j`` is ``v[j + 1]``.
+        :class:`~hydro_sdp.core.model.records.Record`): the controller's answer to ``y_j`` is
+        ``v[j + 1]``.
     u : FloatArray
         Controller increment alongside ``v``, degrees per control sample.
     setpoint : FloatArray
@@ -86,28 +80,14 @@ def run_closed_loop(joints: Sequence[LoopJoint], *, dt: float, control_period: f
     """
     Simulate joints under PIP-IDZ control.
 
-    Parameters
-    ----------
-    joints : sequence of LoopJoint
-        The joints; all set-point arrays have the same length (the run's samples).
-    dt : float
-        Plant sample period, s.
-    control_period : float
-        Controller period, s: a whole multiple of ``dt`` (within
-        :data:`~hydro_sdp.core.model.sample_period.PERIOD_TOLERANCE`: the controller
-        steps every that many samples).
-    noise_std : float
-        Standard deviation of the angle measurement noise, degrees.
-    seed : int
-        Seed of the noise.
-    on_sample : callable or None
-        Called as ``on_sample(done, total)`` every 1000 samples (progress).
-
-    Returns
-    -------
-    list of LoopTrace
-        One trace per joint.
-
+    ``joints``: the joints; all set-point arrays have the same length (the run's samples).
+    ``dt``: plant sample period, s.
+    ``control_period``: controller period, s: a whole multiple of ``dt`` (within
+    :data:`~hydro_sdp.core.model.sample_period.PERIOD_TOLERANCE`: the controller steps every that
+    many samples).
+    ``noise_std``: standard deviation of the angle measurement noise, degrees.
+    ``on_sample``: called as ``on_sample(done, total)`` every 1000 samples (progress).
+    Returns: one trace per joint.
     """
     dt = check_sample_period(dt)
     every = control_steps(check_sample_period(control_period), dt)
@@ -206,23 +186,11 @@ def step_metrics(trace: LoopTrace, *, band: float = 0.5, initial: float | None =
     """
     Settling time, overshoot and steady error of every set-point step in a trace.
 
-    Parameters
-    ----------
-    trace : LoopTrace
-        The closed-loop run.
-    band : float
-        Settling band around the set-point, degrees.
-    initial : float or None
-        Angle before the first set-point (default: the first angle), so that the
-        first level counts as a step too.
-    tail : float
-        Seconds at the end of each hold averaged for the steady error.
-
-    Returns
-    -------
-    list of StepMetrics
-        One per step.
-
+    ``band``: settling band around the set-point, degrees.
+    ``initial``: angle before the first set-point (default: the first angle), so that the first
+    level counts as a step too.
+    ``tail``: seconds at the end of each hold averaged for the steady error.
+    Returns: one per step.
     """
     setpoint = trace.setpoint
     changes = np.flatnonzero(np.diff(setpoint)) + 1

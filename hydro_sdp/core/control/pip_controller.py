@@ -25,10 +25,8 @@ class ControllerSettings:
     """
     Everything a PIP-IDZ controller needs at run time.
 
-    Parameters
+    Attributes
     ----------
-    gains : PipGains
-        PIP gains.
     idz : InverseDeadZone, TableInverseDeadZone or None
         Inverse dead-zone, chord or table; ``None`` sends ``u`` to the valve unchanged.
     u_limits : tuple[float, float] or None
@@ -54,15 +52,7 @@ class ControllerSettings:
 
 
 class PipIdzController:
-    """
-    Incremental PIP controller with inverse dead-zone, limits and anti-windup.
-
-    Parameters
-    ----------
-    settings : ControllerSettings
-        Gains, IDZ and limits.
-
-    """
+    """Incremental PIP controller with inverse dead-zone, limits and anti-windup."""
 
     def __init__(self, settings: ControllerSettings) -> None:
         self.settings = settings
@@ -81,13 +71,8 @@ class PipIdzController:
         """
         Forget the history; the next step starts bumplessly from ``y`` and ``u``.
 
-        Parameters
-        ----------
-        y : float or None
-            Angle to assume as the past output; ``None`` takes the next measurement.
-        u : float
-            Increment to assume as the past input (0: valve at rest).
-
+        ``y``: angle to assume as the past output; ``None`` takes the next measurement.
+        ``u``: increment to assume as the past input (0: valve at rest).
         """
         self._y = [] if y is None else [float(y)] * (self._n + 1)
         self._u = [float(u)] * self._m
@@ -100,28 +85,14 @@ class PipIdzController:
         """
         Compute one control sample.
 
-        Parameters
-        ----------
-        setpoint : float
-            Desired angle ``d_k``, degrees.
-        y : float
-            Measured angle ``y_k``, degrees.
-        feedforward : float or None
-            Set-point increment ``w_k``, degrees per control sample, ``tau`` samples
-            ahead (methods 4.9); ``None``: the plain PIP law.
-
-        Returns
-        -------
-        tuple[float, float]
-            ``(u, v)``: the increment applied (angle per control sample) and the
-            valve command (input units), always finite and inside their limits.
-
-        Raises
-        ------
-        DataError
-            If ``setpoint``, ``y`` or ``feedforward`` is not finite; the state
-            is left unchanged.
-
+        ``setpoint``: desired angle ``d_k``, degrees.
+        ``y``: measured angle ``y_k``, degrees.
+        ``feedforward``: set-point increment ``w_k``, degrees per control sample, ``tau`` samples
+        ahead (methods 4.9); ``None``: the plain PIP law.
+        Returns: ``(u, v)``: the increment applied (angle per control sample) and the valve command
+        (input units), always finite and inside their limits.
+        Raises DataError if ``setpoint``, ``y`` or ``feedforward`` is not finite; the state is left
+        unchanged.
         """
         if feedforward is not None:
             return self._step_feedforward(float(setpoint), float(y), float(feedforward))
@@ -210,15 +181,7 @@ class PipIdzController:
         return float(sum(self._u[:max(delay - 1, 0)]))
 
     def update_idz(self, idz: Idz) -> None:
-        """
-        Change the IDZ at run time without a jump in the valve command.
-
-        Parameters
-        ----------
-        idz : InverseDeadZone or TableInverseDeadZone
-            The new inverse dead-zone.
-
-        """
+        """Change the IDZ at run time without a jump in the valve command."""
         settings = replace(self.settings, idz=idz)  # validates against the valve range
         old = self.settings.idz
         if old is not None and self._u and self._branch != 0:

@@ -70,16 +70,10 @@ class Nmss:
     """
     NMSS form ``x_k = F x_{k-1} + g u_{k-1} + d r_k``, ``y_k = h' x_k``.
 
-    Parameters
+    Attributes
     ----------
     F : FloatArray
         State transition matrix, ``(n + m, n + m)``.
-    g : FloatArray
-        Input vector.
-    d : FloatArray
-        Command (set-point) vector.
-    h : FloatArray
-        Output vector.
 
     """
 
@@ -93,16 +87,7 @@ def nmss(plant: DiscretePlant) -> Nmss:
     """
     Build the NMSS model of ``plant`` (docs/methods.md section 4.1).
 
-    Parameters
-    ----------
-    plant : DiscretePlant
-        The plant.
-
-    Returns
-    -------
-    Nmss
-        Matrices of dimension ``n + m``.
-
+    Returns: matrices of dimension ``n + m``.
     """
     n, m = plant.n, plant.m
     size = n + m
@@ -172,18 +157,7 @@ def closed_loop_poles(plant: DiscretePlant, gains: PipGains) -> np.ndarray:
     """
     Eigenvalues of the closed-loop NMSS matrix ``F - g k'``.
 
-    Parameters
-    ----------
-    plant : DiscretePlant
-        The plant.
-    gains : PipGains
-        The controller.
-
-    Returns
-    -------
-    numpy.ndarray
-        Complex poles, sorted by decreasing magnitude.
-
+    Returns: complex poles, sorted by decreasing magnitude.
     """
     model = nmss(plant)
     k = gains.vector
@@ -223,18 +197,7 @@ def pole_assignment(plant: DiscretePlant, poles: Sequence[complex]) -> PipGains:
     """
     PIP gains that place the closed-loop poles at ``poles``.
 
-    Parameters
-    ----------
-    plant : DiscretePlant
-        The plant.
-    poles : sequence of complex
-        ``n + m`` poles, complex ones in conjugate pairs.
-
-    Returns
-    -------
-    PipGains
-        The gains; their closed-loop poles are checked against ``poles``.
-
+    ``poles``: ``n + m`` poles, complex ones in conjugate pairs.
     """
     n, m = plant.n, plant.m
     poles = [complex(p) for p in poles]
@@ -275,14 +238,10 @@ class LqWeights:
     """
     Diagonal LQ weights in the True Digital Control convention.
 
-    Parameters
+    Attributes
     ----------
-    w_y : float
-        Total weight on the output states.
     w_u : float
         Total weight on the input states and the input.
-    w_e : float
-        Weight on the integral-of-error state.
 
     """
 
@@ -297,22 +256,7 @@ class LqWeights:
 
 
 def lq_design(plant: DiscretePlant, weights: LqWeights = LqWeights()) -> PipGains:
-    """
-    LQ-optimal PIP gains from the discrete algebraic Riccati equation.
-
-    Parameters
-    ----------
-    plant : DiscretePlant
-        The plant.
-    weights : LqWeights
-        Diagonal weights.
-
-    Returns
-    -------
-    PipGains
-        The gains; the closed loop is checked to be stable.
-
-    """
+    """LQ-optimal PIP gains from the discrete algebraic Riccati equation."""
     from scipy.linalg import solve_discrete_are   # here: only LQ designs need scipy
     model = nmss(plant)
     n, m = plant.n, plant.m

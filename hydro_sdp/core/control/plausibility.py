@@ -16,15 +16,9 @@ class FeedbackPlausibility:
     """
     Range and speed checks of one joint's measured angle.
 
-    Parameters
-    ----------
-    angle_limits : tuple[float, float] or None
-        End stops, degrees (None: no range check).
-    top_speed : float or None
-        Largest speed of the joint either way, deg/s (None: no speed check).
-    margin : float
-        Allowance beyond the stops and on each change, degrees (>= 0).
-
+    ``angle_limits``: end stops, degrees (None: no range check).
+    ``top_speed``: largest speed of the joint either way, deg/s (None: no speed check).
+    ``margin``: allowance beyond the stops and on each change, degrees (>= 0).
     """
 
     def __init__(self, angle_limits: tuple[float, float] | None, top_speed: float | None,
@@ -54,18 +48,9 @@ class FeedbackPlausibility:
         """
         Refuse an angle the joint cannot have; remember it if it lies within range.
 
-        Parameters
-        ----------
-        stamp_ns : int
-            Its stamp, ns (after the previous sample's).
-        angle : float
-            Measured angle, degrees (finite).
-
-        Raises
-        ------
-        DataError
-            Naming the angle and the stops, or the change, the time and the top speed.
-
+        ``stamp_ns``: its stamp, ns (after the previous sample's).
+        ``angle``: measured angle, degrees (finite).
+        Raises DataError naming the angle and the stops, or the change, the time and the top speed.
         """
         margin = self._margin
         limits = self.angle_limits

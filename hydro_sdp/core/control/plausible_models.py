@@ -34,12 +34,10 @@ class Plausible:
     """
     One model the data do not rule out.
 
-    Parameters
+    Attributes
     ----------
     name : str
         What was changed (``dead_zone[0] +2 SE``, ``delay -1 sample``, ``family pwl``...).
-    model : JointModel
-        The changed model.
 
     """
 
@@ -98,21 +96,11 @@ def with_edge_at(model: JointModel, side: int, edge: float) -> JointModel | None
     """
     Return ``model`` with one dead-zone edge moved to ``edge``, as a piecewise-linear map.
 
-    Parameters
-    ----------
-    model : JointModel
-        The model; the commands its IDZ table covers (``command_span``: the input
-        limits, else the map's own range) bound the stretch.
-    side : int
-        0 for the negative edge, 1 for the positive one.
-    edge : float
-        The new edge, input units (clipped between rest and the limit).
-
-    Returns
-    -------
-    JointModel or None
-        The changed model, or None where it has no command range to stretch over.
-
+    ``model``: the model; the commands its IDZ table covers (``command_span``: the input limits,
+    else the map's own range) bound the stretch.
+    ``side``: 0 for the negative edge, 1 for the positive one.
+    ``edge``: the new edge, input units (clipped between rest and the limit).
+    Returns: the changed model, or None where it has no command range to stretch over.
     """
     try:
         limits = command_span(model)
@@ -154,22 +142,11 @@ def plausible_models(model: JointModel, *, standard_errors: Mapping[str, float],
     """
     Return the models one change away from ``model`` that its data do not rule out.
 
-    Parameters
-    ----------
-    model : JointModel
-        The identified model (with its effects).
-    standard_errors : mapping
-        Standard errors of its map parameters, by model-file name (``dead_zone[0]``).
-    dt : float
-        The records' sample period, s: the delay's resolution.
-    families : sequence of JointModel
-        Models of the other map families within the held-out tie band.
-
-    Returns
-    -------
-    tuple[Plausible, ...]
-        In the order: families, map parameters, undetermined edges, delay, lag.
-
+    ``standard_errors``: standard errors of its map parameters, by model-file name
+    (``dead_zone[0]``).
+    ``dt``: the records' sample period, s: the delay's resolution.
+    ``families``: models of the other map families within the held-out tie band.
+    Returns: in the order: families, map parameters, undetermined edges, delay, lag.
     """
     found = [Plausible(f'family {other.kind}', other) for other in families]
     bounded = {entry.parameter: entry for entry in model.undetermined}
@@ -204,15 +181,7 @@ def plausible_models(model: JointModel, *, standard_errors: Mapping[str, float],
 
 @dataclass(frozen=True, eq=False)
 class PlausibleCheck:
-    """
-    A controller's closed-loop check on every plausible model.
-
-    Parameters
-    ----------
-    checks : tuple[tuple[Plausible, LoopCheck], ...]
-        Each model and its check.
-
-    """
+    """A controller's closed-loop check on every plausible model."""
 
     checks: tuple[tuple[Plausible, LoopCheck], ...]
 
@@ -225,12 +194,8 @@ class PlausibleCheck:
         """
         Return the worst figure of each metric and the model that gave it.
 
-        Returns
-        -------
-        dict
-            ``settling_time`` (s), ``overshoot`` (%), ``steady_error`` (deg),
-            ``pulse_rate`` (per s of hold): ``(value, model name)``; empty without checks.
-
+        Returns: ``settling_time`` (s), ``overshoot`` (%), ``steady_error`` (deg), ``pulse_rate``
+        (per s of hold): ``(value, model name)``; empty without checks.
         """
         metrics: dict[str, Callable[[LoopCheck], float]] = {
             'settling_time': lambda c: max((m.settling_time for m in c.steps), default=0.0),

@@ -26,23 +26,11 @@ def setpoint_range(angle_limits: tuple[float, float] | None,
     """
     Return the range of allowed set-points: the end stops moved ``margin`` inwards.
 
-    Parameters
-    ----------
-    angle_limits : tuple[float, float] or None
-        End stops, degrees (``None``: no stops, no range).
-    margin : float
-        Distance kept from each stop, degrees (>= 0).
-
-    Returns
-    -------
-    tuple[float, float] or None
-        ``(low, high)``, degrees.
-
-    Raises
-    ------
-    ConfigurationError
-        If ``margin`` is negative or not finite, or leaves no room between the stops.
-
+    ``angle_limits``: end stops, degrees (``None``: no stops, no range).
+    ``margin``: distance kept from each stop, degrees (>= 0).
+    Returns: ``(low, high)``, degrees.
+    Raises ConfigurationError if ``margin`` is negative or not finite, or leaves no room between
+    the stops.
     """
     if not (isinstance(margin, (int, float)) and math.isfinite(margin) and margin >= 0.0):
         raise ConfigurationError(f'setpoint_margin must be a finite number >= 0 deg, '
@@ -69,18 +57,7 @@ def check_controller_fits(spec: ControllerSpec, model: JointModel) -> None:
     """
     Refuse a controller made for another joint or for commands beyond the model's valve range.
 
-    Parameters
-    ----------
-    spec : ControllerSpec
-        The controller (e.g. from a controller file).
-    model : JointModel
-        The joint it is to control.
-
-    Raises
-    ------
-    ConfigurationError
-        Naming the joint or the ranges that differ, and what to do.
-
+    Raises ConfigurationError naming the joint or the ranges that differ, and what to do.
     """
     if spec.joint != model.joint:
         raise ConfigurationError(f'the controller is for joint {spec.joint!r}, the model is '
@@ -119,20 +96,9 @@ def slope_bounds(model: JointModel, control_period: float,
     """
     Return the physical IDZ slopes of each side of the model's map, (low, high) each.
 
-    Parameters
-    ----------
-    model : JointModel
-        The joint.
-    control_period : float
-        Control period, s.
-    v_limits : tuple[float, float] or None
-        Valve range, input units (default: the model's).
-
-    Returns
-    -------
-    list of (float, float) or None
-        Negative side, positive side; None for a side without a range or without motion.
-
+    ``control_period``: control period, s.
+    ``v_limits``: valve range, input units (default: the model's).
+    Returns: negative side, positive side; None for a side without a range or without motion.
     """
     limits = v_limits if v_limits is not None else model.input_limits
     if limits is None:
@@ -156,22 +122,9 @@ def check_idz_fits(idz: Idz, model: JointModel, control_period: float,
     """
     Refuse an IDZ whose edges leave the valve range or whose slopes the joint cannot have.
 
-    Parameters
-    ----------
-    idz : InverseDeadZone or TableInverseDeadZone
-        The IDZ (from run-time parameters).
-    model : JointModel
-        The joint the controller runs.
-    control_period : float
-        Control period, s.
-    v_limits : tuple[float, float] or None
-        Valve range, input units (default: the model's).
-
-    Raises
-    ------
-    ConfigurationError
-        Naming the edge or slope, its bound and where the bound comes from.
-
+    ``control_period``: control period, s.
+    ``v_limits``: valve range, input units (default: the model's).
+    Raises ConfigurationError naming the edge or slope, its bound and where the bound comes from.
     """
     limits = v_limits if v_limits is not None else model.input_limits
     low, high = idz.dead_zone
@@ -195,11 +148,7 @@ class StopHold:
     """
     Hold the valve in its dead-zone once the joint is near a set-point at a stop.
 
-    Parameters
-    ----------
-    band : float
-        Band, degrees (>= 0; 0 never holds).
-
+    ``band``: band, degrees (>= 0; 0 never holds).
     """
 
     def __init__(self, band: float = STOP_BAND) -> None:
@@ -223,20 +172,9 @@ class StopHold:
         """
         Return whether the valve holds at this control step.
 
-        Parameters
-        ----------
-        setpoint : float
-            Set-point in force, degrees.
-        angle : float
-            The angle, degrees: measured, or where the commands already sent take the joint.
-        allowed : tuple[float, float] or None
-            Allowed set-point range (:func:`setpoint_range`); None: no stops, no hold.
-
-        Returns
-        -------
-        bool
-            True: send the rest command.
-
+        ``setpoint``: set-point in force, degrees.
+        ``angle``: the angle, degrees: measured, or where the commands already sent take the joint.
+        ``allowed``: allowed set-point range (:func:`setpoint_range`); None: no stops, no hold.
         """
         band = self._band
         side = 0.0

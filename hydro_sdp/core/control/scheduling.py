@@ -24,20 +24,7 @@ def _positive_ns(value: int, name: str) -> int:
 
 
 def seconds_to_ns(seconds: float) -> int:
-    """
-    Return a duration in seconds as whole nanoseconds (nearest).
-
-    Parameters
-    ----------
-    seconds : float
-        Duration, s.
-
-    Returns
-    -------
-    int
-        Duration, ns.
-
-    """
+    """Return a duration in seconds as whole nanoseconds (nearest)."""
     return int(round(float(seconds) * 1e9))
 
 
@@ -45,16 +32,10 @@ class FeedbackGate:
     """
     Admission of feedback samples by stamp, and the feedback watchdog.
 
-    Parameters
-    ----------
-    timeout_ns : int
-        Longest accepted age of a stamp, and longest silence before the watchdog
-        fires, ns.
-    now_ns : int
-        Clock reading at creation, ns (the silence is counted from here).
-    lead_ns : int or None
-        Longest accepted lead of a stamp over the clock, ns (default ``timeout_ns``).
-
+    ``timeout_ns``: longest accepted age of a stamp, and longest silence before the watchdog fires,
+    ns.
+    ``now_ns``: clock reading at creation, ns (the silence is counted from here).
+    ``lead_ns``: longest accepted lead of a stamp over the clock, ns (default ``timeout_ns``).
     """
 
     def __init__(self, timeout_ns: int, now_ns: int, lead_ns: int | None = None) -> None:
@@ -79,29 +60,15 @@ class FeedbackGate:
         """
         Decide on one sample stamped ``stamp_ns`` arriving at clock reading ``now_ns``.
 
-        Parameters
-        ----------
-        stamp_ns : int
-            Stamp of the sample, ns.
-        now_ns : int
-            Reader's clock, ns; 0 means simulated time has not started, and the
-            freshness check is skipped.
-        steady_ns : int or None
-            A steady clock's reading, ns, for the watchdog (None: not kept).
-
-        Returns
-        -------
-        Admission
-            ``ignored`` for a duplicate or overtaken sample (nothing changes),
-            ``accepted``, or ``resumed`` after a silence the watchdog reported.
-
-        Raises
-        ------
-        DataError
-            If the stamp is more than the timeout behind the clock, or more than
-            ``lead_ns`` ahead of it (one from the future would make every later sample
-            look old); the caller closes the valve.
-
+        ``stamp_ns``: stamp of the sample, ns.
+        ``now_ns``: reader's clock, ns; 0 means simulated time has not started, and the freshness
+        check is skipped.
+        ``steady_ns``: a steady clock's reading, ns, for the watchdog (None: not kept).
+        Returns: ``ignored`` for a duplicate or overtaken sample (nothing changes), ``accepted``,
+        or ``resumed`` after a silence the watchdog reported.
+        Raises DataError if the stamp is more than the timeout behind the clock, or more than
+        ``lead_ns`` ahead of it (one from the future would make every later sample look old); the
+        caller closes the valve.
         """
         if now_ns != 0:
             lead = stamp_ns - now_ns
@@ -136,21 +103,9 @@ class FeedbackGate:
         """
         Check the silence at clock reading ``now_ns`` (and steady reading ``steady_ns``).
 
-        Parameters
-        ----------
-        now_ns : int
-            Clock reading, ns.
-        steady_ns : int or None
-            Steady clock reading, ns: once a sample was accepted with a steady reading,
-            the silence is the longer of the two clocks' (a simulated clock that stops
-            does not stop the watchdog).
-
-        Returns
-        -------
-        WatchdogState
-            ``fed``; ``lost`` the first time the silence exceeds the timeout;
-            ``blind`` while it lasts. The caller keeps the valve closed on both.
-
+        ``steady_ns``: steady clock reading, ns: once a sample was accepted with a steady reading,
+        the silence is the longer of the two clocks' (a simulated clock that stops does not stop
+        the watchdog).
         """
         if now_ns < self.last_valid_ns:
             self.last_valid_ns = now_ns
@@ -168,15 +123,7 @@ def watchdog_period_ns(timeout_ns: int, longest_ns: int = 100_000_000) -> int:
 
 
 class ControlSchedule:
-    """
-    Control instants every ``period_ns`` from the first admitted sample.
-
-    Parameters
-    ----------
-    period_ns : int
-        Control period, ns.
-
-    """
+    """Control instants every ``period_ns`` from the first admitted sample."""
 
     def __init__(self, period_ns: int) -> None:
         self.period_ns = _positive_ns(period_ns, 'period_ns')
@@ -196,16 +143,8 @@ class ControlSchedule:
         """
         Record that the sample stamped ``stamp_ns`` was controlled; move to the next instant.
 
-        Parameters
-        ----------
-        stamp_ns : int
-            Stamp of the controlled sample, ns.
-
-        Returns
-        -------
-        int
-            Control instants missed before this sample (0 on time).
-
+        ``stamp_ns``: stamp of the controlled sample, ns.
+        Returns: control instants missed before this sample (0 on time).
         """
         if self.next_instant is None:
             self.next_instant = stamp_ns

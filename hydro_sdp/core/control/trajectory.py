@@ -18,21 +18,16 @@ class JointTrajectory:
     """
     Points for several joints, as ``trajectory_msgs/JointTrajectory`` in degrees.
 
-    Parameters
+    Raises DataError naming what is wrong (names, lengths, times, values).
+
+    Attributes
     ----------
-    joint_names : tuple of str
-        Joints, unique.
     times : FloatArray
         Time from start of each point, s: finite, >= 0, strictly increasing.
     positions : FloatArray
         Positions, degrees, one row per point and one column per joint.
     velocities : FloatArray or None
         Velocities, deg/s, same shape as ``positions`` (``None``: linear interpolation).
-
-    Raises
-    ------
-    DataError
-        Naming what is wrong (names, lengths, times, values).
 
     """
 
@@ -89,21 +84,10 @@ def check_trajectory(trajectory: JointTrajectory,
     """
     Refuse a trajectory for joints not controlled or beyond the end stops.
 
-    Parameters
-    ----------
-    trajectory : JointTrajectory
-        The trajectory.
-    angle_limits : mapping of str to (float, float) or None
-        End stops of each controlled joint, degrees (``None``: no stops).
-    margin : float
-        Distance kept from the stops, degrees (as :func:`~.safety.setpoint_range`).
-
-    Raises
-    ------
-    DataError
-        One message naming every joint not controlled and every joint whose
-        positions leave the allowed range (its extreme position and the range).
-
+    ``angle_limits``: end stops of each controlled joint, degrees (``None``: no stops).
+    ``margin``: distance kept from the stops, degrees (as :func:`~.safety.setpoint_range`).
+    Raises DataError with one message naming every joint not controlled and every joint whose
+    positions leave the allowed range (its extreme position and the range).
     """
     unknown = [name for name in trajectory.joint_names if name not in angle_limits]
     beyond = []
@@ -133,19 +117,10 @@ def check_trajectory_speeds(rates: Mapping[str, tuple[float, float]],
     """
     Refuse a trajectory whose set-point would move faster than a joint's top speed.
 
-    Parameters
-    ----------
-    rates : mapping of str to (float, float)
-        Lowest and highest set-point rate of each joint it names, deg/s
-        (:meth:`TrajectorySampler.planned_rates`).
-    top_speeds : mapping of str to (float, float) or None
-        Each joint's identified top speeds down (<= 0) and up, deg/s (None: unknown).
-
-    Raises
-    ------
-    DataError
-        One message naming every joint too fast, its rate and its top speed.
-
+    ``rates``: lowest and highest set-point rate of each joint it names, deg/s
+    (:meth:`TrajectorySampler.planned_rates`).
+    ``top_speeds``: each joint's identified top speeds down (<= 0) and up, deg/s (None: unknown).
+    Raises DataError with one message naming every joint too fast, its rate and its top speed.
     """
     fast = []
     for name, (low, high) in rates.items():
@@ -222,12 +197,8 @@ class TrajectorySampler:
     """
     The set-point and set-point rate of each joint at any time.
 
-    Parameters
-    ----------
-    setpoints : mapping of str to float
-        Controlled joints and the set-point each holds until a trajectory
-        comes, degrees.
-
+    ``setpoints``: controlled joints and the set-point each holds until a trajectory comes,
+    degrees.
     """
 
     def __init__(self, setpoints: Mapping[str, float]) -> None:
@@ -272,15 +243,7 @@ class TrajectorySampler:
         """
         Hold ``joint`` at ``position`` (deg) from ``start`` (s) on, replacing what follows.
 
-        Parameters
-        ----------
-        joint : str
-            Joint name.
-        position : float
-            Set-point, degrees.
-        start : float
-            Time from which it holds, s.
-
+        ``start``: time from which it holds, s.
         """
         point = np.full((1, 1), float(position))
         self.replace(JointTrajectory((joint,), np.zeros(1), point), start)
@@ -297,18 +260,7 @@ class TrajectorySampler:
         """
         Return the lowest and highest set-point rate (deg/s) ``trajectory`` would give each joint.
 
-        Parameters
-        ----------
-        trajectory : JointTrajectory
-            The trajectory.
-        start : float
-            Its start time, s.
-
-        Returns
-        -------
-        dict of str to (float, float)
-            By joint, from the set-point in force at ``start`` on (nothing changes here).
-
+        ``start``: its start time, s.
         """
         return {name: piece.rate_range()
                 for name, piece in self._planned(trajectory, start).items()}

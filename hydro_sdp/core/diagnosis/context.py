@@ -24,17 +24,8 @@ class Context:
     """
     The model under test, the runs and what every detector needs from them.
 
-    Parameters
-    ----------
-    model : JointModel
-        The model the candidates augment.
-    runs : sequence of Run
-        Estimation runs.
-    max_delay : int
-        Largest delay considered, samples.
-    naming : Naming or None
-        What the SDP analysis of the model's misses found (None: not analysed).
-
+    ``max_delay``: largest delay considered, samples.
+    ``naming``: what the SDP analysis of the model's misses found (None: not analysed).
     """
 
     def __init__(self, model: JointModel, runs: Sequence[Run], max_delay: int,

@@ -31,30 +31,11 @@ def judge(trial: Trial, model: JointModel, checks: Sequence[Run], base: Sequence
     """
     Judge one candidate on the held-out runs.
 
-    Parameters
-    ----------
-    trial : Trial
-        The candidate and its augmented model (None: nothing to judge).
-    model : JointModel
-        The model under test.
-    checks : sequence of Run
-        Held-out runs.
-    base : sequence of FloatArray
-        The model's velocity residuals on them.
-    block : int
-        Block length of the bootstrap, samples.
-    naming : Naming
-        What the SDP analysis names.
-    state : str
-        The state of the candidate's word.
-    errors : WindowErrors
-        The simulation errors on the held-out runs (the model's made once a round).
-
-    Returns
-    -------
-    Candidate
-        The candidate with its held-out gain, test, windowed errors and verdict.
-
+    ``trial``: the candidate and its augmented model (None: nothing to judge).
+    ``base``: the model's velocity residuals on them.
+    ``block``: block length of the bootstrap, samples.
+    ``state``: the state of the candidate's word.
+    ``errors``: the simulation errors on the held-out runs (the model's made once a round).
     """
     candidate, augmented = trial
     named = naming.named(state) and _direction_agrees(candidate.effect, naming)
@@ -109,22 +90,8 @@ def carry_over(candidate: Candidate, model: JointModel, augmented: JointModel | 
     """
     Refuse an accepted candidate that makes the runs the model came from worse.
 
-    Parameters
-    ----------
-    candidate : Candidate
-        A judged candidate.
-    model : JointModel
-        The model under test.
-    augmented : JointModel or None
-        The model with the candidate's effect.
-    own : WindowErrors
-        The simulation errors on the runs the model was identified from.
-
-    Returns
-    -------
-    Candidate
-        With both figures on those runs; no longer accepted when it does not carry over.
-
+    ``augmented``: the model with the candidate's effect.
+    ``own``: the simulation errors on the runs the model was identified from.
     """
     if not candidate.accepted or augmented is None:
         return candidate
@@ -152,16 +119,7 @@ def explained_away(judged: Sequence[tuple[Candidate, JointModel | None]]
     """
     Refuse ``stroke_geometry`` in a round where a stop or a load is accepted.
 
-    Parameters
-    ----------
-    judged : sequence of (Candidate, JointModel or None)
-        The round's judged candidates.
-
-    Returns
-    -------
-    list of (Candidate, JointModel or None)
-        ``judged``, ``stroke_geometry`` refused with its reason where one is accepted.
-
+    ``judged``: the round's judged candidates.
     """
     causes = [c.effect for c, _ in judged if c.accepted and c.effect in EXPLAINS_ANGLE]
     if not causes:
@@ -187,23 +145,11 @@ def confounded_by_records(judged: Sequence[tuple[Candidate, JointModel | None]],
     """
     Hold back the words that may stand in for records differing in speed for no cause seen.
 
-    Where the records' own speed scales differ beyond their noise and no load signal says
-    why (``load_dependence`` refused), a word fitted to all the records at once takes on
-    part of that difference: an accepted word that removes less of its held-out error
-    than the records' scales remove of theirs waits, unless its cause is in the runs.
+    An accepted word that removes less of its held-out error than the records' own speed
+    scales remove of theirs waits, unless its cause is in the runs (methods 8.4).
 
-    Parameters
-    ----------
-    judged : sequence of (Candidate, JointModel or None)
-        The round's candidates judged on the held-out runs.
-    on_own : sequence of (Candidate, JointModel or None)
-        Those judged on the records themselves (per-record factors).
-
-    Returns
-    -------
-    list of (Candidate, JointModel or None)
-        ``judged``, with such words refused and the reason said.
-
+    ``judged``: the round's candidates judged on the held-out runs.
+    ``on_own``: those judged on the records themselves (per-record factors).
     """
     differ = [c for c, _ in on_own if c.refused and c.held_out > 0.0]
     if not differ:
@@ -229,21 +175,9 @@ def on_common_samples(judged: Sequence[tuple[Candidate, JointModel | None]],
     """
     Return the judged candidates with the accepted ones' windowed errors over the same samples.
 
-    Parameters
-    ----------
-    judged : sequence of (Candidate, JointModel or None)
-        Candidates judged on the runs of ``errors``, with their augmented models.
-    model : JointModel
-        The model under test.
-    errors : WindowErrors
-        The simulation errors on the held-out runs.
-
-    Returns
-    -------
-    list of (Candidate, JointModel or None)
-        ``judged``, the accepted candidates' held-out share and windowed errors now
-        over the samples they share.
-
+    ``judged``: candidates judged on the runs of ``errors``, with their augmented models.
+    Returns: ``judged``, the accepted candidates' held-out share and windowed errors now over the
+    samples they share.
     """
     accepted = {i: augmented for i, (candidate, augmented) in enumerate(judged)
                 if candidate.accepted and augmented is not None}
@@ -272,20 +206,9 @@ def rank(candidates: Sequence[Candidate], naming: Naming) -> list[Candidate]:
     """
     Return the candidates in the order they are tried: accepted first, by held-out gain.
 
-    Parameters
-    ----------
-    candidates : sequence of Candidate
-        Judged candidates.
-    naming : Naming
-        What the SDP analysis names.
-
-    Returns
-    -------
-    list[Candidate]
-        Accepted candidates first, by the share of the held-out windowed error they
-        remove; the others after, by size; a richer word after the simpler word it
-        holds unless it lowers the windowed error by :data:`MARGIN` more.
-
+    Returns: accepted candidates first, by the share of the held-out windowed error they remove;
+    the others after, by size; a richer word after the simpler word it holds unless it lowers the
+    windowed error by :data:`MARGIN` more.
     """
     def key(candidate: Candidate) -> tuple[bool, float, float]:
         return (not candidate.accepted, -candidate.held_out, -candidate.gain)

@@ -27,24 +27,22 @@ class Naming:
     """
     What the SDP analysis of the model's misses says, state by state.
 
-    Parameters
+    Attributes
     ----------
     analysis : SdpAnalysis or None
         The analysis (None when the records could not be analysed).
     shares : dict[str, float]
-        Per state analysed: the share of the squared residual its significant
-        dependences remove, held out (the larger of the ratio's, summed over the
-        directions, and the residual's; 0 when none is significant).
+        Per state analysed: the share of the squared residual its significant dependences remove,
+        held out (the larger of the ratio's, summed over the directions, and the residual's; 0 when
+        none is significant).
     agreement : float or None
-        Correlation of the two directions' ratios along the angle where both are
-        seen: near 1 when a factor of the angle is shared, near -1 when it mirrors.
+        Correlation of the two directions' ratios along the angle where both are seen: near 1 when
+        a factor of the angle is shared, near -1 when it mirrors.
     shared : bool
-        Whether the angle's dependence is a factor both directions share: the ratio
-        explains more than the residual and the two directions agree (a mirrored
-        factor, gravity-like, adds the same offset to both directions' increments,
-        which the residual shows and the ratio's per-direction curves mirror).
-    failure : str
-        Why there is no analysis.
+        Whether the angle's dependence is a factor both directions share: the ratio explains more
+        than the residual and the two directions agree (a mirrored factor, gravity-like, adds the
+        same offset to both directions' increments, which the residual shows and the ratio's
+        per-direction curves mirror).
 
     """
 
@@ -88,17 +86,9 @@ def agreement_of(up: StateDependence, down: StateDependence) -> float | None:
     """
     Return the correlation of two directions' ratios along one state where both are seen.
 
-    Parameters
-    ----------
-    up, down : StateDependence
-        The ratio along the state for each direction of motion.
-
-    Returns
-    -------
-    float or None
-        Correlation of the two curves over 50 points of their common range; None when
-        they share too little of it or either is flat.
-
+    ``up``, ``down``: the ratio along the state for each direction of motion.
+    Returns: correlation of the two curves over 50 points of their common range; None when they
+    share too little of it or either is flat.
     """
     low = max(float(up.values[0]), float(down.values[0]))
     high = min(float(up.values[-1]), float(down.values[-1]))
@@ -117,16 +107,8 @@ def scale_share(rows: Rows) -> float:
     """
     Return the share of the squared increment residual a speed scale per direction removes.
 
-    Parameters
-    ----------
-    rows : Rows
-        Rows of the analysis, with the model's increments.
-
-    Returns
-    -------
-    float
-        ``1 - sum (dy - c dy^)^2 / sum (dy - dy^)^2`` with ``c`` fitted per direction.
-
+    ``rows``: rows of the analysis, with the model's increments.
+    Returns: ``1 - sum (dy - c dy^)^2 / sum (dy - dy^)^2`` with ``c`` fitted per direction.
     """
     assert rows.predicted is not None
     measured, predicted = rows.increment, rows.predicted
@@ -147,20 +129,7 @@ def name_states(records: Sequence[Record], model: JointModel, *, seed: int = 0) 
     """
     Analyse what ``model`` misses on ``records`` against every state they can give.
 
-    Parameters
-    ----------
-    records : sequence of Record
-        Estimation records.
-    model : JointModel
-        The model under test.
-    seed : int
-        Seed of the bootstrap.
-
-    Returns
-    -------
-    Naming
-        The shares of the states and the angle's agreement.
-
+    Returns: the shares of the states and the angle's agreement.
     """
     try:
         # The held-out share is the evidence: no bootstrap (the candidates get theirs).

@@ -49,18 +49,9 @@ def bootstrap_block(candidate: Sequence[FloatArray], shortest: int) -> int:
     """
     Return the block length: twice the candidate residual's correlation, at least ``shortest``.
 
-    Parameters
-    ----------
-    candidate : sequence of FloatArray
-        The candidate's velocity residuals, run by run.
-    shortest : int
-        Fewest samples per block.
-
-    Returns
-    -------
-    int
-        Samples per block.
-
+    ``candidate``: the candidate's velocity residuals, run by run.
+    ``shortest``: fewest samples per block.
+    Returns: samples per block.
     """
     longest = max((series.size for series in candidate), default=0)
     if longest == 0:
@@ -74,22 +65,10 @@ def reduction_test(base: Sequence[FloatArray], candidate: Sequence[FloatArray], 
     """
     Test the candidate's reduction of the squared residual by a block bootstrap.
 
-    Parameters
-    ----------
-    base, candidate : sequence of FloatArray
-        Velocity residuals of the model and of the candidate, run by run (same shapes).
-    block : int
-        Samples per block (the last block of a run may be shorter).
-    replicates : int
-        Bootstrap replicates.
-    seed : int
-        Seed of the signs.
-
-    Returns
-    -------
-    Reduction
-        Share removed, standard score, p-value and block length.
-
+    ``base``, ``candidate``: velocity residuals of the model and of the candidate, run by run (same
+    shapes).
+    ``block``: samples per block (the last block of a run may be shorter).
+    Returns: share removed, standard score, p-value and block length.
     """
     sums: list[float] = []
     total = removed = changed = 0.0

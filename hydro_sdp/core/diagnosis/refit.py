@@ -63,15 +63,8 @@ class MapFamily:
     """
     Static maps with a chosen set of features, as functions of free parameters.
 
-    Parameters
-    ----------
-    features : Features
-        The features the maps have.
-    rest : float
-        Rest command, input units.
-    scale : float
-        Largest distance of a command from ``rest``, input units.
-
+    ``rest``: rest command, input units.
+    ``scale``: largest distance of a command from ``rest``, input units.
     """
 
     def __init__(self, features: Features, rest: float, scale: float) -> None:
@@ -219,20 +212,7 @@ def refit_map(context: Context, features: Features, delay: float | None = None) 
     """
     Return the model under test with its map refitted to have ``features``.
 
-    Parameters
-    ----------
-    context : Context
-        The model under test and the data.
-    features : Features
-        The features the refitted map has.
-    delay : float or None
-        Delay to fit at, s (default: the model's).
-
-    Returns
-    -------
-    JointModel
-        The model with the refitted map.
-
+    ``delay``: delay to fit at, s (default: the model's).
     """
     model = context.model if delay is None else replace(context.model, delay=delay)
     families = [features]

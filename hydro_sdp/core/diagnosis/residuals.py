@@ -29,10 +29,8 @@ class Run:
     """
     A record with the sample it is simulated from.
 
-    Parameters
+    Attributes
     ----------
-    record : Record
-        Measured record.
     dt : float
         Its sample period, s.
     start : int
@@ -76,21 +74,10 @@ def runs_of(records: Sequence[Record], max_delay: float, settle: float = 1.0) ->
     """
     Wrap records with the sample each is simulated from.
 
-    Parameters
-    ----------
-    records : sequence of Record
-        Measured records.
-    max_delay : float
-        Largest delay considered, s.
-    settle : float
-        Shortest hold, s (0: every delayed command known is enough: the held-out runs
-        a candidate is judged on, where a short run's first seconds count).
-
-    Returns
-    -------
-    list[Run]
-        One run per record.
-
+    ``max_delay``: largest delay considered, s.
+    ``settle``: shortest hold, s (0: every delayed command known is enough: the held-out runs a
+    candidate is judged on, where a short run's first seconds count).
+    Returns: one run per record.
     """
     runs = []
     for record in records:

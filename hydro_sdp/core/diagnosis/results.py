@@ -22,42 +22,32 @@ class Candidate:
     """
     One effect tried on the data.
 
-    Parameters
+    Attributes
     ----------
-    effect : str
-        Vocabulary word.
     applicable : bool
         Whether the effect can be added to this model at all.
     gain : float
-        Share of the squared velocity residual the effect removes on the held-out
-        runs (on the estimation runs until it is judged).
+        Share of the squared velocity residual the effect removes on the held-out runs (on the
+        estimation runs until it is judged).
     t : float
         Standard score of that reduction under the block bootstrap's null.
     significant : bool
         Whether the reduction is significant (``p_value`` <= 0.01).
-    parameters : dict
-        Fitted parameters of the effect.
-    evidence : str
-        What in the data shows it.
     signature_match : bool
-        Whether the data show the effect's own signature, which no other word
-        explains (reported; the ranking is by held-out gain alone).
-    p_value : float
-        Block-bootstrap p-value of the reduction.
+        Whether the data show the effect's own signature, which no other word explains (reported;
+        the ranking is by held-out gain alone).
     held_out : float
-        Share of the windowed simulation error on the held-out runs it removes; once
-        accepted, over the samples all accepted candidates share (what they rank by).
+        Share of the windowed simulation error on the held-out runs it removes; once accepted, over
+        the samples all accepted candidates share (what they rank by).
     window_before, window_after : float
         That error of the model under test and with the effect, degrees.
-    accepted : bool
-        Whether it passes the decision (size and significance).
     state : str
         The state of the SDP analysis that names the word.
     named_by_data : bool
         Whether the SDP analysis names that state (docs/methods.md section 8.2).
     own_before, own_after : float
-        The windowed error on the runs the model was identified from, without and
-        with the effect, degrees (NaN: not compared).
+        The windowed error on the runs the model was identified from, without and with the effect,
+        degrees (NaN: not compared).
     carries_over : bool
         Whether it is no worse there beyond the tie band (docs/methods.md section 8.4).
     refused : str
@@ -95,16 +85,10 @@ class LedgerStep:
     """
     One iteration of the workflow.
 
-    Parameters
+    Attributes
     ----------
-    effect : str
-        The effect added.
-    parameters : dict
-        Its fitted parameters.
     mae_before : float
         Validation simulation MAE before adding it, degrees.
-    mae_after : float
-        The same after.
     window_before, window_after : float
         The windowed simulation error the decision weighed, before and after, degrees.
 
@@ -123,30 +107,23 @@ class Signature:
     """
     The residual signature that named an effect, before and after adding it.
 
-    Parameters
+    Attributes
     ----------
-    effect : str
-        Vocabulary word.
-    feature : Feature
-        What the residual is drawn against.
-    label : str
-        What the x axis shows.
     dt : float
         Sample period, s.
     before, after : FloatArray
-        Velocity residuals (measured minus predicted increments) of the model given
-        and of the augmented model, degrees per sample.
+        Velocity residuals (measured minus predicted increments) of the model given and of the
+        augmented model, degrees per sample.
     x : FloatArray or None
-        Per-sample value of the feature (``command``, ``angle``), aligned with the
-        residuals; None for the event features.
+        Per-sample value of the feature (``command``, ``angle``), aligned with the residuals; None
+        for the event features.
     triggers : IntArray
         Residual indices of the events (``events``, ``reversals``); empty otherwise.
     signs : FloatArray
-        Sign of each event (direction of the change or of the new motion); for the
-        angle words, the direction of the model's motion at every sample instead.
+        Sign of each event (direction of the change or of the new motion); for the angle words, the
+        direction of the model's motion at every sample instead.
     ends : IntArray or None
-        Where each run ends in the residuals when several are joined (exclusive);
-        None for one run.
+        Where each run ends in the residuals when several are joined (exclusive); None for one run.
 
     """
 
@@ -173,17 +150,7 @@ class Signature:
         """
         Return the signatures of several runs as one, runs one after the other.
 
-        Parameters
-        ----------
-        parts : sequence of Signature
-            Signatures of one effect on successive runs (at least one).
-
-        Returns
-        -------
-        Signature
-            Residuals, feature and directions concatenated; event indices shifted to
-            the joined residuals, and where each run ends.
-
+        ``parts``: signatures of one effect on successive runs (at least one).
         """
         first = parts[0]
         ends = np.cumsum([part.before.size for part in parts]).astype(np.int64)
@@ -204,10 +171,8 @@ class GapTraces:
     """
     A validation record simulated with the model given and with the augmented model.
 
-    Parameters
+    Attributes
     ----------
-    t : FloatArray
-        Time, s.
     measured, before, after : FloatArray
         Measured angle and the two simulations, degrees.
 
@@ -224,17 +189,13 @@ class StateEvidence:
     """
     The SDP estimate that named an effect: what the model misses along its state.
 
-    Parameters
+    Attributes
     ----------
-    effect : str
-        The word named.
-    state : str
-        Its state.
     share : float
         Share of the squared residual the state's dependence removes (held out).
     before, after : tuple[StateDependence, ...]
-        The ratio (per direction) and the residual along the state, for the model
-        given and for the model with the effect.
+        The ratio (per direction) and the residual along the state, for the model given and for the
+        model with the effect.
 
     """
 
@@ -250,30 +211,22 @@ class Diagnosis:
     """
     What the workflow found.
 
-    Parameters
+    Attributes
     ----------
     effect : str
         The first (and largest) effect named, or ``none``.
-    model : JointModel
-        The model with every kept effect.
     ledger : tuple[LedgerStep, ...]
         The effects added in turn, with the validation MAE before and after each.
-    candidates : tuple[Candidate, ...]
-        Every effect tried in the first iteration, ranked.
-    rounds : tuple[tuple[Candidate, ...], ...]
-        The candidates of every iteration.
     mae_before : float
         Validation MAE of the model given, degrees.
     mae_after : float
         Validation MAE of the final model, degrees.
-    gap : GapTraces
-        The first validation record against both models.
     signature : Signature or None
-        The residual signature of the first effect named, on the first estimation
-        record; None when nothing was named.
+        The residual signature of the first effect named, on the first estimation record; None when
+        nothing was named.
     evidence : StateEvidence or None
-        The SDP estimate along the state that named the first effect, before and after
-        (None when nothing was named or the state was not analysed).
+        The SDP estimate along the state that named the first effect, before and after (None when
+        nothing was named or the state was not analysed).
     validation : str
         Which records the decision and the MAE were judged on.
     shares : dict[str, float]

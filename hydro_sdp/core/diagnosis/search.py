@@ -45,16 +45,7 @@ def hold_out(records: Sequence[Record]) -> tuple[list[Record], list[Record], str
     """
     Hold out whole recordings to judge the candidates on: every third, from three on.
 
-    Parameters
-    ----------
-    records : sequence of Record
-        The records given.
-
-    Returns
-    -------
-    tuple
-        ``(estimation, held_out, note)``.
-
+    Returns: ``(estimation, held_out, note)``.
     """
     keys = [record.source or f'#{index}' for index, record in enumerate(records)]
     sources = list(dict.fromkeys(keys))

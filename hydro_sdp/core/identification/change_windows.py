@@ -36,13 +36,7 @@ class ChangeWindows:
     """
     The measured increments around every change of the command.
 
-    Parameters
-    ----------
-    experiments : sequence of Experiment
-        The experiments.
-    max_delay : int
-        Largest dead time, samples.
-
+    ``max_delay``: largest dead time, samples.
     """
 
     def __init__(self, experiments: Sequence[Experiment], max_delay: int) -> None:
@@ -103,20 +97,9 @@ class ChangeWindows:
         """
         Return the windows of some of the experiments, scored from what these compute.
 
-        Parameters
-        ----------
-        experiments : sequence of Experiment
-            Experiments these windows were made of, in any order (any other: the
-            windows are made anew).
-        max_delay : int or None
-            Largest dead time, samples (another than these windows': made anew).
-
-        Returns
-        -------
-        ChangeWindows
-            What ``ChangeWindows(experiments, max_delay)`` would be, with the same
-            residuals bit for bit, made without computing a window twice.
-
+        ``experiments``: experiments these windows were made of, in any order (any other: the
+        windows are made anew).
+        ``max_delay``: largest dead time, samples (another than these windows': made anew).
         """
         if max_delay is not None and max_delay != self.max_delay:
             return ChangeWindows(experiments, max_delay)
@@ -139,18 +122,9 @@ class ChangeWindows:
         """
         Residual sum of squares with dead time ``delay`` and lag pole ``pole``.
 
-        Parameters
-        ----------
-        delay : int
-            Dead time, samples.
-        pole : float
-            Lag pole ``p`` (0: pure delay).
-
-        Returns
-        -------
-        float
-            Sum over the windows of the squared residuals, degrees squared.
-
+        ``delay``: dead time, samples.
+        ``pole``: lag pole ``p`` (0: pure delay).
+        Returns: sum over the windows of the squared residuals, degrees squared.
         """
         if self.windows == 0:
             return 0.0
@@ -163,18 +137,9 @@ class ChangeWindows:
         """
         Return the summed absolute angle error over the windows, and the samples summed.
 
-        Parameters
-        ----------
-        delay : int
-            Dead time, samples.
-        pole : float
-            Lag pole ``p`` (0: pure delay).
-
-        Returns
-        -------
-        tuple[float, int]
-            Degrees summed over the samples, and their number.
-
+        ``delay``: dead time, samples.
+        ``pole``: lag pole ``p`` (0: pure delay).
+        Returns: degrees summed over the samples, and their number.
         """
         if self.windows == 0:
             return 0.0, 0
@@ -315,31 +280,15 @@ def fit_delay_lag_and_pure(experiments: Sequence[Experiment], dt: float, max_del
     """
     Dead time and lag time constant that explain the increments best, and the best pure delay.
 
-    Parameters
-    ----------
-    experiments : sequence of Experiment
-        Experiments with at least ``max_delay`` samples of command history.
-    dt : float
-        Sample period, s.
-    max_delay : int
-        Largest dead time, samples.
-    windows : ChangeWindows or None
-        The experiments' windows, if made already (:meth:`ChangeWindows.part`).
-
-    Returns
-    -------
-    tuple
-        ``(delay, time_constant, explained, pure)``: dead time (samples), lag time
-        constant (s, 0 for none), per candidate delay 1..max_delay the share of the
-        windows' squared increments explained with the best lag tried there, and the
-        dead time that explains them best without a lag (what stands when the lag
-        does not earn its place on held-out experiments).
-
-    Raises
-    ------
-    DataError
-        If no command change can show in the experiments.
-
+    ``experiments``: experiments with at least ``max_delay`` samples of command history.
+    ``dt``: sample period, s.
+    ``max_delay``: largest dead time, samples.
+    ``windows``: the experiments' windows, if made already (:meth:`ChangeWindows.part`).
+    Returns: ``(delay, time_constant, explained, pure)``: dead time (samples), lag time constant
+    (s, 0 for none), per candidate delay 1..max_delay the share of the windows' squared increments
+    explained with the best lag tried there, and the dead time that explains them best without a
+    lag (what stands when the lag does not earn its place on held-out experiments).
+    Raises DataError if no command change can show in the experiments.
     """
     if windows is None:
         windows = ChangeWindows(experiments, max_delay)

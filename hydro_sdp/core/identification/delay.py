@@ -22,28 +22,23 @@ class DelayEstimate:
     """
     The delay, and what each estimator found.
 
-    Parameters
+    Attributes
     ----------
     samples : int
         Chosen delay, samples (from the fit).
     seconds : float
         The same in seconds.
-    fit : int
-        Delay that explains the differenced angle best.
     onset : int or None
         Delay from motion onsets of the fastest steps (None without steps).
-    xcorr : int or None
-        Delay from cross-correlation of speed and command changes.
     explained : FloatArray
-        Share of the squared increments around the command changes explained at
-        each candidate delay 1..max_delay, with the best lag tried there.
+        Share of the squared increments around the command changes explained at each candidate
+        delay 1..max_delay, with the best lag tried there.
     lag : float
         First-order valve lag time constant found with the delay, s (0: none).
     pure : int or None
         Dead time that explains the increments best without a lag (None: ``fit``).
     fitted_lag : float
-        The lag the increments showed, kept or not, s: how long the valve's transient
-        lasts.
+        The lag the increments showed, kept or not, s: how long the valve's transient lasts.
 
     """
 
@@ -149,7 +144,7 @@ class LevelSpeed:
     """
     Mean speed of the joint while one command level acted on it.
 
-    Parameters
+    Attributes
     ----------
     level : float
         Command, input units.
@@ -157,11 +152,8 @@ class LevelSpeed:
         Mean angular velocity, deg/s.
     standard_error : float
         Its standard error, deg/s.
-    samples : int
-        Samples averaged.
     gain : float
-        The SDP gain ``b_tau = speed dt / (level - rest)``, deg per sample per unit
-        (NaN at rest).
+        The SDP gain ``b_tau = speed dt / (level - rest)``, deg per sample per unit (NaN at rest).
 
     """
 
@@ -179,26 +171,9 @@ def level_speeds(experiments: Sequence[Experiment], delay: int, dt: float, *,
 
     The reasoning is in docs/methods.md section 1.10.
 
-    Parameters
-    ----------
-    experiments : sequence of Experiment
-        The experiments.
-    delay : int
-        Delay, samples.
-    dt : float
-        Sample period, s.
-    rest : float
-        Rest command.
-    skip : int
-        Samples left out after each level change (valve transients).
-    min_samples : int
-        Fewest samples for a point.
-
-    Returns
-    -------
-    list of LevelSpeed
-        One point per experiment and level, sorted by level.
-
+    ``dt``: sample period, s.
+    ``min_samples``: fewest samples for a point.
+    Returns: one point per experiment and level, sorted by level.
     """
     points = []
     for experiment in experiments:

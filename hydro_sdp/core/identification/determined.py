@@ -21,18 +21,8 @@ def undetermined_edges(points: Sequence[LevelSpeed], rest: float) -> tuple[Undet
     """
     Return the dead-zone edges that no still command brackets, with their bounds.
 
-    Parameters
-    ----------
-    points : sequence of LevelSpeed
-        Speed of every command level held (or along the command, routine operation).
-    rest : float
-        Rest command.
-
-    Returns
-    -------
-    tuple[Undetermined, ...]
-        One entry per edge the data leave between rest and the innermost moving command.
-
+    ``points``: speed of every command level held (or along the command, routine operation).
+    Returns: one entry per edge the data leave between rest and the innermost moving command.
     """
     if not points:
         return ()
@@ -72,20 +62,10 @@ def unpinned(values: dict[str, float], errors: dict[str, float],
     """
     Return the parameters whose standard errors leave them unpinned, with their 2-SE bounds.
 
-    Parameters
-    ----------
-    values : dict[str, float]
-        The map's parameters by model-file name (``curvature[0]``).
-    errors : dict[str, float]
-        Their standard errors (a parameter without one is not judged).
-    levels_a_side : tuple[int, int]
-        Command levels that moved the joint below and above rest.
-
-    Returns
-    -------
-    tuple[Undetermined, ...]
-        One entry per parameter with ``2 SE > PINNED |value|`` (or no finite SE).
-
+    ``values``: the map's parameters by model-file name (``curvature[0]``).
+    ``errors``: their standard errors (a parameter without one is not judged).
+    ``levels_a_side``: command levels that moved the joint below and above rest.
+    Returns: one entry per parameter with ``2 SE > PINNED |value|`` (or no finite SE).
     """
     found = []
     for name, value in values.items():

@@ -94,23 +94,10 @@ def held_out(effect: str, parts: Sequence[tuple[list[Experiment], list[Experimen
     """
     Compare a model without and with an effect on the experiments of every fold's test part.
 
-    Parameters
-    ----------
-    effect : str
-        The effect's name, for reports.
-    parts : sequence of (train, test)
-        Folds (:func:`~.family_choice.folds`).
-    without, with_effect : callable
-        Fit the model without and with the effect to a training part; a fit that
-        fails or returns None for the effect counts as no effect on that fold.
-    dt : float
-        Sample period, s.
-
-    Returns
-    -------
-    HeldOut
-        The judgement.
-
+    ``effect``: the effect's name, for reports.
+    ``without``, ``with_effect``: fit the model without and with the effect to a training part; a
+    fit that fails or returns None for the effect counts as no effect on that fold.
+    ``dt``: sample period, s.
     """
     rows, weights = [], []
     for train, test in parts:
@@ -138,23 +125,12 @@ def at_stop(previous: FloatArray, speed: FloatArray,
     """
     Mark the samples where the joint sits at an end stop while the command drives it into it.
 
-    Parameters
-    ----------
-    previous : FloatArray
-        Angle before each sample, degrees.
-    speed : FloatArray
-        The model's speed over each sample (its sign is the direction driven), deg/s.
-    stops : tuple[float | None, float | None]
-        Lower and upper stop, degrees; where one is None, the extreme angle of
-        ``previous`` on that side stands for it (a stop lies at the end of the travel).
-    reach : float
-        How near the stop counts as at it, degrees.
-
-    Returns
-    -------
-    numpy.ndarray
-        Boolean mask, one entry per sample.
-
+    ``previous``: angle before each sample, degrees.
+    ``speed``: the model's speed over each sample (its sign is the direction driven), deg/s.
+    ``stops``: lower and upper stop, degrees; where one is None, the extreme angle of ``previous``
+    on that side stands for it (a stop lies at the end of the travel).
+    ``reach``: how near the stop counts as at it, degrees.
+    Returns: boolean mask, one entry per sample.
     """
     previous = np.asarray(previous, dtype=np.float64)
     speed = np.asarray(speed, dtype=np.float64)

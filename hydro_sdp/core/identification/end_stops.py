@@ -27,35 +27,17 @@ def clamp_start(y: FloatArray, v: FloatArray, begin: int, end: int, *, delay: in
     """
     First index in ``[begin, end)`` where the joint is held by an end stop, if any.
 
-    Parameters
-    ----------
-    y, v : FloatArray
-        Angles (degrees) and commands of the whole record.
-    begin, end : int
-        The stretch searched.
-    delay : int
-        Largest delay, samples: the command must have been held that long before.
-    noise : float
-        Angle noise standard deviation, degrees.
-    window : int
-        Samples of the net-displacement window (:func:`stop_window`).
-    limits : tuple[float, float] or None
-        Known stops, degrees: a held joint counts only near the stop in the
-        direction it moved.
-    extremes : tuple[float, float] or None
-        Lowest and highest angle of the whole record, degrees: without known
-        stops, a stop lies at one of them (a stretch that reaches neither is
-        not searched).
-    rest : float or None
-        Rest command: a stop counts only when the held command drives the joint
-        the way it moved (above rest up, below rest down).
-
-    Returns
-    -------
-    tuple[int, float, int] or None
-        Index where the joint arrives at the stop, the angle it is held at, and
-        the stop's side (0 lower, 1 upper).
-
+    ``y``, ``v``: angles (degrees) and commands of the whole record.
+    ``delay``: largest delay, samples: the command must have been held that long before.
+    ``noise``: angle noise standard deviation, degrees.
+    ``limits``: known stops, degrees: a held joint counts only near the stop in the direction it
+    moved.
+    ``extremes``: lowest and highest angle of the whole record, degrees: without known stops, a
+    stop lies at one of them (a stretch that reaches neither is not searched).
+    ``rest``: rest command: a stop counts only when the held command drives the joint the way it
+    moved (above rest up, below rest down).
+    Returns: index where the joint arrives at the stop, the angle it is held at, and the stop's
+    side (0 lower, 1 upper).
     """
     if end - begin < 2 * window + 2:
         return None
@@ -140,22 +122,9 @@ def pushes_into_stop(y: FloatArray, level: float, rest: float,
     """
     Whether a step starts at an end stop and its command drives into that stop.
 
-    Parameters
-    ----------
-    y : FloatArray
-        Angles of the step from its initial state on, degrees.
-    level : float
-        The held command.
-    rest : float
-        Rest command: above it the joint is driven up, below it down.
-    stops : tuple[float | None, float | None]
-        Lower and upper end stop (known or detected), degrees; None where unknown.
-
-    Returns
-    -------
-    bool
-        True when the step is held against an end stop from its start.
-
+    ``y``: angles of the step from its initial state on, degrees.
+    ``rest``: rest command: above it the joint is driven up, below it down.
+    ``stops``: lower and upper end stop (known or detected), degrees; None where unknown.
     """
     target = driven_stop(level, rest, stops)
     if y.size == 0 or target is None:

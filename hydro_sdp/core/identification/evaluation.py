@@ -25,12 +25,10 @@ class RecordScore:
     """
     Errors of the three models on one record.
 
-    Parameters
+    Attributes
     ----------
     source : str
         The record's origin.
-    samples : int
-        Samples compared.
     model : float
         MAE of the model, degrees.
     sdp_dz : float
@@ -40,8 +38,7 @@ class RecordScore:
     linear_gain : float
         That gain, deg/s per input unit.
     stalled : float
-        Time the joint stalled and that is left out of the scores, s
-        (:mod:`.stalls`).
+        Time the joint stalled and that is left out of the scores, s (:mod:`.stalls`).
 
     """
 
@@ -55,20 +52,7 @@ class RecordScore:
 
 
 def sdp_dz_benchmark(model: JointModel) -> JointModel | None:
-    """
-    Return the SDP-DZ linearisation of a model, or None if its map has no dead-zone form.
-
-    Parameters
-    ----------
-    model : JointModel
-        The model.
-
-    Returns
-    -------
-    JointModel or None
-        Same delay and end stops, chord map, no effects.
-
-    """
+    """Return the SDP-DZ linearisation of a model, or None if its map has no dead-zone form."""
     static_map = model.static_map
     if isinstance(static_map, SdpMap):
         chord = linearise(static_map, *chord_commands(static_map))
@@ -130,23 +114,10 @@ def simulated_record(model: JointModel, record: Record, dt: float | None = None,
     """
     Simulate a model over a record as every figure of its error does (methods 3.8).
 
-    Parameters
-    ----------
-    model : JointModel
-        The model.
-    record : Record
-        The measured record.
-    dt : float or None
-        Its sample period, s (default: checked from the record).
-    exogenous : Exogenous or None
-        Its load and other joints' speeds, if already built.
-
-    Returns
-    -------
-    tuple[int, FloatArray]
-        The first sample compared, and the simulated angles (degrees; before that
-        sample they repeat it).
-
+    ``dt``: its sample period, s (default: checked from the record).
+    ``exogenous``: its load and other joints' speeds, if already built.
+    Returns: the first sample compared, and the simulated angles (degrees; before that sample they
+    repeat it).
     """
     dt = check_record(record, min_samples=2) if dt is None else dt
     start = first_compared(model, dt, record)
@@ -167,25 +138,11 @@ def record_mae(model: JointModel, record: Record, dt: float | None = None,
     The one figure ``evaluate``, ``diagnose`` and ``calibrate`` report, over the
     simulation of :func:`simulated_record`.
 
-    Parameters
-    ----------
-    model : JointModel
-        The model.
-    record : Record
-        The measured record.
-    dt : float or None
-        Its sample period, s (default: checked from the record).
-    exogenous : Exogenous or None
-        Its load and other joints' speeds, if already built.
-    left_out : numpy.ndarray or None
-        Samples not scored (a stall): the simulation starts again from the measured
-        angle after each such stretch.
-
-    Returns
-    -------
-    float
-        The MAE, degrees.
-
+    ``dt``: its sample period, s (default: checked from the record).
+    ``exogenous``: its load and other joints' speeds, if already built.
+    ``left_out``: samples not scored (a stall): the simulation starts again from the measured angle
+    after each such stretch.
+    Returns: the MAE, degrees.
     """
     start, simulated = simulated_record(model, record, dt, exogenous)
     if left_out is None or not np.any(left_out[start:]):
@@ -203,20 +160,8 @@ def best_linear_gain(record: Record, model: JointModel, dt: float) -> tuple[floa
     """
     Gain of eq. (2) that minimises the record's MAE, and that MAE.
 
-    Parameters
-    ----------
-    record : Record
-        The record.
-    model : JointModel
-        Supplies the delay.
-    dt : float
-        Sample period, s.
-
-    Returns
-    -------
-    tuple[float, float]
-        ``(gain, mae)``; gain in deg/s per input unit.
-
+    ``dt``: sample period, s.
+    Returns: ``(gain, mae)``; gain in deg/s per input unit.
     """
     linear = JointModel(model.joint, LinearMap(1.0), model.delay)
     tau = model.delay_samples(dt)
@@ -303,17 +248,9 @@ def mean_errors(scores: Sequence[RecordScore]) -> dict[str, dict[str, float]]:
     """
     Average each model's MAE per record and weighted by time.
 
-    Parameters
-    ----------
-    scores : sequence of RecordScore
-        One per record, from :func:`evaluate`.
-
-    Returns
-    -------
-    dict
-        ``{'per_record': {...}, 'time_weighted': {...}}``, each mapping ``model``,
-        ``sdp_dz`` and ``linear`` to degrees (NaN where undefined).
-
+    ``scores``: one per record, from :func:`evaluate`.
+    Returns: ``{'per_record': {...}, 'time_weighted': {...}}``, each mapping ``model``, ``sdp_dz``
+    and ``linear`` to degrees (NaN where undefined).
     """
     weights = np.array([s.samples for s in scores], dtype=np.float64)
     out: dict[str, dict[str, float]] = {'per_record': {}, 'time_weighted': {}}

@@ -23,7 +23,7 @@ class Experiment:
     """
     One segment of a record, with command history before its start.
 
-    Parameters
+    Attributes
     ----------
     v : FloatArray
         Commands from the start of the history to the end.
@@ -37,8 +37,6 @@ class Experiment:
         The held command of a step; NaN for a run.
     t0 : float
         Record time of ``y[start]``, s.
-    source : str
-        Where the record came from.
 
     """
 
@@ -61,20 +59,9 @@ def split_long(experiments: Sequence[Experiment], max_samples: int,
     """
     Cut experiments longer than ``max_samples`` into consecutive pieces.
 
-    Parameters
-    ----------
-    experiments : sequence of Experiment
-        The experiments.
-    max_samples : int
-        Longest piece, predicted samples.
-    history : int
-        Command history kept before each piece, samples.
-
-    Returns
-    -------
-    list of Experiment
-        The pieces, in order.
-
+    ``max_samples``: longest piece, predicted samples.
+    ``history``: command history kept before each piece, samples.
+    Returns: the pieces, in order.
     """
     pieces = []
     for experiment in experiments:
@@ -106,21 +93,9 @@ def thin_evenly(experiments: Sequence[Experiment], max_samples: int,
     """
     Keep every k-th experiment of each kind and direction, up to about ``max_samples``.
 
-    Parameters
-    ----------
-    experiments : sequence of Experiment
-        The experiments.
-    max_samples : int
-        Sample budget (predicted samples).
-    rest : float
-        Rest command (splits the directions of step experiments).
-
-    Returns
-    -------
-    list of Experiment
-        All of them when within budget, else every k-th of each kind and direction,
-        in their order: alternating directions are not thinned to one.
-
+    ``max_samples``: sample budget (predicted samples).
+    Returns: all of them when within budget, else every k-th of each kind and direction, in their
+    order: alternating directions are not thinned to one.
     """
     total = sum(e.samples for e in experiments)
     if total <= max_samples:

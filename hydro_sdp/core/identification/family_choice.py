@@ -36,18 +36,7 @@ def folds(experiments: Sequence[Experiment], rest: float
     """
     Training and test parts of each fold (:func:`~.held_out.deal`).
 
-    Parameters
-    ----------
-    experiments : sequence of Experiment
-        All experiments.
-    rest : float
-        Rest command (splits the directions).
-
-    Returns
-    -------
-    list of (train, test)
-        Two or more folds; no test level outside its training part's levels on its side.
-
+    Returns: two or more folds; no test level outside its training part's levels on its side.
     """
     ordered = sorted(experiments, key=_key)
     units, runs = [], 0
@@ -81,15 +70,13 @@ class KindScore:
     """
     Held-out simulation error of one map family.
 
-    Parameters
+    Attributes
     ----------
     kind : str
         Map family (one of :data:`KINDS`).
     mae : float
-        Mean absolute simulation error over the held-out experiments, pooled over the
-        folds, degrees (NaN if it could not be fitted).
-    note : str
-        Why it could not be fitted, if so.
+        Mean absolute simulation error over the held-out experiments, pooled over the folds,
+        degrees (NaN if it could not be fitted).
 
     """
 
@@ -99,15 +86,7 @@ class KindScore:
 
 
 class FoldErrors:
-    """
-    Each family's held-out errors, fold by fold, and why any failed.
-
-    Parameters
-    ----------
-    kinds : sequence of str
-        The families compared.
-
-    """
+    """Each family's held-out errors, fold by fold, and why any failed."""
 
     def __init__(self, kinds: Sequence[FittedKind]) -> None:
         self.kinds = tuple(kinds)
@@ -166,28 +145,9 @@ def fit_family(kind: FittedKind, data: FitData, points: Sequence[LevelSpeed], re
     """
     Fit one map family to experiments.
 
-    Parameters
-    ----------
-    kind : str
-        The family (one of :data:`KINDS`).
-    data : FitData
-        The experiments arranged for the fit.
-    points : sequence of LevelSpeed
-        Speed of every experiment and command level (the starting values).
-    rest : float
-        Rest command.
-    method : str
-        ``rr`` or ``oe``.
-    sdp_map : SdpMap or None
-        The ``sdp`` fit the others start from (its dead-zone), if already made.
-    starts : int
-        Starts of the ``sdp`` multi-start search.
-
-    Returns
-    -------
-    MapFit
-        The fit.
-
+    ``kind``: the family (one of :data:`KINDS`).
+    ``points``: speed of every experiment and command level (the starting values).
+    ``sdp_map``: the ``sdp`` fit the others start from (its dead-zone), if already made.
     """
     if kind == 'sdp':
         return fit_sdp(data, points, rest, method=method, starts=starts)
@@ -206,10 +166,8 @@ class Fold:
     """
     One fold's experiments arranged for fitting, and the ``sdp`` fit every family starts from.
 
-    Parameters
+    Attributes
     ----------
-    data, held_out : FitData
-        The training and the test part.
     points : list of LevelSpeed
         The training part's per-level speeds.
     sdp_map : SdpMap
@@ -227,21 +185,8 @@ class FoldFits:
     """
     The folds of :func:`folds` with their ``sdp`` fits, made once for every comparison.
 
-    Parameters
-    ----------
-    experiments : sequence of Experiment
-        All experiments.
-    delay : int
-        Delay, samples.
-    dt : float
-        Sample period, s.
-    rest : float
-        Rest command.
-    method : str
-        Fitting method (``rr`` or ``oe``), for every family.
-    lag : float
-        Valve lag time constant, s.
-
+    ``dt``: sample period, s.
+    ``lag``: valve lag time constant, s.
     """
 
     def __init__(self, experiments: Sequence[Experiment], delay: int, dt: float, rest: float,
@@ -270,33 +215,12 @@ def compare_kinds(experiments: Sequence[Experiment], delay: int, dt: float, rest
     """
     Held-out error of each map family, over folds that never extrapolate.
 
-    Parameters
-    ----------
-    experiments : sequence of Experiment
-        All experiments.
-    delay : int
-        Delay, samples.
-    dt : float
-        Sample period, s.
-    rest : float
-        Rest command.
-    method : str
-        Fitting method (``rr`` or ``oe``), for every family.
-    kinds : sequence of str
-        Families to compare.
-    dead_zone : tuple[float, float] or None
-        Plateau of the ``pwl`` map (default: from the ``sdp`` fit of each fold).
-    lag : float
-        Valve lag time constant, s.
-    fold_fits : FoldFits or None
-        The folds and their ``sdp`` fits, made for these same arguments (default:
-        made here).
-
-    Returns
-    -------
-    FoldErrors
-        Each family's mean absolute simulation error over each fold's test part.
-
+    ``dt``: sample period, s.
+    ``dead_zone``: plateau of the ``pwl`` map (default: from the ``sdp`` fit of each fold).
+    ``lag``: valve lag time constant, s.
+    ``fold_fits``: the folds and their ``sdp`` fits, made for these same arguments (default: made
+    here).
+    Returns: each family's mean absolute simulation error over each fold's test part.
     """
     if fold_fits is None:
         fold_fits = FoldFits(experiments, delay, dt, rest, method, lag)

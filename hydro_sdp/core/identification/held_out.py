@@ -53,19 +53,10 @@ def deal(units: Sequence[Unit], count: int | None = None) -> list[tuple[list[int
     """
     Deal units into folds whose test parts never ask a fit to extrapolate.
 
-    Parameters
-    ----------
-    units : sequence of Unit
-        In a canonical order (the folds follow it).
-    count : int or None
-        Number of folds; default: 2 to :data:`MAX_FOLDS`, as many as a side has inner
-        levels held once.
-
-    Returns
-    -------
-    list of (train, test)
-        Indices into ``units``; folds with an empty part are left out.
-
+    ``units``: in a canonical order (the folds follow it).
+    ``count``: number of folds; default: 2 to :data:`MAX_FOLDS`, as many as a side has inner levels
+    held once.
+    Returns: indices into ``units``; folds with an empty part are left out.
     """
     levels: dict[float, list[int]] = {}
     others: dict[Hashable, list[int]] = {}
@@ -113,20 +104,9 @@ def stretch_folds(segment: IntArray, stretches: int = STRETCHES,
 
     The reasoning is in docs/methods.md section 14.5.
 
-    Parameters
-    ----------
-    segment : IntArray
-        Record of each sample, in time order (samples of one record consecutive).
-    stretches : int
-        A stretch is at most ``1 / stretches`` of the samples.
-    max_folds : int
-        Most folds; consecutive stretches are pooled beyond.
-
-    Returns
-    -------
-    IntArray
-        Fold of each sample, ``0..folds-1``.
-
+    ``segment``: record of each sample, in time order (samples of one record consecutive).
+    ``stretches``: a stretch is at most ``1 / stretches`` of the samples.
+    Returns: fold of each sample, ``0..folds-1``.
     """
     segment = np.asarray(segment)
     n = segment.size
@@ -157,15 +137,7 @@ class Scored(Protocol):
 
 
 class WindowErrors:
-    """
-    Simulation errors of models over held-out records, over windows, each simulation once.
-
-    Parameters
-    ----------
-    runs : sequence of Scored
-        Held-out records.
-
-    """
+    """Simulation errors of models over held-out records, over windows, each simulation once."""
 
     def __init__(self, runs: Sequence[Scored]) -> None:
         self.runs = runs
@@ -212,13 +184,11 @@ class Judgement:
     """
     Held-out errors of candidates over the same folds, and the one :func:`judge` chose.
 
-    Parameters
+    Attributes
     ----------
-    names : tuple[str, ...]
-        The candidates, simplest first.
     errors : tuple[tuple[float, ...], ...]
-        Per fold, each candidate's mean absolute error on the fold's test part, degrees
-        (NaN: not scored).
+        Per fold, each candidate's mean absolute error on the fold's test part, degrees (NaN: not
+        scored).
     weights : tuple[float, ...]
         Samples of each fold's test part.
     chosen : int
@@ -293,21 +263,9 @@ def judge(names: Sequence[str], errors: Sequence[Sequence[float]],
     """
     Choose among candidates by their held-out errors: the one rule (methods 16).
 
-    Parameters
-    ----------
-    names : sequence of str
-        The candidates, simplest first.
-    errors : sequence of sequence of float
-        Per fold, each candidate's mean absolute held-out error, degrees; a candidate
-        with a NaN on any fold is not scored.
-    weights : sequence of float
-        Samples of each fold's test part.
-
-    Returns
-    -------
-    Judgement
-        The errors, the bands and the choice.
-
+    ``errors``: per fold, each candidate's mean absolute held-out error, degrees; a candidate with
+    a NaN on any fold is not scored.
+    ``weights``: samples of each fold's test part.
     """
     rows = tuple(tuple(float(e) for e in row) for row in errors)
     weights = tuple(float(w) for w in weights)

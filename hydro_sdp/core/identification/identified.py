@@ -48,28 +48,20 @@ class Identification:
     """
     Everything ``identify`` found.
 
-    Parameters
+    Attributes
     ----------
-    model : JointModel
-        The identified joint.
     sample_period : float
         Sample period of the records, s.
-    delay : DelayEstimate
-        The delay and what each estimator found.
-    segmentation : Segmentation
-        The experiments used and dropped.
     points : tuple[LevelSpeed, ...]
-        Speed of every experiment and command level (routine operation: the speed
-        along the delayed command estimated by the SDP smoother).
+        Speed of every experiment and command level (routine operation: the speed along the delayed
+        command estimated by the SDP smoother).
     fit : MapFit
         The chosen map's fit.
-    comparison : tuple[KindScore, ...]
-        Held-out errors of the map families tried.
     mae : float
         Mean absolute simulation error of the model on all experiments, degrees.
     effect_checks : tuple[HeldOut, ...]
-        Held-out errors without and with each effect identify proposed by itself
-        (``valve_lag``, ``stroke_geometry``), and whether it was kept.
+        Held-out errors without and with each effect identify proposed by itself (``valve_lag``,
+        ``stroke_geometry``), and whether it was kept.
     route : str
         ``experiments`` or ``routine`` (:data:`ROUTES`).
     commands : CommandRange or None

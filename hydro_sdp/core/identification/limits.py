@@ -73,24 +73,9 @@ def model_limits(records: Sequence[Record], end_stops: tuple[float | None, float
     """
     Return the limits of an identified model: given, else what the data show.
 
-    Parameters
-    ----------
-    records : sequence of Record
-        The records identified from.
-    end_stops : tuple[float | None, float | None]
-        Angles where the joint was seen held against a stop (or the stops given).
-    rest : float
-        The rest command (kept inside the valve range).
-    angle_limits : tuple[float, float] or None
-        End stops given.
-    input_limits : tuple[float, float] or None
-        Valve range given.
-
-    Returns
-    -------
-    ModelLimits
-        The limits and their sources.
-
+    ``end_stops``: angles where the joint was seen held against a stop (or the stops given).
+    ``angle_limits``: end stops given.
+    ``input_limits``: valve range given.
     """
     low, high = commands_seen(records)
     angles: tuple[float, float] | None

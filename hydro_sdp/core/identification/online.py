@@ -33,7 +33,7 @@ class OnlineSettings:
     Every command-side setting is in input units, used as given; for another command
     range build the settings with :meth:`for_input_limits`, which scales them once.
 
-    Parameters
+    Attributes
     ----------
     noise_std : float
         Angle measurement noise, degrees.
@@ -41,25 +41,23 @@ class OnlineSettings:
         Width of the soft edges of the gradient, input units (0.05 V).
     change_gate : float
         Command change that suspends updates, input units (0.5 V).
-    hold_off : int
-        Samples skipped after such a change.
     margin : float
         Distance from an end stop inside which updates stop, degrees.
     outlier : float
         Normalised innovation beyond which a sample is an outlier.
     input_scale : float
-        Size of the command range relative to +-10 V (1 for volts); scales the start
-        covariance, the random walk and the box of the edges and curvatures.
+        Size of the command range relative to +-10 V (1 for volts); scales the start covariance,
+        the random walk and the box of the edges and curvatures.
     change_level : float
-        Mean normalised innovation squared (about 1 while the model holds) above
-        which the joint is taken to have changed and the covariance is reset.
+        Mean normalised innovation squared (about 1 while the model holds) above which the joint is
+        taken to have changed and the covariance is reset.
     change_memory : float
         Samples the mean of the normalised innovation squared remembers.
     cusum_drift : float
         Drift ``k`` of the CUSUM tests on the normalised innovations.
     cusum_limit : float
-        Threshold ``h`` of those tests (the mean run length between false
-        alarms grows roughly as ``exp(2 k h)``).
+        Threshold ``h`` of those tests (the mean run length between false alarms grows roughly as
+        ``exp(2 k h)``).
 
     """
 
@@ -88,19 +86,9 @@ class OnlineSettings:
         """
         Return the defaults scaled to a command range (the one place they are scaled).
 
-        Parameters
-        ----------
-        input_limits : tuple[float, float] or None
-            The valve's command range, input units (e.g. ``(0, 100)`` % duty: scale 10);
-            None for +-10 V.
-        **overrides : Any
-            Other settings (``noise_std``...), in input units where they are commands.
-
-        Returns
-        -------
-        OnlineSettings
-            ``kappa`` 0.05 and ``change_gate`` 0.5 times the scale, and ``input_scale``.
-
+        ``input_limits``: the valve's command range, input units (e.g. ``(0, 100)`` % duty: scale
+        10); None for +-10 V.
+        ``**overrides``: other settings (``noise_std``...), in input units where they are commands.
         """
         scale = input_scale(input_limits)
         values: dict[str, Any] = {'kappa': cls.kappa * scale,
@@ -114,16 +102,8 @@ def input_scale(input_limits: tuple[float, float] | None) -> float:
     """
     Size of a command range relative to +-10 V.
 
-    Parameters
-    ----------
-    input_limits : tuple[float, float] or None
-        Command range, input units; None for +-10 V.
-
-    Returns
-    -------
-    float
-        The largest command magnitude over 10 (1 for +-10 V, 10 for 0..100 %).
-
+    ``input_limits``: command range, input units; None for +-10 V.
+    Returns: the largest command magnitude over 10 (1 for +-10 V, 10 for 0..100 %).
     """
     if input_limits is None:
         return 1.0
@@ -158,7 +138,9 @@ class SdpEstimate(EstimatedEdges):
     """
     The online estimate of an SDP map by name, with standard deviations.
 
-    Parameters
+    Each ``<name>_std`` is the standard deviation of ``<name>``, in its units.
+
+    Attributes
     ----------
     dead_zone_lower, dead_zone_upper : float
         Dead-zone edges, input units.
@@ -166,9 +148,6 @@ class SdpEstimate(EstimatedEdges):
         Saturation speeds, deg/s.
     curvature_negative, curvature_positive : float
         Curvatures, 1/input unit.
-    dead_zone_lower_std, dead_zone_upper_std, saturation_negative_std, \
-saturation_positive_std, curvature_negative_std, curvature_positive_std : float
-        Their standard deviations, same units.
 
     """
 
@@ -190,15 +169,8 @@ class OnlineMapFilter:
     """
     The random-walk Kalman filter of docs/methods.md 7.2-7.4 on six map coefficients.
 
-    Parameters
-    ----------
-    model : JointModel
-        Starting point, and the delay and end stops to use.
-    dt : float
-        Sample period of the incoming samples, s.
-    settings : OnlineSettings
-        Tuning.
-
+    ``model``: starting point, and the delay and end stops to use.
+    ``dt``: sample period of the incoming samples, s.
     """
 
     def __init__(self, model: JointModel, dt: float,
@@ -270,18 +242,8 @@ class OnlineMapFilter:
         """
         Take one sample: the command in force up to ``t_k`` and the angle at ``t_k``.
 
-        Parameters
-        ----------
-        v : float
-            Command (input units).
-        y : float
-            Angle, degrees.
-
-        Returns
-        -------
-        bool
-            Whether the sample updated the estimate (False when gated).
-
+        ``v``: command (input units).
+        Returns: whether the sample updated the estimate (False when gated).
         """
         self.samples += 1
         settings = self.settings
@@ -398,15 +360,8 @@ class OnlineSdpIdentifier(OnlineMapFilter):
     """
     Random-walk Kalman filter on the six coefficients ``(a1 .. a6)`` of eq. (5).
 
-    Parameters
-    ----------
-    model : JointModel
-        Starting point (kind ``sdp``) and the delay and end stops to use.
-    dt : float
-        Sample period of the incoming samples, s.
-    settings : OnlineSettings
-        Tuning.
-
+    ``model``: starting point (kind ``sdp``) and the delay and end stops to use.
+    ``dt``: sample period of the incoming samples, s.
     """
 
     def __init__(self, model: JointModel, dt: float,

@@ -33,15 +33,14 @@ class EdgeEstimate(EstimatedEdges):
     """
     The online estimate of a map's edges and the speeds near them, with standard deviations.
 
-    Parameters
+    Each ``<name>_std`` is the standard deviation of ``<name>``, in its units.
+
+    Attributes
     ----------
     dead_zone_lower, dead_zone_upper : float
         Dead-zone edges, input units.
     speed_scale_negative, speed_scale_positive : float
         Speeds beyond each edge relative to the model's (1: unchanged).
-    dead_zone_lower_std, dead_zone_upper_std, speed_scale_negative_std, \
-speed_scale_positive_std : float
-        Their standard deviations.
 
     """
 
@@ -106,15 +105,8 @@ class OnlineEdgeIdentifier(OnlineMapFilter):
     ``theta = (k_n, 1, a3, k_p, 1, a6)``: speed scale and edge below the dead-zone,
     then above it (module docstring).
 
-    Parameters
-    ----------
-    model : JointModel
-        The model to start from (any map family), with the delay and end stops to use.
-    dt : float
-        Sample period of the incoming samples, s.
-    settings : OnlineSettings
-        Tuning.
-
+    ``model``: the model to start from (any map family), with the delay and end stops to use.
+    ``dt``: sample period of the incoming samples, s.
     """
 
     def __init__(self, model: JointModel, dt: float,
@@ -199,17 +191,7 @@ class OnlineEdgeIdentifier(OnlineMapFilter):
         """
         Return the current estimate as a map of the model's family (a ``pwl`` for others).
 
-        Parameters
-        ----------
-        edges : tuple[float, float] or None
-            Edges to use instead of the estimated ones, input units.
-
-        Returns
-        -------
-        StaticMap
-            ``sdp``, ``power_sat`` and ``sdp_dz`` maps moved exactly; any other map as
-            a ``pwl`` through its tabulated sides, moved.
-
+        ``edges``: edges to use instead of the estimated ones, input units.
         """
         kn, _, a3, kp, _, a6 = self._theta
         if edges is not None:
@@ -254,20 +236,7 @@ def online_identifier(model: JointModel, dt: float,
     """
     Return the online identifier of a model: eq. (5)'s own for ``sdp``, the edges' for others.
 
-    Parameters
-    ----------
-    model : JointModel
-        The model to start from (any map family).
-    dt : float
-        Sample period of the incoming samples, s.
-    settings : OnlineSettings
-        Tuning.
-
-    Returns
-    -------
-    OnlineSdpIdentifier or OnlineEdgeIdentifier
-        The filter.
-
+    ``dt``: sample period of the incoming samples, s.
     """
     if isinstance(model.static_map, SdpMap):
         return OnlineSdpIdentifier(model, dt, settings)

@@ -41,26 +41,10 @@ def check_lag(experiments: Sequence[Experiment], delay: DelayEstimate, dt: float
 
     The reasoning is in docs/methods.md section 13.8.
 
-    Parameters
-    ----------
-    experiments : sequence of Experiment
-        Experiments to deal into folds (:func:`~.family_choice.folds`).
-    delay : DelayEstimate
-        The delay and lag fitted on all experiments (its lag is what is checked).
-    dt : float
-        Sample period, s.
-    rest : float
-        Rest command.
-    max_delay : int
-        Largest dead time, samples.
-    windows : ChangeWindows or None
-        Change windows of these experiments or more, fitted already for the delay.
-
-    Returns
-    -------
-    HeldOut
-        The judgement (:mod:`.effect_check`).
-
+    ``delay``: the delay and lag fitted on all experiments (its lag is what is checked).
+    ``dt``: sample period, s.
+    ``max_delay``: largest dead time, samples.
+    ``windows``: change windows of these experiments or more, fitted already for the delay.
     """
     rows, weights = [], []
     every = ChangeWindows(experiments, max_delay) if windows is None else \
@@ -86,26 +70,10 @@ def check_geometry(experiments: Sequence[Experiment], model: JointModel, delay: 
     """
     Held-out errors of the model without and with a stroke factor fitted on each training part.
 
-    Parameters
-    ----------
-    experiments : sequence of Experiment
-        Experiments to deal into folds (:func:`~.family_choice.folds`).
-    model : JointModel
-        The model without the factor (its map fitted on all experiments).
-    delay : DelayEstimate
-        Delay and lag.
-    dt : float
-        Sample period, s.
-    stops : tuple
-        End stops seen, degrees.
-    reach : float
-        How near a stop counts as at it, degrees.
-
-    Returns
-    -------
-    HeldOut
-        The comparison (:mod:`.effect_check`).
-
+    ``model``: the model without the factor (its map fitted on all experiments).
+    ``dt``: sample period, s.
+    ``stops``: end stops seen, degrees.
+    ``reach``: how near a stop counts as at it, degrees.
     """
     def shaped(train: Sequence[Experiment]) -> JointModel | None:
         geometry = fit_stroke_geometry(train, model.static_map.rate, delay.samples, dt,
@@ -128,33 +96,15 @@ def shape_with_geometry(model: JointModel, geometry: StrokeGeometry | None, refi
     """
     Refit the map under the stroke factor, then the factor under the new map, in turn.
 
-    Parameters
-    ----------
-    model : JointModel
-        The model without the factor.
-    geometry : StrokeGeometry or None
-        The factor fitted under the model's map.
-    refit_map : callable
-        Refits the chosen map family to data with known gains on the speed.
-    first : MapFit
-        The fit of the chosen map family without the factor.
-    pieces, sample : sequence of Experiment
-        All experiments, and the (thinned) ones the factor is fitted on.
-    delay : DelayEstimate
-        Delay and lag.
-    dt : float
-        Sample period, s.
-    stops : tuple
-        End stops seen, degrees.
-    reach : float
-        How near a stop counts as at it, degrees.
-
-    Returns
-    -------
-    tuple
-        ``(model, fit)``: the shaped model (None when it gains too little) and the
-        map fit under the factor.
-
+    ``geometry``: the factor fitted under the model's map.
+    ``refit_map``: refits the chosen map family to data with known gains on the speed.
+    ``first``: the fit of the chosen map family without the factor.
+    ``pieces``, ``sample``: all experiments, and the (thinned) ones the factor is fitted on.
+    ``dt``: sample period, s.
+    ``stops``: end stops seen, degrees.
+    ``reach``: how near a stop counts as at it, degrees.
+    Returns: ``(model, fit)``: the shaped model (None when it gains too little) and the map fit
+    under the factor.
     """
     refit = first
     for _ in range(GEOMETRY_ROUNDS):

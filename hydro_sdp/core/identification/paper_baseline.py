@@ -25,20 +25,8 @@ def paper_model(records: Sequence[Record], *, max_delay: float = 0.5,
     """
     Identify eq. (5) with a pure delay by the paper's output-error simplex fit.
 
-    Parameters
-    ----------
-    records : sequence of Record
-        Records of one joint.
-    max_delay : float
-        Largest delay considered, s.
-    rest : float or None
-        Rest command (default: as :func:`~.segmentation.segment_records`).
-
-    Returns
-    -------
-    JointModel
-        An ``sdp`` model with the end stops seen in the data and no effects.
-
+    ``max_delay``: largest delay considered, s.
+    ``rest``: rest command (default: as :func:`~.segmentation.segment_records`).
     """
     dt = check_records(records)
     most = max(2, int(round(max_delay / dt)))

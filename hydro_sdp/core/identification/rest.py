@@ -22,17 +22,9 @@ def command_motion(pairs: Sequence[tuple[FloatArray, FloatArray]]
     """
     Count the samples and the median angle step of each held command, per record.
 
-    Parameters
-    ----------
-    pairs : sequence of (v, y)
-        Commands and angles (degrees) of each record.
-
-    Returns
-    -------
-    dict
-        Command -> (samples in the second half of the stretches it was held,
-        median ``|y_k - y_{k-1}|`` over them, degrees).
-
+    ``pairs``: commands and angles (degrees) of each record.
+    Returns: command -> (samples in the second half of the stretches it was held, median
+    ``|y_k - y_{k-1}|`` over them, degrees).
     """
     values: list[FloatArray] = []
     steps: list[FloatArray] = []
@@ -66,25 +58,11 @@ def estimate_rest_command(pairs: Sequence[tuple[FloatArray, FloatArray]], *,
     """
     Choose the rest command of one joint's records.
 
-    Parameters
-    ----------
-    pairs : sequence of (v, y)
-        Commands and angles (degrees) of each record.
-    neutral : float or None
-        The valve's neutral command, if known: it is the answer.
-    input_limits : tuple[float, float] or None
-        The valve's command range: its middle is the preferred rest when the
-        range does not contain 0 (a 0..100 % duty resting at 50).
-    min_share : float
-        Share of the samples a command must be held for to be a candidate.
-
-    Returns
-    -------
-    float
-        The rest command: the neutral (given, 0 for commands of both signs, or
-        the middle of ``input_limits``) when it is held and the joint stands
-        still there; else the still command held longest; 0 when nothing is held.
-
+    ``pairs``: commands and angles (degrees) of each record.
+    ``neutral``: the valve's neutral command, if known: it is the answer.
+    ``input_limits``: the valve's command range: its middle is the preferred rest when the range
+    does not contain 0 (a 0..100 % duty resting at 50).
+    ``min_share``: share of the samples a command must be held for to be a candidate.
     """
     if neutral is not None:
         return float(neutral)

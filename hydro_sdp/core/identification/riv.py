@@ -26,7 +26,7 @@ class TfEstimate:
     """
     An estimated discrete transfer function with its diagnostics.
 
-    Parameters
+    Attributes
     ----------
     a : FloatArray
         Full denominator ``[1, a_1, .., a_n]`` (known factor included).
@@ -38,18 +38,12 @@ class TfEstimate:
         The estimated parameters ``[a'_1 .. a'_n', b_0 .. b_m]`` (without the known factor).
     covariance : FloatArray
         ``P* = sigma2 [sum phi^ phi^']^-1`` of ``parameters``.
-    sigma2 : float
-        Residual (simulation error) variance.
-    rt2 : float
-        Coefficient of determination of the simulated output.
     rt2_diff : float
         The same on the differenced output (informative for integrating outputs).
     yic : float
         Young information criterion (more negative is better).
     fit : float
         NRMSE fit, percent.
-    iterations : int
-        IV iterations done.
     converged : bool
         Whether the relative parameter change fell below the tolerance.
     warnings : tuple[str, ...]

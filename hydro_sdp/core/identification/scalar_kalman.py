@@ -15,36 +15,14 @@ def packed(matrix: FloatArray) -> list[float]:
     """
     Return the upper triangle of a 6 x 6 matrix, row by row, as Python floats.
 
-    Parameters
-    ----------
-    matrix : FloatArray
-        A symmetric 6 x 6 matrix.
-
-    Returns
-    -------
-    list[float]
-        Its 21 entries ``M[i, j]``, ``i <= j``.
-
+    Returns: its 21 entries ``M[i, j]``, ``i <= j``.
     """
     rows, columns = np.triu_indices(6)
     return [float(value) for value in np.asarray(matrix, dtype=np.float64)[rows, columns]]
 
 
 def unpacked(packed_matrix: list[float]) -> FloatArray:
-    """
-    Return the full symmetric 6 x 6 matrix of a packed upper triangle.
-
-    Parameters
-    ----------
-    packed_matrix : list[float]
-        The 21 entries, as :func:`packed` gives them.
-
-    Returns
-    -------
-    FloatArray
-        A new 6 x 6 array (a copy: writing to it does not change the packed matrix).
-
-    """
+    """Return the full symmetric 6 x 6 matrix of a packed upper triangle."""
     matrix = np.empty((6, 6))
     rows, columns = np.triu_indices(6)
     matrix[rows, columns] = packed_matrix
@@ -56,16 +34,7 @@ def diagonal(packed_matrix: list[float]) -> FloatArray:
     """
     Return the diagonal of a packed matrix.
 
-    Parameters
-    ----------
-    packed_matrix : list[float]
-        The 21 entries of the upper triangle.
-
-    Returns
-    -------
-    FloatArray
-        ``M00 .. M55``.
-
+    ``packed_matrix``: the 21 entries of the upper triangle.
     """
     return np.array([packed_matrix[k] for k in DIAGONAL])
 
@@ -74,13 +43,7 @@ def add_to_diagonal(packed_matrix: list[float], values: Six) -> None:
     """
     Add six values to the diagonal of a packed matrix, in place.
 
-    Parameters
-    ----------
-    packed_matrix : list[float]
-        The 21 entries of the upper triangle; changed in place.
-    values : tuple of six floats
-        What to add to ``M00 .. M55``.
-
+    ``packed_matrix``: the 21 entries of the upper triangle; changed in place.
     """
     d0, d1, d2, d3, d4, d5 = values
     packed_matrix[0] += d0
@@ -95,19 +58,9 @@ def times(packed_matrix: list[float], x: Six) -> tuple[Six, float]:
     """
     Return ``M x`` and the quadratic form ``x' M x``.
 
-    Parameters
-    ----------
-    packed_matrix : list[float]
-        The 21 entries of the upper triangle of ``M``.
-    x : tuple of six floats
-        The vector.
-
-    Returns
-    -------
-    tuple
-        ``M x`` (six floats, each summed from the first column to the last) and
-        ``x' M x``, summed as ``x0 (M x)_0 + .. + x5 (M x)_5``.
-
+    ``packed_matrix``: the 21 entries of the upper triangle of ``M``.
+    Returns: ``M x`` (six floats, each summed from the first column to the last) and ``x' M x``,
+    summed as ``x0 (M x)_0 + .. + x5 (M x)_5``.
     """
     (m00, m01, m02, m03, m04, m05, m11, m12, m13, m14, m15,
      m22, m23, m24, m25, m33, m34, m35, m44, m45, m55) = packed_matrix
@@ -125,18 +78,7 @@ def downdated(packed_matrix: list[float], gain: Six, h: Six) -> list[float]:
     """
     Return ``M - gain h'`` for a symmetric result (``gain`` a multiple of ``h``).
 
-    Parameters
-    ----------
-    packed_matrix : list[float]
-        The 21 entries of the upper triangle of ``M``.
-    gain, h : tuple of six floats
-        The two vectors of the rank-one term.
-
-    Returns
-    -------
-    list[float]
-        The 21 entries of the result (a new list).
-
+    ``packed_matrix``: the 21 entries of the upper triangle of ``M``.
     """
     (m00, m01, m02, m03, m04, m05, m11, m12, m13, m14, m15,
      m22, m23, m24, m25, m33, m34, m35, m44, m45, m55) = packed_matrix
@@ -155,22 +97,7 @@ def boxed(theta: list[float], gain: Six, innovation: float, lower: Six, upper: S
     """
     Return ``theta + gain innovation`` projected on the box ``[lower, upper]``.
 
-    Parameters
-    ----------
-    theta : list[float]
-        The six coefficients.
-    gain : tuple of six floats
-        The Kalman gain ``K``.
-    innovation : float
-        The innovation ``eps``.
-    lower, upper : tuple of six floats
-        The box.
-
-    Returns
-    -------
-    list[float]
-        The new coefficients (a new list); a NaN stays NaN, as through ``np.clip``.
-
+    Returns: the new coefficients (a new list); a NaN stays NaN, as through ``np.clip``.
     """
     a0, a1, a2, a3, a4, a5 = theta
     k0, k1, k2, k3, k4, k5 = gain

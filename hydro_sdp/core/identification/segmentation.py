@@ -22,14 +22,10 @@ class Dropped:
     """
     A segment that was not used, and why.
 
-    Parameters
+    Attributes
     ----------
     t0 : float
         Record time where it started, s.
-    reason : str
-        Why it was not used.
-    source : str
-        Where the record came from.
     since_start : float
         The same time counted from the start of the record's bag, s (for messages).
     angle : float
@@ -58,14 +54,8 @@ class Segmentation:
     """
     Experiments cut from records, with what was dropped and the noise level.
 
-    Parameters
+    Attributes
     ----------
-    experiments : tuple[Experiment, ...]
-        Usable experiments.
-    dropped : tuple[Dropped, ...]
-        Segments not used, with reasons.
-    rest : float
-        Command taken as rest.
     noise_std : float
         Angle measurement noise estimated at rest, degrees.
     end_stops : tuple[float | None, float | None]
@@ -94,27 +84,12 @@ def check_record(record: Record, *, min_samples: int = 50, max_gap: float = 3.0)
     """
     Check that a record can be identified from, and return its sample period.
 
-    Parameters
-    ----------
-    record : Record
-        The record.
-    min_samples : int
-        Fewest samples accepted.
-    max_gap : float
-        Largest accepted spacing of time stamps, in sample periods.
-
-    Returns
-    -------
-    float
-        Nominal sample period, s (:func:`hydro_sdp.core.model.sample_period.nominal_period`).
-
-    Raises
-    ------
-    DataError
-        Naming the problem: too few samples, or a gap in the time stamps
-        (records are cut at gaps by :func:`hydro_sdp.core.model.records.split_at_gaps`
-        when they are read from bags).
-
+    ``min_samples``: fewest samples accepted.
+    ``max_gap``: largest accepted spacing of time stamps, in sample periods.
+    Returns: nominal sample period, s (:func:`hydro_sdp.core.model.sample_period.nominal_period`).
+    Raises DataError naming the problem: too few samples, or a gap in the time stamps (records are
+    cut at gaps by :func:`hydro_sdp.core.model.records.split_at_gaps` when they are read from
+    bags).
     """
     label = record.source or 'record'
     if len(record) < min_samples:
@@ -134,25 +109,10 @@ def check_records(records: Sequence[Record], task: str = 'identify') -> float:
     """
     Check records of one joint for a fit, and return their common nominal sample period.
 
-    Parameters
-    ----------
-    records : sequence of Record
-        Records of one joint.
-    task : str
-        What the records are for, in messages (``identify``, ``analyse``).
-
-    Returns
-    -------
-    float
-        The nominal period of all their spacings together, s, so that records of one
-        timer give one period whatever their length.
-
-    Raises
-    ------
-    DataError
-        Without records, with records of several joints, or with periods more than
-        1 % apart (each record is checked by :func:`check_record`).
-
+    Returns: the nominal period of all their spacings together, s, so that records of one timer
+    give one period whatever their length.
+    Raises DataError without records, with records of several joints, or with periods more than 1 %
+    apart (each record is checked by :func:`check_record`).
     """
     if not records:
         raise DataError(f'no records to {task} from')
@@ -171,20 +131,8 @@ def noise_level(record: Record, rest: float, settle: int) -> float:
     """
     Estimate the angle noise from samples taken well after the command went to rest.
 
-    Parameters
-    ----------
-    record : Record
-        The record.
-    rest : float
-        Rest command.
-    settle : int
-        Samples after the command reaches rest before the joint is taken as still.
-
-    Returns
-    -------
-    float
-        Standard deviation of the angle noise, degrees (robust, from differences).
-
+    ``settle``: samples after the command reaches rest before the joint is taken as still.
+    Returns: standard deviation of the angle noise, degrees (robust, from differences).
     """
     at_rest = record.v == rest
     # A sample counts when the command has rested for `settle` samples before it.
@@ -209,25 +157,13 @@ def segment_record(record: Record, *, max_delay: int, rest: float | None = None,
     """
     Cut a record into step and run experiments.
 
-    Parameters
-    ----------
-    record : Record
-        The record.
-    max_delay : int
-        Largest delay considered, samples: the history kept before each
-        experiment and the tail kept after its command returns to rest.
-    rest : float or None
-        Rest command; default: :func:`~hydro_sdp.core.identification.rest.estimate_rest_command`.
-    angle_limits : tuple[float, float] or None
-        Known end stops; default: detected where the joint is held still while driven.
-    min_samples : int
-        Fewest predicted samples an experiment needs.
-
-    Returns
-    -------
-    Segmentation
-        The experiments and what was dropped.
-
+    ``max_delay``: largest delay considered, samples: the history kept before each experiment and
+    the tail kept after its command returns to rest.
+    ``rest``: rest command; default:
+    :func:`~hydro_sdp.core.identification.rest.estimate_rest_command`.
+    ``angle_limits``: known end stops; default: detected where the joint is held still while
+    driven.
+    ``min_samples``: fewest predicted samples an experiment needs.
     """
     v, y = record.v, record.y
     rest = estimate_rest_command([(v, y)]) if rest is None else rest
@@ -331,26 +267,13 @@ def segment_records(records: Sequence[Record], *, max_delay: int,
     The records are put in a canonical order first (by source, start time and
     content), so the order they are given in changes nothing.
 
-    Parameters
-    ----------
-    records : sequence of Record
-        Records of the same joint at the same sample period.
-    max_delay : int
-        Largest delay considered, samples.
-    angle_limits : tuple[float, float] or None
-        Known end stops.
-    rest : float or None
-        Rest (neutral) command; default: from the data
-        (:func:`~hydro_sdp.core.identification.rest.estimate_rest_command`).
-    input_limits : tuple[float, float] or None
-        Command range of the valve (its middle is the preferred rest when it excludes 0).
-
-    Returns
-    -------
-    Segmentation
-        Pooled experiments; rest and noise from all records; each end stop the
-        outermost angle the joint was held at.
-
+    ``records``: records of the same joint at the same sample period.
+    ``max_delay``: largest delay considered, samples.
+    ``angle_limits``: known end stops.
+    ``rest``: rest (neutral) command; default: from the data
+    (:func:`~hydro_sdp.core.identification.rest.estimate_rest_command`).
+    ``input_limits``: command range of the valve (its middle is the preferred rest when it excludes
+    0).
     """
     if not records:
         raise DataError('no records to identify from')

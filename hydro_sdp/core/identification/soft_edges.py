@@ -11,21 +11,11 @@ def map_and_soft_gradient(u: float, theta: list[float], kappa: float) -> tuple[f
     """
     Return eq. (5) at ``u`` and the gradient of its soft-edged form.
 
-    Parameters
-    ----------
-    u : float
-        The delayed command, input units.
-    theta : list[float]
-        ``(a1 .. a6)`` of eq. (5) in per-sample form: ``(a1, a2, a3)`` below the dead-zone,
-        ``(a4, a5, a6)`` above.
-    kappa : float
-        Width of the soft edges, input units.
-
-    Returns
-    -------
-    tuple
-        The exact map ``q(u; theta)`` and ``d q_s / d theta`` of the soft-edged map.
-
+    ``u``: the delayed command, input units.
+    ``theta``: ``(a1 .. a6)`` of eq. (5) in per-sample form: ``(a1, a2, a3)`` below the dead-zone,
+    ``(a4, a5, a6)`` above.
+    ``kappa``: width of the soft edges, input units.
+    Returns: the exact map ``q(u; theta)`` and ``d q_s / d theta`` of the soft-edged map.
     """
     a1, a2, a3, a4, a5, a6 = theta
     d_below = u - a3

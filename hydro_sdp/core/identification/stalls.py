@@ -36,24 +36,10 @@ def stalled(model: JointModel, record: Record, dt: float,
     """
     Mark the samples of a record where the joint stalls.
 
-    Parameters
-    ----------
-    model : JointModel
-        The model the record is scored against.
-    record : Record
-        The record.
-    dt : float
-        Its sample period, s.
-    travel : tuple[float, float] or None
-        Lowest and highest angle of all the records scored together (default: this one's).
-    exogenous : Exogenous or None
-        The record's load and other joints' speeds.
-
-    Returns
-    -------
-    numpy.ndarray
-        One boolean per sample.
-
+    ``dt``: its sample period, s.
+    ``travel``: lowest and highest angle of all the records scored together (default: this one's).
+    ``exogenous``: the record's load and other joints' speeds.
+    Returns: one boolean per sample.
     """
     n = len(record)
     window = max(2, int(round(WINDOW / dt)))

@@ -31,24 +31,10 @@ def model_speeds(experiments: Sequence[Experiment], rate_of: object, delay: int,
     """
     Model speed, measured increment and previous angle of every predicted sample.
 
-    Parameters
-    ----------
-    experiments : sequence of Experiment
-        The experiments.
-    rate_of : callable
-        The static map, commands to deg/s.
-    delay : int
-        Delay, samples.
-    dt : float
-        Sample period, s.
-    lag : float
-        Valve lag time constant, s (0: none).
-
-    Returns
-    -------
-    tuple of FloatArray
-        ``(w, dy, previous)``: deg/s, degrees, degrees.
-
+    ``rate_of``: the static map, commands to deg/s.
+    ``dt``: sample period, s.
+    ``lag``: valve lag time constant, s (0: none).
+    Returns: ``(w, dy, previous)``: deg/s, degrees, degrees.
     """
     pole = float(np.exp(-dt / lag)) if lag > 0.0 else 0.0
     speeds, increments, previous = [], [], []
@@ -79,16 +65,8 @@ def stroke_knots(angles: FloatArray) -> FloatArray:
     """
     Knots over the angles moved through: evenly spread, two more near each end (cushions).
 
-    Parameters
-    ----------
-    angles : FloatArray
-        Angles the joint moved through, degrees.
-
-    Returns
-    -------
-    FloatArray
-        Increasing knots, degrees.
-
+    ``angles``: angles the joint moved through, degrees.
+    Returns: increasing knots, degrees.
     """
     first, last = float(np.min(angles)), float(np.max(angles))
     step = (last - first) / (KNOTS - 1)
@@ -103,24 +81,12 @@ def penalised_lstsq(blocks: Sequence[FloatArray], smoothed: Sequence[bool],
     """
     Least squares over column blocks, those of knot values smoothed by a small penalty.
 
-    Parameters
-    ----------
-    blocks : sequence of FloatArray
-        Design columns, block by block (a block of knot values has one column a knot).
-    smoothed : sequence of bool
-        Whether each block gets the penalty on second differences of its values.
-    target : FloatArray
-        Values to fit.
-    ridge : sequence of float or FloatArray, or None
-        Weight of each block's pull towards zero, relative to the data, for the whole
-        block or column by column (default: none).
-
-    Returns
-    -------
-    tuple
-        ``(solution, sse)``: the coefficients and the sum of squared residuals (without
-        the penalty).
-
+    ``blocks``: design columns, block by block (a block of knot values has one column a knot).
+    ``smoothed``: whether each block gets the penalty on second differences of its values.
+    ``ridge``: weight of each block's pull towards zero, relative to the data, for the whole block
+    or column by column (default: none).
+    Returns: ``(solution, sse)``: the coefficients and the sum of squared residuals (without the
+    penalty).
     """
     design = np.hstack(blocks)
     rows = []
@@ -161,25 +127,14 @@ def fit_factor(angles: FloatArray, drive: FloatArray, target: FloatArray, knots:
     """
     Fit ``target ~ drive (s(y) + sign(drive) p(y))``, both parts piecewise-linear in the angle.
 
-    Parameters
-    ----------
-    angles : FloatArray
-        Angle before each sample, degrees.
-    drive : FloatArray
-        The model's increment of each sample, degrees.
-    target : FloatArray
-        The measured increment, degrees.
-    knots : FloatArray
-        Knots, degrees (from :func:`stroke_knots`).
-    shared, direction : Part
-        How the shared part ``s`` and the per-direction part ``p`` are fitted.
-
-    Returns
-    -------
-    tuple
-        ``(s, p, sse)``: the two parts at the knots and the sum of squared residuals,
-        degrees^2.
-
+    ``angles``: angle before each sample, degrees.
+    ``drive``: the model's increment of each sample, degrees.
+    ``target``: the measured increment, degrees.
+    ``knots``: knots, degrees (from :func:`stroke_knots`).
+    ``shared``, ``direction``: how the shared part ``s`` and the per-direction part ``p`` are
+    fitted.
+    Returns: ``(s, p, sse)``: the two parts at the knots and the sum of squared residuals,
+    degrees^2.
     """
     size = knots.size
     basis = hats(angles, knots)
@@ -215,20 +170,8 @@ def geometry_of(knots: FloatArray, shared: FloatArray,
     """
     Return the effect of fitted parts (``f = s (1 + sign(w) p / s)``), None if ``s`` is not > 0.
 
-    Parameters
-    ----------
-    knots : FloatArray
-        Knots, degrees.
-    shared : FloatArray
-        Shared part at the knots.
-    part : FloatArray or None
-        Per-direction part at the knots (None: none).
-
-    Returns
-    -------
-    StrokeGeometry or None
-        The effect, or None when the shared factor falls to nearly nothing somewhere.
-
+    ``part``: per-direction part at the knots (None: none).
+    Returns: the effect, or None when the shared factor falls to nearly nothing somewhere.
     """
     if np.any(shared <= 0.05):
         return None
@@ -244,29 +187,13 @@ def fit_stroke_geometry(experiments: Sequence[Experiment], rate_of: object, dela
     """
     Fit a shared angle factor with a per-direction part, if the data span the stroke.
 
-    Parameters
-    ----------
-    experiments : sequence of Experiment
-        The experiments.
-    rate_of : callable
-        The fitted static map, commands to deg/s.
-    delay : int
-        Delay, samples.
-    dt : float
-        Sample period, s.
-    lag : float
-        Valve lag time constant, s.
-    stops : tuple
-        End stops seen, degrees (None where none was seen).
-    reach : float
-        How near a stop the joint counts as sitting at it, degrees: samples there
-        that drive it into the stop are left out (:func:`.effect_check.at_stop`).
-
-    Returns
-    -------
-    StrokeGeometry or None
-        The effect, or None when the data do not span the stroke.
-
+    ``rate_of``: the fitted static map, commands to deg/s.
+    ``dt``: sample period, s.
+    ``lag``: valve lag time constant, s.
+    ``stops``: end stops seen, degrees (None where none was seen).
+    ``reach``: how near a stop the joint counts as sitting at it, degrees: samples there that drive
+    it into the stop are left out (:func:`.effect_check.at_stop`).
+    Returns: the effect, or None when the data do not span the stroke.
     """
     w, dy, previous = model_speeds(experiments, rate_of, delay, dt, lag)
     peak = float(np.max(np.abs(w))) if w.size else 0.0
@@ -295,22 +222,10 @@ def unit_mean_per_direction(knots: FloatArray, shared: FloatArray, part: FloatAr
     """
     Scale the factor of each direction to a mean of 1 over the angles it was seen at.
 
-    Parameters
-    ----------
-    knots : FloatArray
-        Knots, degrees.
-    shared, part : FloatArray
-        Shared and per-direction parts at the knots (``f = s + sign(w) p``).
-    angles : FloatArray
-        Angle of each sample the factor was fitted on, degrees.
-    signs : FloatArray
-        Direction of motion of each of those samples (+1, -1).
-
-    Returns
-    -------
-    tuple[FloatArray, FloatArray]
-        The shared and per-direction parts, rescaled.
-
+    ``shared``, ``part``: shared and per-direction parts at the knots (``f = s + sign(w) p``).
+    ``angles``: angle of each sample the factor was fitted on, degrees.
+    ``signs``: direction of motion of each of those samples (+1, -1).
+    Returns: the shared and per-direction parts, rescaled.
     """
     basis = hats(angles, knots)
     sides = []

@@ -22,24 +22,14 @@ class StructureRow:
     """
     One candidate structure of a search.
 
-    Parameters
+    Attributes
     ----------
     n : int
         Denominator order (known factor excluded).
-    m : int
-        Numerator order.
-    delay : int
-        Delay, samples.
     rt2 : float
         ``R_T^2``.
     rt2_diff : float
         ``R_T^2`` of the differenced output.
-    yic : float
-        Young information criterion.
-    converged : bool
-        Whether SRIV converged.
-    stable : bool
-        Whether the estimated denominator is stable.
 
     """
 
@@ -60,27 +50,10 @@ def structure_search(y: FloatArray | Sequence[FloatArray], u: FloatArray | Seque
     """
     Estimate every structure in a range and rank them (CAPTAIN ``rivid``, docs/methods.md 1.9).
 
-    Parameters
-    ----------
-    y, u : array or sequence of arrays
-        Data as for :func:`sriv`.
-    n_range, m_range, delay_range : sequence of int
-        Candidate orders and delays.
-    known_factor : sequence of float
-        Known factor of ``A``.
-    criterion : str
-        ``yic`` (most negative first, among models with ``R_T^2 >= min_rt2``),
-        ``rt2`` or ``rt2_diff`` (largest first).
-    min_rt2 : float or None
-        Models below this ``R_T^2`` are ranked after all others for ``yic``;
-        default: 0.001 below the best ``R_T^2`` (YIC chooses among the models that
-        explain the data about as well as the best, as in Young's practice).
-
-    Returns
-    -------
-    list of StructureRow
-        Sorted best first; structures that failed to estimate are left out.
-
+    ``criterion``: ``yic`` (most negative first, among models with ``R_T^2 >= min_rt2``), ``rt2``
+    or ``rt2_diff`` (largest first).
+    ``min_rt2``: models below this ``R_T^2`` are ranked after all others for ``yic``; default:
+    0.001 below the best ``R_T^2`` (methods 1.9).
     """
     if criterion not in ('yic', 'rt2', 'rt2_diff'):
         raise DataError(f'criterion must be yic, rt2 or rt2_diff, got {criterion!r}')

@@ -20,26 +20,13 @@ def integrate_angle_dependent(speed: FloatArray, dt: float, y0: float, low: floa
     """
     Return the angles from ``y0`` under ``speed`` scaled by the angle effects, in the stops.
 
-    Parameters
-    ----------
-    speed : FloatArray
-        Speed per sample before the angle effects, deg/s (the first belongs to no interval).
-    dt : float
-        Sample period, s.
-    y0 : float
-        Angle at the first sample, degrees (clamped into the stops).
-    low, high : float
-        End stops, degrees.
-    gravity : AngleDependentVelocity or None
-        The gravity-like effect, if the model has it.
-    geometry : StrokeGeometry or None
-        The stroke factor, if the model has it.
-
-    Returns
-    -------
-    FloatArray
-        Angle at each sample, degrees.
-
+    ``speed``: speed per sample before the angle effects, deg/s (the first belongs to no interval).
+    ``dt``: sample period, s.
+    ``y0``: angle at the first sample, degrees (clamped into the stops).
+    ``low``, ``high``: end stops, degrees.
+    ``gravity``: the gravity-like effect, if the model has it.
+    ``geometry``: the stroke factor, if the model has it.
+    Returns: angle at each sample, degrees.
     """
     current = min(max(float(y0), low), high)
     # A list grows faster than a numpy array takes one float at a time.

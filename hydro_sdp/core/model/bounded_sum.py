@@ -15,22 +15,8 @@ def bounded_cumsum(x0: float, increments: FloatArray, low: float, high: float) -
     """
     Solve ``x_k = min(max(x_{k-1} + d_k, low), high)`` for a whole sequence (methods 3.7).
 
-    Parameters
-    ----------
-    x0 : float
-        Value before the first increment (clamped into the bounds).
-    increments : FloatArray
-        Increments ``d_1..d_n``.
-    low : float
-        Lower bound (may be ``-inf``).
-    high : float
-        Upper bound (may be ``inf``).
-
-    Returns
-    -------
-    FloatArray
-        ``x_0..x_n`` (length ``n + 1``).
-
+    ``low``: lower bound (may be ``-inf``).
+    ``high``: upper bound (may be ``inf``).
     """
     increments = np.asarray(increments, dtype=np.float64)
     n = increments.size

@@ -17,18 +17,8 @@ def command_span(model: JointModel,
     """
     Return the commands an IDZ table (or the chords of ``chord_map``) covers, input units.
 
-    Parameters
-    ----------
-    model : JointModel
-        The joint.
-    v_range : tuple[float, float] or None
-        Commands to cover.
-
-    Returns
-    -------
-    tuple[float, float]
-        ``(low, high)`` with the rest command strictly between.
-
+    ``v_range``: commands to cover.
+    Returns: ``(low, high)`` with the rest command strictly between.
     """
     static_map = model.static_map
     if v_range is not None:

@@ -246,22 +246,7 @@ EFFECT_TYPES: dict[str, type[Effect]] = {
 
 
 def effect_from_mapping(name: str, params: object) -> Effect:
-    """
-    Build one validated effect from its model-file entry (``name`` a key of :data:`EFFECT_TYPES`).
-
-    Parameters
-    ----------
-    name : str
-        Vocabulary word.
-    params : object
-        The mapping of parameters read from the file.
-
-    Returns
-    -------
-    Effect
-        The validated effect.
-
-    """
+    """Build one validated effect from its model-file entry (``name`` in :data:`EFFECT_TYPES`)."""
     if name not in EFFECT_TYPES:
         known = ', '.join(EFFECT_TYPES)
         raise ModelFileError(f"key 'effects': unknown effect {name!r} (known: {known})")

@@ -93,24 +93,12 @@ def load_factor(load: FloatArray, slope: float, reference: float, overrun: float
     """
     Return one direction's speed factor of ``load_dependence`` at a measured load (methods 3.6).
 
-    Parameters
-    ----------
-    load : FloatArray
-        Measured load at each sample, load units.
-    slope : float
-        Relative speed change per load unit, 1/load unit.
-    reference : float
-        Load at which the slope's factor is 1, load units.
-    overrun : float
-        Growth of the squared factor per load unit beyond ``onset`` (signed), 1/load unit.
-    onset : float
-        Load at which the overrunning begins, load units.
-
-    Returns
-    -------
-    FloatArray
-        Factor per sample.
-
+    ``load``: measured load at each sample, load units.
+    ``slope``: relative speed change per load unit, 1/load unit.
+    ``reference``: load at which the slope's factor is 1, load units.
+    ``overrun``: growth of the squared factor per load unit beyond ``onset`` (signed), 1/load unit.
+    ``onset``: load at which the overrunning begins, load units.
+    Returns: factor per sample.
     """
     load = np.asarray(load, dtype=np.float64)
     linear = np.maximum(MIN_LOAD_FACTOR, 1.0 + slope * (load - reference))
@@ -124,20 +112,9 @@ def exogenous_factor(model: JointModel, speed: FloatArray,
     """
     Return the speed factor of the model's ``flow_sharing`` and ``load_dependence``.
 
-    Parameters
-    ----------
-    model : JointModel
-        The joint.
-    speed : FloatArray
-        Speed the map, the delays and the lag give at each sample, deg/s.
-    exogenous : Exogenous or None
-        The record's signals; None: no load signal, the other joints still.
-
-    Returns
-    -------
-    FloatArray or None
-        Factor per sample, or None when the model has neither effect.
-
+    ``speed``: speed the map, the delays and the lag give at each sample, deg/s.
+    ``exogenous``: the record's signals; None: no load signal, the other joints still.
+    Returns: factor per sample, or None when the model has neither effect.
     """
     sharing = model.effect(FlowSharing.name)
     load = model.effect(LoadDependence.name)

@@ -41,22 +41,10 @@ def first_order(x: FloatArray, a: float, b: float = 1.0,
     """
     Run ``y_k = a y_{k-1} + b x_k`` along the last axis of ``x``.
 
-    Parameters
-    ----------
-    x : FloatArray
-        Input, one series per row of the last axis.
-    a : float
-        The pole, ``-1 <= a <= 1`` (a valve lag: ``exp(-dt / T)``).
-    b : float
-        The input gain (a lag of unit steady gain: ``1 - a``).
-    before : float or FloatArray
-        ``y_{-1}``, the output before the first sample (one per series, or one for all).
-
-    Returns
-    -------
-    FloatArray
-        ``y``, the shape of ``x``.
-
+    ``x``: input, one series per row of the last axis.
+    ``a``: the pole, ``-1 <= a <= 1`` (a valve lag: ``exp(-dt / T)``).
+    ``b``: the input gain (a lag of unit steady gain: ``1 - a``).
+    ``before``: ``y_{-1}``, the output before the first sample (one per series, or one for all).
     """
     if not -1.0 <= a <= 1.0:
         raise ValueError(f'the pole of a first-order recursion must lie in [-1, 1], got {a}')

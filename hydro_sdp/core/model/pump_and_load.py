@@ -46,20 +46,10 @@ def power_allowed(load: FloatArray, limit: float, offset: float) -> FloatArray:
     """
     Return the speed a power-limited pump allows, ``limit / (load + offset)`` (inf where <= 0).
 
-    Parameters
-    ----------
-    load : FloatArray
-        Measured load, load units.
-    limit : float
-        The cap, speed x load unit.
-    offset : float
-        Load added to the measured one (the pump's margin above the load pressure).
-
-    Returns
-    -------
-    FloatArray
-        The speed allowed (the unit of ``limit`` over load units).
-
+    ``load``: measured load, load units.
+    ``limit``: the cap, speed x load unit.
+    ``offset``: load added to the measured one (the pump's margin above the load pressure).
+    Returns: the speed allowed (the unit of ``limit`` over load units).
     """
     pressure = load + offset
     return np.where(pressure > 0.0, limit / np.maximum(pressure, 1e-12), np.inf)
@@ -72,14 +62,12 @@ class LoadDependence:
 
     A record without a load signal takes the factors fitted to it by key; others keep 1.
 
-    Parameters
+    Attributes
     ----------
     positive, negative : float
         Relative speed change per load unit in each direction, 1/load unit.
     reference : float
         Load at which the map holds, load units.
-    records : tuple[str, ...]
-        Keys of records (:func:`~.exogenous_signals.record_key`) with fitted factors.
     record_positive, record_negative : tuple[float, ...]
         Speed factor of each of those records per direction (> 0).
     overrun_positive, overrun_negative : float

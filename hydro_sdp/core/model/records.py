@@ -200,12 +200,10 @@ class Pieces:
     """
     A record cut at the holes in its time stamps.
 
-    Parameters
+    Attributes
     ----------
     records : tuple[Record, ...]
         The pieces kept, in time order.
-    gaps : tuple[Gap, ...]
-        Where it was cut.
     dropped : int
         Samples left out in pieces too short to keep.
 
@@ -238,25 +236,9 @@ def split_at_gaps(record: Record, *, max_gap: float = 3.0,
 
     The period is the record's median spacing; pieces keep its joint, source and origin.
 
-    Parameters
-    ----------
-    record : Record
-        The record.
-    max_gap : float
-        Largest spacing kept inside one piece, in sample periods (> 1).
-    min_samples : int
-        Fewest samples a piece cut from the record needs to be kept (>= 1).
-
-    Returns
-    -------
-    Pieces
-        The pieces (the record itself when it has no gap) and the gaps.
-
-    Raises
-    ------
-    DataError
-        When every piece is too short.
-
+    ``max_gap``: largest spacing kept inside one piece, in sample periods (> 1).
+    ``min_samples``: fewest samples a piece cut from the record needs to be kept (>= 1).
+    Raises DataError when every piece is too short.
     """
     if not (math.isfinite(max_gap) and max_gap > 1.0):
         raise DataError(f'max_gap must be a number of sample periods above 1, got {max_gap}')

@@ -29,21 +29,8 @@ def nominal_period(steps: FloatArray | IntArray) -> float:
     """
     Return the nominal period of spacings between time stamps (their unit).
 
-    Parameters
-    ----------
-    steps : array
-        Spacings of successive stamps (seconds, or integer nanoseconds), > 0.
-
-    Returns
-    -------
-    float
-        The median spacing rounded to the digits the spacings support.
-
-    Raises
-    ------
-    DataError
-        When there is no spacing, or the median is not a positive finite number.
-
+    ``steps``: spacings of successive stamps (seconds, or integer nanoseconds), > 0.
+    Raises DataError when there is no spacing, or the median is not a positive finite number.
     """
     spacings = np.asarray(steps, dtype=np.float64)
     if spacings.size == 0:

@@ -151,24 +151,10 @@ def speed_profile(model: JointModel, v: FloatArray, dt: float, *,
     """
     Speed ``w_k`` (deg/s) from ``y_{k-1}`` to ``y_k``, before end stops (methods 3.6).
 
-    Parameters
-    ----------
-    model : JointModel
-        The joint.
-    v : FloatArray
-        Commands.
-    dt : float
-        Sample period, s.
-    v_before : float
-        Command assumed before the first sample.
-    exogenous : Exogenous or None
-        The record's load and other joints' speeds.
-
-    Returns
-    -------
-    FloatArray
-        One speed per sample (``w_0`` belongs to no interval).
-
+    ``dt``: sample period, s.
+    ``v_before``: command assumed before the first sample.
+    ``exogenous``: the record's load and other joints' speeds.
+    Returns: one speed per sample (``w_0`` belongs to no interval).
     """
     dt = check_sample_period(dt)
     v = _check_commands(v)
@@ -197,20 +183,9 @@ def one_step_increments(model: JointModel, v: FloatArray, y: FloatArray, dt: flo
     """
     Return the increments ``y^_k - y_{k-1}`` predicted from each measured angle (methods 8.1).
 
-    Parameters
-    ----------
-    model, v, dt, v_before, exogenous
-        As in :func:`speed_profile`.
-    y : FloatArray
-        Measured angles, degrees.
-    start : int
-        First sample whose delayed commands are known.
-
-    Returns
-    -------
-    FloatArray
-        Predicted increments for samples ``start + 1 ..``.
-
+    ``y``: measured angles, degrees.
+    ``start``: first sample whose delayed commands are known.
+    Returns: predicted increments for samples ``start + 1 ..``.
     """
     mode = model.effect(Oscillation.name)
     steps = OneStep(model.without_effect(Oscillation.name) if mode is not None else model, v, y,
@@ -223,15 +198,7 @@ class OneStep:
     """
     The one-step increments of a model for any link mode added to it.
 
-    Parameters
-    ----------
-    model : JointModel
-        The model without ``oscillation``.
-    v, y, dt, start, v_before, exogenous
-        As in :func:`one_step_increments`.
-    from_start : bool
-        Whether only the increments from ``start`` are needed (no mode will be added).
-
+    ``from_start``: whether only the increments from ``start`` are needed (no mode will be added).
     """
 
     def __init__(self, model: JointModel, v: FloatArray, y: FloatArray, dt: float, *,
@@ -381,17 +348,9 @@ class JointSimulator:
     """
     Step a joint model one sample at a time; :meth:`step` takes ``v_{k+1}``.
 
-    Parameters
-    ----------
-    model : JointModel
-        The joint.
-    dt : float
-        Sample period, s.
-    y0 : float
-        Angle at the first sample, degrees.
-    v_before : float
-        Command in force up to and including the first sample.
-
+    ``dt``: sample period, s.
+    ``y0``: angle at the first sample, degrees.
+    ``v_before``: command in force up to and including the first sample.
     """
 
     def __init__(self, model: JointModel, dt: float, y0: float, *,
@@ -425,15 +384,7 @@ class JointSimulator:
         self.samples = 0
 
     def set_static_map(self, static_map: StaticMap) -> None:
-        """
-        Swap the command-to-speed map from now on; commands in the delay line keep their speeds.
-
-        Parameters
-        ----------
-        static_map : StaticMap
-            The new map.
-
-        """
+        """Swap the command-to-speed map; commands in the delay line keep their speeds."""
         self.model = replace(self.model, static_map=static_map)
 
     @property
@@ -445,16 +396,8 @@ class JointSimulator:
         """
         Issue command ``v`` now and advance one sample.
 
-        Parameters
-        ----------
-        v : float
-            Command in force over the next sample, input units (must be finite).
-
-        Returns
-        -------
-        float
-            Angle at the next sample, degrees.
-
+        ``v``: command in force over the next sample, input units (must be finite).
+        Returns: angle at the next sample, degrees.
         """
         if not math.isfinite(v):
             raise DataError(f'command must be finite, got {v}')

@@ -33,20 +33,8 @@ def delayed(values: FloatArray, tau: int, before: float | None = None) -> FloatA
     """
     Shift a per-sample sequence ``tau`` samples later: element ``k`` is ``values[k - tau]``.
 
-    Parameters
-    ----------
-    values : FloatArray
-        Per-sample values.
-    tau : int
-        Delay, samples (>= 0).
-    before : float or None
-        Value in force before the sequence starts; None: its first value.
-
-    Returns
-    -------
-    FloatArray
-        The delayed sequence, same length.
-
+    ``tau``: delay, samples (>= 0).
+    ``before``: value in force before the sequence starts; None: its first value.
     """
     values = np.asarray(values, dtype=np.float64)
     if tau < 0:
@@ -64,20 +52,7 @@ def delayed_at(values: FloatArray, indices: IntArray, tau: int) -> FloatArray:
     """
     ``values[k - tau]`` at the sample indices ``k``, holding the first value before the start.
 
-    Parameters
-    ----------
-    values : FloatArray
-        Per-sample commands of one record.
-    indices : IntArray
-        Sample indices ``k`` into ``values``.
-    tau : int
-        Delay, samples.
-
-    Returns
-    -------
-    FloatArray
-        The delayed commands at ``indices``.
-
+    ``values``: per-sample commands of one record.
     """
     return np.asarray(values)[np.maximum(np.asarray(indices) - tau, 0)]
 
@@ -98,13 +73,7 @@ class DelayLine:
     """
     The last ``tau + 1`` values pushed, one per sample: what a pure delay holds.
 
-    Parameters
-    ----------
-    tau : int
-        Longest delay to be asked for, samples.
-    before : float
-        Value in force before the first push.
-
+    ``tau``: longest delay to be asked for, samples.
     """
 
     def __init__(self, tau: int, before: float) -> None:

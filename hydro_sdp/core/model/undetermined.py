@@ -18,16 +18,10 @@ class Undetermined:
     """
     One parameter the data leave within a bound.
 
-    Parameters
+    Attributes
     ----------
     parameter : str
         The parameter, by its model-file name (``dead_zone[1]``, ``curvature[0]``).
-    bound : tuple[float, float]
-        The values the data allow, low to high.
-    reason : str
-        Why the data do not pin it.
-    record : str
-        What to record to pin it.
     motion : float
         Speed at the bound's end where the joint moved, share of its fastest (0: unknown).
 

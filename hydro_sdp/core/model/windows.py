@@ -18,20 +18,9 @@ def simulate_windows(model: JointModel, v: FloatArray, y: FloatArray, dt: float,
     """
     Simulate afresh from the measured angle at each of ``starts``; delays and lag run on.
 
-    Parameters
-    ----------
-    model, v, dt, v_before, exogenous
-        As in :func:`speed_profile`.
-    y : FloatArray
-        Measured angles, degrees.
-    starts : sequence of int
-        First sample of each window, increasing.
-
-    Returns
-    -------
-    FloatArray
-        Simulated angle from the first start on; NaN before it.
-
+    ``y``: measured angles, degrees.
+    ``starts``: first sample of each window, increasing.
+    Returns: simulated angle from the first start on; NaN before it.
     """
     speed = speed_profile(model, v, dt, v_before=v_before, exogenous=exogenous)
     out = np.full(speed.size, np.nan)

@@ -15,28 +15,10 @@ def experiment_record(model: JointModel, program: str, *, dt: float = 0.01, seed
     """
     Simulate one open-loop program on ``model`` with measurement noise.
 
-    Parameters
-    ----------
-    model : JointModel
-        The joint.
-    program : str
-        ``steps`` or ``random``.
-    dt : float
-        Sample period, s.
-    seed : int
-        Seed for the program and the noise.
-    duration : float or None
-        Length in s; default 40 steps, or 60 s of random levels.
-    noise : float
-        Standard deviation of the measurement noise, degrees.
-    y0 : float or None
-        Starting angle; default: the middle of the end stops.
-
-    Returns
-    -------
-    Record
-        The noisy record, ``t`` starting at ``dt``.
-
+    ``dt``: sample period, s.
+    ``duration``: length in s; default 40 steps, or 60 s of random levels.
+    ``noise``: standard deviation of the measurement noise, degrees.
+    ``y0``: starting angle; default: the middle of the end stops.
     """
     start = start_angle(model) if y0 is None else y0
     if program == 'steps':

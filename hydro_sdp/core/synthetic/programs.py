@@ -27,18 +27,8 @@ def level_bounds(model: JointModel, *, saturation: float = 0.99
     Small ends lie 60 % of the way to the dead-zone's edge; large ends reach ``saturation``
     of an ``sdp`` map's speed, within 95 % of the input limits.
 
-    Parameters
-    ----------
-    model : JointModel
-        The joint.
-    saturation : float
-        Fraction of the saturation speed where an ``sdp`` map's span ends.
-
-    Returns
-    -------
-    tuple of two (float, float)
-        The spans, negative then positive.
-
+    ``saturation``: fraction of the saturation speed where an ``sdp`` map's span ends.
+    Returns: the spans, negative then positive.
     """
     rest = model.rest_command
     static_map = model.static_map
@@ -90,26 +80,12 @@ def step_program(model: JointModel, dt: float, *, steps: int = 40, hold: float =
     """
     Make steps from rest of increasing size, alternating in sign, separated by rests.
 
-    Parameters
-    ----------
-    model : JointModel
-        The joint, for the command range and to keep it inside its end stops.
-    dt : float
-        Sample period, s.
-    steps : int
-        Number of step experiments (at least 2).
-    hold : float
-        Longest time a step is held, s (shortened before an end stop).
-    rest : float
-        Rest before each step, s (also after the last one).
-    y0 : float
-        Angle at the start, degrees.
-
-    Returns
-    -------
-    FloatArray
-        Command at each sample.
-
+    ``model``: the joint, for the command range and to keep it inside its end stops.
+    ``dt``: sample period, s.
+    ``hold``: longest time a step is held, s (shortened before an end stop).
+    ``rest``: rest before each step, s (also after the last one).
+    ``y0``: angle at the start, degrees.
+    Returns: command at each sample.
     """
     dt = check_sample_period(dt)
     if steps < 2:
@@ -156,26 +132,11 @@ def random_program(model: JointModel, dt: float, duration: float, *, seed: int =
 
     Sizes are uniform up to 90 % of saturation; signs pull the joint to mid-travel.
 
-    Parameters
-    ----------
-    model : JointModel
-        The joint.
-    dt : float
-        Sample period, s.
-    duration : float
-        Length of the program, s.
-    seed : int
-        Seed of the random generator.
-    y0 : float
-        Angle at the start, degrees.
-    hold_range : tuple[float, float]
-        Shortest and longest hold time, s.
-
-    Returns
-    -------
-    FloatArray
-        Command at each sample.
-
+    ``dt``: sample period, s.
+    ``duration``: length of the program, s.
+    ``y0``: angle at the start, degrees.
+    ``hold_range``: shortest and longest hold time, s.
+    Returns: command at each sample.
     """
     dt = check_sample_period(dt)
     if not duration > 0.0:

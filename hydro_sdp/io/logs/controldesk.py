@@ -27,19 +27,8 @@ def signal_name(trace: str, path: str) -> str:
     """
     Return a column's name as a user reads it (docs/interfaces.md section 4.4).
 
-    Parameters
-    ----------
-    trace : str
-        Its trace name (may be empty).
-    path : str
-        Its block path (may be empty).
-
-    Returns
-    -------
-    str
-        The trace name, or the last element of the path that is not a port;
-        the trace name when the path has none.
-
+    ``trace``: its trace name (may be empty).
+    ``path``: its block path (may be empty).
     """
     if trace and not PORT.match(trace):
         return trace
@@ -112,22 +101,11 @@ class ControlDeskTable:
     """
     The signals of a ControlDesk export, each timed by its section's time column.
 
-    Parameters
-    ----------
-    rows : Rows
-        The file's rows (:func:`.text_rows.read_rows`).
-    time : str or None
-        Time column (default: each section's own); a signal names a time for the
-        signals of its section.
-    source : str
-        The file, for messages.
-    time_role : str
-        How messages name the time option.
-    decimal_comma : bool
-        Whether a comma in a number is its decimal point.
-    notes : tuple[str, ...]
-        What the user should know of how the file was read.
-
+    ``rows``: the file's rows (:func:`.text_rows.read_rows`).
+    ``time``: time column (default: each section's own); a signal names a time for the signals of
+    its section.
+    ``decimal_comma``: whether a comma in a number is its decimal point.
+    ``notes``: what the user should know of how the file was read.
     """
 
     def __init__(self, rows: Rows, time: str | None, *, source: str = 'csv',

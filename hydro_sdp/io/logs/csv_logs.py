@@ -22,13 +22,11 @@ class CsvLog:
     """
     One CSV log as a record.
 
-    Parameters
+    Attributes
     ----------
     record : Record
-        ``t`` (s, shifted), ``v`` (input units, the command in force over the
-        interval ending at each row), ``y`` (degrees).
-    time_shift : float
-        Seconds added to the time column.
+        ``t`` (s, shifted), ``v`` (input units, the command in force over the interval ending at
+        each row), ``y`` (degrees).
 
     """
 
@@ -41,25 +39,9 @@ def record_from_log(t: FloatArray, y: FloatArray, command: FloatArray, *, joint:
     """
     Turn logged rows into a record by the timing rule of methods 3.4.
 
-    Parameters
-    ----------
-    t : FloatArray
-        Time of each row, s, strictly increasing (any start).
-    y : FloatArray
-        Angle of each row, degrees.
-    command : FloatArray
-        Command the logger applied at each row's time, input units.
-    joint : str
-        Joint name.
-    source : str
-        Where the rows came from, for messages.
-
-    Returns
-    -------
-    CsvLog
-        The record (``v_k`` = command of row ``k - 1``; ``v_0`` = command of row 0)
-        and the time shift.
-
+    ``t``: time of each row, s, strictly increasing (any start).
+    ``y``: angle of each row, degrees.
+    ``command``: command the logger applied at each row's time, input units.
     """
     t = np.asarray(t, dtype=np.float64)
     if t.size < 2:

@@ -27,10 +27,8 @@ class Header:
     """
     The header block of a CSV log.
 
-    Parameters
+    Attributes
     ----------
-    names : Row
-        The names row.
     others : tuple[Row, ...]
         The block's other rows (units, descriptions), top to bottom.
 
@@ -49,23 +47,12 @@ def split_header(rows: Rows, header_row: int | None, source: str,
     """
     Find the header block and the sample rows.
 
-    Parameters
-    ----------
-    rows : Rows
-        The file's rows, blank ones empty.
-    header_row : int or None
-        Spreadsheet number of the names row; default: found (docs/interfaces.md section 4.4).
-    source : str
-        The file, for messages.
-    decimal_comma : bool
-        Whether a comma in a number is its decimal point.
-
-    Returns
-    -------
-    tuple
-        ``(header, data)``: the header block (None without one) and the non-blank
-        rows from the first row of numbers on.
-
+    ``rows``: the file's rows, blank ones empty.
+    ``header_row``: spreadsheet number of the names row; default: found (docs/interfaces.md section
+    4.4).
+    ``decimal_comma``: whether a comma in a number is its decimal point.
+    Returns: ``(header, data)``: the header block (None without one) and the non-blank rows from
+    the first row of numbers on.
     """
     start = 0
     if header_row is not None:
@@ -94,23 +81,11 @@ class CsvTable:
     """
     The columns of a CSV log, each timed by the time column.
 
-    Parameters
-    ----------
-    rows : Rows
-        The file's rows (:func:`.text_rows.read_rows`).
-    time : str or None
-        Time column (name or 0-based index), s; required.
-    source : str
-        The file, for messages.
-    header_row : int or None
-        Spreadsheet number of the names row (default: found, see the module).
-    time_role : str
-        How messages name the time option.
-    decimal_comma : bool
-        Whether a comma in a number is its decimal point.
-    notes : tuple[str, ...]
-        What the user should know of how the file was read.
-
+    ``rows``: the file's rows (:func:`.text_rows.read_rows`).
+    ``time``: time column (name or 0-based index), s; required.
+    ``header_row``: spreadsheet number of the names row (default: found, see the module).
+    ``decimal_comma``: whether a comma in a number is its decimal point.
+    ``notes``: what the user should know of how the file was read.
     """
 
     def __init__(self, rows: Rows, time: str | None, *, source: str = 'csv',
@@ -192,28 +167,11 @@ def text_table(text: str, time: str | None, *, delimiter: str | None = None,
     """
     Read a CSV log's text as a ControlDesk export or a plain table, whichever it is.
 
-    Parameters
-    ----------
-    text : str
-        The file's content.
-    time : str or None
-        Time column (optional for a ControlDesk export, which names its own).
-    delimiter : str or None
-        Cell delimiter (see :func:`.text_rows.delimiter_character`); default: sniffed.
-    source : str
-        The file, for messages.
-    header_row : int or None
-        Spreadsheet number of a plain table's names row.
-    time_role : str
-        How messages name the time option.
-    notes : tuple[str, ...]
-        How the text was read (its encoding), passed on.
-
-    Returns
-    -------
-    LogTable
-        The file's channels.
-
+    ``text``: the file's content.
+    ``time``: time column (optional for a ControlDesk export, which names its own).
+    ``delimiter``: cell delimiter (see :func:`.text_rows.delimiter_character`); default: sniffed.
+    ``header_row``: spreadsheet number of a plain table's names row.
+    Returns: the file's channels.
     """
     character = sniff_delimiter(text) if delimiter is None else delimiter_character(delimiter)
     rows = read_rows(text, character, source)

@@ -25,14 +25,12 @@ class MachineLog:
     """
     One logger's file read as records.
 
-    Parameters
+    Attributes
     ----------
     records : tuple[Record, ...]
         One per joint, in the signals file's order, sharing their time stamps: ``t`` (s, shifted),
         ``v`` (the command in force over the interval ending at each sample; zero for a joint
         without a command), ``y`` (degrees).
-    commanded : tuple[str, ...]
-        Joints that have a command channel.
     signals : Mapping[str, FloatArray]
         Each signal's value at each sample, by topic.
     time_shift : float
@@ -71,26 +69,11 @@ def open_table(path: str | os.PathLike[str], time: str | None, *, time_role: str
     """
     Open a logger's file by its kind (:func:`log_kind`); closed on leaving.
 
-    Parameters
-    ----------
-    path : str or PathLike
-        The file.
-    time : str or None
-        Time column or variable (optional for MDF4).
-    time_role : str
-        How messages name the time option.
-    header_row : int or None
-        CSV names row (spreadsheet number).
-    delimiter : str or None
-        CSV cell delimiter (default: sniffed).
-    encoding : str or None
-        CSV text encoding (default: detected, :mod:`.text_rows`).
-
-    Yields
-    ------
-    LogTable
-        The file's channels.
-
+    ``time``: time column or variable (optional for MDF4).
+    ``header_row``: CSV names row (spreadsheet number).
+    ``delimiter``: CSV cell delimiter (default: sniffed).
+    ``encoding``: CSV text encoding (default: detected, :mod:`.text_rows`).
+    Yields: the file's channels.
     """
     kind = log_kind(path)
     if kind == 'mdf':
@@ -116,18 +99,8 @@ def machine_log(table: LogTable, spec: MachineSpec) -> MachineLog:
     """
     Read a machine's joints and signals from an open logger's file.
 
-    Parameters
-    ----------
-    table : LogTable
-        The file (:func:`open_table`).
-    spec : MachineSpec
-        Which channels are which (the signals file, or the single-joint options).
-
-    Returns
-    -------
-    MachineLog
-        The records and signals on the first joint's angle samples.
-
+    ``spec``: which channels are which (the signals file, or the single-joint options).
+    Returns: the records and signals on the first joint's angle samples.
     """
     source = table.source
     names = list(spec.joints)

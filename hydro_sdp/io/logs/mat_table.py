@@ -49,15 +49,7 @@ class MatTable:
     """
     The numeric vectors of a MATLAB file.
 
-    Parameters
-    ----------
-    path : str or PathLike
-        The file.
-    time : str or None
-        Time variable, s; required.
-    time_role : str
-        How messages name the time option.
-
+    ``time``: time variable, s; required.
     """
 
     def __init__(self, path: str | os.PathLike[str], time: str | None, *,

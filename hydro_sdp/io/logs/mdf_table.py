@@ -35,16 +35,8 @@ class MdfTable:
     """
     The channels of an MDF4 file.
 
-    Parameters
-    ----------
-    path : str or PathLike
-        The file.
-    time : str or None
-        A channel whose values are the time of its group's channels, s (default:
-        each group's master channel).
-    time_role : str
-        How messages name the time option.
-
+    ``time``: a channel whose values are the time of its group's channels, s (default: each group's
+    master channel).
     """
 
     def __init__(self, path: str | os.PathLike[str], time: str | None = None, *,

@@ -26,10 +26,8 @@ class JointChannels:
     """
     The channels of one joint.
 
-    Parameters
+    Attributes
     ----------
-    angle : str
-        Angle channel.
     command : str or None
         Command channel (None: the joint is only measured).
     command_negative : str or None
@@ -50,7 +48,7 @@ class MachineSpec:
     """
     A machine's joints and signals in a logger's files.
 
-    Parameters
+    Attributes
     ----------
     joints : Mapping[str, JointChannels]
         Joints in order: the first joint's angle samples are the bag's time base.
@@ -58,8 +56,6 @@ class MachineSpec:
         Float64 topic (with its leading slash) per channel.
     time : str or None
         Time column or variable, s (None: each channel's own time base, MDF4 only).
-    source : str
-        Where the description came from, for messages.
 
     """
 
@@ -97,22 +93,7 @@ def _keys_of(value: object) -> tuple[str, ...]:
 
 
 def spec_from_mapping(data: object, source: str) -> MachineSpec:
-    """
-    Build a :class:`MachineSpec` from a parsed signals file.
-
-    Parameters
-    ----------
-    data : object
-        The parsed YAML document.
-    source : str
-        The file, for messages.
-
-    Returns
-    -------
-    MachineSpec
-        The joints and signals.
-
-    """
+    """Build a :class:`MachineSpec` from a parsed signals file."""
     top = _mapping(data, source, FILE_KEYS)
     unit = _unit(top.get('angle_unit', 'deg'), f'{source}: angle_unit')
     joints_data = top.get('joints')
@@ -154,35 +135,14 @@ def spec_from_mapping(data: object, source: str) -> MachineSpec:
 
 
 def load_signals(path: str | os.PathLike[str]) -> MachineSpec:
-    """
-    Read a signals file.
-
-    Parameters
-    ----------
-    path : str or PathLike
-        The YAML file.
-
-    Returns
-    -------
-    MachineSpec
-        The joints and signals.
-
-    """
+    """Read a signals file."""
     return spec_from_mapping(load_yaml(path), str(path))
 
 
 def single_joint_spec(joint: str, angle: str, command: str, *, time: str | None = None,
                       command_negative: str | None = None,
                       angle_unit: str = 'deg') -> MachineSpec:
-    """
-    Return the spec the single-joint options give (``--joint --time --angle --command``...).
-
-    Returns
-    -------
-    MachineSpec
-        One joint, no signals.
-
-    """
+    """Return the spec the single-joint options give (``--joint --time --angle --command``...)."""
     if not joint:
         raise ConfigurationError('joint name must not be empty')
     _unit(angle_unit, '--angle-unit')

@@ -20,14 +20,10 @@ class Channel:
     """
     One logged signal.
 
-    Parameters
+    Attributes
     ----------
-    name : str
-        Its name in the file.
     t : FloatArray
         Time of each value, s (any origin: the logger's clock, time since 1970).
-    values : FloatArray
-        The values, finite.
     label : str
         How messages name it (``channel 'Boom_ang'``, ``column 'angle'``...).
 
@@ -49,22 +45,7 @@ class LogTable(Protocol):
 
 
 def check_channel(source: str, channel: Channel) -> Channel:
-    """
-    Refuse a channel whose values are not finite or whose time does not increase.
-
-    Parameters
-    ----------
-    source : str
-        The file, for messages.
-    channel : Channel
-        The channel.
-
-    Returns
-    -------
-    Channel
-        The same channel.
-
-    """
+    """Refuse a channel whose values are not finite or whose time does not increase."""
     if channel.values.size == 0:
         raise DataError(f'{source}: {channel.label}: no values')
     if channel.t.shape != channel.values.shape:
@@ -97,17 +78,9 @@ def first_time_fault(t: FloatArray) -> TimeFault | None:
     """
     Find the first time that does not exceed the one before it.
 
-    Parameters
-    ----------
-    t : FloatArray
-        Logged times, s.
-
-    Returns
-    -------
-    TimeFault or None
-        Its index ``k`` (``t[k + 1] <= t[k]``), how it fails (``repeats`` or ``goes backwards
-        from``) and how many times fail in all; None if ``t`` increases strictly.
-
+    ``t``: logged times, s.
+    Returns: its index ``k`` (``t[k + 1] <= t[k]``), how it fails (``repeats`` or
+    ``goes backwards from``) and how many times fail in all; None if ``t`` increases strictly.
     """
     steps = np.diff(t)
     wrong = np.flatnonzero(steps <= 0.0)

@@ -36,12 +36,8 @@ class LogText:
     """
     A logger's file as text.
 
-    Parameters
+    Attributes
     ----------
-    text : str
-        The content.
-    encoding : str
-        The codec it was read with.
     note : str
         Why it was read so, when it was not UTF-8 (empty otherwise).
 
@@ -87,20 +83,8 @@ def decode_log(data: bytes, source: str, encoding: str | None = None) -> LogText
     """
     Decode a logger's file (docs/interfaces.md section 4.4).
 
-    Parameters
-    ----------
-    data : bytes
-        The file's bytes.
-    source : str
-        The file, for messages.
-    encoding : str or None
-        The encoding named by the user (strict: a byte it cannot read is refused).
-
-    Returns
-    -------
-    LogText
-        The text and how it was read.
-
+    ``data``: the file's bytes.
+    ``encoding``: the encoding named by the user (strict: a byte it cannot read is refused).
     """
     if encoding is not None:
         codec = check_encoding(encoding)
@@ -138,18 +122,7 @@ def read_log_text(path: str | os.PathLike[str], encoding: str | None = None) -> 
     """
     Read a logger's text file; each failure is one line naming the file.
 
-    Parameters
-    ----------
-    path : str or PathLike
-        The file.
-    encoding : str or None
-        Its encoding, if the user named it.
-
-    Returns
-    -------
-    LogText
-        The text and how it was read.
-
+    ``encoding``: its encoding, if the user named it.
     """
     source = Path(path)
     if source.is_dir():
@@ -167,16 +140,7 @@ def delimiter_character(text: str) -> str:
     """
     Return the one-character delimiter that ``text`` names.
 
-    Parameters
-    ----------
-    text : str
-        A single character, or ``tab`` (also a backslash and ``t``) or ``space``.
-
-    Returns
-    -------
-    str
-        The character.
-
+    ``text``: a single character, or ``tab`` (also a backslash and ``t``) or ``space``.
     """
     character = DELIMITER_NAMES.get(text, text)
     if len(character) != 1 or character in '"\r\n':
@@ -218,16 +182,7 @@ def sniff_delimiter(text: str) -> str:
     """
     Return the delimiter of ``,``, ``;`` and tab that makes the most rows of numbers.
 
-    Parameters
-    ----------
-    text : str
-        The file's content.
-
-    Returns
-    -------
-    str
-        The delimiter (a comma when none makes a row of numbers).
-
+    ``text``: the file's content.
     """
     lines = text.splitlines()
     sample = lines if len(lines) <= 2 * SNIFF_LINES else \
@@ -244,20 +199,7 @@ def read_rows(text: str, delimiter: str, source: str) -> Rows:
     """
     Split text into rows of stripped cells, blank rows kept empty, trailing empty cells dropped.
 
-    Parameters
-    ----------
-    text : str
-        The file's content.
-    delimiter : str
-        One character.
-    source : str
-        The file, for messages.
-
-    Returns
-    -------
-    Rows
-        ``(spreadsheet row number, cells)`` for every row.
-
+    ``text``: the file's content.
     """
     reader = csv.reader(io.StringIO(text, newline=''), delimiter=delimiter)
     rows = []
@@ -277,24 +219,9 @@ def column_values(data: Rows, index: int, label: str, source: str,
     """
     Return the numbers of one column of sample rows, naming the row and column of a bad cell.
 
-    Parameters
-    ----------
-    data : Rows
-        The sample rows.
-    index : int
-        The column, 0-based.
-    label : str
-        How messages name it (``column 'angle'``).
-    source : str
-        The file, for messages.
-    decimal_comma : bool
-        Whether a comma in a number is its decimal point.
-
-    Returns
-    -------
-    FloatArray
-        One finite number per row.
-
+    ``data``: the sample rows.
+    ``decimal_comma``: whether a comma in a number is its decimal point.
+    Returns: one finite number per row.
     """
     cells = []
     for line, row in data:

@@ -16,22 +16,7 @@ _WIDENED = {Parameter.Type.INTEGER: Parameter.Type.DOUBLE,
 
 
 def as_double(parameter: Parameter, declared: Parameter.Type) -> Parameter:
-    """
-    Return ``parameter`` as a double (array) if it is an integer (array) and ``declared`` is.
-
-    Parameters
-    ----------
-    parameter : Parameter
-        A value being set.
-    declared : Parameter.Type
-        The declared type of the parameter.
-
-    Returns
-    -------
-    Parameter
-        The converted parameter, or ``parameter`` itself.
-
-    """
+    """Return ``parameter`` as a double (array) if it is an integer (array) and ``declared`` is."""
     if _WIDENED.get(parameter.type_) != declared:
         return parameter
     value = parameter.value
@@ -44,18 +29,8 @@ def descriptor(spec: ParameterSpec, description: str | None = None) -> Parameter
     """
     Return the descriptor of a parameter: description, read-only, range, constraints.
 
-    Parameters
-    ----------
-    spec : ParameterSpec
-        The table's row.
-    description : str or None
-        The text to show instead of the table's (a joint's name in front).
-
-    Returns
-    -------
-    rcl_interfaces/ParameterDescriptor
-        The descriptor rclpy checks every set against.
-
+    ``spec``: the table's row.
+    ``description``: the text to show instead of the table's (a joint's name in front).
     """
     result = ParameterDescriptor(description=description or spec.documented,
                                  read_only=spec.read_only, type=ROS_TYPES[spec.kind].value)

@@ -218,22 +218,7 @@ def blocks(text: str) -> list[tuple[str, str]]:
 
 
 def stale_files(root: Path, write: bool = False) -> list[Path]:
-    """
-    Return the files that differ from what the tables give; with ``write``, rewrite them.
-
-    Parameters
-    ----------
-    root : Path
-        The repository (holding ``docs/`` and ``config/``).
-    write : bool
-        Whether to write the files that differ.
-
-    Returns
-    -------
-    list of Path
-        The files that differed.
-
-    """
+    """Return the files that differ from what the tables give; with ``write``, rewrite them."""
     wanted = {root / path: render((root / path).read_text()) for path in MARKDOWN_FILES}
     wanted[root / PARAMS_FILE] = params_file()
     stale = [path for path, text in wanted.items()

@@ -33,28 +33,16 @@ class NodeParameters:
     """
     The parameters of one node: declared from its table, checked and applied whole.
 
-    Parameters
-    ----------
-    node : Node
-        The node (its parameter callbacks are registered here; register no others).
-    table : ParameterTable
-        The node's table.
-    check : callable or None
-        The node's own check of a request, after the table's: raises
-        :class:`~hydro_sdp.core.errors.HydroSdpError` (or ``ValueError``) to refuse it.
-    apply : mapping of str to callable
-        For every writable parameter declared once per node, what makes a new value take effect
-        (called with no argument, once per accepted request however many of its names share it,
-        after the values are set; it reads them back).
-    apply_joint : callable or None
-        What makes a request of per-joint parameters take effect (required when the table
-        has writable per-joint parameters); called with the request.
-
-    Raises
-    ------
-    ValueError
-        If a writable parameter has no handler: it would take no effect.
-
+    ``node``: the node (its parameter callbacks are registered here; register no others).
+    ``table``: the node's table.
+    ``check``: the node's own check of a request, after the table's: raises
+    :class:`~hydro_sdp.core.errors.HydroSdpError` (or ``ValueError``) to refuse it.
+    ``apply``: for every writable parameter declared once per node, what makes a new value take
+    effect (called with no argument, once per accepted request however many of its names share it,
+    after the values are set; it reads them back).
+    ``apply_joint``: what makes a request of per-joint parameters take effect (required when the
+    table has writable per-joint parameters); called with the request.
+    Raises ValueError if a writable parameter has no handler: it would take no effect.
     """
 
     def __init__(self, node: Node, table: ParameterTable, *,
@@ -94,21 +82,13 @@ class NodeParameters:
         """
         Declare per-node parameters (an override from the command line or a file wins).
 
-        Parameters
-        ----------
-        names : iterable of str or None
-            The parameters to declare (default: every per-node one of the table not yet
-            declared, but those declared on demand).
-        defaults : mapping or None
-            Defaults the node computes, by name (required for those the table has none for).
-
-        Raises
-        ------
-        rclpy.exceptions.ParameterException
-            If a value given at start-up breaks the table (wrong type, range, length...).
-        ConfigurationError
-            If a required parameter is not given.
-
+        ``names``: the parameters to declare (default: every per-node one of the table not yet
+        declared, but those declared on demand).
+        ``defaults``: defaults the node computes, by name (required for those the table has none
+        for).
+        Raises rclpy.exceptions.ParameterException if a value given at start-up breaks the table
+        (wrong type, range, length...).
+        Raises ConfigurationError if a required parameter is not given.
         """
         wanted = [spec for spec in self.table.node_specs
                   if not spec.on_demand and not self.declared(spec.name)] \
@@ -124,21 +104,10 @@ class NodeParameters:
         """
         Declare a joint's parameters as ``<joint>.<name>``, and the plain names for one joint.
 
-        Parameters
-        ----------
-        joint : str
-            Joint name.
-        values : mapping
-            Default of each per-joint parameter the joint has, by plain name (None: unset).
-        single : bool
-            Whether the node has this joint only: the plain names are declared too, and
-            kept in step with the joint's.
-
-        Returns
-        -------
-        list of str
-            The joint's names (``<joint>.<name>``), in the order of ``values``.
-
+        ``values``: default of each per-joint parameter the joint has, by plain name (None: unset).
+        ``single``: whether the node has this joint only: the plain names are declared too, and
+        kept in step with the joint's.
+        Returns: the joint's names (``<joint>.<name>``), in the order of ``values``.
         """
         declared = []
         started, self._started = self._started, False     # checked against the table only
@@ -254,11 +223,7 @@ class NodeParameters:
         """
         Check the declared values with the node's check, apply each once, then go live.
 
-        Raises
-        ------
-        ConfigurationError
-            If the node's check refuses the declared values.
-
+        Raises ConfigurationError if the node's check refuses the declared values.
         """
         declared = [self._parameter(spec.name) for spec in self.table.node_specs
                     if self._node.has_parameter(spec.name)]

@@ -16,15 +16,7 @@ def array_items(value: object) -> list[float | str]:
 
 
 class ParameterRequest:
-    """
-    The values of a set request, by name.
-
-    Parameters
-    ----------
-    parameters : sequence of Parameter
-        The request.
-
-    """
+    """The values of a set request, by name."""
 
     def __init__(self, parameters: Sequence[Parameter]) -> None:
         self._values: dict[str, object] = {p.name: p.value for p in parameters}

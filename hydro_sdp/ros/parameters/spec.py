@@ -163,20 +163,8 @@ def size_error(spec: ParameterSpec, value: object, name: str) -> str | None:
     """
     Return why ``value`` is too large for ``spec``, or None; reads its length only.
 
-    Parameters
-    ----------
-    spec : ParameterSpec
-        The table's row.
-    value : object
-        The value as rclpy gives it (a list, an ``array.array``, a string).
-    name : str
-        The name it was given under.
-
-    Returns
-    -------
-    str or None
-        The reason to refuse it.
-
+    ``spec``: the table's row.
+    ``value``: the value as rclpy gives it (a list, an ``array.array``, a string).
     """
     if spec.is_array and isinstance(value, Sized) and not isinstance(value, (str, bytes)):
         limit, what = max(spec.length or 0, MAX_ITEMS), 'values'
@@ -200,14 +188,12 @@ class ParameterTable:
     """
     Every parameter of one node, in the order the documentation lists them.
 
-    Parameters
+    Attributes
     ----------
     executable : str
         Console script (``controller_node``).
     node_name : str
         Default node name (``pip_controller``), the key of the node in parameter files.
-    specs : tuple of ParameterSpec
-        The parameters.
 
     """
 
@@ -248,16 +234,8 @@ class ParameterTable:
         """
         Return the spec of a declared name, or None.
 
-        Parameters
-        ----------
-        name : str
-            A plain name, or ``<joint>.<name>`` of a per-joint parameter.
-
-        Returns
-        -------
-        ParameterSpec or None
-            The spec, or None for a name the table does not hold (``use_sim_time``).
-
+        ``name``: a plain name, or ``<joint>.<name>`` of a per-joint parameter.
+        Returns: the spec, or None for a name the table does not hold (``use_sim_time``).
         """
         for spec in self.specs:
             if name == spec.name or spec.per_joint and name.endswith('.' + spec.name):

@@ -29,20 +29,7 @@ VOCABULARY: tuple[str, ...] = tuple(detector.word for detector in DETECTORS)
 
 
 def detector(word: str) -> Detector:
-    """
-    Return the detector of a vocabulary word.
-
-    Parameters
-    ----------
-    word : str
-        Vocabulary word.
-
-    Returns
-    -------
-    Detector
-        Its registered detector.
-
-    """
+    """Return the detector of a vocabulary word."""
     for candidate in DETECTORS:
         if candidate.word == word:
             return candidate

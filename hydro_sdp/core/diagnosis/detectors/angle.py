@@ -32,17 +32,8 @@ def held_at_stops(context: Context) -> tuple[float | None, float | None, int]:
     """
     Return the angles the joint is held still at while driven on, low and high side.
 
-    Parameters
-    ----------
-    context : Context
-        The model under test and the data.
-
-    Returns
-    -------
-    tuple
-        ``(low, high, samples)``: the stop angles (None where there is no contact for
-        at least :data:`MIN_CONTACT` s) and the contact samples.
-
+    Returns: ``(low, high, samples)``: the stop angles (None where there is no contact for at least
+    :data:`MIN_CONTACT` s) and the contact samples.
     """
     # Over a fifth of a second, so that slow motion stands out of the noise.
     window = max(2, int(round(0.2 / context.dt)))
@@ -101,22 +92,11 @@ def outermost_dwell(outward: FloatArray, band: float, needed: int) -> float | No
     """
     Return the outermost value near which at least ``needed`` of ``outward`` gather.
 
-    Parameters
-    ----------
-    outward : FloatArray
-        Angles of the samples held still while driven, signed so that larger is further
-        towards the stop.
-    band : float
-        Half-width of a dwell, degrees.
-    needed : int
-        Samples a dwell takes.
-
-    Returns
-    -------
-    float or None
-        The median of the outermost ``2 band`` wide window holding ``needed`` samples (in
-        the signed angles), None where no window does.
-
+    ``outward``: angles of the samples held still while driven, signed so that larger is further
+    towards the stop.
+    ``band``: half-width of a dwell, degrees.
+    Returns: the median of the outermost ``2 band`` wide window holding ``needed`` samples (in the
+    signed angles), None where no window does.
     """
     values = np.sort(outward)
     if values.size < needed:

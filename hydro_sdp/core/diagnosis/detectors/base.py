@@ -45,16 +45,7 @@ class Detector(ABC):
         """
         Add the effect to the model under test, fit it and score it.
 
-        Parameters
-        ----------
-        context : Context
-            The model under test and the data.
-
-        Returns
-        -------
-        Trial
-            The candidate, and the augmented model (None when there is none to keep).
-
+        Returns: the candidate, and the augmented model (None when there is none to keep).
         """
 
     def signature(self, model: JointModel, augmented: JointModel, run: Run) -> Signature:
@@ -94,22 +85,7 @@ def feature_signature(word: str, feature: Feature, model: JointModel, augmented:
     """
     Return the residual signature of ``word`` drawn against ``feature``.
 
-    Parameters
-    ----------
-    word : str
-        Vocabulary word.
-    feature : Feature
-        What the residual is drawn against.
-    model, augmented : JointModel
-        The model given and the augmented model.
-    run : Run
-        The run to draw.
-
-    Returns
-    -------
-    Signature
-        Residuals of both models and the feature, aligned sample by sample.
-
+    Returns: residuals of both models and the feature, aligned sample by sample.
     """
     record, start = run.record, run.start
     # Residual i is the increment from sample start + i to start + i + 1.

@@ -41,21 +41,8 @@ def best_sides(base: JointModel, forms: Sequence[LoadDependence],
     """
     Choose each direction's form by the windowed simulation error on ``runs``.
 
-    Parameters
-    ----------
-    base : JointModel
-        The model without ``load_dependence``.
-    forms : sequence of LoadDependence
-        The fitted forms.
-    runs : sequence of Run
-        The estimation runs.
-
-    Returns
-    -------
-    tuple
-        The effect joined from the chosen directions (None: no form helps either), and
-        the index in ``forms`` of each direction's form (-1: none).
-
+    Returns: the effect joined from the chosen directions (None: no form helps either), and the
+    index in ``forms`` of each direction's form (-1: none).
     """
     errors = WindowErrors(runs)
     chosen: list[int] = []

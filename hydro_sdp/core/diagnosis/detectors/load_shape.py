@@ -24,16 +24,7 @@ def load_knots(load: FloatArray) -> FloatArray:
     """
     Return knots over the loads seen: at the quantiles 0, 1/4, 1/2, 3/4 and 1.
 
-    Parameters
-    ----------
-    load : FloatArray
-        Loads of the samples where the model moves, load units.
-
-    Returns
-    -------
-    FloatArray
-        Strictly increasing knots (two at least when the load varies; fewer otherwise).
-
+    ``load``: loads of the samples where the model moves, load units.
     """
     knots = np.unique(np.quantile(load, np.linspace(0.0, 1.0, KNOTS)))
     if knots.size >= 2:
@@ -48,21 +39,10 @@ def fitted_table(measured: FloatArray, predicted: FloatArray, load: FloatArray,
     """
     Fit the factor's knot values per direction to the one-step increments.
 
-    Parameters
-    ----------
-    measured, predicted : FloatArray
-        Measured and model increments, degrees.
-    load : FloatArray
-        Load at each sample.
-    knots : FloatArray
-        Knots.
-
-    Returns
-    -------
-    Table
-        The factors at the knots, positive and negative direction (1 where a direction
-        has too few samples).
-
+    ``measured``, ``predicted``: measured and model increments, degrees.
+    ``load``: load at each sample.
+    Returns: the factors at the knots, positive and negative direction (1 where a direction has too
+    few samples).
     """
     out = []
     for side in (predicted > 0.0, predicted < 0.0):
@@ -79,19 +59,8 @@ def sdp_table(naming: Naming, knots: FloatArray) -> Table | None:
     """
     Read the factor at the knots off the SDP analysis's ratio along the load.
 
-    Parameters
-    ----------
-    naming : Naming
-        The SDP analysis of the model under test.
-    knots : FloatArray
-        Knots.
-
-    Returns
-    -------
-    Table or None
-        The ratio's estimate per direction at the knots (1 for a direction not
-        analysed); None when the load was not analysed.
-
+    Returns: the ratio's estimate per direction at the knots (1 for a direction not analysed); None
+    when the load was not analysed.
     """
     found = [naming.ratio('load', direction) for direction in ('positive', 'negative')]
     if all(entry is None for entry in found):

@@ -40,12 +40,8 @@ def fit_overrun(measured: FloatArray, predicted: FloatArray,
     """
     Fit ``measured = predicted sqrt(1 + max(0, g (L - onset)))`` by least squares.
 
-    Returns
-    -------
-    tuple[float, float]
-        ``(g, onset)`` in 1/load unit and load units; ``(0, 0)`` when no fit beats
-        the factor 1.
-
+    Returns: ``(g, onset)`` in 1/load unit and load units; ``(0, 0)`` when no fit beats the factor
+    1.
     """
     span = float(np.ptp(load)) if load.size else 0.0
     if not span > 0.0 or predicted.size < 10:

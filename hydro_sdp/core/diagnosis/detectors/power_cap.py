@@ -25,19 +25,10 @@ def fit_power_cap(measured: FloatArray, predicted: FloatArray,
     """
     Fit ``|dy| <= c / (L + offset)`` to one direction's one-step increments.
 
-    Parameters
-    ----------
-    measured, predicted : FloatArray
-        Measured and model increments of one direction, deg.
-    load : FloatArray
-        Measured load at each sample, load units.
-
-    Returns
-    -------
-    tuple[float, float]
-        ``(c, offset)``: the cap in deg x load unit per sample and the offset in load
-        units; ``(0, 0)`` when no cap lowers the squared residual by :data:`MIN_GAIN`.
-
+    ``measured``, ``predicted``: measured and model increments of one direction, deg.
+    ``load``: measured load at each sample, load units.
+    Returns: ``(c, offset)``: the cap in deg x load unit per sample and the offset in load units;
+    ``(0, 0)`` when no cap lowers the squared residual by :data:`MIN_GAIN`.
     """
     span = float(np.ptp(load)) if load.size else 0.0
     if not span > 0.0 or predicted.size < MIN_SAMPLES:

@@ -30,11 +30,7 @@ def block_scale(measured: FloatArray, predicted: FloatArray, block: int) -> tupl
     """
     Scale of the measured travel on the predicted travel, and its standard error.
 
-    Returns
-    -------
-    tuple[float, float]
-        ``(scale, error)``; ``(nan, inf)`` when the predicted travel vanishes.
-
+    Returns: ``(scale, error)``; ``(nan, inf)`` when the predicted travel vanishes.
     """
     travel = float(np.sum(predicted))
     if not abs(travel) > 0.0 or predicted.size < 2 * block:

@@ -95,20 +95,7 @@ def _since_change(v: FloatArray) -> FloatArray:
 
 
 def stroke_samples(context: Context) -> Samples:
-    """
-    Return the samples of motion away from the stops.
-
-    Parameters
-    ----------
-    context : Context
-        The model under test and the data.
-
-    Returns
-    -------
-    Samples
-        The samples.
-
-    """
+    """Return the samples of motion away from the stops."""
     model = context.model
     split = model.effect(DirectionDependentDelay.name)
     delay = max(split.positive, split.negative) if isinstance(split, DirectionDependentDelay) \
@@ -155,16 +142,8 @@ def factor_parts(samples: Samples) -> Parts:
     """
     Return what a shared and an opposite angle factor explain beyond map and transients.
 
-    Parameters
-    ----------
-    samples : Samples
-        The samples a factor is fitted on.
-
-    Returns
-    -------
-    Parts
-        The squared residuals, degrees^2.
-
+    ``samples``: the samples a factor is fitted on.
+    Returns: the squared residuals, degrees^2.
     """
     y, up = samples.angles, samples.drive > 0.0
     inside = np.zeros(y.size, dtype=bool)
@@ -197,18 +176,7 @@ def fit_shape(samples: Samples, knots: FloatArray) -> tuple[FloatArray, FloatArr
     """
     Fit the shared factor and its per-direction part (cushions, load) at ``knots``.
 
-    Parameters
-    ----------
-    samples : Samples
-        The samples.
-    knots : FloatArray
-        Knots, degrees.
-
-    Returns
-    -------
-    tuple[FloatArray, FloatArray]
-        The shared factor and the per-direction part at the knots.
-
+    Returns: the shared factor and the per-direction part at the knots.
     """
     basis = hats(samples.angles, knots)
     up = samples.drive > 0.0

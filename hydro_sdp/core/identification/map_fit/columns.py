@@ -24,14 +24,6 @@ class BatchedResiduals:
 
     Pass the object as the residual function of ``least_squares`` and its
     :attr:`options` (``workers=map_points``) as keyword arguments.
-
-    Parameters
-    ----------
-    data : FitData
-        The experiments.
-    parametrised : callable
-        Parameters to ``(rate, beta)``.
-
     """
 
     def __init__(self, data: FitData, parametrised: ParametrisedMap) -> None:
@@ -59,18 +51,9 @@ class BatchedResiduals:
         """
         Apply ``function`` to every point, the residuals of all evaluated in one pass.
 
-        Parameters
-        ----------
-        function : callable
-            scipy's wrapper of this object.
-        points : iterable of FloatArray
-            The points (a Jacobian's: one parameter moved in each).
-
-        Returns
-        -------
-        list
-            ``function`` of each point, in order.
-
+        ``function``: scipy's wrapper of this object.
+        ``points``: the points (a Jacobian's: one parameter moved in each).
+        Returns: ``function`` of each point, in order.
         """
         points = [np.array(point, dtype=np.float64) for point in points]
         evaluated = self.data.evaluate([self.parametrised(p) for p in points], self._last)
@@ -90,21 +73,8 @@ def forward_jacobian(data: FitData, parametrised: ParametrisedMap,
     """
     Return the forward-difference Jacobian of the residuals at ``x``, all columns in one pass.
 
-    Parameters
-    ----------
-    data : FitData
-        The experiments.
-    parametrised : callable
-        Parameters to ``(rate, beta)``.
-    x : FloatArray
-        The point.
-
-    Returns
-    -------
-    FloatArray
-        One row per residual, one column per parameter; the steps are
-        ``1e-6 max(|x_i|, 1e-3)``.
-
+    Returns: one row per residual, one column per parameter; the steps are
+    ``1e-6 max(|x_i|, 1e-3)``.
     """
     points, steps = [x], []
     for i in range(x.size):

@@ -37,16 +37,7 @@ def buckets_of(lengths: IntArray) -> list[IntArray]:
     """
     Group experiments by length into the rows of padded 2-D blocks.
 
-    Parameters
-    ----------
-    lengths : IntArray
-        Predicted samples of each experiment.
-
-    Returns
-    -------
-    list of IntArray
-        Per block, its experiments.
-
+    ``lengths``: predicted samples of each experiment.
     """
     sizes = 2 ** np.ceil(np.log2(np.maximum(lengths, 1))).astype(int)
     out: list[IntArray] = []
@@ -64,21 +55,11 @@ class FitData:
     """
     Experiments arranged for fast residual evaluation.
 
-    Parameters
-    ----------
-    experiments : sequence of Experiment
-        The experiments.
-    delay : int
-        Delay, samples.
-    dt : float
-        Sample period, s.
-    lag : float
-        Valve lag time constant, s (0: none); each experiment's lag starts in
-        steady state at its first delayed command.
-    gains : sequence of FloatArray or None
-        Per experiment, a factor on the speed of each predicted sample (the
-        stroke geometry at the measured angle before it); default: 1.
-
+    ``dt``: sample period, s.
+    ``lag``: valve lag time constant, s (0: none); each experiment's lag starts in steady state at
+    its first delayed command.
+    ``gains``: per experiment, a factor on the speed of each predicted sample (the stroke geometry
+    at the measured angle before it); default: 1.
     """
 
     def __init__(self, experiments: Sequence[Experiment], delay: int, dt: float,
@@ -158,18 +139,8 @@ class FitData:
         """
         Return the residuals of several maps, each as :meth:`residuals` gives them, bit for bit.
 
-        Parameters
-        ----------
-        maps : sequence of (callable, float)
-            Each map's rate function and its ``beta``.
-        base : Evaluation or None
-            An earlier evaluation to start from.
-
-        Returns
-        -------
-        list of Evaluation
-            Per map, its residuals.
-
+        ``maps``: each map's rate function and its ``beta``.
+        ``base``: an earlier evaluation to start from.
         """
         per_level = [self._per_level(rate) for rate, _ in maps]
         out: dict[int, Evaluation] = {}
@@ -284,10 +255,8 @@ class Evaluation:
     """
     One map's residuals, kept whole so that later evaluations can start from them.
 
-    Parameters
+    Attributes
     ----------
-    beta : float
-        The state-residual gain.
     per_level : FloatArray
         ``dt rate`` of every level, then 0 for the padding.
     grids : tuple of FloatArray
@@ -308,24 +277,14 @@ class MapFit(Generic[MapT]):
     """
     A fitted static map.
 
-    Parameters
+    Attributes
     ----------
-    static_map : StaticMap
-        The map.
     method : str
-        ``rr``, ``oe``, ``points`` (fitted to the per-level speeds) or ``increments``
-        (least squares on the one-step angle increments, routine operation).
+        ``rr``, ``oe``, ``points`` (fitted to the per-level speeds) or ``increments`` (least
+        squares on the one-step angle increments, routine operation).
     beta : float
-        Regret-regression gain (0 for ``oe``; 1 for ``increments``, whose one-step
-        prediction starts from every measured angle).
-    cost : float
-        Sum of squared residuals at the optimum.
-    standard_errors : dict
-        Standard error of each parameter, by model-file name.
-    evaluations : int
-        Objective evaluations used.
-    starts : int
-        Starting points tried.
+        Regret-regression gain (0 for ``oe``; 1 for ``increments``, whose one-step prediction
+        starts from every measured angle).
 
     """
 

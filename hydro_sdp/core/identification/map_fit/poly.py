@@ -19,24 +19,9 @@ def fit_poly(points: Sequence[LevelSpeed], rest: float, *, degree: int = 3,
     """
     Fit the second paper's polynomial gain ``b(u)``, ``u = v - rest``, per direction.
 
-    Parameters
-    ----------
-    points : sequence of LevelSpeed
-        Per-level speeds.
-    rest : float
-        Rest command (the gain divides by the command's distance from it).
-    degree : int
-        Highest polynomial degree (lowered when a side has few points).
-    data : FitData or None
-        Experiments to refine the coefficients on (default: the points' fit).
-    method : str
-        ``rr`` or ``oe`` for that refinement.
-
-    Returns
-    -------
-    MapFit
-        The fitted ``poly`` map.
-
+    ``rest``: rest command (the gain divides by the command's distance from it).
+    ``degree``: highest polynomial degree (lowered when a side has few points).
+    ``data``: experiments to refine the coefficients on (default: the points' fit).
     """
     levels = np.array([p.level for p in points]) - rest
     speeds = np.array([p.speed for p in points])

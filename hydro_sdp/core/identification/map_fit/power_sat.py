@@ -97,24 +97,8 @@ def fit_power_sat(data: FitData, points: Sequence[LevelSpeed], rest: float, star
     """
     Fit the saturating power-law map by regret-regression or output error.
 
-    Parameters
-    ----------
-    data : FitData
-        The experiments.
-    points : sequence of LevelSpeed
-        Per-level speeds, for the start.
-    rest : float
-        Rest command.
-    start : SdpMap
-        An ``sdp`` fit: its edges and saturation speeds start the search.
-    method : str
-        ``rr`` (``beta`` estimated) or ``oe`` (``beta = 0``, the simulation error).
-
-    Returns
-    -------
-    MapFit
-        The fitted ``power_sat`` map.
-
+    ``start``: an ``sdp`` fit: its edges and saturation speeds start the search.
+    ``method``: ``rr`` (``beta`` estimated) or ``oe`` (``beta = 0``, the simulation error).
     """
     x0, lower, upper = power_sat_start(points, rest, start)
     if method == 'rr':

@@ -24,15 +24,11 @@ class PwlLayout:
     """
     Knots of a ``pwl`` map and how its free parameters become speeds.
 
-    Parameters
+    Attributes
     ----------
     knots : FloatArray
-        Commands, increasing: ``negative`` knots below the plateau, its one or two
-        edges, then ``positive`` knots above it; input units.
-    negative : int
-        Knots below the plateau.
-    positive : int
-        Knots above the plateau.
+        Commands, increasing: ``negative`` knots below the plateau, its one or two edges, then
+        ``positive`` knots above it; input units.
 
     """
 
@@ -54,22 +50,11 @@ def pwl_layout(levels: FloatArray, dead_zone: tuple[float, float], *,
     """
     Place the knots: the plateau's edges and the commands beyond each.
 
-    Parameters
-    ----------
-    levels : FloatArray
-        The distinct commands of the data, input units.
-    dead_zone : tuple[float, float]
-        Edges of the zero-speed plateau.
-    knots_per_side : int or None
-        Knots beyond each edge, at quantiles of the commands there; default: one at
-        every distinct command, or :data:`QUANTILE_KNOTS` quantiles when there are
-        more than :data:`MAX_KNOTS`.
-
-    Returns
-    -------
-    PwlLayout
-        The knots.
-
+    ``levels``: the distinct commands of the data, input units.
+    ``dead_zone``: edges of the zero-speed plateau.
+    ``knots_per_side``: knots beyond each edge, at quantiles of the commands there; default: one at
+    every distinct command, or :data:`QUANTILE_KNOTS` quantiles when there are more than
+    :data:`MAX_KNOTS`.
     """
     low, high = dead_zone
     # A side without data gets one knot past its edge: 1 input unit, or more where
@@ -97,18 +82,8 @@ def initial_pwl(layout: PwlLayout, points: Sequence[LevelSpeed]) -> FloatArray:
     """
     Return starting increments and ``beta`` whose speeds follow the per-level speeds.
 
-    Parameters
-    ----------
-    layout : PwlLayout
-        The knots.
-    points : sequence of LevelSpeed
-        Mean speeds per command level.
-
-    Returns
-    -------
-    FloatArray
-        Increments (:meth:`PwlLayout.speeds`), at least 1e-6 deg/s each, then ``beta`` 0.5.
-
+    ``points``: mean speeds per command level.
+    Returns: increments (:meth:`PwlLayout.speeds`), at least 1e-6 deg/s each, then ``beta`` 0.5.
     """
     n_neg, n_pos = layout.negative, layout.positive
     target = np.interp(layout.knots, [p.level for p in points], [p.speed for p in points])
@@ -124,24 +99,7 @@ def fit_pwl(data: FitData, points: Sequence[LevelSpeed], rest: float,
     """
     Fit a monotone piecewise-linear map by regret-regression or output error.
 
-    Parameters
-    ----------
-    data : FitData
-        The experiments.
-    points : sequence of LevelSpeed
-        Per-level speeds, for the starting values.
-    rest : float
-        Rest command.
-    dead_zone, knots_per_side
-        Plateau and knots, as in :func:`pwl_layout`.
-    method : str
-        ``rr`` (``beta`` estimated) or ``oe`` (``beta = 0``: the simulation error).
-
-    Returns
-    -------
-    MapFit
-        The fitted ``pwl`` map.
-
+    ``method``: ``rr`` (``beta`` estimated) or ``oe`` (``beta = 0``: the simulation error).
     """
     layout = pwl_layout(data.levels, dead_zone, knots_per_side=knots_per_side)
     knots = layout.knots

@@ -40,18 +40,7 @@ def initial_sdp(points: Sequence[LevelSpeed], rest: float) -> FloatArray:
     """
     Return starting values of ``(vn, cn, a3, vp, cp, a6)`` from per-level speeds.
 
-    Parameters
-    ----------
-    points : sequence of LevelSpeed
-        Mean speeds per command level.
-    rest : float
-        Rest command.
-
-    Returns
-    -------
-    FloatArray
-        Starting parameters.
-
+    ``points``: mean speeds per command level.
     """
     check_excitation(points, rest)
     levels = np.array([p.level for p in points])
@@ -98,18 +87,8 @@ def check_excitation(points: Sequence[LevelSpeed], rest: float) -> None:
     """
     Refuse data that cannot identify a two-sided map.
 
-    Parameters
-    ----------
-    points : sequence of LevelSpeed
-        Mean speeds per command level.
-    rest : float
-        Rest command.
-
-    Raises
-    ------
-    DataError
-        If the joint never moves, or moves in one direction only.
-
+    ``points``: mean speeds per command level.
+    Raises DataError if the joint never moves, or moves in one direction only.
     """
     if not points:
         raise DataError('no excitation: no command level was held long enough to measure a '
@@ -176,28 +155,12 @@ def fit_sdp(data: FitData, points: Sequence[LevelSpeed], rest: float, *,
     """
     Fit eq. (5) of West et al. by regret-regression or by output error.
 
-    Parameters
-    ----------
-    data : FitData
-        The experiments.
-    points : sequence of LevelSpeed
-        Per-level speeds, for the starting values.
-    rest : float
-        Rest command.
-    method : str
-        ``rr`` (least squares on the regret-regression residuals, ``beta``
-        estimated) or ``oe`` (Nelder-Mead on the mean simulation error).
-    starts : int
-        Number of starting points (the curvatures are varied around the start).
-    polish : FitData or None
-        Larger data set: the starts run on ``data`` (a sample of it) and the best
-        is refined on ``polish``.
-
-    Returns
-    -------
-    MapFit
-        The fitted ``sdp`` map with standard errors.
-
+    ``method``: ``rr`` (least squares on the regret-regression residuals, ``beta`` estimated) or
+    ``oe`` (Nelder-Mead on the mean simulation error).
+    ``starts``: number of starting points (the curvatures are varied around the start).
+    ``polish``: larger data set: the starts run on ``data`` (a sample of it) and the best is
+    refined on ``polish``.
+    Returns: the fitted ``sdp`` map with standard errors.
     """
     if method not in FIT_METHODS:
         raise DataError(f"method must be 'rr' or 'oe', got {method!r}")

@@ -21,20 +21,8 @@ def held_share(records: Sequence[Record], rest: float, hold: int) -> float:
     """
     Share of the driven samples that belong to levels held for at least ``hold`` samples.
 
-    Parameters
-    ----------
-    records : sequence of Record
-        The records.
-    rest : float
-        Rest command (samples at rest are not driven).
-    hold : int
-        Samples a level must last to count as held.
-
-    Returns
-    -------
-    float
-        The share, 0..1 (1 when nothing is driven: there is nothing routine to use).
-
+    ``rest``: rest command (samples at rest are not driven).
+    Returns: the share, 0..1 (1 when nothing is driven: there is nothing routine to use).
     """
     driven = held = 0
     for record in records:

@@ -38,27 +38,10 @@ def compare_routine_kinds(pieces: Sequence[Experiment], delay: int, dt: float, r
     """
     Held-out simulation error of each map family fitted to the increments.
 
-    Parameters
-    ----------
-    pieces : sequence of Experiment
-        Pieces of the runs (:func:`routine_pieces`).
-    delay : int
-        Delay, samples.
-    dt : float
-        Sample period, s.
-    rest : float
-        Rest command.
-    points : sequence of LevelSpeed
-        Speeds along the command of all the data (starting values).
-    kinds : sequence of str
-        Families to compare.
-
-    Returns
-    -------
-    FoldErrors
-        Each family's held-out simulation error on each fold (the reason where it could
-        not be fitted).
-
+    ``dt``: sample period, s.
+    ``points``: speeds along the command of all the data (starting values).
+    Returns: each family's held-out simulation error on each fold (the reason where it could not be
+    fitted).
     """
     tally = FoldErrors(kinds)
     units = [Unit(index) for index in range(len(pieces))]

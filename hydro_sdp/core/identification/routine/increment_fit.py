@@ -53,22 +53,9 @@ def fit_sdp_increments(data: Increments, dt: float, points: Sequence[LevelSpeed]
     """
     Fit eq. (5) of West et al. (the ``sdp`` map) to the increments.
 
-    Parameters
-    ----------
-    data : Increments
-        Increments and delayed commands.
-    dt : float
-        Sample period, s.
-    points : sequence of LevelSpeed
-        Speeds along the command (the starting values and the bounds).
-    rest : float
-        Rest command.
-
-    Returns
-    -------
-    MapFit
-        The fit (``method`` ``increments``, ``beta`` 1) with standard errors.
-
+    ``dt``: sample period, s.
+    ``points``: speeds along the command (the starting values and the bounds).
+    Returns: the fit (``method`` ``increments``, ``beta`` 1) with standard errors.
     """
     residuals = _Residuals(data, dt)
     levels = np.array([p.level for p in points])
@@ -84,26 +71,7 @@ def fit_increments(kind: FittedKind, data: Increments, dt: float, points: Sequen
     """
     Fit one map family to the increments.
 
-    Parameters
-    ----------
-    kind : str
-        ``sdp``, ``pwl``, ``poly`` or ``power_sat``.
-    data : Increments
-        Increments and delayed commands.
-    dt : float
-        Sample period, s.
-    points : sequence of LevelSpeed
-        Speeds along the command (the starting values).
-    rest : float
-        Rest command.
-    start : SdpMap
-        The ``sdp`` fit the others start from (its dead-zone).
-
-    Returns
-    -------
-    MapFit
-        The fit (``method`` ``increments``, ``beta`` 1).
-
+    ``dt``: sample period, s.
     """
     if kind == 'sdp':
         return fit_sdp_increments(data, dt, points, rest)

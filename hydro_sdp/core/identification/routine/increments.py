@@ -51,21 +51,8 @@ def increments_of(experiments: Sequence[Experiment], delay: int, *,
     """
     Pair every predicted increment of the experiments with its delayed command.
 
-    Parameters
-    ----------
-    experiments : sequence of Experiment
-        The experiments (with command history before their start).
-    delay : int
-        ``tau``, samples.
-    first : int
-        Leave out samples before this index of each experiment (so that every
-        candidate delay sees the same increments).
-
-    Returns
-    -------
-    Increments
-        The pairs, experiment after experiment.
-
+    ``first``: leave out samples before this index of each experiment (so that every candidate
+    delay sees the same increments).
     """
     commands, increments = [], []
     for experiment in experiments:
@@ -78,22 +65,7 @@ def increments_of(experiments: Sequence[Experiment], delay: int, *,
 
 
 def monotone_share(increment: FloatArray, command: FloatArray) -> float:
-    """
-    Share of the increments' variance explained by the best monotone function of the command.
-
-    Parameters
-    ----------
-    increment : FloatArray
-        The increments.
-    command : FloatArray
-        The command paired with each.
-
-    Returns
-    -------
-    float
-        ``1 - SS_residual / SS_total`` (0 when the increments do not vary).
-
-    """
+    """Share of the increments' variance explained by the best monotone function of the command."""
     total = float(np.sum((increment - np.mean(increment)) ** 2))
     if total <= 0.0:
         return 0.0
@@ -114,29 +86,13 @@ def increment_delay(experiments: Sequence[Experiment], dt: float, *, max_delay: 
     """
     Estimate the delay of routine operation from increments and delayed commands.
 
-    Parameters
-    ----------
-    experiments : sequence of Experiment
-        The runs, each with ``max_delay`` samples of command history.
-    dt : float
-        Sample period, s.
-    max_delay : int
-        Largest delay considered, samples.
-    rest : float
-        Rest command.
-
-    Returns
-    -------
-    DelayEstimate
-        ``fit``: the delay of the largest monotone correlation ratio
-        (:func:`monotone_share`; ``explained``, one value per delay 1..max_delay);
-        ``xcorr``: that of the largest linear correlation; no onset and no valve lag.
-
-    Raises
-    ------
-    DataError
-        When the command never leaves rest.
-
+    ``experiments``: the runs, each with ``max_delay`` samples of command history.
+    ``dt``: sample period, s.
+    ``max_delay``: largest delay considered, samples.
+    Returns: ``fit``: the delay of the largest monotone correlation ratio (:func:`monotone_share`;
+    ``explained``, one value per delay 1..max_delay); ``xcorr``: that of the largest linear
+    correlation; no onset and no valve lag.
+    Raises DataError when the command never leaves rest.
     """
     base = increments_of(experiments, 0, first=max_delay)
     if not np.any(np.concatenate([e.v for e in experiments]) != rest):

@@ -41,28 +41,10 @@ def identify_routine(records: Sequence[Record], segmentation: Segmentation, dt: 
     """
     Identify a joint model from records of routine operation.
 
-    Parameters
-    ----------
-    records : sequence of Record
-        The records.
-    segmentation : Segmentation
-        Their runs (:func:`~hydro_sdp.core.identification.segmentation.segment_records`).
-    dt : float
-        Sample period, s.
-    max_delay : int
-        Largest delay considered, samples.
-    kind : str
-        ``auto`` or a map family.
-    angle_limits, input_limits : tuple[float, float] or None
-        End stops and valve range given.
-    progress : callable or None
-        Called with each :class:`IdentifyStage` as it starts.
-
-    Returns
-    -------
-    Identification
-        The model and the evidence (``route`` ``routine``).
-
+    ``dt``: sample period, s.
+    ``max_delay``: largest delay considered, samples.
+    ``angle_limits``, ``input_limits``: end stops and valve range given.
+    ``progress``: called with each :class:`IdentifyStage` as it starts.
     """
     step = progress if progress is not None else (lambda stage: None)
     rest = segmentation.rest

@@ -27,21 +27,9 @@ def speed_points(data: Increments, dt: float, rest: float) -> tuple[LevelSpeed, 
     """
     Speed at every distinct delayed command, by the SDP smoother of the gain.
 
-    Parameters
-    ----------
-    data : Increments
-        Increments and delayed commands.
-    dt : float
-        Sample period, s.
-    rest : float
-        Rest command.
-
-    Returns
-    -------
-    tuple of LevelSpeed
-        One point per distinct command away from rest (pooled when there are very
-        many), sorted by command; empty when no side has enough samples.
-
+    ``dt``: sample period, s.
+    Returns: one point per distinct command away from rest (pooled when there are very many),
+    sorted by command; empty when no side has enough samples.
     """
     drive = data.command - rest
     terms = [Term(name, part, data.command, test=False)
@@ -75,22 +63,8 @@ def check_coverage(points: Sequence[LevelSpeed], seen: tuple[float, float], rest
     """
     Refuse routine data that cannot place a dead-zone edge, naming the commands never seen.
 
-    Parameters
-    ----------
-    points : sequence of LevelSpeed
-        Speeds along the delayed command (:func:`speed_points`).
-    seen : tuple[float, float]
-        Smallest and largest command in the records.
-    rest : float
-        Rest command.
-    input_limits : tuple[float, float] or None
-        The valve's range, when given (the message then names the range never seen).
-
-    Raises
-    ------
-    DataError
-        When the joint never moved, or never moved one way.
-
+    ``input_limits``: the valve's range, when given (the message then names the range never seen).
+    Raises DataError when the joint never moved, or never moved one way.
     """
     levels = np.array([p.level for p in points])
     speeds = np.array([p.speed for p in points])

@@ -74,14 +74,8 @@ class TermEstimate:
     """
     A back-fitted term with its weight of evidence.
 
-    Parameters
+    Attributes
     ----------
-    term : Term
-        The term.
-    ordering : Ordering
-        Groups of its state.
-    smoothed : SmoothedParameter
-        The parameter along them at convergence.
     standard_error : FloatArray
         Standard error per group.
     parameter : FloatArray
@@ -143,25 +137,17 @@ class Backfit:
     """
     A back-fitted model and its base.
 
-    Parameters
+    Attributes
     ----------
     terms : tuple[TermEstimate, ...]
         The terms, in the order given.
     fitted : FloatArray
         ``sum_i x_i p_i`` at every sample.
-    residual_sum : float
-        Squared residual of the back-fitted model.
-    base_residual_sum : float
-        Squared residual of the constant-parameter model.
     base : FloatArray
-        The constant parameters of the terms that are not additive (least squares
-        over them at once).
+        The constant parameters of the terms that are not additive (least squares over them at
+        once).
     base_se : FloatArray
         Their standard errors.
-    passes : int
-        Back-fitting passes made.
-    converged : bool
-        Whether the squared residual settled.
 
     """
 
@@ -193,11 +179,7 @@ def base_fit(z: FloatArray, regressors: FloatArray) -> tuple[FloatArray, FloatAr
     """
     Least-squares constant parameters of ``z = X p + e``.
 
-    Returns
-    -------
-    tuple
-        Parameters, their standard errors, squared residual.
-
+    Returns: parameters, their standard errors, squared residual.
     """
     X = np.asarray(regressors, dtype=np.float64)
     norms = np.sqrt(np.einsum('ij,ij->j', X, X))
@@ -223,36 +205,14 @@ def backfit(z: FloatArray, terms: Sequence[Term], *, max_groups: int | None = MA
     """
     Back-fit the terms' state-dependent parameters to ``z``, and weigh each.
 
-    Parameters
-    ----------
-    z : FloatArray
-        Observations.
-    terms : sequence of Term
-        The terms; each parameter follows its own state.
-    max_groups : int or None
-        Most groups per state (:func:`.ordering.order_by_state`).
-    replicates : int
-        Bootstrap replicates of each term's test (0: no test, p-values NaN).
-    seed : int
-        Seed of the bootstrap.
-    segment : IntArray or None
-        Record of every sample, for the held-out shares (None: one record).
-    max_passes : int
-        Most back-fitting passes.
-    tolerance : float
-        Convergence threshold on the squared residual, as a share of the base's.
-    start : sequence of FloatArray or None, or None
-        Per term, its parameter at every sample to start from (a fit of fewer terms);
-        None: the base model's constant (zero for an additive term).
-    runs : IntArray or None
-        Run of every sample (a command held), where the tests' blocks may be cut
-        (:func:`~hydro_sdp.core.identification.state_dependence.significance.dependence_test`).
-
-    Returns
-    -------
-    Backfit
-        The terms at convergence, with shares and p-values.
-
+    ``max_groups``: most groups per state (:func:`.ordering.order_by_state`).
+    ``replicates``: bootstrap replicates of each term's test (0: no test, p-values NaN).
+    ``segment``: record of every sample, for the held-out shares (None: one record).
+    ``tolerance``: convergence threshold on the squared residual, as a share of the base's.
+    ``start``: per term, its parameter at every sample to start from (a fit of fewer terms); None:
+    the base model's constant (zero for an additive term).
+    ``runs``: run of every sample (a command held), where the tests' blocks may be cut
+    (:func:`~hydro_sdp.core.identification.state_dependence.significance.dependence_test`).
     """
     z = np.asarray(z, dtype=np.float64)
     if not terms:
@@ -313,22 +273,7 @@ def with_tests(fit: Backfit, z: FloatArray, names: Sequence[str], *, replicates:
     """
     Return a back-fit with the terms ``names`` tested, as if fitted with ``test=True``.
 
-    Parameters
-    ----------
-    fit : Backfit
-        A back-fit of ``z`` made with ``replicates``, ``seed`` and ``segment``.
-    z : FloatArray
-        Its observations.
-    names : sequence of str
-        The terms to test.
-    replicates, seed, segment, runs
-        As :func:`backfit` was given them.
-
-    Returns
-    -------
-    Backfit
-        The same fit, those terms with their p-values.
-
+    ``fit``: a back-fit of ``z`` made with ``replicates``, ``seed`` and ``segment``.
     """
     residual = np.asarray(z, dtype=np.float64) - fit.fitted
     terms = tuple(

@@ -24,20 +24,16 @@ class BandedFit:
     """
     The smoothed parameter at one NVR.
 
-    Parameters
+    Attributes
     ----------
     estimate : FloatArray
         Smoothed parameter per group.
-    sigma2 : float
-        Concentrated noise variance.
     neg2_log_likelihood : float
         ``-2 log L`` (diffuse, or with the given prior).
     factor : FloatArray
         Lower banded Cholesky factor of ``A`` (for more right-hand sides).
     residual_sum : float
         ``sum (z - x p)^2`` at the estimate.
-    nvr : float
-        The NVR.
 
     """
 
@@ -65,11 +61,7 @@ def banded_factor(bands: FloatArray) -> FloatArray:
     """
     Return the lower banded Cholesky factor of ``bands`` (lower banded storage).
 
-    Raises
-    ------
-    LinAlgError
-        The matrix is not positive definite.
-
+    Raises LinAlgError if the matrix is not positive definite.
     """
     factor, info = dpbtrf(bands, lower=1)
     if info > 0:
@@ -88,22 +80,7 @@ def banded_solve(factor: FloatArray, rhs: FloatArray) -> FloatArray:
 
 
 def penalty_bands(groups: int, kind: str) -> FloatArray:
-    """
-    Return ``D'D`` in lower banded storage: row ``i`` holds the ``i``-th subdiagonal.
-
-    Parameters
-    ----------
-    groups : int
-        Size ``M`` of the matrix.
-    kind : str
-        ``rw`` or ``irw``.
-
-    Returns
-    -------
-    FloatArray
-        Array of shape ``(d + 1, M)``.
-
-    """
+    """Return ``D'D`` in lower banded storage: row ``i`` holds the ``i``-th subdiagonal."""
     stencil = STENCILS[kind]
     d = len(stencil) - 1
     bands = np.zeros((d + 1, groups))
@@ -134,25 +111,11 @@ def fit_banded(stats: GroupStats, kind: str, nvr: float, *,
     """
     Smooth the parameter at a given NVR by the banded normal equations.
 
-    Parameters
-    ----------
-    stats : GroupStats
-        Sums of the observations per group.
-    kind : str
-        ``rw`` or ``irw``.
-    nvr : float
-        Noise variance ratio (> 0).
-    prior : float or None
-        Variance of the initial state normalised by ``sigma^2``; None: diffuse.
-    dd_bands : FloatArray or None
-        ``penalty_bands(stats.groups, kind)`` when the caller has it (a search over
-        the NVR builds it once); None: built here.
-
-    Returns
-    -------
-    BandedFit
-        The estimate, ``sigma^2``, the likelihood and the factor.
-
+    ``stats``: sums of the observations per group.
+    ``nvr``: noise variance ratio (> 0).
+    ``prior``: variance of the initial state normalised by ``sigma^2``; None: diffuse.
+    ``dd_bands``: ``penalty_bands(stats.groups, kind)`` when the caller has it (a search over the
+    NVR builds it once); None: built here.
     """
     d = order_of(kind)
     M = stats.groups
@@ -200,7 +163,7 @@ class FlatFit:
     """
     The walk's limit at zero NVR: a constant (``rw``) or a line in rank (``irw``).
 
-    Parameters
+    Attributes
     ----------
     estimate : FloatArray
         Parameter per group.
@@ -208,8 +171,6 @@ class FlatFit:
         Level (and slope per rank) of the fit.
     covariance : FloatArray
         Their covariance, ``sigma^2 (N'WN)^{-1}``.
-    sigma2 : float
-        Concentrated noise variance.
     neg2_log_likelihood : float
         ``-2 log L``, the limit of the diffuse likelihood of :func:`fit_banded`.
     residual_sum : float
@@ -240,18 +201,7 @@ def fit_flat(stats: GroupStats, kind: str) -> FlatFit:
     """
     Fit the walk at zero NVR: weighted least squares on its null space.
 
-    Parameters
-    ----------
-    stats : GroupStats
-        Sums of the observations per group.
-    kind : str
-        ``rw`` or ``irw``.
-
-    Returns
-    -------
-    FlatFit
-        The fit and its likelihood.
-
+    ``stats``: sums of the observations per group.
     """
     d = order_of(kind)
     basis = null_basis(stats.groups, kind)
@@ -280,16 +230,7 @@ def selected_inverse_diagonal(factor: FloatArray) -> FloatArray:
     """
     Return ``diag(A^{-1})`` from the lower banded Cholesky factor of ``A``.
 
-    Parameters
-    ----------
-    factor : FloatArray
-        Lower banded factor, shape ``(b + 1, M)`` with ``b`` 1 or 2.
-
-    Returns
-    -------
-    FloatArray
-        The diagonal of the inverse.
-
+    ``factor``: lower banded factor, shape ``(b + 1, M)`` with ``b`` 1 or 2.
     """
     b = factor.shape[0] - 1
     M = factor.shape[1]

@@ -22,38 +22,30 @@ class StateDependence:
     """
     One parameter estimated along one state (one direction of motion).
 
-    Parameters
+    Attributes
     ----------
     state : str
         The state (``command``, ``angle``...).
     parameter : str
-        ``b`` (SDP-ARX gain), ``a1``, ``ratio`` (measured over modelled increment)
-        or ``residual`` (measured less modelled increment, deg).
+        ``b`` (SDP-ARX gain), ``a1``, ``ratio`` (measured over modelled increment) or ``residual``
+        (measured less modelled increment, deg).
     direction : str
-        ``positive`` or ``negative`` (sign of the drive, or of the model's
-        increment), ``both`` for a parameter of every sample.
+        ``positive`` or ``negative`` (sign of the drive, or of the model's increment), ``both`` for
+        a parameter of every sample.
     share : float
-        Share of the constant-parameter model's squared residual removed by letting
-        the parameter follow the state.
+        Share of the constant-parameter model's squared residual removed by letting the parameter
+        follow the state.
     nvr : float
         NVR of its walk along the state (0: no dependence).
-    p_value : float
-        Bootstrap p-value of the dependence.
-    significant : bool
-        Whether it is significant.
     values : FloatArray
         State value of each group (sorted).
     estimate : FloatArray
         The parameter per group.
     se : FloatArray
         Its standard error per group.
-    constant : float
-        The parameter held constant.
-    samples : int
-        Samples that inform it.
     given : str or None
-        The state this dependence is added to (its share is what it adds); None for
-        the first state, weighed alone.
+        The state this dependence is added to (its share is what it adds); None for the first
+        state, weighed alone.
 
     """
 
@@ -96,12 +88,8 @@ class ParameterSummary:
     """
     A parameter held constant, and how much it varies with the states.
 
-    Parameters
+    Attributes
     ----------
-    mean : float
-        Its least-squares value given the other terms.
-    se : float
-        Standard error.
     nvr : float
         Largest NVR of its walk along any state analysed (0: constant along all).
 
@@ -117,18 +105,14 @@ class SdpAnalysis:
     """
     Every parameter of a joint against every candidate state.
 
-    Parameters
+    Attributes
     ----------
     target : str
         ``arx`` (the SDP-ARX model) or ``ratio`` (what a model misses).
-    samples : int
-        Rows analysed (angle increments).
     delay : int
         Delay ``tau``, samples.
     sample_period : float
         Sample period, s.
-    rest : float
-        Rest command.
     states : tuple[StateDependence, ...]
         The gains (``b`` or ``ratio``) per state and direction, largest share first.
     residual : tuple[StateDependence, ...]
@@ -139,11 +123,9 @@ class SdpAnalysis:
         ``a1`` along each state (``arx`` only).
     fits : dict
         The back-fit of each state (keys: state, or ``residual <state>``).
-    skipped : tuple[tuple[str, str], ...]
-        States not analysed, with the reason.
     alone : dict[str, float]
-        Held-out share of each state's gains fitted alone (keys: state, or ``residual
-        <state>``), before any is weighed given the first.
+        Held-out share of each state's gains fitted alone (keys: state, or ``residual <state>``),
+        before any is weighed given the first.
     left_out : dict[str, int]
         Increments left out because the joint could not move, by reason
         (:data:`~hydro_sdp.core.identification.state_dependence.states.HOLDS`).

@@ -21,12 +21,10 @@ class KalmanSmoothing:
     """
     What the filter and the smoother give, per group.
 
-    Parameters
+    Attributes
     ----------
     filtered : FloatArray
         Filtered parameter after each group's observations.
-    smoothed : FloatArray
-        Smoothed parameter (given all observations).
     variance : FloatArray
         Smoothed variance, normalised by ``sigma^2``.
     innovations : FloatArray
@@ -59,26 +57,9 @@ def kalman_smooth(z: FloatArray, x: FloatArray, group: IntArray, kind: str, nvr:
     """
     Filter and smooth a random-walk parameter over observations sorted by group.
 
-    Parameters
-    ----------
-    z : FloatArray
-        Observations ``z_k = x_k p_{g(k)} + e_k``, sorted so that ``group`` never decreases.
-    x : FloatArray
-        Regressors.
-    group : IntArray
-        Group of each observation: ``0, 0, 1, 2, 2, ...`` (every group present).
-    kind : str
-        ``rw`` or ``irw``.
-    nvr : float
-        Noise variance ratio (>= 0).
-    prior : float
-        Variance of the initial state, normalised by ``sigma^2``.
-
-    Returns
-    -------
-    KalmanSmoothing
-        Filtered and smoothed parameters, variances, innovations, likelihood.
-
+    ``z``: observations ``z_k = x_k p_{g(k)} + e_k``, sorted so that ``group`` never decreases.
+    ``group``: group of each observation: ``0, 0, 1, 2, 2, ...`` (every group present).
+    ``nvr``: noise variance ratio (>= 0).
     """
     z = np.asarray(z, dtype=np.float64)
     x = np.asarray(x, dtype=np.float64)

@@ -71,18 +71,8 @@ def estimate_nvr(stats: GroupStats, kind: str) -> NvrEstimate:
     """
     Find the NVR that maximises the concentrated likelihood.
 
-    Parameters
-    ----------
-    stats : GroupStats
-        Sums of the observations per group.
-    kind : str
-        ``rw`` or ``irw``.
-
-    Returns
-    -------
-    NvrEstimate
-        The estimate, its standard error in ``ln nvr`` and the likelihoods.
-
+    ``stats``: sums of the observations per group.
+    Returns: the estimate, its standard error in ``ln nvr`` and the likelihoods.
     """
     flat = fit_flat(stats, kind).neg2_log_likelihood
     low, high = (math.log(value) for value in nvr_range(stats))

@@ -23,7 +23,7 @@ class Ordering:
     """
     Samples grouped by the value of a state, groups sorted by it.
 
-    Parameters
+    Attributes
     ----------
     samples : IntArray
         Indices of the samples that inform the parameter (regressor not zero), ascending.
@@ -31,8 +31,6 @@ class Ordering:
         Group of each of those samples, ``0..M-1`` in increasing state.
     values : FloatArray
         State value of each group (the mean over its samples).
-    pooled : bool
-        Whether neighbouring distinct values were pooled.
 
     """
 
@@ -69,20 +67,9 @@ def order_by_state(state: FloatArray, regressor: FloatArray, *,
     """
     Group the informative samples by the value of a state.
 
-    Parameters
-    ----------
-    state : FloatArray
-        The state at every sample.
-    regressor : FloatArray
-        The parameter's regressor at every sample (zero: the sample says nothing).
-    max_groups : int or None
-        Pool neighbouring distinct values beyond this many groups; None: never.
-
-    Returns
-    -------
-    Ordering
-        The groups.
-
+    ``state``: the state at every sample.
+    ``regressor``: the parameter's regressor at every sample (zero: the sample says nothing).
+    ``max_groups``: pool neighbouring distinct values beyond this many groups; None: never.
     """
     state = np.asarray(state, dtype=np.float64)
     regressor = np.asarray(regressor, dtype=np.float64)
@@ -103,20 +90,8 @@ def coarsened(ordering: Ordering, max_groups: int, state: FloatArray) -> Orderin
     """
     Pool neighbouring groups of an ordering into about ``max_groups`` of equal sample count.
 
-    Parameters
-    ----------
-    ordering : Ordering
-        The ordering.
-    max_groups : int
-        Most groups kept (>= 2); an ordering within it comes back as it is.
-    state : FloatArray
-        The state at every sample (for the pooled groups' mean values).
-
-    Returns
-    -------
-    Ordering
-        The pooled ordering (a group is never split).
-
+    ``max_groups``: most groups kept (>= 2); an ordering within it comes back as it is.
+    ``state``: the state at every sample (for the pooled groups' mean values).
     """
     if ordering.groups <= max_groups:
         return ordering

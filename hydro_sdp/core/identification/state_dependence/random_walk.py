@@ -27,20 +27,7 @@ def inner(a: FloatArray, b: FloatArray) -> float:
 
 
 def order_of(kind: str) -> int:
-    """
-    Return the order ``d`` of a family's difference operator (its diffuse states).
-
-    Parameters
-    ----------
-    kind : str
-        ``rw`` or ``irw``.
-
-    Returns
-    -------
-    int
-        1 for ``rw``, 2 for ``irw``.
-
-    """
+    """Return the order ``d`` of a family's difference operator (its diffuse states)."""
     if kind not in STENCILS:
         raise ConfigurationError(f"random-walk model must be 'rw' or 'irw', got {kind!r}")
     return len(STENCILS[kind]) - 1
@@ -50,16 +37,7 @@ def transition(kind: str) -> tuple[FloatArray, FloatArray]:
     """
     Return the state-space form ``(F, G)`` of a family (the walk's state is ``(p[, s])``).
 
-    Parameters
-    ----------
-    kind : str
-        ``rw`` or ``irw``.
-
-    Returns
-    -------
-    tuple
-        Transition matrix ``F`` and noise input ``G`` (``x_{j+1} = F x_j + G eta``).
-
+    Returns: transition matrix ``F`` and noise input ``G`` (``x_{j+1} = F x_j + G eta``).
     """
     if order_of(kind) == 1:
         return np.ones((1, 1)), np.ones((1, 1))
@@ -76,7 +54,7 @@ class GroupStats:
     """
     Sufficient statistics of the observations ``z_k = x_k p_{g(k)} + e_k``, per group.
 
-    Parameters
+    Attributes
     ----------
     weight : FloatArray
         ``sum x_k^2`` over each group's observations.
@@ -84,10 +62,6 @@ class GroupStats:
         ``sum x_k r_k`` over each group's observations.
     total : float
         ``sum r_k^2`` over all observations.
-    count : int
-        Number of observations.
-    reference : float
-        The reference value of the parameter.
 
     """
 
@@ -118,26 +92,7 @@ class GroupStats:
 
 
 def group_stats(z: FloatArray, x: FloatArray, group: IntArray, groups: int) -> GroupStats:
-    """
-    Sum the observations of each group.
-
-    Parameters
-    ----------
-    z : FloatArray
-        Observations.
-    x : FloatArray
-        Their regressors.
-    group : IntArray
-        Group of each observation, ``0..groups-1``.
-    groups : int
-        Number of groups.
-
-    Returns
-    -------
-    GroupStats
-        The sums, about the constant least-squares fit ``sum x z / sum x^2``.
-
-    """
+    """Sum the observations of each group."""
     z = np.asarray(z, dtype=np.float64)
     x = np.asarray(x, dtype=np.float64)
     if not (z.shape == x.shape == np.shape(group)):

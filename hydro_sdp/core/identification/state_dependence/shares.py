@@ -20,27 +20,10 @@ def held_out_reduction(z: FloatArray, x: FloatArray, ordering: Ordering, kind: s
     """
     Return the held-out reduction in squared residual of a parameter following its state.
 
-    Parameters
-    ----------
-    z : FloatArray
-        The term's observations (its partial residual) at every sample.
-    x : FloatArray
-        Its regressor at every sample.
-    ordering : Ordering
-        Groups of the state.
-    kind : str
-        ``rw`` or ``irw``.
-    nvr : float
-        The walk's NVR (0: a constant, the reduction 0; for ``irw`` a line in the rank).
-    segment : IntArray or None
-        Record of every sample (None: one record).
-
-    Returns
-    -------
-    float
-        Held-out squared residual with the parameter constant, less that with it
-        following the state.
-
+    ``z``: the term's observations (its partial residual) at every sample.
+    ``x``: its regressor at every sample.
+    ``nvr``: the walk's NVR (0: a constant, the reduction 0; for ``irw`` a line in the rank).
+    ``segment``: record of every sample (None: one record).
     """
     if nvr <= 0.0 and kind == 'rw':
         return 0.0

@@ -61,16 +61,8 @@ def automatic_block(series: FloatArray) -> int:
 
     The reasoning is in docs/methods.md section 14.5.
 
-    Parameters
-    ----------
-    series : FloatArray
-        Residuals in time order.
-
-    Returns
-    -------
-    int
-        Samples per block (>= 1).
-
+    ``series``: residuals in time order.
+    Returns: samples per block (>= 1).
     """
     n, longest, centred, power = _centred(series)
     if n < 4 * MIN_BLOCKS or power <= 0.0:
@@ -97,16 +89,8 @@ def block_length(series: FloatArray) -> int:
     """
     Return the block length for a residual series, samples.
 
-    Parameters
-    ----------
-    series : FloatArray
-        Residuals in time order.
-
-    Returns
-    -------
-    int
-        Samples per block (>= 1).
-
+    ``series``: residuals in time order.
+    Returns: samples per block (>= 1).
     """
     n, longest, centred, power = _centred(series)
     if n < 4 or power <= 0.0:
@@ -134,15 +118,7 @@ class LikelihoodRatio:
     """
     The likelihood ratio of a walk against a flat parameter, for many series at once.
 
-    Parameters
-    ----------
-    weight : FloatArray
-        ``sum x^2`` per group.
-    count : int
-        Observations.
-    kind : str
-        ``rw`` or ``irw``.
-
+    ``weight``: ``sum x^2`` per group.
     """
 
     def __init__(self, weight: FloatArray, count: int, kind: str) -> None:
@@ -179,18 +155,8 @@ class LikelihoodRatio:
         """
         Return the likelihood ratio of each series (columns of ``moment``).
 
-        Parameters
-        ----------
-        moment : FloatArray
-            ``sum x z`` per group, shape ``(M, series)``.
-        total : FloatArray
-            ``sum z^2`` of each series.
-
-        Returns
-        -------
-        FloatArray
-            ``max(0, -2 log L(flat) - min over the scan of -2 log L(nvr))`` per series.
-
+        ``moment``: ``sum x z`` per group, shape ``(M, series)``.
+        Returns: ``max(0, -2 log L(flat) - min over the scan of -2 log L(nvr))`` per series.
         """
         projected = np.einsum('ij,ik->jk', self.basis, moment)
         flat_squares = total - np.sum(projected * (self.normal_inverse @ projected), axis=0)
@@ -210,7 +176,7 @@ class DependenceTest:
     """
     The bootstrap test of one parameter's dependence on its state.
 
-    Parameters
+    Attributes
     ----------
     statistic : float
         Likelihood ratio of the dependence on the data.
@@ -218,8 +184,6 @@ class DependenceTest:
         Share of replicates (with the data) whose ratio reaches it.
     block : int
         Block length, samples.
-    replicates : int
-        Replicates drawn.
 
     """
 
@@ -236,38 +200,17 @@ def dependence_test(residual: FloatArray, x: FloatArray, state: FloatArray,
     """
     Test whether the parameter of ``z = x p(state) + e`` depends on the state.
 
-    Parameters
-    ----------
-    residual : FloatArray
-        The term's partial residual at every sample, less the parameter held constant:
-        the null's residuals (those of the model with the dependence fitted would have
-        lost the slow part of autocorrelated errors that the smoother took for it), and
-        the data, whose ratio does not change with the constant.
-    x : FloatArray
-        The term's regressor at every sample.
-    state : FloatArray
-        The state at every sample.
-    ordering : Ordering
-        The term's groups (its samples, ascending, are the time order); pooled to
-        :data:`TEST_GROUPS`.
-    kind : str
-        ``rw`` or ``irw``.
-    replicates : int
-        Bootstrap replicates; ``MORE`` times as many (less one) when they leave the
-        decision ``p <= alpha`` open.
-    seed : int
-        Seed of the signs and block offsets.
-    runs : IntArray or None
-        Run of every sample (a command held, within one record): blocks are cut only
-        where the run changes; None: anywhere.
-    alpha : float
-        The level the decision is made at.
-
-    Returns
-    -------
-    DependenceTest
-        The ratio, its p-value, the block length and the replicates drawn.
-
+    ``residual``: the term's partial residual at every sample, less the parameter held constant
+    (the null's residuals and the data, methods 14.5).
+    ``x``: the term's regressor at every sample.
+    ``state``: the state at every sample.
+    ``ordering``: the term's groups (its samples, ascending, are the time order); pooled to
+    :data:`TEST_GROUPS`.
+    ``replicates``: bootstrap replicates; ``MORE`` times as many (less one) when they leave the
+    decision ``p <= alpha`` open.
+    ``runs``: run of every sample (a command held, within one record): blocks are cut only where
+    the run changes; None: anywhere.
+    Returns: the ratio, its p-value, the block length and the replicates drawn.
     """
     ordering = coarsened(ordering, TEST_GROUPS, state)
     samples = ordering.samples

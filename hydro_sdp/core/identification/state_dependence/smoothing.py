@@ -22,7 +22,7 @@ class SmoothedParameter:
     """
     A parameter smoothed along the groups of one state.
 
-    Parameters
+    Attributes
     ----------
     kind : str
         ``rw`` or ``irw`` (``rw`` when the state has too few values for ``irw``).
@@ -30,8 +30,6 @@ class SmoothedParameter:
         The NVR used (estimated, or given with a NaN standard error).
     estimate : FloatArray
         Parameter per group.
-    stats : GroupStats
-        The sums it was fitted to.
     fit : BandedFit or FlatFit
         The banded fit (NVR > 0) or the flat one (NVR 0).
 
@@ -71,21 +69,9 @@ def smooth_parameter(stats: GroupStats, kind: str,
     """
     Smooth the parameter ``p`` of ``z = x p(state) + e`` along the groups of a state.
 
-    Parameters
-    ----------
-    stats : GroupStats
-        Sums of the observations per group
-        (:meth:`~hydro_sdp.core.identification.state_dependence.ordering.Ordering.stats`).
-    kind : str
-        ``rw`` or ``irw``.
-    nvr : float, NvrEstimate or None
-        NVR to use; None: estimate it by maximum likelihood.
-
-    Returns
-    -------
-    SmoothedParameter
-        The smoothed parameter.
-
+    ``stats``: sums of the observations per group
+    (:meth:`~hydro_sdp.core.identification.state_dependence.ordering.Ordering.stats`).
+    ``nvr``: NVR to use; None: estimate it by maximum likelihood.
     """
     if stats.groups <= order_of(kind):
         kind = 'rw'

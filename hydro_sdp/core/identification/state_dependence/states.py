@@ -39,7 +39,7 @@ class Rows:
     """
     One row per angle increment of all records.
 
-    Parameters
+    Attributes
     ----------
     y : FloatArray
         Angle ``y_k``, deg.
@@ -55,8 +55,6 @@ class Rows:
         Other joints' summed absolute speed, deg/s (None: no other joints).
     load : FloatArray or None
         Measured load (None: no load signal).
-    record : IntArray
-        Index of the record each row comes from.
     predicted : FloatArray or None
         The model's one-step increment, deg (None without a model).
     reversals : FloatArray or None
@@ -64,11 +62,10 @@ class Rows:
     angle : FloatArray or None
         Angle ``y_{k-2}``, deg (None: ``previous``).
     hold : IntArray or None
-        Why the joint cannot move at each row (:data:`HOLDS`; 0: it can); None: not
-        looked for.
+        Why the joint cannot move at each row (:data:`HOLDS`; 0: it can); None: not looked for.
     run : IntArray or None
-        Index of the run each row belongs to: a delayed command held, within one
-        record (None: one run per row).
+        Index of the run each row belongs to: a delayed command held, within one record (None: one
+        run per row).
 
     """
 
@@ -123,21 +120,8 @@ class Rows:
         """
         Return a candidate state at every row.
 
-        Parameters
-        ----------
-        name : str
-            One of :data:`STATES`.
-
-        Returns
-        -------
-        FloatArray
-            The state.
-
-        Raises
-        ------
-        DataError
-            When the records do not carry it (no other joints, no load).
-
+        ``name``: one of :data:`STATES`.
+        Raises DataError when the records do not carry it (no other joints, no load).
         """
         if name == 'command':
             return self.command
@@ -187,19 +171,8 @@ def travel_since_reversal(direction: FloatArray, travel: FloatArray) -> FloatArr
     """
     Return the travel since the direction last reversed, before each step.
 
-    Parameters
-    ----------
-    direction : FloatArray
-        Sign of the motion at each step (0: no direction, the last one holds).
-    travel : FloatArray
-        Length of each step (>= 0).
-
-    Returns
-    -------
-    FloatArray
-        The summed ``travel`` of the steps since the direction last changed, before
-        each step (from the first step while it never changed).
-
+    ``direction``: sign of the motion at each step (0: no direction, the last one holds).
+    ``travel``: length of each step (>= 0).
     """
     direction = np.sign(np.asarray(direction, dtype=np.float64))
     index = np.arange(direction.size)
@@ -217,26 +190,12 @@ def rows_of(records: Sequence[Record], delay: int, rest: float,
     """
     Build the rows of the SDP analysis from records of one joint.
 
-    Parameters
-    ----------
-    records : sequence of Record
-        The records (same joint, same sample period).
-    delay : int
-        Delay ``tau``, samples (>= 1).
-    rest : float
-        The valve's rest command.
-    model : JointModel or None
-        A model whose one-step increments are added as ``predicted``.
-    dt : float or None
-        Sample period, s (for the model); default: each record's own.
-    holds : bool
-        Whether to mark the rows where the joint is held (:func:`holds_of`).
-
-    Returns
-    -------
-    Rows
-        The rows of all records, record after record.
-
+    ``records``: the records (same joint, same sample period).
+    ``delay``: delay ``tau``, samples (>= 1).
+    ``rest``: the valve's rest command.
+    ``model``: a model whose one-step increments are added as ``predicted``.
+    ``dt``: sample period, s (for the model); default: each record's own.
+    ``holds``: whether to mark the rows where the joint is held (:func:`holds_of`).
     """
     if delay < 1:
         raise DataError(f'delay must be at least one sample, got {delay}')
@@ -301,25 +260,10 @@ def holds_of(record: Record, delay: int, rest: float, model: JointModel | None,
     """
     Mark the increments of a record the joint cannot make although it is driven.
 
-    Parameters
-    ----------
-    record : Record
-        The record.
-    delay : int
-        Delay, samples.
-    rest : float
-        Rest command.
-    model : JointModel or None
-        The model: its stops, and its map for the direction a command drives (else the
-        sign of ``v - rest``).
-    extremes : tuple[float, float]
-        Lowest and highest angle of all the records: a joint held there is at a stop.
-
-    Returns
-    -------
-    IntArray
-        Code of the increment ending at each sample (0 at the first ``delay``).
-
+    ``model``: the model: its stops, and its map for the direction a command drives (else the sign
+    of ``v - rest``).
+    ``extremes``: lowest and highest angle of all the records: a joint held there is at a stop.
+    Returns: code of the increment ending at each sample (0 at the first ``delay``).
     """
     v, y = record.v, record.y
     n = y.size
@@ -354,22 +298,9 @@ def stalled(y: FloatArray, v: FloatArray, delay: int, noise: float, window: int)
     """
     Mark the samples where the joint is held after moving under the same delayed command.
 
-    Parameters
-    ----------
-    y, v : FloatArray
-        Angles (deg) and commands of a record.
-    delay : int
-        Delay, samples.
-    noise : float
-        Angle noise, deg.
-    window : int
-        Samples of the net-speed window.
-
-    Returns
-    -------
-    numpy.ndarray
-        Whether each sample is held so (False at the last ``window`` and first ``delay``).
-
+    ``y``, ``v``: angles (deg) and commands of a record.
+    ``noise``: angle noise, deg.
+    Returns: whether each sample is held so (False at the last ``window`` and first ``delay``).
     """
     n = y.size
     held = np.zeros(n, dtype=bool)

@@ -22,24 +22,11 @@ def power_sat_rate(v: FloatArray | float, vn: float, cn: float, nn: float, a3: f
     """
     Evaluate ``vn (1 - exp(-(cn (a3 - v))^nn))`` below ``a3``, 0 inside, ``vp (..)`` above ``a6``.
 
-    Parameters
-    ----------
-    v : FloatArray or float
-        Commands, input units.
-    vn, vp : float
-        Negative and positive saturation speeds, deg/s.
-    cn, cp : float
-        Scales, 1/input unit.
-    nn, np_ : float
-        Exponents (> 0; 1 gives eq. (5)).
-    a3, a6 : float
-        Dead-zone edges, input units.
-
-    Returns
-    -------
-    FloatArray
-        Speeds, same shape as ``v``.
-
+    ``v``: commands, input units.
+    ``vn``, ``vp``: negative and positive saturation speeds, deg/s.
+    ``cn``, ``cp``: scales, 1/input unit.
+    ``nn``, ``np_``: exponents (> 0; 1 gives eq. (5)).
+    ``a3``, ``a6``: dead-zone edges, input units.
     """
     v = np.asarray(v, dtype=np.float64)
     if v.size == 1:

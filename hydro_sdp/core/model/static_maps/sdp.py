@@ -27,23 +27,11 @@ def sdp_rate(v: FloatArray | float, vn: float, cn: float, a3: float, vp: float, 
     """
     Evaluate eq. (5): ``vn (1 - exp(cn (v - a3)))`` below ``a3``, 0 inside, ``vp (..)`` above.
 
-    Parameters
-    ----------
-    v : FloatArray or float
-        Commands, input units.
-    vn, vp : float
-        Negative and positive saturation speeds (``vn < 0 < vp``); the result is
-        in their unit (deg/s, or deg per sample for the paper's ``alpha_1``, ``alpha_4``).
-    cn, cp : float
-        Curvatures, 1/input unit.
-    a3, a6 : float
-        Lower and upper dead-zone edges, input units.
-
-    Returns
-    -------
-    FloatArray
-        Speeds, same shape as ``v`` (0-d for a scalar).
-
+    ``v``: commands, input units.
+    ``vn``, ``vp``: negative and positive saturation speeds (``vn < 0 < vp``); the result is in
+    their unit (deg/s, or deg per sample for the paper's ``alpha_1``, ``alpha_4``).
+    ``cn``, ``cp``: curvatures, 1/input unit.
+    ``a3``, ``a6``: lower and upper dead-zone edges, input units.
     """
     v = np.asarray(v, dtype=np.float64)
     # Clipping the exponent's argument at zero keeps the inactive branch finite.
@@ -120,20 +108,10 @@ class SdpMap:
         """
         Build the map from the paper's ``alpha_1..alpha_6`` at sample period ``dt``.
 
-        Parameters
-        ----------
-        alpha : tuple of six floats
-            ``(a1, a2, a3, a4, a5, a6)``; ``a1`` and ``a4`` in deg per sample.
-        dt : float
-            Sample period the coefficients refer to, s.
-        convention : str
-            ``signed`` (``a1 < 0``) or ``magnitude`` (Table 1's ``a1 > 0``; methods 2.3).
-
-        Returns
-        -------
-        SdpMap
-            The equivalent rate-based map.
-
+        ``alpha``: ``(a1, a2, a3, a4, a5, a6)``; ``a1`` and ``a4`` in deg per sample.
+        ``dt``: sample period the coefficients refer to, s.
+        ``convention``: ``signed`` (``a1 < 0``) or ``magnitude`` (Table 1's ``a1 > 0``; methods
+        2.3).
         """
         a1, a2, a3, a4, a5, a6 = (float(a) for a in alpha)
         if convention == 'magnitude':
@@ -158,20 +136,9 @@ def linearise(sdp: SdpMap, v_min: float, v_max: float) -> SdpDzMap:
     """
     Chord approximation of an SDP map between its edges and two commands (eq. (6)).
 
-    Parameters
-    ----------
-    sdp : SdpMap
-        The exponential map.
-    v_min : float
-        Command below the lower edge where the chord meets the curve.
-    v_max : float
-        Command above the upper edge where the chord meets the curve.
-
-    Returns
-    -------
-    SdpDzMap
-        Dead-zone map with the same edges and the chord slopes (deg/s per unit).
-
+    ``v_min``: command below the lower edge where the chord meets the curve.
+    ``v_max``: command above the upper edge where the chord meets the curve.
+    Returns: dead-zone map with the same edges and the chord slopes (deg/s per unit).
     """
     low, high = sdp.dead_zone
     if not v_min < low or not v_max > high:

@@ -24,13 +24,7 @@ class Actuator:
     """
     One joint's valve metering edges, cylinder and load, in SI units.
 
-    Parameters
-    ----------
-    joint : Joint
-        The joint.
-    pump : Pump
-        The machine's pump.
-
+    ``pump``: the machine's pump.
     """
 
     def __init__(self, joint: Joint, pump: Pump) -> None:
@@ -82,18 +76,9 @@ class Actuator:
         """
         Cylinder speed (m/s, signed) and pump flow (m^3/s) before flow sharing.
 
-        Parameters
-        ----------
-        area : float
-            Signed effective meter-in area ``Cd A``, m^2 (positive extends).
-        extension : float
-            Cylinder extension, m.
-
-        Returns
-        -------
-        tuple[float, float]
-            Speed, m/s, and the flow drawn from the pump, m^3/s.
-
+        ``area``: signed effective meter-in area ``Cd A``, m^2 (positive extends).
+        ``extension``: cylinder extension, m.
+        Returns: speed, m/s, and the flow drawn from the pump, m^3/s.
         """
         if self.blocked(area, extension):
             return 0.0, 0.0
@@ -121,18 +106,9 @@ class Actuator:
         """
         :meth:`supplied` at one area and extension, as a function of the pump pressure (Pa).
 
-        Parameters
-        ----------
-        area : float
-            Signed effective meter-in area ``Cd A``, m^2 (positive extends).
-        extension : float
-            Cylinder extension, m.
-
-        Returns
-        -------
-        Callable[[float], tuple[float, float]]
-            Pump pressure to speed and flow, as :meth:`supplied` gives.
-
+        ``area``: signed effective meter-in area ``Cd A``, m^2 (positive extends).
+        ``extension``: cylinder extension, m.
+        Returns: pump pressure to speed and flow, as :meth:`supplied` gives.
         """
         if self.blocked(area, extension):
             return lambda supply: (0.0, 0.0)
@@ -156,20 +132,10 @@ class Actuator:
         """
         Pressure (Pa, at least 0) the inlet chamber needs to move at ``speed`` (force balance).
 
-        Parameters
-        ----------
-        area : float
-            Signed effective meter-in area, m^2.
-        extension : float
-            Cylinder extension, m.
-        speed : float
-            Cylinder speed, m/s.
-
-        Returns
-        -------
-        float
-            ``(F + p_out A_out) / A_in``, Pa.
-
+        ``area``: signed effective meter-in area, m^2.
+        ``extension``: cylinder extension, m.
+        ``speed``: cylinder speed, m/s.
+        Returns: ``(F + p_out A_out) / A_in``, Pa.
         """
         inlet, outlet, force, _, a_out = self._sides(area, extension)
         outflow = self.tank + self.half_rho * (outlet * speed / a_out) ** 2
@@ -179,20 +145,10 @@ class Actuator:
         """
         Piston-side and rod-side pressures ``(p_piston, p_rod)``, bar.
 
-        Parameters
-        ----------
-        area : float
-            Signed effective meter-in area, m^2.
-        extension : float
-            Cylinder extension, m.
-        speed : float
-            Cylinder speed, m/s (after flow sharing).
-
-        Returns
-        -------
-        tuple[float, float]
-            ``(p_piston, p_rod)``, bar.
-
+        ``area``: signed effective meter-in area, m^2.
+        ``extension``: cylinder extension, m.
+        ``speed``: cylinder speed, m/s (after flow sharing).
+        Returns: ``(p_piston, p_rod)``, bar.
         """
         if area == 0.0:
             # Closed spool: the trapped oil holds the load on one side.

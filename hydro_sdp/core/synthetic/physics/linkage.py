@@ -24,15 +24,7 @@ _MM = 1e-3
 
 
 class Geometry:
-    """
-    Triangle of one joint, in SI units.
-
-    Parameters
-    ----------
-    joint : Joint
-        The joint.
-
-    """
+    """Triangle of one joint, in SI units."""
 
     def __init__(self, joint: Joint) -> None:
         link = joint.linkage

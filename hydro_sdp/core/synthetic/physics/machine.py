@@ -131,30 +131,11 @@ def simulate_plant(machine: Machine, commands: FloatArray, dt: float, *,
     """
     Simulate the machine for a command array.
 
-    Parameters
-    ----------
-    machine : Machine
-        The plant.
-    commands : FloatArray
-        Commands, shape (samples, joints) or 1-D for one joint, valve units.
-    dt : float
-        Sample period, s.
-    angles0 : sequence of float or None
-        Angles at sample 0, degrees (None: mid-stroke).
-    command_before : sequence of float or None
-        Command in force before sample 0 per joint (None: each valve's neutral).
-    seed : int or None
-        Seed of the sensor noise.
-    noise : bool
-        Whether to add the sensor noise.
-    pressures : bool
-        Whether to return the chamber pressures (slower).
-
-    Returns
-    -------
-    PlantRun
-        Angles, speeds, extensions and, if asked, pressures.
-
+    ``commands``: commands, shape (samples, joints) or 1-D for one joint, valve units.
+    ``dt``: sample period, s.
+    ``angles0``: angles at sample 0, degrees (None: mid-stroke).
+    ``command_before``: command in force before sample 0 per joint (None: each valve's neutral).
+    ``seed``: seed of the sensor noise.
     """
     dt = check_sample_period(dt)
     v = _check(machine, commands)
@@ -223,21 +204,10 @@ class PlantSimulator:
     """
     Step the plant one sample at a time, as :func:`simulate_plant` does for the same seed.
 
-    Parameters
-    ----------
-    machine : Machine
-        The plant.
-    dt : float
-        Sample period, s.
-    angles0 : sequence of float or None
-        Angles at the first sample, degrees (None: mid-stroke).
-    command_before : sequence of float or None
-        Commands in force up to and including the first sample.
-    seed : int or None
-        Seed of the sensor noise.
-    noise : bool
-        Whether to add the sensor noise.
-
+    ``dt``: sample period, s.
+    ``angles0``: angles at the first sample, degrees (None: mid-stroke).
+    ``command_before``: commands in force up to and including the first sample.
+    ``seed``: seed of the sensor noise.
     """
 
     def __init__(self, machine: Machine, dt: float, *,

@@ -33,15 +33,8 @@ class OilColumn:
     """
     One joint's chambers and link as a dynamic system.
 
-    Parameters
-    ----------
-    joint : Joint
-        The joint (with its ``compressibility`` section).
-    actuator : Actuator
-        Its valve edges, cylinder and load in SI units.
-    extension : float
-        Cylinder extension at rest at the start, m.
-
+    ``actuator``: its valve edges, cylinder and load in SI units.
+    ``extension``: cylinder extension at rest at the start, m.
     """
 
     def __init__(self, joint: Joint, actuator: Actuator, extension: float) -> None:
@@ -115,20 +108,9 @@ class OilColumn:
         """
         Move the link over one sample; return the cylinder's extension then, m.
 
-        Parameters
-        ----------
-        area : float
-            Signed effective meter-in area of the valve, m^2 (0: closed).
-        speed : float
-            Cylinder speed the valve and pump pass at settled pressures, m/s.
-        dt : float
-            Sample period, s.
-
-        Returns
-        -------
-        float
-            Extension, m.
-
+        ``area``: signed effective meter-in area of the valve, m^2 (0: closed).
+        ``speed``: cylinder speed the valve and pump pass at settled pressures, m/s.
+        ``dt``: sample period, s.
         """
         act, geometry = self.actuator, self.geometry
         extension = self.extension

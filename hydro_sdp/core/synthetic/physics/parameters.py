@@ -100,7 +100,7 @@ class Valve:
     """
     Proportional spool valve of one joint.
 
-    Parameters
+    Attributes
     ----------
     neutral : float
         Command at which the spool is centred, command units.
@@ -112,8 +112,6 @@ class Valve:
         Pure delay of the electronics and pilot stage, s.
     time_constant : float
         First-order lag of the spool, s.
-    discharge_coefficient : float
-        Orifice discharge coefficient Cd.
     opening : tuple[tuple[float, float], ...]
         Metering notch: (travel fraction, meter-in area mm^2) pairs, linear between.
     outlet_ratio : float
@@ -204,7 +202,7 @@ class Cylinder:
     """
     Double-acting cylinder with end-of-stroke cushions.
 
-    Parameters
+    Attributes
     ----------
     bore : float
         Piston diameter, mm.
@@ -212,8 +210,6 @@ class Cylinder:
         Rod diameter, mm.
     min_length : float
         Pin-to-pin length fully retracted, mm.
-    stroke : float
-        Stroke, mm.
     cushion_length : float
         Length of each cushion at the stroke ends, mm.
     cushion_area : float

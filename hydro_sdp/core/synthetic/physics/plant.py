@@ -18,12 +18,10 @@ class Joint:
     """
     One joint: valve, cylinder, linkage, load, end-stop compliance and sensor.
 
-    Parameters
+    Attributes
     ----------
     name : str
         Joint name as in ``JointState.name``.
-    valve, cylinder, linkage, load : Valve, Cylinder, Linkage, Load
-        The sections of the same names.
     stop_frequency : float
         Natural frequency of the link on its end-stop compliance, Hz (``stop.frequency``).
     stop_damping : float
@@ -92,10 +90,8 @@ class Machine:
     """
     A physics plant: one pump and its joints.
 
-    Parameters
+    Attributes
     ----------
-    pump : Pump
-        The shared pump.
     joints : tuple[Joint, ...]
         The joints, in the order of the command columns.
 
@@ -114,11 +110,7 @@ class Machine:
         """
         Validate a parsed physics file and build the machine.
 
-        Raises
-        ------
-        ModelFileError
-            Naming the key when anything is missing, unknown or invalid.
-
+        Raises ModelFileError naming the key when anything is missing, unknown or invalid.
         """
         data = read_document(data, 'a physics file', PHYSICS_FORMAT,
                              known=('format', 'pump', 'joints'))

@@ -49,26 +49,11 @@ def full_stroke_runs(machine: Machine, dt: float, duties: Sequence[float], *, jo
     """
     Constant-duty runs from one end stop to the other and on against it, both directions.
 
-    Parameters
-    ----------
-    machine : Machine
-        The plant.
-    dt : float
-        Sample period, s.
-    duties : sequence of float
-        Duty magnitudes, percent (each run once per direction).
-    joint : int
-        Joint that moves; the others stay at neutral.
-    rest, on_stop, longest : float
-        Rest at the start, drive beyond the stop, longest run; s.
-    seed : int
-        Seed of the first run's noise (the next runs use the following seeds).
-
-    Returns
-    -------
-    list[Record]
-        Extending runs first (in the order of ``duties``), then retracting runs.
-
+    ``dt``: sample period, s.
+    ``duties``: duty magnitudes, percent (each run once per direction).
+    ``rest``, ``on_stop``, ``longest``: rest at the start, drive beyond the stop, longest run; s.
+    ``seed``: seed of the first run's noise (the next runs use the following seeds).
+    Returns: extending runs first (in the order of ``duties``), then retracting runs.
     """
     dt = check_sample_period(dt)
     low, high = Geometry(machine.joints[joint]).angle_limits
@@ -106,28 +91,10 @@ def step_and_return(machine: Machine, dt: float, duties: Sequence[float], *, joi
     """
     Step from mid-stroke and back: each step is followed by a return at one fixed duty.
 
-    Parameters
-    ----------
-    machine : Machine
-        The plant.
-    dt : float
-        Sample period, s.
-    duties : sequence of float
-        Signed step duties, percent.
-    joint : int
-        Joint that moves.
-    hold, rest : float
-        Step and rest durations, s.
-    return_duty : float
-        Duty magnitude of every return move, percent.
-    seed : int
-        Seed of the sensor noise.
-
-    Returns
-    -------
-    Record
-        The whole program as one record.
-
+    ``dt``: sample period, s.
+    ``duties``: signed step duties, percent.
+    ``hold``, ``rest``: step and rest durations, s.
+    ``return_duty``: duty magnitude of every return move, percent.
     """
     dt = check_sample_period(dt)
     neutral = [j.valve.neutral for j in machine.joints]
@@ -161,30 +128,12 @@ def random_levels(machine: Machine, dt: float, duration: float, *, joint: int = 
     """
     Random duties held for random times, turning back before the stops.
 
-    Parameters
-    ----------
-    machine : Machine
-        The plant.
-    dt : float
-        Sample period, s.
-    duration : float
-        Length of the run, s.
-    joint : int
-        Joint that moves.
-    duties : tuple[float, float]
-        Range of duty magnitudes, percent.
-    holds : tuple[float, float]
-        Range of hold times, s.
-    seed : int
-        Seed of the levels, the holds and the sensor noise.
-    pressure : bool
-        Whether the record's ``load`` is the joint's piston-side pressure, bar.
-
-    Returns
-    -------
-    Record
-        The run.
-
+    ``dt``: sample period, s.
+    ``duration``: length of the run, s.
+    ``duties``: range of duty magnitudes, percent.
+    ``holds``: range of hold times, s.
+    ``seed``: seed of the levels, the holds and the sensor noise.
+    ``pressure``: whether the record's ``load`` is the joint's piston-side pressure, bar.
     """
     dt = check_sample_period(dt)
     rng = np.random.default_rng(seed)

@@ -36,17 +36,7 @@ def speeds(actuators: Sequence[Actuator], pump: Pump, areas: Sequence[float],
 
 
 class Supply:
-    """
-    The pump and the joints it feeds, for :func:`speeds` sample after sample.
-
-    Parameters
-    ----------
-    actuators : sequence of Actuator
-        The joints.
-    pump : Pump
-        The pump.
-
-    """
+    """The pump and the joints it feeds, for :func:`speeds` sample after sample."""
 
     def __init__(self, actuators: Sequence[Actuator], pump: Pump) -> None:
         self.actuators = list(actuators)

@@ -35,22 +35,10 @@ def spool_travel(valve: Valve, commands: FloatArray, dt: float, *,
     """
     Spool travel over each sample interval: dead time, then a first-order lag.
 
-    Parameters
-    ----------
-    valve : Valve
-        The valve.
-    commands : FloatArray
-        Commands, one per sample, valve units.
-    dt : float
-        Sample period, s.
-    command_before : float
-        Command in force before the first sample (the spool starts settled on it).
-
-    Returns
-    -------
-    FloatArray
-        Spool travel, fraction of full travel.
-
+    ``commands``: commands, one per sample, valve units.
+    ``dt``: sample period, s.
+    ``command_before``: command in force before the first sample (the spool starts settled on it).
+    Returns: spool travel, fraction of full travel.
     """
     tau = delay_samples(valve.dead_time, dt) if valve.dead_time > 0.0 else 0
     before = float(spool_command(valve, np.array([command_before]))[0])
@@ -66,15 +54,7 @@ class Spool:
     """
     The spool of :func:`spool_travel`, one sample at a time.
 
-    Parameters
-    ----------
-    valve : Valve
-        The valve.
-    dt : float
-        Sample period, s.
-    command_before : float
-        Command in force before the first step.
-
+    ``dt``: sample period, s.
     """
 
     def __init__(self, valve: Valve, dt: float, command_before: float) -> None:
@@ -114,15 +94,7 @@ def metering_area(valve: Valve, travel: FloatArray) -> FloatArray:
 
 
 class Notch:
-    """
-    :func:`metering_area` of one valve at one travel at a time, (as :func:`numpy.interp`).
-
-    Parameters
-    ----------
-    valve : Valve
-        The valve.
-
-    """
+    """:func:`metering_area` of one valve at one travel at a time, (as :func:`numpy.interp`)."""
 
     def __init__(self, valve: Valve) -> None:
         self.travels = [valve.overlap] + [row[0] for row in valve.opening]
