@@ -73,6 +73,8 @@ _POLISHED = 2
 RINGING = 0.35
 #: How much shorter than the model's the dead time is searched with the mode, s.
 SHORTER = 0.3
+#: Turns of the search of the dead time and the mode, one after the other.
+_TURNS = 3
 
 Fit = tuple[float, float, float]
 
@@ -101,7 +103,7 @@ class OscillationDetector(EffectDetector):
                 model, delay=whole_samples_seconds(delay, dt))
             return timed.with_effect(Oscillation(frequency, damping))
 
-        def fit_at(delay: int, start: FloatArray | None = None) -> tuple[float, FloatArray]:
+        def cost_at(delay: int) -> Callable[[FloatArray], float]:
             # The model's increments without the mode are the same for every mode tried.
             timed = with_mode(delay, np.array([0.0, 0.5])).without_effect(Oscillation.name)
             steps = [(OneStep(timed, run.record.v, run.record.y, dt, start=run.start,
@@ -115,6 +117,10 @@ class OscillationDetector(EffectDetector):
                              np.where(free, measured - step.increments(mode), 0.0)
                              for step, measured, free in steps]
                 return float(block_sums(residuals, context.block).sum())
+            return cost
+
+        def fit_at(delay: int, start: FloatArray | None = None) -> tuple[float, FloatArray]:
+            cost = cost_at(delay)
             seeds = [start] if start is not None else _seeds(context, cost, low, high)
             best: tuple[float, FloatArray] = (math.inf, np.zeros(2))
             for x0 in seeds:
@@ -130,24 +136,18 @@ class OscillationDetector(EffectDetector):
         fits = {current: fit_at(current)}
         split = model.effect(DirectionDependentDelay.name) is not None
         shortest = current if split else max(1, current - int(round(SHORTER / dt)))
-        if shortest < current:
-            middle = (shortest + current) // 2
-            fits[middle] = fit_at(middle)
-            # The residual along the delay, the mode fitted at each, has one valley: a
-            # ternary search over the whole samples, warm-started from the best fit so far.
-            left, right = shortest, current
-            while right - left > 2:
-                one, two = left + (right - left) // 3, right - (right - left) // 3
-                for delay in (one, two):
-                    if delay not in fits:
-                        fits[delay] = fit_at(delay, min(fits.values(), key=_cost)[1])
-                if fits[one][0] <= fits[two][0]:
-                    right = two
-                else:
-                    left = one
-            for delay in range(left, right + 1):
-                if delay not in fits:
-                    fits[delay] = fit_at(delay, min(fits.values(), key=_cost)[1])
+        delay = current
+        # The dead time and the mode trade against each other (the mode lags the actuator):
+        # in turns, the dead time that fits best at the mode found, then the mode polished
+        # at that dead time, until the dead time stays.
+        for _ in range(_TURNS if shortest < current else 0):
+            mode_found = fits[delay][1]
+            best = min(range(shortest, current + 1),
+                       key=lambda tried: cost_at(tried)(mode_found))
+            if best in fits:
+                break
+            fits[best] = fit_at(best, mode_found)
+            delay = best
         delay = min(fits, key=lambda k: fits[k][0])
         augmented = with_mode(delay, fits[delay][1])
         mode = augmented.effect(Oscillation.name)
@@ -164,10 +164,6 @@ class OscillationDetector(EffectDetector):
             evidence += (f', the dead time {augmented.delay:g} s, not {model.delay:g} s (the '
                          "link's lag was taken for delay)")
         return context.score(self.word, augmented, parameters, evidence)
-
-
-def _cost(fit: tuple[float, FloatArray]) -> float:
-    return fit[0]
 
 
 def _seeds(context: Context, cost: Callable[[FloatArray], float], low: float,
