@@ -21,6 +21,7 @@ from hydro_sdp.core.identification.identify import Identification, identify, Ide
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.records import Record
 from hydro_sdp.core.model.sample_period import control_period_on, ControlPeriod
+from hydro_sdp.core.model.timing import SamplePeriod
 import numpy as np
 
 #: The stages, in order, as :func:`calibrate` reports them.
@@ -45,9 +46,10 @@ class CalibrationSettings:
         Command range of the valve, written to the model.
     angle_limits : tuple[float, float] or None
         Known end stops, degrees (default: those seen in the data).
-    control_period : float
-        Control period asked for, s; the controller runs at the nearest whole
-        multiple of the records' sample period (:func:`.sample_period.control_period_on`).
+    control_period : SamplePeriod
+        Control period asked for, s (a number is checked and wrapped); the controller
+        runs at the nearest whole multiple of the records' sample period
+        (:func:`.sample_period.control_period_on`).
     poles : tuple[complex, ...] or None
         Closed-loop poles to start from (default: the LQ design); fewer than the
         design needs (``1 +`` the delay in control samples) are completed with
@@ -63,10 +65,13 @@ class CalibrationSettings:
     rest: float | None = None
     input_limits: tuple[float, float] | None = None
     angle_limits: tuple[float, float] | None = None
-    control_period: float = 0.05
+    control_period: SamplePeriod = SamplePeriod(0.05)
     poles: tuple[complex, ...] | None = None
     iterations: int = 4
     check: CheckSettings | None = None
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, 'control_period', SamplePeriod(self.control_period))
 
 
 @dataclass(frozen=True)

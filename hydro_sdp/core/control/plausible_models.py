@@ -18,6 +18,7 @@ from hydro_sdp.core.model.effects import ValveLag
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.static_maps.pwl import PwlMap
 from hydro_sdp.core.model.static_maps.registry import MAP_KINDS
+from hydro_sdp.core.model.timing import SamplePeriod
 from hydro_sdp.core.model.undetermined import EDGES
 import numpy as np
 
@@ -149,7 +150,7 @@ def _with_bounded_value(model: JointModel, key: str, value: float) -> JointModel
 
 
 def plausible_models(model: JointModel, *, standard_errors: Mapping[str, float],
-                     dt: float,
+                     dt: SamplePeriod,
                      families: Sequence[JointModel] = ()) -> tuple[Plausible, ...]:
     """
     Return the models one change away from ``model`` that its data do not rule out.
@@ -160,7 +161,7 @@ def plausible_models(model: JointModel, *, standard_errors: Mapping[str, float],
         The identified model (with its effects).
     standard_errors : mapping
         Standard errors of its map parameters, by model-file name (``dead_zone[0]``).
-    dt : float
+    dt : SamplePeriod
         The records' sample period, s: the delay's resolution.
     families : sequence of JointModel
         Models of the other map families within the held-out tie band.

@@ -16,6 +16,7 @@ from hydro_sdp.core.model.exogenous_signals import Exogenous, exogenous_of
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.records import Record
 from hydro_sdp.core.model.simulation import bounded_cumsum, one_step_increments, speed_profile
+from hydro_sdp.core.model.timing import SamplePeriod
 import numpy as np
 
 #: A candidate must remove at least this share of the squared velocity residual.
@@ -33,7 +34,7 @@ class Run:
     ----------
     record : Record
         Measured record.
-    dt : float
+    dt : SamplePeriod
         Its sample period, s.
     start : int
         First sample at which the joint's state is settled.
@@ -43,7 +44,7 @@ class Run:
     """
 
     record: Record
-    dt: float
+    dt: SamplePeriod
     start: int
     free: np.ndarray | None = None
 

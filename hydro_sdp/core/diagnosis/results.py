@@ -9,6 +9,7 @@ from typing import Literal, Sequence
 from hydro_sdp.core.arrays import FloatArray, IntArray
 from hydro_sdp.core.identification.state_dependence import StateDependence
 from hydro_sdp.core.model.joint_model import JointModel
+from hydro_sdp.core.model.timing import SamplePeriod
 import numpy as np
 
 #: What a residual signature is drawn against: the delayed command or the angle (residual
@@ -131,7 +132,7 @@ class Signature:
         What the residual is drawn against.
     label : str
         What the x axis shows.
-    dt : float
+    dt : SamplePeriod
         Sample period, s.
     before, after : FloatArray
         Velocity residuals (measured minus predicted increments) of the model given
@@ -153,7 +154,7 @@ class Signature:
     effect: str
     feature: Feature
     label: str
-    dt: float
+    dt: SamplePeriod
     before: FloatArray
     after: FloatArray
     x: FloatArray | None

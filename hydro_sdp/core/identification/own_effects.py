@@ -23,6 +23,7 @@ from hydro_sdp.core.identification.stroke_fit import fit_stroke_geometry, speed_
 from hydro_sdp.core.model.effects import StrokeGeometry
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.static_maps import StaticMap
+from hydro_sdp.core.model.timing import SamplePeriod
 
 #: The stroke factor refitted with the map is kept when it lowers the simulation error of
 #: the experiments by this share at least (after its held-out check).
@@ -34,8 +35,8 @@ GEOMETRY_ROUNDS = 3
 MapRefit = Callable[[FitData], MapFit[StaticMap]]
 
 
-def check_lag(experiments: Sequence[Experiment], delay: DelayEstimate, dt: float, rest: float,
-              max_delay: int, windows: ChangeWindows | None = None) -> HeldOut:
+def check_lag(experiments: Sequence[Experiment], delay: DelayEstimate, dt: SamplePeriod,
+              rest: float, max_delay: int, windows: ChangeWindows | None = None) -> HeldOut:
     """
     Held-out angle error around the command changes, with the lag and with the best pure delay.
 
@@ -47,7 +48,7 @@ def check_lag(experiments: Sequence[Experiment], delay: DelayEstimate, dt: float
         Experiments to deal into folds (:func:`~.family_choice.folds`).
     delay : DelayEstimate
         The delay and lag fitted on all experiments (its lag is what is checked).
-    dt : float
+    dt : SamplePeriod
         Sample period, s.
     rest : float
         Rest command.
@@ -81,7 +82,7 @@ def check_lag(experiments: Sequence[Experiment], delay: DelayEstimate, dt: float
 
 
 def check_geometry(experiments: Sequence[Experiment], model: JointModel, delay: DelayEstimate,
-                   dt: float, stops: tuple[float | None, float | None],
+                   dt: SamplePeriod, stops: tuple[float | None, float | None],
                    reach: float) -> HeldOut:
     """
     Held-out errors of the model without and with a stroke factor fitted on each training part.
@@ -94,7 +95,7 @@ def check_geometry(experiments: Sequence[Experiment], model: JointModel, delay: 
         The model without the factor (its map fitted on all experiments).
     delay : DelayEstimate
         Delay and lag.
-    dt : float
+    dt : SamplePeriod
         Sample period, s.
     stops : tuple
         End stops seen, degrees.
@@ -115,14 +116,14 @@ def check_geometry(experiments: Sequence[Experiment], model: JointModel, delay: 
                     lambda train: model, shaped, dt)
 
 
-def _mae(model: JointModel, experiments: Sequence[Experiment], dt: float) -> float:
+def _mae(model: JointModel, experiments: Sequence[Experiment], dt: SamplePeriod) -> float:
     total, count = simulation_errors(model, experiments, dt)
     return total / max(count, 1)
 
 
 def shape_with_geometry(model: JointModel, geometry: StrokeGeometry | None, refit_map: MapRefit,
                         first: MapFit[StaticMap], pieces: Sequence[Experiment],
-                        sample: Sequence[Experiment], delay: DelayEstimate, dt: float,
+                        sample: Sequence[Experiment], delay: DelayEstimate, dt: SamplePeriod,
                         stops: tuple[float | None, float | None], reach: float
                         ) -> tuple[JointModel | None, MapFit[StaticMap]]:
     """
@@ -142,7 +143,7 @@ def shape_with_geometry(model: JointModel, geometry: StrokeGeometry | None, refi
         All experiments, and the (thinned) ones the factor is fitted on.
     delay : DelayEstimate
         Delay and lag.
-    dt : float
+    dt : SamplePeriod
         Sample period, s.
     stops : tuple
         End stops seen, degrees.

@@ -11,10 +11,11 @@ import math
 
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.model.effects import AngleDependentVelocity, StrokeGeometry
+from hydro_sdp.core.model.timing import SamplePeriod
 import numpy as np
 
 
-def integrate_angle_dependent(speed: FloatArray, dt: float, y0: float, low: float,
+def integrate_angle_dependent(speed: FloatArray, dt: SamplePeriod, y0: float, low: float,
                               high: float, gravity: AngleDependentVelocity | None,
                               geometry: StrokeGeometry | None) -> FloatArray:
     """
@@ -24,7 +25,7 @@ def integrate_angle_dependent(speed: FloatArray, dt: float, y0: float, low: floa
     ----------
     speed : FloatArray
         Speed per sample before the angle effects, deg/s (the first belongs to no interval).
-    dt : float
+    dt : SamplePeriod
         Sample period, s.
     y0 : float
         Angle at the first sample, degrees (clamped into the stops).

@@ -8,6 +8,7 @@ from typing import Literal
 
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.identification.state_dependence.backfit import Backfit, TermEstimate
+from hydro_sdp.core.model.timing import SamplePeriod
 import numpy as np
 
 #: What the gains describe: the SDP-ARX model's ``b``, or the measured increment over
@@ -125,7 +126,7 @@ class SdpAnalysis:
         Rows analysed (angle increments).
     delay : int
         Delay ``tau``, samples.
-    sample_period : float
+    sample_period : SamplePeriod
         Sample period, s.
     rest : float
         Rest command.
@@ -153,7 +154,7 @@ class SdpAnalysis:
     target: Target
     samples: int
     delay: int
-    sample_period: float
+    sample_period: SamplePeriod
     rest: float
     states: tuple[StateDependence, ...]
     residual: tuple[StateDependence, ...]

@@ -12,7 +12,7 @@ from typing import Sequence
 
 from hydro_sdp.core.errors import ConfigurationError
 from hydro_sdp.core.model.records import Record
-from hydro_sdp.core.model.timing import check_sample_period
+from hydro_sdp.core.model.timing import SamplePeriod
 from hydro_sdp.core.synthetic.physics.linkage import Geometry
 from hydro_sdp.core.synthetic.physics.machine import PlantSimulator, simulate_plant
 from hydro_sdp.core.synthetic.physics.plant import Joint, Machine
@@ -29,7 +29,7 @@ def duty_command(machine: Machine, joint: int, duty: float) -> float:
 
 
 def _record(machine: Machine, joint: int, commands: np.ndarray, angles: np.ndarray,
-            dt: float, source: str) -> Record:
+            dt: SamplePeriod, source: str) -> Record:
     t = dt * np.arange(1, commands.shape[0] + 1)
     return Record(t, commands[:, joint], angles[:, joint], machine.joints[joint].name, source)
 
@@ -70,7 +70,7 @@ def full_stroke_runs(machine: Machine, dt: float, duties: Sequence[float], *, jo
         Extending runs first (in the order of ``duties``), then retracting runs.
 
     """
-    dt = check_sample_period(dt)
+    dt = SamplePeriod(dt)
     low, high = Geometry(machine.joints[joint]).angle_limits
     records: list[Record] = []
     for sign, start in ((1.0, low), (-1.0, high)):
@@ -129,7 +129,7 @@ def step_and_return(machine: Machine, dt: float, duties: Sequence[float], *, joi
         The whole program as one record.
 
     """
-    dt = check_sample_period(dt)
+    dt = SamplePeriod(dt)
     neutral = [j.valve.neutral for j in machine.joints]
     home = _mid(machine.joints[joint])
     sim = PlantSimulator(machine, dt, angles0=[_mid(j) for j in machine.joints],
@@ -186,7 +186,7 @@ def random_levels(machine: Machine, dt: float, duration: float, *, joint: int = 
         The run.
 
     """
-    dt = check_sample_period(dt)
+    dt = SamplePeriod(dt)
     rng = np.random.default_rng(seed)
     neutral = [j.valve.neutral for j in machine.joints]
     low, high = Geometry(machine.joints[joint]).angle_limits
