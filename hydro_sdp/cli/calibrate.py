@@ -11,11 +11,12 @@ from typing import TYPE_CHECKING
 from hydro_sdp.bags import STORAGE_SUFFIXES
 from hydro_sdp.cli.common import (
     add_bag_options, add_text_options, finite_float, json_number, Outcome, Payload,
-    positive_float, read_bag_records, table)
+    period_seconds, read_bag_records, table)
 from hydro_sdp.cli.design import complex_pole
 from hydro_sdp.cli.progress import ProgressBar
 from hydro_sdp.core.errors import ConfigurationError
 from hydro_sdp.core.model.records import Record
+from hydro_sdp.core.model.timing import SamplePeriod
 from hydro_sdp.io.atomic import atomic_directory, atomic_write_text
 from hydro_sdp.io.controller_files import save_controller
 from hydro_sdp.io.logs import ANGLE_UNITS, read_machine_log, single_joint_spec
@@ -108,7 +109,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         help='command range of the valve, written to the model')
     parser.add_argument('--angle-limits', nargs=2, type=finite_float, metavar=('LOW', 'HIGH'),
                         help='known end stops, deg (default: those seen in the data)')
-    parser.add_argument('--control-period', type=positive_float, default=0.05,
+    parser.add_argument('--control-period', type=period_seconds, default=SamplePeriod(0.05),
                         help='control period, s (default: 0.05); the controller runs at the '
                              "nearest whole multiple of the records' sample period")
     parser.add_argument('--poles', nargs='+', type=complex_pole, metavar='P',
@@ -197,12 +198,12 @@ def ros_parameters(result: CalibrationResult, folder: Path) -> ParameterFile:
     plant: dict[str, ParameterValue] = {'model_file': model_file}
     identifier: dict[str, ParameterValue] = {'model_file': model_file}
     if not math.isclose(dt, 0.01):
-        plant['sample_period'] = identifier['sample_period'] = dt
+        plant['sample_period'] = identifier['sample_period'] = float(dt)
     noise = result.identification.segmentation.noise_std
     if math.isfinite(noise) and noise > 1e-6 and not math.isclose(noise, 0.03, rel_tol=0.05):
         identifier['noise_std'] = float(f'{noise:.3g}')
     if not math.isclose(result.spec.control_period, 0.05):
-        identifier['control_period'] = result.spec.control_period
+        identifier['control_period'] = float(result.spec.control_period)
     parameters: ParameterFile = {
         '/**/pip_controller': {'ros__parameters': {
             'model_file': model_file, 'controller_file': str(folder / 'controller.yaml')}},

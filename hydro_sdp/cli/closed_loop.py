@@ -7,7 +7,8 @@ import math
 import sys
 
 from hydro_sdp.bags import STORAGES, write_bag
-from hydro_sdp.cli.common import finite_float, non_negative_float, Outcome, positive_float, table
+from hydro_sdp.cli.common import (
+    finite_float, non_negative_float, Outcome, period_seconds, positive_float, table)
 from hydro_sdp.cli.progress import ProgressBar
 from hydro_sdp.cli.trajectory_loop import add_trajectory_options, run_trajectory
 from hydro_sdp.core.control.loop_simulation import (
@@ -16,6 +17,7 @@ from hydro_sdp.core.control.safety import clamp_setpoint, SETPOINT_MARGIN
 from hydro_sdp.core.errors import ConfigurationError
 from hydro_sdp.core.model.records import Record
 from hydro_sdp.core.model.sample_period import control_period_on
+from hydro_sdp.core.model.timing import SamplePeriod
 from hydro_sdp.io.controller_files import controller_for
 from hydro_sdp.io.model_files import load_model
 import numpy as np
@@ -66,9 +68,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument('--hold', type=positive_float, default=10.0,
                         help='time each set-point is held, s (default: 10)')
     parser.add_argument('--out', required=True, help='bag folder to write')
-    parser.add_argument('--sample-period', type=positive_float, default=0.01,
+    parser.add_argument('--sample-period', type=period_seconds, default=SamplePeriod(0.01),
                         help='plant sample period, s (default: 0.01)')
-    parser.add_argument('--control-period', type=positive_float, default=0.05,
+    parser.add_argument('--control-period', type=period_seconds, default=SamplePeriod(0.05),
                         help='control period when designing from the model, s (default: 0.05; '
                              'the nearest whole multiple of --sample-period)')
     parser.add_argument('--y0', type=finite_float,

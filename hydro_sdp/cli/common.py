@@ -7,6 +7,8 @@ from dataclasses import dataclass, field
 import math
 from typing import Any, Union
 
+from hydro_sdp.core.errors import ConfigurationError
+from hydro_sdp.core.model.timing import SamplePeriod
 import numpy as np
 
 #: What ``json`` writes: null, booleans, numbers, text, and lists and objects of them.
@@ -53,6 +55,15 @@ def positive_float(text: str) -> float:
     if not (math.isfinite(value) and value > 0.0):
         raise argparse.ArgumentTypeError(f'must be a positive number, got {text!r}')
     return value
+
+
+def period_seconds(text: str) -> SamplePeriod:
+    """Argparse type: a sample or control period, s (checked as :class:`SamplePeriod`)."""
+    try:
+        return SamplePeriod(_parse_number(text))
+    except ConfigurationError:
+        raise argparse.ArgumentTypeError(
+            f'must be a positive number of seconds, got {text!r}') from None
 
 
 def non_negative_float(text: str) -> float:

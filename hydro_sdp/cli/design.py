@@ -6,7 +6,7 @@ import argparse
 import math
 
 from hydro_sdp.cli.common import (
-    finite_float, non_negative_float, Outcome, Payload, positive_float, table)
+    finite_float, non_negative_float, Outcome, Payload, period_seconds, table)
 from hydro_sdp.core.control.controller_spec import ControllerSpec, design_from_model, format_pole
 from hydro_sdp.core.control.idz import IDZ_MODES
 from hydro_sdp.core.control.idz_design import chord_idz, IDZ_FORMS
@@ -15,6 +15,7 @@ from hydro_sdp.core.control.idz_table_design import DEFAULT_NOISE
 from hydro_sdp.core.control.pip_design import LqWeights
 from hydro_sdp.core.errors import ConfigurationError
 from hydro_sdp.core.model.sample_period import control_period_on
+from hydro_sdp.core.model.timing import SamplePeriod
 from hydro_sdp.io.controller_files import save_controller
 from hydro_sdp.io.model_files import load_model
 
@@ -84,9 +85,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         metavar=('W_Y', 'W_U', 'W_E'),
                         help='LQ weights on output, input and integral of error '
                              '(default: 1.6567e-3 1 4.1993e-5)')
-    parser.add_argument('--control-period', type=positive_float, default=0.05,
+    parser.add_argument('--control-period', type=period_seconds, default=SamplePeriod(0.05),
                         help='control period in s (default: 0.05)')
-    parser.add_argument('--sample-period', type=positive_float, metavar='S',
+    parser.add_argument('--sample-period', type=period_seconds, metavar='S',
                         help="the records' sample period, s (identify prints it): the control "
                              'period becomes the nearest whole multiple of it'),
     parser.add_argument('--u-limits', nargs=2, type=finite_float, metavar=('LOW', 'HIGH'),

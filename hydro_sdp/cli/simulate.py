@@ -5,7 +5,9 @@ from __future__ import annotations
 import argparse
 
 from hydro_sdp.bags import STORAGES, write_bag
-from hydro_sdp.cli.common import finite_float, non_negative_float, Outcome, positive_float
+from hydro_sdp.cli.common import (
+    finite_float, non_negative_float, Outcome, period_seconds, positive_float)
+from hydro_sdp.core.model.timing import SamplePeriod
 from hydro_sdp.core.synthetic.joint_experiments import experiment_record
 from hydro_sdp.io.model_files import load_model
 
@@ -36,7 +38,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument('--seed', type=int, default=0, help='random seed (default: 0)')
     parser.add_argument('--duration', type=positive_float,
                         help='length in s (default: 40 steps of about 3 s; 60 s for random)')
-    parser.add_argument('--sample-period', type=positive_float, default=0.01,
+    parser.add_argument('--sample-period', type=period_seconds, default=SamplePeriod(0.01),
                         help='sample period in s (default: 0.01)')
     parser.add_argument('--noise', type=non_negative_float, default=0.03,
                         help='std of the angle measurement noise, deg (default: 0.03)')

@@ -17,6 +17,7 @@ from hydro_sdp.core.errors import ConfigurationError
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.records import Record
 from hydro_sdp.core.model.sample_period import control_period_on
+from hydro_sdp.core.model.timing import SamplePeriod
 from hydro_sdp.io.controller_files import controller_for
 from hydro_sdp.io.model_files import load_model
 from hydro_sdp.io.trajectory_files import load_trajectory, TrajectoryFile
@@ -88,7 +89,7 @@ class TrajectoryRun:
 
 
 def simulate_trajectory(models: list[JointModel], specs: list[ControllerSpec],
-                        plan: TrajectoryFile, *, dt: float, start_at: float, settle: float,
+                        plan: TrajectoryFile, *, dt: SamplePeriod, start_at: float, settle: float,
                         feedforward: bool = True, noise_std: float = 0.0, seed: int = 0,
                         margin: float = 0.5, bar: ProgressBar | None = None) -> TrajectoryRun:
     """

@@ -21,6 +21,7 @@ from hydro_sdp.core.identification.identify import Identification, identify, Ide
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.records import Record
 from hydro_sdp.core.model.sample_period import control_period_on, ControlPeriod
+from hydro_sdp.core.model.timing import SamplePeriod
 import numpy as np
 
 #: The stages, in order, as :func:`calibrate` reports them.
@@ -59,10 +60,13 @@ class CalibrationSettings:
     rest: float | None = None
     input_limits: tuple[float, float] | None = None
     angle_limits: tuple[float, float] | None = None
-    control_period: float = 0.05
+    control_period: SamplePeriod = SamplePeriod(0.05)
     poles: tuple[complex, ...] | None = None
     iterations: int = 4
     check: CheckSettings | None = None
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, 'control_period', SamplePeriod(self.control_period))
 
 
 @dataclass(frozen=True)

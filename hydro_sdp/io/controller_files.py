@@ -8,6 +8,7 @@ from pathlib import Path
 from hydro_sdp.core.control.controller_spec import ControllerSpec, design_from_model
 from hydro_sdp.core.control.safety import controller_within_model
 from hydro_sdp.core.model.joint_model import JointModel
+from hydro_sdp.core.model.timing import SamplePeriod
 from hydro_sdp.io.atomic import atomic_write_text
 from hydro_sdp.io.documents import load_document, yaml_text
 
@@ -42,7 +43,7 @@ def load_controller(path: str | os.PathLike[str]) -> ControllerSpec:
 
 
 def controller_for(model: JointModel, path: str | os.PathLike[str] | None,
-                   control_period: float) -> ControllerSpec:
+                   control_period: SamplePeriod) -> ControllerSpec:
     """Return the controller of ``path`` checked against ``model``, or one designed from it."""
     if path:
         return controller_within_model(load_controller(path), model)

@@ -83,7 +83,7 @@ class ControllerConfiguration:
         (nothing stays declared).
         """
         parameters = self.parameters
-        period = parameters.double('control_period')
+        period = parameters.period('control_period')
         loops = []
         for files in joint_files(parameters):
             model = load_model(files.model_file)

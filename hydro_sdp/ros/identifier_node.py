@@ -64,8 +64,8 @@ class IdentifierNode(Node):
                    'auto_recalibrate': self._apply_auto_recalibrate,
                    **{name: self._apply_policy for name in POLICY_PARAMETERS}})
         models = self._declare_parameters()
-        self.sample_period = self.parameters.double('sample_period')
-        self.control_period = self.parameters.double('control_period')
+        self.sample_period = self.parameters.period('sample_period')
+        self.control_period = self.parameters.period('control_period')
         self.controller_name = self.parameters.text('controller_node')
         self.identified = [self._identified_joint(joint, model)
                            for joint, model in zip(self._joint_names(models), models)]

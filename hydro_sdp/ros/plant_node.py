@@ -39,7 +39,7 @@ class PlantNode(Node):
             apply={'noise_std': self._apply_noise, 'dead_zone_shift': self._apply_shift})
         self.parameters.declare(defaults={'model_file': str(default_model_path())})
         parameters = self.parameters
-        self.sample_period = parameters.double('sample_period')
+        self.sample_period = parameters.period('sample_period')
         self.models = [load_model(path) for path in
                        (parameters.texts('model_files') or [parameters.text('model_file')])]
         self.names = [model.joint for model in self.models]

@@ -7,8 +7,9 @@ import subprocess
 import sys
 
 from hydro_sdp.bags import read_bag, read_record
-from hydro_sdp.cli.main import main
+from hydro_sdp.cli.main import build_parser, main
 from hydro_sdp.core.model.effects import ValveLag
+from hydro_sdp.core.model.timing import SamplePeriod
 from hydro_sdp.core.synthetic.joint_experiments import experiment_record
 from hydro_sdp.io.model_files import default_model_path, load_model
 import numpy as np
@@ -83,6 +84,31 @@ def test_bad_arguments_exit_2(capsys, argv):
         main(argv)
     assert exit_info.value.code == 2
     assert 'error:' in capsys.readouterr().err
+
+
+@pytest.mark.parametrize('bad', ['0', '-0.01', 'nan', 'inf'])
+@pytest.mark.parametrize('argv', [
+    ['simulate', 'm.yaml', '--program', 'steps', '--out', 'x', '--sample-period'],
+    ['closed-loop', 'm.yaml', '--setpoints', '10', '--sample-period'],
+    ['closed-loop', 'm.yaml', '--setpoints', '10', '--control-period'],
+    ['design', 'm.yaml', '--sample-period'],
+    ['design', 'm.yaml', '--control-period'],
+    ['calibrate', 'b', '--control-period'],
+], ids=lambda argv: f'{argv[0]} {argv[-1]}')
+def test_a_bad_period_option_is_a_usage_error_naming_it(capsys, argv, bad):
+    with pytest.raises(SystemExit) as exit_info:
+        main([*argv, bad])
+    assert exit_info.value.code == 2
+    err = capsys.readouterr().err
+    assert err.endswith(f'error: argument {argv[-1]}: must be a positive number of seconds, '
+                        f"got '{bad}'\n")
+
+
+def test_period_options_give_sample_periods():
+    parser = build_parser()
+    args = parser.parse_args(['design', 'm.yaml', '--sample-period', '0.02'])
+    assert type(args.sample_period) is SamplePeriod and args.sample_period == 0.02
+    assert type(args.control_period) is SamplePeriod and args.control_period == 0.05
 
 
 def test_bad_model_file_names_the_key(tmp_path, capsys):

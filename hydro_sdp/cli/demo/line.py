@@ -6,14 +6,17 @@ from hydro_sdp.cli.demo.report import Report
 from hydro_sdp.cli.trajectory_loop import simulate_trajectory
 from hydro_sdp.core.control.controller_spec import design_from_model
 from hydro_sdp.core.errors import DataError
+from hydro_sdp.core.model.timing import SamplePeriod
 from hydro_sdp.io.documents import shipped_config
 from hydro_sdp.io.model_files import load_model
 from hydro_sdp.io.trajectory_files import load_trajectory
 from hydro_sdp.plots.bucket_line import plot_bucket_line
 import numpy as np
 
-#: Plant sample period, control period, hold before the line and time after it, s.
-SAMPLE_PERIOD, CONTROL_PERIOD, START_AT, SETTLE = 0.02, 0.1, 1.0, 4.0
+#: Plant sample period and control period, s.
+SAMPLE_PERIOD, CONTROL_PERIOD = SamplePeriod(0.02), SamplePeriod(0.1)
+#: Hold before the line and time after it, s.
+START_AT, SETTLE = 1.0, 4.0
 
 
 def bucket_line(report: Report) -> None:

@@ -19,6 +19,7 @@ from hydro_sdp.core.identification.evaluation import evaluate, simulated_angles
 from hydro_sdp.core.identification.identify import identify
 from hydro_sdp.core.model.effects import ValveLag
 from hydro_sdp.core.model.records import Record
+from hydro_sdp.core.model.timing import SamplePeriod
 from hydro_sdp.core.synthetic.joint_experiments import experiment_record
 from hydro_sdp.io.controller_files import save_controller
 from hydro_sdp.io.documents import shipped_config
@@ -125,8 +126,9 @@ def _control(report: Report) -> None:
     levels = [20.0, 10.0, 55.0]
     hold = 6.0 if report.short else 10.0
     trace = run_closed_loop([LoopJoint(model, spec.controller(),
-                                       step_setpoints(levels, hold, 0.01), 0.0)],
-                            dt=0.01, control_period=0.05, noise_std=0.01, seed=report.seed)[0]
+                                       step_setpoints(levels, hold, SamplePeriod(0.01)), 0.0)],
+                            dt=SamplePeriod(0.01), control_period=spec.control_period,
+                            noise_std=0.01, seed=report.seed)[0]
     write_bag(report.out / 'closed_loop_bag',
               [Record(trace.t + 0.01, trace.v, trace.measured, joint=model.joint)],
               setpoints={model.joint: trace.setpoint})
@@ -162,7 +164,7 @@ def _control(report: Report) -> None:
 
 
 def _two_joints(report: Report) -> None:
-    dt, period = 0.02, 0.1
+    dt, period = SamplePeriod(0.02), SamplePeriod(0.1)
     t = np.arange(0.0, 30.0 if report.short else 40.0, dt)
     ramps = {'boom': np.interp(t, [0, 3, 18, 40], [0.0, 0.0, 30.0, 30.0]),
              'dipper': np.interp(t, [0, 3, 18, 40], [-100.0, -100.0, -60.0, -60.0])}

@@ -18,9 +18,10 @@ from hydro_sdp.core.control.pip_design import (
     closed_loop_poles, DiscretePlant, lq_design, LqWeights, PipGains, pole_assignment)
 from hydro_sdp.core.errors import ConfigurationError, ModelFileError
 from hydro_sdp.core.model.joint_model import JointModel
-from hydro_sdp.core.model.timing import check_sample_period
+from hydro_sdp.core.model.timing import SamplePeriod
 from hydro_sdp.core.validation import (
-    Document, read_document, require_float, require_float_list, require_ordered_pair)
+    Document, read_document, require_float, require_float_list, require_ordered_pair,
+    require_period)
 import numpy as np
 
 CONTROLLER_FORMAT = 'hydro_sdp/controller/v1'
@@ -37,8 +38,8 @@ class ControllerSpec:
     ----------
     joint : str
         Joint name.
-    control_period : float
-        Control period, s.
+    control_period : SamplePeriod
+        Control period, s (a number is checked and wrapped).
     plant : DiscretePlant
         Design plant at the control period.
     gains : PipGains
@@ -72,7 +73,7 @@ class ControllerSpec:
     """
 
     joint: str
-    control_period: float
+    control_period: SamplePeriod
     plant: DiscretePlant
     gains: PipGains
     idz: Idz | None
@@ -83,7 +84,7 @@ class ControllerSpec:
     oscillation: Mode | None = None
 
     def __post_init__(self) -> None:
-        check_sample_period(self.control_period)
+        object.__setattr__(self, 'control_period', SamplePeriod(self.control_period))
         if self.valve_lag is not None or self.oscillation is not None:
             check_plant_lag(self.plant, self.valve_lag, self.control_period, self.oscillation)
         if len(self.gains.f) != self.plant.n or len(self.gains.g) != self.plant.m - 1:
@@ -130,7 +131,7 @@ class ControllerSpec:
         return {
             'format': CONTROLLER_FORMAT,
             'joint': self.joint,
-            'control_period': self.control_period,
+            'control_period': float(self.control_period),
             'delay_samples': self.delay_samples,
             'plant': plant,
             'f': list(self.gains.f),
@@ -177,7 +178,7 @@ class ControllerSpec:
         try:
             spec = cls(
                 joint=str(data['joint']),
-                control_period=require_float(data['control_period'], 'control_period'),
+                control_period=require_period(data['control_period'], 'control_period'),
                 plant=DiscretePlant(require_float_list(plant['a'], 'plant.a'),
                                     require_float_list(plant['b'], 'plant.b')),
                 gains=PipGains(require_float_list(data['f'], 'f'),
@@ -277,7 +278,7 @@ def design_from_model(model: JointModel, *, control_period: float = 0.05,
     True
 
     """
-    period = check_sample_period(control_period)
+    period = SamplePeriod(control_period)
     plant = plant_for_model(model, period)
     lag = model_lag(model)
     ringing = model_mode(model)

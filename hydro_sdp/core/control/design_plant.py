@@ -10,7 +10,7 @@ from hydro_sdp.core.control.pip_design import DiscretePlant
 from hydro_sdp.core.errors import ConfigurationError
 from hydro_sdp.core.model.effects import Oscillation, ValveLag
 from hydro_sdp.core.model.joint_model import JointModel
-from hydro_sdp.core.model.timing import check_sample_period
+from hydro_sdp.core.model.timing import SamplePeriod
 import numpy as np
 
 #: Relative tolerance when a controller file's plant is checked against its valve lag.
@@ -22,7 +22,7 @@ Mode = tuple[float, float]
 
 
 def lagged_integrator(delay: int, time_constant: float | None,
-                      control_period: float, mode: Mode | None = None) -> DiscretePlant:
+                      control_period: SamplePeriod, mode: Mode | None = None) -> DiscretePlant:
     """
     Return the integrator behind ``delay`` control samples, a first-order lag and a mode.
 
@@ -32,25 +32,24 @@ def lagged_integrator(delay: int, time_constant: float | None,
     ``mode``: the link's mode, frequency (Hz) and damping ratio (``None``: none).
     Returns: ``n`` = 1, plus 1 with the lag, plus 2 with the mode; ``m = delay + n - 1``.
     """
-    period = check_sample_period(control_period)
     if time_constant is not None and not (math.isfinite(time_constant)
                                           and time_constant > 0.0):
         raise ConfigurationError(f'the valve lag must be a time constant > 0 s, '
                                  f'got {time_constant}')
     if mode is not None:
-        return _with_mode(delay, time_constant, period, mode)
+        return _with_mode(delay, time_constant, control_period, mode)
     if time_constant is None:
         return DiscretePlant.integrator(delay)
     if delay < 1:
         raise ConfigurationError(f'the delay must be at least one sample, got {delay}')
-    p = math.exp(-period / time_constant)
-    ratio = time_constant / period
+    p = math.exp(-control_period / time_constant)
+    ratio = time_constant / control_period
     b1 = 1.0 - ratio * (1.0 - p)
     b2 = ratio * (1.0 - p) - p
     return DiscretePlant(a=(-(1.0 + p), p), b=(0.0,) * (delay - 1) + (b1, b2))
 
 
-def _with_mode(delay: int, time_constant: float | None, period: float,
+def _with_mode(delay: int, time_constant: float | None, period: SamplePeriod,
                mode: Mode) -> DiscretePlant:
     """Return the zero-order hold of ``1 / (T s)``, the lag and the mode, behind the delay."""
     frequency, damping = mode
@@ -85,12 +84,12 @@ def _with_mode(delay: int, time_constant: float | None, period: float,
                          b=(0.0,) * (delay - 1) + tuple(float(x) for x in b.real))
 
 
-def mode_poles(mode: Mode, control_period: float) -> tuple[complex, complex]:
+def mode_poles(mode: Mode, control_period: SamplePeriod) -> tuple[complex, complex]:
     """Return the mode's pair of poles at the control period, ``exp((-d w +- i w_d) T)``."""
     frequency, damping = mode
     w = 2.0 * math.pi * frequency
     pole = cmath.exp(complex(-damping * w, w * math.sqrt(1.0 - damping * damping))
-                     * check_sample_period(control_period))
+                     * control_period)
     return pole, pole.conjugate()
 
 
@@ -106,11 +105,10 @@ def model_lag(model: JointModel) -> float | None:
     return lag.time_constant if isinstance(lag, ValveLag) else None
 
 
-def plant_for_model(model: JointModel, control_period: float) -> DiscretePlant:
+def plant_for_model(model: JointModel, control_period: SamplePeriod) -> DiscretePlant:
     """Return the design plant of a model: its delay and its valve lag at the control period."""
-    period = check_sample_period(control_period)
-    return lagged_integrator(model.delay_samples(period), model_lag(model), period,
-                             model_mode(model))
+    return lagged_integrator(model.delay_samples(control_period), model_lag(model),
+                             control_period, model_mode(model))
 
 
 def completed_poles(plant: DiscretePlant, poles: Sequence[complex]) -> list[complex]:
@@ -127,7 +125,7 @@ def completed_poles(plant: DiscretePlant, poles: Sequence[complex]) -> list[comp
 
 
 def check_plant_lag(plant: DiscretePlant, time_constant: float | None,
-                    control_period: float, mode: Mode | None = None) -> None:
+                    control_period: SamplePeriod, mode: Mode | None = None) -> None:
     """
     Raise :class:`ConfigurationError` unless ``plant`` is the integrator of its lag and mode.
 

@@ -15,7 +15,7 @@ from hydro_sdp.core.model.command_span import command_span
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.static_maps import (
     chord_commands, CHORD_SPEED_FRACTION, linearise, LinearMap, SdpDzMap, SdpMap)
-from hydro_sdp.core.model.timing import check_sample_period
+from hydro_sdp.core.model.timing import SamplePeriod
 import numpy as np
 
 #: How the IDZ inverts the map.
@@ -72,7 +72,7 @@ def chord_map(model: JointModel, span: tuple[float, float]) -> SdpDzMap:
     return SdpDzMap(dead_zone=(edges[0], edges[1]), slope=(slopes[0], slopes[1]))
 
 
-def chord_idz(model: JointModel, control_period: float, *, beta: float | None = None,
+def chord_idz(model: JointModel, control_period: SamplePeriod, *, beta: float | None = None,
               mode: IdzMode = 'zero',
               v_range: tuple[float, float] | None = None) -> InverseDeadZone:
     """
@@ -87,7 +87,6 @@ def chord_idz(model: JointModel, control_period: float, *, beta: float | None = 
     (default :func:`command_span`).
     Returns: slopes in degrees per control sample per input unit.
     """
-    period = check_sample_period(control_period)
     static_map = model.static_map
     if isinstance(static_map, SdpMap):
         v_min, v_max = v_range if v_range is not None else chord_commands(static_map)
@@ -104,11 +103,12 @@ def chord_idz(model: JointModel, control_period: float, *, beta: float | None = 
     if beta is None:
         beta = 0.0 if isinstance(static_map, LinearMap) else CHORD_BETA
     return InverseDeadZone(dead_zone=dead_zone,
-                           slopes=(slopes[0] * period, slopes[1] * period),
+                           slopes=(slopes[0] * control_period, slopes[1] * control_period),
                            beta=beta, mode=mode, rest=model.rest_command)
 
 
-def idz_for_model(model: JointModel, control_period: float, *, form: IdzForm | None = None,
+def idz_for_model(model: JointModel, control_period: SamplePeriod, *,
+                  form: IdzForm | None = None,
                   beta: float | None = None, mode: IdzMode = 'zero',
                   v_range: tuple[float, float] | None = None,
                   design: tuple[DiscretePlant, PipGains, float | None] | None = None,
@@ -144,7 +144,7 @@ def faded(idz: Idz) -> Idz:
 
 
 def default_u_limits(model: JointModel, idz: Idz,
-                     control_period: float) -> tuple[float, float] | None:
+                     control_period: SamplePeriod) -> tuple[float, float] | None:
     """
     Return the default limits of ``u`` for a model and its IDZ.
 

@@ -13,6 +13,7 @@ from hydro_sdp.core.control.idz_table_design import table_idz
 from hydro_sdp.core.errors import ConfigurationError
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.static_maps import PowerSatMap, PwlMap, SdpDzMap, SdpMap
+from hydro_sdp.core.model.timing import SamplePeriod
 from hydro_sdp.core.validation import require_positive_fields
 
 
@@ -174,8 +175,8 @@ def with_dead_zone(model: JointModel, edges: tuple[float, float]) -> JointModel:
     raise ConfigurationError(f'the edges of a {model.kind} map without a dead-zone cannot move')
 
 
-def recalibrated_idz(estimate: JointModel, edges: tuple[float, float], control_period: float,
-                     form: IdzForm | None = None) -> Idz:
+def recalibrated_idz(estimate: JointModel, edges: tuple[float, float],
+                     control_period: SamplePeriod, form: IdzForm | None = None) -> Idz:
     """IDZ of the estimated model with the decided edges, at the control period."""
     model = with_dead_zone(estimate, edges)
     form = default_form(estimate) if form is None else form

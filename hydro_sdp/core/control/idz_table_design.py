@@ -14,7 +14,7 @@ from hydro_sdp.core.control.pip_design import DiscretePlant, PipGains
 from hydro_sdp.core.errors import DataError
 from hydro_sdp.core.model.command_span import command_span
 from hydro_sdp.core.model.joint_model import JointModel
-from hydro_sdp.core.model.timing import check_sample_period
+from hydro_sdp.core.model.timing import SamplePeriod
 import numpy as np
 
 #: Angle the smallest correction of [W18]'s J2 loop moves: its band 0.05 deg per sample
@@ -29,17 +29,17 @@ TABLE_POINTS = 40
 
 
 def table_beta(dead_zone: tuple[float, float], plant: DiscretePlant, gains: PipGains,
-               lag: float | None, control_period: float, noise_std: float) -> float:
+               lag: float | None, control_period: SamplePeriod, noise_std: float) -> float:
     """Return the default chatter band of an IDZ table, degrees per control sample."""
     if dead_zone[1] <= dead_zone[0]:
         return 0.0
-    samples = plant.delay + (0.0 if lag is None else lag / check_sample_period(control_period))
+    samples = plant.delay + (0.0 if lag is None else lag / control_period)
     noise = NOISE_MULTIPLE * noise_std * noise_gain(plant, gains) if noise_std > 0.0 else 0.0
     return max(SMALLEST_CORRECTION / samples, noise)
 
 
 def _branch(model: JointModel, rest: float, end: float,
-            control_period: float) -> tuple[list[float], list[float]]:
+            control_period: SamplePeriod) -> tuple[list[float], list[float]]:
     """Return one branch of the table, ``(u, v)`` from the edge outward (u from 0)."""
     sign = 1.0 if end > rest else -1.0
     dead_zone = model.dead_zone
@@ -74,14 +74,13 @@ def _branch(model: JointModel, rest: float, end: float,
     return (sign * u_table[keep] + 0.0).tolist(), v_table[keep].tolist()   # no -0.0
 
 
-def table_idz(model: JointModel, control_period: float, *, beta: float,
+def table_idz(model: JointModel, control_period: SamplePeriod, *, beta: float,
               mode: IdzMode = 'zero',
               v_range: tuple[float, float] | None = None) -> TableInverseDeadZone:
     """Return the map's own inverse as the IDZ table at the control period (methods.md 5.4)."""
-    period = check_sample_period(control_period)
     low, high = command_span(model, v_range)
     rest = model.rest_command
-    negative_u, negative_v = _branch(model, rest, low, period)
-    positive = _branch(model, rest, high, period)
+    negative_u, negative_v = _branch(model, rest, low, control_period)
+    positive = _branch(model, rest, high, control_period)
     return TableInverseDeadZone.from_branches(
         (negative_u[::-1], negative_v[::-1]), positive, beta=beta, mode=mode, rest=rest)

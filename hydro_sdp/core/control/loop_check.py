@@ -12,6 +12,7 @@ from hydro_sdp.core.control.loop_simulation import (
     LoopJoint, LoopTrace, run_closed_loop, step_metrics, StepMetrics, valve_reversals)
 from hydro_sdp.core.errors import ConfigurationError
 from hydro_sdp.core.model.joint_model import JointModel
+from hydro_sdp.core.model.timing import SamplePeriod
 import numpy as np
 
 #: Fractions of the stroke (between the end stops) the check steps between.
@@ -29,8 +30,8 @@ class CheckSettings:
 
     Attributes
     ----------
-    dt : float
-        Plant sample period, s.
+    dt : SamplePeriod
+        Plant sample period, s (a number is checked and wrapped).
     settling : float
         Settling time allowed on top of the travel at a quarter of full speed, s.
     band : float
@@ -45,13 +46,16 @@ class CheckSettings:
 
     """
 
-    dt: float = 0.01
+    dt: SamplePeriod = SamplePeriod(0.01)
     settling: float = 6.0
     band: float = 0.5
     hold: float = 10.0
     tail: float = 2.0
     noise_std: float = 0.0
     seed: int = 0
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, 'dt', SamplePeriod(self.dt))
 
 
 @dataclass(frozen=True, eq=False)

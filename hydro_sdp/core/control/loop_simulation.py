@@ -13,7 +13,7 @@ from hydro_sdp.core.errors import ConfigurationError
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.sample_period import control_steps
 from hydro_sdp.core.model.simulation import JointSimulator
-from hydro_sdp.core.model.timing import check_sample_period, command_in_force
+from hydro_sdp.core.model.timing import command_in_force, SamplePeriod
 import numpy as np
 
 
@@ -74,7 +74,8 @@ class LoopTrace:
     setpoint: FloatArray
 
 
-def run_closed_loop(joints: Sequence[LoopJoint], *, dt: float, control_period: float,
+def run_closed_loop(joints: Sequence[LoopJoint], *, dt: SamplePeriod,
+                    control_period: SamplePeriod,
                     noise_std: float = 0.0, seed: int = 0,
                     on_sample: Callable[[int, int], None] | None = None) -> list[LoopTrace]:
     """
@@ -89,8 +90,7 @@ def run_closed_loop(joints: Sequence[LoopJoint], *, dt: float, control_period: f
     ``on_sample``: called as ``on_sample(done, total)`` every 1000 samples (progress).
     Returns: one trace per joint.
     """
-    dt = check_sample_period(dt)
-    every = control_steps(check_sample_period(control_period), dt)
+    every = control_steps(control_period, dt)
     if not joints:
         raise ConfigurationError('no joints to simulate')
     samples = len(joints[0].setpoint)
@@ -146,11 +146,13 @@ def run_closed_loop(joints: Sequence[LoopJoint], *, dt: float, control_period: f
     return traces
 
 
-def step_setpoints(levels: Sequence[float], hold: float, dt: float) -> FloatArray:
+def step_setpoints(levels: Sequence[float], hold: float, dt: SamplePeriod) -> FloatArray:
     """Set-point array holding each level for ``hold`` seconds."""
     if not levels:
         raise ConfigurationError('at least one set-point is needed')
-    per_level = max(1, int(round(check_sample_period(hold) / check_sample_period(dt))))
+    if not (math.isfinite(hold) and hold > 0.0):
+        raise ConfigurationError(f'hold must be a positive number of seconds, got {hold!r}')
+    per_level = max(1, int(round(hold / dt)))
     return np.repeat(np.asarray(levels, dtype=np.float64), per_level)
 
 

@@ -18,6 +18,7 @@ from hydro_sdp.core.model.effects import ValveLag
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.static_maps.pwl import PwlMap
 from hydro_sdp.core.model.static_maps.registry import MAP_KINDS
+from hydro_sdp.core.model.timing import SamplePeriod
 from hydro_sdp.core.model.undetermined import EDGES
 import numpy as np
 
@@ -137,7 +138,7 @@ def _with_bounded_value(model: JointModel, key: str, value: float) -> JointModel
 
 
 def plausible_models(model: JointModel, *, standard_errors: Mapping[str, float],
-                     dt: float,
+                     dt: SamplePeriod,
                      families: Sequence[JointModel] = ()) -> tuple[Plausible, ...]:
     """
     Return the models one change away from ``model`` that its data do not rule out.

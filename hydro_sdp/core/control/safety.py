@@ -9,6 +9,7 @@ from hydro_sdp.core.control.controller_spec import ControllerSpec
 from hydro_sdp.core.control.idz_table import Idz
 from hydro_sdp.core.errors import ConfigurationError
 from hydro_sdp.core.model.joint_model import JointModel
+from hydro_sdp.core.model.timing import SamplePeriod
 import numpy as np
 
 #: Default distance of set-points from the end stops, degrees.
@@ -91,7 +92,7 @@ def top_speeds(model: JointModel) -> tuple[float, float] | None:
     return min(float(np.min(rates)), 0.0), max(float(np.max(rates)), 0.0)
 
 
-def slope_bounds(model: JointModel, control_period: float,
+def slope_bounds(model: JointModel, control_period: SamplePeriod,
                  v_limits: tuple[float, float] | None) -> list[tuple[float, float] | None]:
     """
     Return the physical IDZ slopes of each side of the model's map, (low, high) each.
@@ -117,7 +118,7 @@ def slope_bounds(model: JointModel, control_period: float,
     return bounds
 
 
-def check_idz_fits(idz: Idz, model: JointModel, control_period: float,
+def check_idz_fits(idz: Idz, model: JointModel, control_period: SamplePeriod,
                    v_limits: tuple[float, float] | None) -> None:
     """
     Refuse an IDZ whose edges leave the valve range or whose slopes the joint cannot have.

@@ -10,6 +10,7 @@ from typing import Mapping, Sequence
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.control.safety import SETPOINT_MARGIN, setpoint_range
 from hydro_sdp.core.errors import DataError
+from hydro_sdp.core.model.timing import SamplePeriod
 import numpy as np
 
 
@@ -229,7 +230,7 @@ class TrajectorySampler:
         """Return the set-point of ``joint`` at time ``t`` (s), degrees."""
         return self.sample(joint, t)[0]
 
-    def feedforward(self, joint: str, t: float, control_period: float, lead: int) -> float:
+    def feedforward(self, joint: str, t: float, control_period: SamplePeriod, lead: int) -> float:
         """Set-point increment over one control period ending ``lead`` periods after ``t``."""
         ahead = t + lead * control_period
         return self.setpoint(joint, ahead) - self.setpoint(joint, ahead - control_period)

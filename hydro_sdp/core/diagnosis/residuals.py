@@ -16,6 +16,7 @@ from hydro_sdp.core.model.exogenous_signals import Exogenous, exogenous_of
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.records import Record
 from hydro_sdp.core.model.simulation import bounded_cumsum, one_step_increments, speed_profile
+from hydro_sdp.core.model.timing import SamplePeriod
 import numpy as np
 
 #: A candidate must remove at least this share of the squared velocity residual.
@@ -41,7 +42,7 @@ class Run:
     """
 
     record: Record
-    dt: float
+    dt: SamplePeriod
     start: int
     free: np.ndarray | None = None
 

@@ -9,6 +9,7 @@ from typing import Literal, Sequence
 from hydro_sdp.core.arrays import FloatArray, IntArray
 from hydro_sdp.core.identification.state_dependence import StateDependence
 from hydro_sdp.core.model.joint_model import JointModel
+from hydro_sdp.core.model.timing import SamplePeriod
 import numpy as np
 
 #: What a residual signature is drawn against: the delayed command or the angle (residual
@@ -130,7 +131,7 @@ class Signature:
     effect: str
     feature: Feature
     label: str
-    dt: float
+    dt: SamplePeriod
     before: FloatArray
     after: FloatArray
     x: FloatArray | None

@@ -10,7 +10,7 @@ from hydro_sdp.core.arrays import FloatArray, IntArray
 from hydro_sdp.core.errors import DataError
 from hydro_sdp.core.identification.experiment import Experiment
 from hydro_sdp.core.model.first_order import first_order
-from hydro_sdp.core.model.timing import delayed_at
+from hydro_sdp.core.model.timing import delayed_at, SamplePeriod
 import numpy as np
 import numpy.typing as npt
 from scipy.optimize import minimize_scalar
@@ -27,7 +27,7 @@ AFTER = 150
 _PER_WINDOW = 4
 
 
-def lag_pole(time_constant: float, dt: float) -> float:
+def lag_pole(time_constant: float, dt: SamplePeriod) -> float:
     """Return ``p = exp(-dt / T)`` (0 for no lag)."""
     return math.exp(-dt / time_constant) if time_constant > 0.0 else 0.0
 
@@ -274,7 +274,7 @@ def _residual(dy: FloatArray, group: np.ndarray, mask: np.ndarray, time: FloatAr
     return float(np.sum(((dy - predicted) * mask) ** 2))
 
 
-def fit_delay_lag_and_pure(experiments: Sequence[Experiment], dt: float, max_delay: int,
+def fit_delay_lag_and_pure(experiments: Sequence[Experiment], dt: SamplePeriod, max_delay: int,
                            windows: ChangeWindows | None = None
                            ) -> tuple[int, float, FloatArray, int]:
     """

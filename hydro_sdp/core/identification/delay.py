@@ -13,7 +13,7 @@ from hydro_sdp.core.identification.change_windows import (
 from hydro_sdp.core.identification.experiment import Experiment
 from hydro_sdp.core.model.first_order import first_order
 from hydro_sdp.core.model.sample_period import whole_samples_seconds
-from hydro_sdp.core.model.timing import delayed_at
+from hydro_sdp.core.model.timing import delayed_at, SamplePeriod
 import numpy as np
 
 
@@ -57,7 +57,7 @@ class DelayEstimate:
         """Return how long after a command change the valve's transient lasts, s (5 lags)."""
         return 5.0 * max(self.lag, self.fitted_lag)
 
-    def without_lag(self, dt: float) -> DelayEstimate:
+    def without_lag(self, dt: SamplePeriod) -> DelayEstimate:
         """Return the estimate with the best pure delay and no lag."""
         pure = self.fit if self.pure is None else self.pure
         return replace(self, samples=pure, seconds=whole_samples_seconds(pure, dt), fit=pure,
@@ -125,7 +125,7 @@ def _xcorr(experiments: Sequence[Experiment], max_delay: int, pole: float) -> in
     return int(np.argmax(score)) + 1
 
 
-def estimate_delay(experiments: Sequence[Experiment], dt: float, *, max_delay: int,
+def estimate_delay(experiments: Sequence[Experiment], dt: SamplePeriod, *, max_delay: int,
                    rest: float = 0.0, noise: float = 0.0,
                    windows: ChangeWindows | None = None) -> DelayEstimate:
     """Estimate the pure delay from experiments."""
@@ -164,7 +164,7 @@ class LevelSpeed:
     gain: float
 
 
-def level_speeds(experiments: Sequence[Experiment], delay: int, dt: float, *,
+def level_speeds(experiments: Sequence[Experiment], delay: int, dt: SamplePeriod, *,
                  rest: float = 0.0, skip: int = 0, min_samples: int = 5) -> list[LevelSpeed]:
     """
     Mean speed per experiment and delayed command level (the points of Figs. 2 and 3).

@@ -16,6 +16,7 @@ from hydro_sdp.core.identification.experiment import Experiment
 from hydro_sdp.core.identification.held_out import judge, Judgement
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.simulation import simulate
+from hydro_sdp.core.model.timing import SamplePeriod
 import numpy as np
 
 #: Fits a model to the training experiments of a fold (None: the effect cannot be fitted).
@@ -71,7 +72,7 @@ class HeldOut:
 
 
 def simulation_errors(model: JointModel, experiments: Sequence[Experiment],
-                      dt: float) -> tuple[float, int]:
+                      dt: SamplePeriod) -> tuple[float, int]:
     """Sum of absolute simulation errors of a model over experiments, and their sample count."""
     total, count = 0.0, 0
     for experiment in experiments:
@@ -90,7 +91,7 @@ def compared(effect: str, rows: Sequence[tuple[float, float]],
 
 
 def held_out(effect: str, parts: Sequence[tuple[list[Experiment], list[Experiment]]],
-             without: Fitter, with_effect: Fitter, dt: float) -> HeldOut:
+             without: Fitter, with_effect: Fitter, dt: SamplePeriod) -> HeldOut:
     """
     Compare a model without and with an effect on the experiments of every fold's test part.
 

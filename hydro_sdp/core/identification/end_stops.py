@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from hydro_sdp.core.arrays import FloatArray
+from hydro_sdp.core.model.timing import SamplePeriod
 import numpy as np
 
 #: Net speed, as a fraction of the moving speed, below which the joint counts as held.
@@ -15,7 +16,7 @@ STAYS = 0.8
 STOP_REACH = 0.25
 
 
-def stop_window(dt: float) -> int:
+def stop_window(dt: SamplePeriod) -> int:
     """Return the window of the net-displacement test, samples (about 0.3 s, at least 5)."""
     return max(5, int(round(0.3 / dt)))
 

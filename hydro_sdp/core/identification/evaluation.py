@@ -16,6 +16,7 @@ from hydro_sdp.core.model.records import Record
 from hydro_sdp.core.model.simulation import simulate
 from hydro_sdp.core.model.static_maps import (
     chord_commands, CHORD_SPEED_FRACTION, linearise, LinearMap, PwlMap, SdpDzMap, SdpMap)
+from hydro_sdp.core.model.timing import SamplePeriod
 import numpy as np
 from scipy.optimize import minimize_scalar
 
@@ -83,7 +84,7 @@ def sdp_dz_benchmark(model: JointModel) -> JointModel | None:
 LAG_MEMORY = 5.0
 
 
-def first_compared(model: JointModel, dt: float, record: Record) -> int:
+def first_compared(model: JointModel, dt: SamplePeriod, record: Record) -> int:
     """
     Return the first sample compared: where the model's state no longer depends on the past.
 
@@ -97,19 +98,19 @@ def first_compared(model: JointModel, dt: float, record: Record) -> int:
     return min(known, len(record) - 2)
 
 
-def _simulated(model: JointModel, record: Record, dt: float, start: int,
+def _simulated(model: JointModel, record: Record, dt: SamplePeriod, start: int,
                exogenous: Exogenous | None = None, backlash_offset: float = 0.0) -> FloatArray:
     return simulate(model, record.v, dt, float(record.y[start]), v_before=float(record.v[0]),
                     start=start, backlash_offset=backlash_offset,
                     exogenous=exogenous if exogenous is not None else exogenous_of(record, dt))
 
 
-def _mae(model: JointModel, record: Record, dt: float, start: int) -> float:
+def _mae(model: JointModel, record: Record, dt: SamplePeriod, start: int) -> float:
     simulated = _simulated(model, record, dt, start)
     return float(np.mean(np.abs(record.y[start:] - simulated[start:])))
 
 
-def simulated_record(model: JointModel, record: Record, dt: float | None = None,
+def simulated_record(model: JointModel, record: Record, dt: SamplePeriod | None = None,
                      exogenous: Exogenous | None = None) -> tuple[int, FloatArray]:
     """
     Simulate a model over a record as every figure of its error does (methods 3.8).
@@ -129,7 +130,7 @@ def simulated_record(model: JointModel, record: Record, dt: float | None = None,
     return start, simulations[int(np.argmin(errors))]
 
 
-def record_mae(model: JointModel, record: Record, dt: float | None = None,
+def record_mae(model: JointModel, record: Record, dt: SamplePeriod | None = None,
                exogenous: Exogenous | None = None,
                left_out: np.ndarray | None = None) -> float:
     """
@@ -156,7 +157,7 @@ def record_mae(model: JointModel, record: Record, dt: float | None = None,
     return total / count if count else math.nan
 
 
-def best_linear_gain(record: Record, model: JointModel, dt: float) -> tuple[float, float]:
+def best_linear_gain(record: Record, model: JointModel, dt: SamplePeriod) -> tuple[float, float]:
     """
     Gain of eq. (2) that minimises the record's MAE, and that MAE.
 

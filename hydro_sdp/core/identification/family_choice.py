@@ -14,6 +14,7 @@ from hydro_sdp.core.identification.map_fit import (
     fit_poly, fit_pwl, fit_sdp, FitData, FitMethod, MapFit)
 from hydro_sdp.core.identification.map_fit.power_sat import fit_power_sat
 from hydro_sdp.core.model.static_maps import SdpMap, StaticMap
+from hydro_sdp.core.model.timing import SamplePeriod
 import numpy as np
 
 #: Map families ``identify`` can fit, and the choice among them.
@@ -189,8 +190,8 @@ class FoldFits:
     ``lag``: valve lag time constant, s.
     """
 
-    def __init__(self, experiments: Sequence[Experiment], delay: int, dt: float, rest: float,
-                 method: FitMethod, lag: float = 0.0) -> None:
+    def __init__(self, experiments: Sequence[Experiment], delay: int, dt: SamplePeriod,
+                 rest: float, method: FitMethod, lag: float = 0.0) -> None:
         self.rest = rest
         self.dt = dt
         self.method = method
@@ -208,7 +209,7 @@ class FoldFits:
             self.folds.append(Fold(data, FitData(test, delay, dt, lag), points, sdp_map))
 
 
-def compare_kinds(experiments: Sequence[Experiment], delay: int, dt: float, rest: float,
+def compare_kinds(experiments: Sequence[Experiment], delay: int, dt: SamplePeriod, rest: float,
                   method: FitMethod, kinds: Sequence[FittedKind] = KINDS,
                   dead_zone: tuple[float, float] | None = None,
                   lag: float = 0.0, fold_fits: FoldFits | None = None) -> FoldErrors:

@@ -16,6 +16,7 @@ from hydro_sdp.core.identification.evaluation import first_compared
 from hydro_sdp.core.model.exogenous_signals import Exogenous
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.records import Record
+from hydro_sdp.core.model.timing import SamplePeriod
 from hydro_sdp.core.model.windows import simulate_windows
 import numpy as np
 
@@ -128,7 +129,7 @@ class Scored(Protocol):
         """Return the measured record."""
 
     @property
-    def dt(self) -> float:
+    def dt(self) -> SamplePeriod:
         """Return its sample period, s."""
 
     @property

@@ -21,6 +21,7 @@ from hydro_sdp.core.identification.map_fit import FitData, FitMethod, MapFit
 from hydro_sdp.core.identification.segmentation import Segmentation
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.static_maps import SdpMap, StaticMap
+from hydro_sdp.core.model.timing import SamplePeriod
 
 #: How the records were identified: from experiments with held levels, or from routine
 #: operation (commands changing every control period).
@@ -74,7 +75,7 @@ class Identification:
     """
 
     model: JointModel
-    sample_period: float
+    sample_period: SamplePeriod
     delay: DelayEstimate
     segmentation: Segmentation
     points: tuple[LevelSpeed, ...]

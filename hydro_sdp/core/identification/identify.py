@@ -38,6 +38,7 @@ from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.records import Record
 from hydro_sdp.core.model.sample_period import whole_samples_seconds
 from hydro_sdp.core.model.static_maps import SdpMap, StaticMap
+from hydro_sdp.core.model.timing import SamplePeriod
 
 __all__ = ['experiments_mae', 'Identification', 'identify', 'IdentifyStage', 'KindChoice',
            'KINDS', 'KindScore', 'PIECE_SAMPLES']
@@ -53,7 +54,8 @@ DELAY_SAMPLES = 100_000
 COMPARE_SAMPLES = 30_000
 
 
-def experiments_mae(model: JointModel, experiments: Sequence[Experiment], dt: float) -> float:
+def experiments_mae(model: JointModel, experiments: Sequence[Experiment],
+                    dt: SamplePeriod) -> float:
     """Mean absolute simulation error of a model over experiments, degrees (per sample)."""
     total, count = simulation_errors(model, experiments, dt)
     return total / max(count, 1)
@@ -68,7 +70,7 @@ class _Pieces:
     trial: list[Experiment]
 
 
-def _segment(records: Sequence[Record], dt: float, max_delay: int,
+def _segment(records: Sequence[Record], dt: SamplePeriod, max_delay: int,
              angle_limits: tuple[float, float] | None, rest: float | None,
              input_limits: tuple[float, float] | None) -> tuple[Segmentation, _Pieces]:
     """Cut the records into experiments, and those into the pieces and samples fits see."""
@@ -83,7 +85,7 @@ def _segment(records: Sequence[Record], dt: float, max_delay: int,
                                  thin_evenly(search, COMPARE_SAMPLES, segmentation.rest))
 
 
-def _delay(segmentation: Segmentation, pieces: _Pieces, dt: float, max_delay: int
+def _delay(segmentation: Segmentation, pieces: _Pieces, dt: SamplePeriod, max_delay: int
            ) -> tuple[DelayEstimate, list[HeldOut]]:
     """Estimate the dead time with the valve lag, keeping the lag only if held-out data need it."""
     sample = thin(pieces.every, DELAY_SAMPLES)
@@ -107,7 +109,7 @@ class _MapStage:
     fit: MapFit[StaticMap]
 
 
-def _fit_sdp(pieces: _Pieces, delay: DelayEstimate, dt: float, rest: float,
+def _fit_sdp(pieces: _Pieces, delay: DelayEstimate, dt: SamplePeriod, rest: float,
              method: FitMethod, answer: bool) -> _MapStage:
     """Fit eq. (5) at this timing: the answer, or where another family starts."""
     points = tuple(level_speeds(pieces.every, delay.samples, dt, rest=rest))
@@ -130,7 +132,7 @@ def _fit_family(stage: _MapStage, kind: FittedKind, rest: float,
                                          stage.sdp_fit.static_map))
 
 
-def _family(kind: KindChoice, pieces: _Pieces, delay: DelayEstimate, dt: float, rest: float,
+def _family(kind: KindChoice, pieces: _Pieces, delay: DelayEstimate, dt: SamplePeriod, rest: float,
             method: FitMethod, step: Callable[[IdentifyStage], None]
             ) -> tuple[FittedKind, FoldErrors | None]:
     """Return the map family asked for, or the one the held-out rule chooses."""

@@ -14,7 +14,7 @@ from hydro_sdp.core.identification.soft_edges import map_and_soft_gradient
 from hydro_sdp.core.model.effects import ValveLag
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.static_maps import SdpMap
-from hydro_sdp.core.model.timing import check_sample_period, DelayLine
+from hydro_sdp.core.model.timing import DelayLine, SamplePeriod
 from hydro_sdp.core.validation import require_positive_fields
 import numpy as np
 
@@ -173,10 +173,10 @@ class OnlineMapFilter:
     ``dt``: sample period of the incoming samples, s.
     """
 
-    def __init__(self, model: JointModel, dt: float,
+    def __init__(self, model: JointModel, dt: SamplePeriod,
                  settings: OnlineSettings = OnlineSettings()) -> None:
         self.model = model
-        self.dt = check_sample_period(dt)
+        self.dt = dt
         self.settings = settings
         self.delay = model.delay_samples(self.dt)
         # theta and the upper triangle of P as Python floats: the per-sample arithmetic on
@@ -364,7 +364,7 @@ class OnlineSdpIdentifier(OnlineMapFilter):
     ``dt``: sample period of the incoming samples, s.
     """
 
-    def __init__(self, model: JointModel, dt: float,
+    def __init__(self, model: JointModel, dt: SamplePeriod,
                  settings: OnlineSettings = OnlineSettings()) -> None:
         if not isinstance(model.static_map, SdpMap):
             raise ConfigurationError(f'OnlineSdpIdentifier tracks kind sdp models, not '

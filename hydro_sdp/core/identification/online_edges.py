@@ -18,6 +18,7 @@ from hydro_sdp.core.model.command_span import command_span
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.static_maps import (
     PowerSatMap, PwlMap, SdpDzMap, SdpMap, StaticMap)
+from hydro_sdp.core.model.timing import SamplePeriod
 import numpy as np
 
 #: Points of the tabulated map on each side of the dead-zone.
@@ -54,8 +55,8 @@ class EdgeEstimate(EstimatedEdges):
     speed_scale_positive_std: float
 
 
-def _side(model: JointModel, rest: float, end: float, dt: float) -> tuple[float, np.ndarray,
-                                                                          float]:
+def _side(model: JointModel, rest: float, end: float,
+          dt: SamplePeriod) -> tuple[float, np.ndarray, float]:
     """Return one side's edge, its increments ``Q`` on the grid (signed) and the grid's reach."""
     sign = 1.0 if end > rest else -1.0
     v = np.linspace(rest, end, 4001)
@@ -109,7 +110,7 @@ class OnlineEdgeIdentifier(OnlineMapFilter):
     ``dt``: sample period of the incoming samples, s.
     """
 
-    def __init__(self, model: JointModel, dt: float,
+    def __init__(self, model: JointModel, dt: SamplePeriod,
                  settings: OnlineSettings = OnlineSettings()) -> None:
         rest = model.rest_command
         low, high = command_reach(model, settings.input_scale)
@@ -231,7 +232,7 @@ class OnlineEdgeIdentifier(OnlineMapFilter):
 OnlineIdentifier = OnlineSdpIdentifier | OnlineEdgeIdentifier
 
 
-def online_identifier(model: JointModel, dt: float,
+def online_identifier(model: JointModel, dt: SamplePeriod,
                       settings: OnlineSettings = OnlineSettings()) -> OnlineIdentifier:
     """
     Return the online identifier of a model: eq. (5)'s own for ``sdp``, the edges' for others.

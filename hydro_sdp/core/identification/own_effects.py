@@ -23,6 +23,7 @@ from hydro_sdp.core.identification.stroke_fit import fit_stroke_geometry, speed_
 from hydro_sdp.core.model.effects import StrokeGeometry
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.static_maps import StaticMap
+from hydro_sdp.core.model.timing import SamplePeriod
 
 #: The stroke factor refitted with the map is kept when it lowers the simulation error of
 #: the experiments by this share at least (after its held-out check).
@@ -34,8 +35,8 @@ GEOMETRY_ROUNDS = 3
 MapRefit = Callable[[FitData], MapFit[StaticMap]]
 
 
-def check_lag(experiments: Sequence[Experiment], delay: DelayEstimate, dt: float, rest: float,
-              max_delay: int, windows: ChangeWindows | None = None) -> HeldOut:
+def check_lag(experiments: Sequence[Experiment], delay: DelayEstimate, dt: SamplePeriod,
+              rest: float, max_delay: int, windows: ChangeWindows | None = None) -> HeldOut:
     """
     Held-out angle error around the command changes, with the lag and with the best pure delay.
 
@@ -65,7 +66,7 @@ def check_lag(experiments: Sequence[Experiment], delay: DelayEstimate, dt: float
 
 
 def check_geometry(experiments: Sequence[Experiment], model: JointModel, delay: DelayEstimate,
-                   dt: float, stops: tuple[float | None, float | None],
+                   dt: SamplePeriod, stops: tuple[float | None, float | None],
                    reach: float) -> HeldOut:
     """
     Held-out errors of the model without and with a stroke factor fitted on each training part.
@@ -83,14 +84,14 @@ def check_geometry(experiments: Sequence[Experiment], model: JointModel, delay: 
                     lambda train: model, shaped, dt)
 
 
-def _mae(model: JointModel, experiments: Sequence[Experiment], dt: float) -> float:
+def _mae(model: JointModel, experiments: Sequence[Experiment], dt: SamplePeriod) -> float:
     total, count = simulation_errors(model, experiments, dt)
     return total / max(count, 1)
 
 
 def shape_with_geometry(model: JointModel, geometry: StrokeGeometry | None, refit_map: MapRefit,
                         first: MapFit[StaticMap], pieces: Sequence[Experiment],
-                        sample: Sequence[Experiment], delay: DelayEstimate, dt: float,
+                        sample: Sequence[Experiment], delay: DelayEstimate, dt: SamplePeriod,
                         stops: tuple[float | None, float | None], reach: float
                         ) -> tuple[JointModel | None, MapFit[StaticMap]]:
     """

@@ -14,6 +14,7 @@ from hydro_sdp.core.identification.experiment import Experiment, MIN_SAMPLES
 from hydro_sdp.core.identification.rest import estimate_rest_command
 from hydro_sdp.core.model.records import Record
 from hydro_sdp.core.model.sample_period import nominal_period
+from hydro_sdp.core.model.timing import SamplePeriod
 import numpy as np
 
 
@@ -80,7 +81,8 @@ class Segmentation:
         return sum(e.kind == 'run' for e in self.experiments)
 
 
-def check_record(record: Record, *, min_samples: int = 50, max_gap: float = 3.0) -> float:
+def check_record(record: Record, *, min_samples: int = 50,
+                 max_gap: float = 3.0) -> SamplePeriod:
     """
     Check that a record can be identified from, and return its sample period.
 
@@ -105,7 +107,7 @@ def check_record(record: Record, *, min_samples: int = 50, max_gap: float = 3.0)
     return period
 
 
-def check_records(records: Sequence[Record], task: str = 'identify') -> float:
+def check_records(records: Sequence[Record], task: str = 'identify') -> SamplePeriod:
     """
     Check records of one joint for a fit, and return their common nominal sample period.
 
@@ -124,7 +126,8 @@ def check_records(records: Sequence[Record], task: str = 'identify') -> float:
     if max(periods) > 1.01 * min(periods):
         raise DataError(f'records have different sample periods ({min(periods):.4g} s to '
                         f'{max(periods):.4g} s); resample them first')
-    return nominal_period(np.concatenate([np.diff(record.t) for record in records]))
+    steps = np.concatenate([np.diff(record.t) for record in records])
+    return SamplePeriod(nominal_period(steps))
 
 
 def noise_level(record: Record, rest: float, settle: int) -> float:
@@ -169,7 +172,8 @@ def segment_record(record: Record, *, max_delay: int, rest: float | None = None,
     rest = estimate_rest_command([(v, y)]) if rest is None else rest
     noise = noise_level(record, rest, max_delay)
     blocks = _blocks(v, rest)
-    window = stop_window(float(np.median(np.diff(record.t)))) if len(record) > 1 else 5
+    window = (stop_window(SamplePeriod(float(np.median(np.diff(record.t)))))
+              if len(record) > 1 else 5)
     extremes = (float(np.min(y)), float(np.max(y))) if len(record) else (0.0, 0.0)
     experiments: list[Experiment] = []
     dropped: list[Dropped] = []

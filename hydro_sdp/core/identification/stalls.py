@@ -14,6 +14,7 @@ from hydro_sdp.core.model.exogenous_signals import Exogenous
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.records import Record
 from hydro_sdp.core.model.simulation import speed_profile
+from hydro_sdp.core.model.timing import SamplePeriod
 import numpy as np
 
 #: Window of the held test, s: the model moves the joint, the joint does not.
@@ -30,7 +31,7 @@ def angle_noise(angles: FloatArray) -> float:
     return float(1.4826 * np.median(np.abs(second)) / math.sqrt(6.0)) if second.size else 0.0
 
 
-def stalled(model: JointModel, record: Record, dt: float,
+def stalled(model: JointModel, record: Record, dt: SamplePeriod,
             travel: tuple[float, float] | None = None,
             exogenous: Exogenous | None = None) -> np.ndarray:
     """

@@ -15,7 +15,7 @@ from hydro_sdp.core.identification.end_stops import STOP_REACH
 from hydro_sdp.core.identification.experiment import Experiment
 from hydro_sdp.core.model.effects import StrokeGeometry
 from hydro_sdp.core.model.first_order import first_order
-from hydro_sdp.core.model.timing import delayed_at
+from hydro_sdp.core.model.timing import delayed_at, SamplePeriod
 import numpy as np
 
 #: Evenly spread knots over the angles moved through.
@@ -26,7 +26,7 @@ SPAN = 0.6
 SMOOTHING = 1e-3
 
 
-def model_speeds(experiments: Sequence[Experiment], rate_of: object, delay: int, dt: float,
+def model_speeds(experiments: Sequence[Experiment], rate_of: object, delay: int, dt: SamplePeriod,
                  lag: float) -> tuple[FloatArray, FloatArray, FloatArray]:
     """
     Model speed, measured increment and previous angle of every predicted sample.
@@ -181,7 +181,7 @@ def geometry_of(knots: FloatArray, shared: FloatArray,
 
 
 def fit_stroke_geometry(experiments: Sequence[Experiment], rate_of: object, delay: int,
-                        dt: float, lag: float,
+                        dt: SamplePeriod, lag: float,
                         stops: tuple[float | None, float | None] = (None, None),
                         reach: float = STOP_REACH) -> StrokeGeometry | None:
     """
@@ -238,7 +238,7 @@ def unit_mean_per_direction(knots: FloatArray, shared: FloatArray, part: FloatAr
     return 0.5 * (up + down), 0.5 * (up - down)
 
 
-def speed_gains(experiments: Sequence[Experiment], rate_of: object, delay: int, dt: float,
+def speed_gains(experiments: Sequence[Experiment], rate_of: object, delay: int, dt: SamplePeriod,
                 lag: float, geometry: StrokeGeometry) -> list[FloatArray]:
     """
     Per experiment, the geometry's factor at the measured angle before each predicted sample.

@@ -11,10 +11,11 @@ import math
 
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.model.effects import AngleDependentVelocity, StrokeGeometry
+from hydro_sdp.core.model.timing import SamplePeriod
 import numpy as np
 
 
-def integrate_angle_dependent(speed: FloatArray, dt: float, y0: float, low: float,
+def integrate_angle_dependent(speed: FloatArray, dt: SamplePeriod, y0: float, low: float,
                               high: float, gravity: AngleDependentVelocity | None,
                               geometry: StrokeGeometry | None) -> FloatArray:
     """

@@ -15,6 +15,7 @@ from hydro_sdp.core.errors import DataError
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.pump_and_load import FlowSharing, LoadDependence
 from hydro_sdp.core.model.records import Record
+from hydro_sdp.core.model.timing import SamplePeriod
 import numpy as np
 
 #: Window the other joints' speeds are averaged over, s.
@@ -57,7 +58,8 @@ def record_key(record: Record) -> str:
     return f'{source} {record.joint} at {start:.3f} s'
 
 
-def smoothed_speeds(angles: FloatArray, dt: float, t: FloatArray | None = None) -> FloatArray:
+def smoothed_speeds(angles: FloatArray, dt: SamplePeriod,
+                    t: FloatArray | None = None) -> FloatArray:
     """Return each column's speed over each sample interval, deg/s (:data:`SMOOTHING` s mean)."""
     angles = np.asarray(angles, dtype=np.float64).reshape(len(angles), -1)
     n = angles.shape[0]
@@ -74,7 +76,7 @@ def smoothed_speeds(angles: FloatArray, dt: float, t: FloatArray | None = None) 
     return (angles - angles[behind]) / span[:, None]
 
 
-def exogenous_of(record: Record, dt: float | None = None) -> Exogenous:
+def exogenous_of(record: Record, dt: SamplePeriod | None = None) -> Exogenous:
     """Return a record's load, other joints' speeds and key for the simulation."""
     speeds = None
     if record.others is not None and record.others.shape[1] and len(record) > 1:

@@ -12,7 +12,7 @@ from hydro_sdp.core.model.effects import (
     DirectionDependentDelay, Effect, effect_from_mapping, effect_to_mapping, EFFECT_TYPES)
 from hydro_sdp.core.model.static_maps import MAP_KINDS, MapKind, SdpMap, StaticMap
 from hydro_sdp.core.model.static_maps.poly import PolyMap
-from hydro_sdp.core.model.timing import check_sample_period, delay_samples
+from hydro_sdp.core.model.timing import delay_samples, SamplePeriod
 from hydro_sdp.core.model.undetermined import Undetermined
 from hydro_sdp.core.validation import (
     Document, read_document, require_float, require_ordered_pair)
@@ -128,19 +128,20 @@ class JointModel:
         """Return the first paper's ``alpha_1..alpha_6`` at ``dt`` s (``sdp``; SdpMap.alpha)."""
         if not isinstance(self.static_map, SdpMap):
             raise ConfigurationError(f'alpha is defined for kind sdp only, not {self.kind}')
-        return self.static_map.alpha(check_sample_period(dt))
+        return self.static_map.alpha(SamplePeriod(dt))
 
     def delay_samples(self, dt: float) -> int:
         """Pure delay in whole samples at sample period ``dt``."""
-        return delay_samples(self.delay, dt)
+        return delay_samples(self.delay, SamplePeriod(dt))
 
     def longest_delay_samples(self, dt: float) -> int:
         """Longest pure delay of either direction in whole samples (effects included)."""
+        period = SamplePeriod(dt)
         split = self.effect(DirectionDependentDelay.name)
         if not isinstance(split, DirectionDependentDelay):
-            return self.delay_samples(dt)
-        return max(self.delay_samples(dt), delay_samples(split.positive, dt),
-                   delay_samples(split.negative, dt))
+            return self.delay_samples(period)
+        return max(self.delay_samples(period), delay_samples(split.positive, period),
+                   delay_samples(split.negative, period))
 
     def effect(self, name: str) -> Effect | None:
         """Return the effect called ``name``, or ``None`` if the model has none."""

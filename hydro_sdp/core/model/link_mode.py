@@ -9,6 +9,7 @@ import math
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import DataError
 from hydro_sdp.core.model.effects import Oscillation
+from hydro_sdp.core.model.timing import SamplePeriod
 import numpy as np
 
 
@@ -33,7 +34,7 @@ class LinkMode:
     lead: float
 
     @classmethod
-    def of(cls, effect: Oscillation, dt: float) -> LinkMode:
+    def of(cls, effect: Oscillation, dt: SamplePeriod) -> LinkMode:
         """Return the mode of ``effect`` at ``dt`` s (its frequency below the Nyquist one)."""
         if not effect.frequency < 0.5 / dt:
             raise DataError(f'the oscillation at {effect.frequency:g} Hz is not below the '
@@ -97,7 +98,7 @@ class LinkMode:
         scale = p01 * (other - pole)
         return pole, (complex(p01), pole - p00), ((other - p00) / scale, -p01 / scale)
 
-    def ring(self, x: FloatArray, dt: float, before: float) -> FloatArray:
+    def ring(self, x: FloatArray, dt: SamplePeriod, before: float) -> FloatArray:
         """Return the link's angles for the actuator's angles ``x`` (first one settled)."""
         x = np.asarray(x, dtype=np.float64)
         if x.size < 2:

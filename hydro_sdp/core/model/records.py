@@ -15,6 +15,7 @@ from typing import Sequence
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import DataError
 from hydro_sdp.core.model.sample_period import period_of_stamps
+from hydro_sdp.core.model.timing import SamplePeriod
 import numpy as np
 
 #: Fewest samples a piece cut at a gap must have to be kept (what identification needs).
@@ -149,11 +150,11 @@ class Record:
         return int(self.t.size)
 
     @property
-    def sample_period(self) -> float:
+    def sample_period(self) -> SamplePeriod:
         """Nominal spacing of the time stamps, s (:func:`.sample_period.period_of_stamps`)."""
         if self.t.size < 2:
             raise DataError(f'{self._label()}: needs at least two samples for a sample period')
-        return period_of_stamps(self.t)
+        return SamplePeriod(period_of_stamps(self.t))
 
     @property
     def duration(self) -> float:

@@ -12,6 +12,7 @@ import math
 
 from hydro_sdp.core.arrays import FloatArray, IntArray
 from hydro_sdp.core.errors import ConfigurationError, DataError
+from hydro_sdp.core.model.timing import SamplePeriod
 import numpy as np
 
 #: Uncertainty of a period below which it is taken as exact, relative (100 ppm).
@@ -75,7 +76,7 @@ class ControlPeriod:
     ----------
     samples : int
         Plant samples per control step, >= 1.
-    seconds : float
+    seconds : SamplePeriod
         The period, ``samples`` plant periods (written cleanly), s.
     asked : float
         The period asked for, s.
@@ -83,17 +84,17 @@ class ControlPeriod:
     """
 
     samples: int
-    seconds: float
+    seconds: SamplePeriod
     asked: float
 
 
-def control_period_on(asked: float, dt: float) -> ControlPeriod:
+def control_period_on(asked: float, dt: SamplePeriod) -> ControlPeriod:
     """Return the whole multiple of the plant period nearest the control period asked for."""
     samples = max(1, int(math.floor(asked / dt + 0.5 + 1e-9)))
-    return ControlPeriod(samples, whole_samples_seconds(samples, dt), float(asked))
+    return ControlPeriod(samples, SamplePeriod(whole_samples_seconds(samples, dt)), float(asked))
 
 
-def control_steps(control_period: float, dt: float) -> int:
+def control_steps(control_period: SamplePeriod, dt: SamplePeriod) -> int:
     """Return the plant samples per control step of a controller run on a plant."""
     period = control_period_on(control_period, dt)
     ratio = control_period / dt

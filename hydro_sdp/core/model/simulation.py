@@ -23,7 +23,7 @@ from hydro_sdp.core.model.first_order import first_order
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.link_mode import LinkMode, LinkState
 from hydro_sdp.core.model.static_maps import StaticMap
-from hydro_sdp.core.model.timing import check_sample_period, delay_samples, delayed, DelayLine
+from hydro_sdp.core.model.timing import delay_samples, delayed, DelayLine, SamplePeriod
 import numpy as np
 
 
@@ -99,7 +99,7 @@ def simulate(model: JointModel, v: FloatArray, dt: float, y0: float,
     True
 
     """
-    dt = check_sample_period(dt)
+    dt = SamplePeriod(dt)
     v = _check_commands(v)
     if v.size == 0:
         return np.empty(0)
@@ -110,7 +110,7 @@ def simulate(model: JointModel, v: FloatArray, dt: float, y0: float,
     return np.r_[np.full(start, y[0]), y] if start else y
 
 
-def integrate_speed(model: JointModel, speed: FloatArray, dt: float, y0: float,
+def integrate_speed(model: JointModel, speed: FloatArray, dt: SamplePeriod, y0: float,
                     backlash_offset: float) -> FloatArray:
     """Return the angles from ``y0`` under ``speed`` (its first value is of no interval)."""
     low, high = _limits(model)
@@ -140,13 +140,13 @@ def integrate_speed(model: JointModel, speed: FloatArray, dt: float, y0: float,
     return y
 
 
-def _link_mode(model: JointModel, dt: float) -> LinkMode | None:
+def _link_mode(model: JointModel, dt: SamplePeriod) -> LinkMode | None:
     """Return the model's link mode at ``dt``, or None without ``oscillation``."""
     effect = model.effect(Oscillation.name)
     return LinkMode.of(effect, dt) if isinstance(effect, Oscillation) else None
 
 
-def speed_profile(model: JointModel, v: FloatArray, dt: float, *,
+def speed_profile(model: JointModel, v: FloatArray, dt: SamplePeriod, *,
                   v_before: float = 0.0, exogenous: Exogenous | None = None) -> FloatArray:
     """
     Speed ``w_k`` (deg/s) from ``y_{k-1}`` to ``y_k``, before end stops (methods 3.6).
@@ -156,7 +156,6 @@ def speed_profile(model: JointModel, v: FloatArray, dt: float, *,
     ``exogenous``: the record's load and other joints' speeds.
     Returns: one speed per sample (``w_0`` belongs to no interval).
     """
-    dt = check_sample_period(dt)
     v = _check_commands(v)
     rates = _rate_of_levels(model, v)
     rate_before = float(model.rate(np.array([v_before]))[0])
@@ -177,7 +176,7 @@ def speed_profile(model: JointModel, v: FloatArray, dt: float, *,
     return speed if factor is None else speed * factor
 
 
-def one_step_increments(model: JointModel, v: FloatArray, y: FloatArray, dt: float, *,
+def one_step_increments(model: JointModel, v: FloatArray, y: FloatArray, dt: SamplePeriod, *,
                         start: int = 0, v_before: float = 0.0,
                         exogenous: Exogenous | None = None) -> FloatArray:
     """
@@ -201,7 +200,7 @@ class OneStep:
     ``from_start``: whether only the increments from ``start`` are needed (no mode will be added).
     """
 
-    def __init__(self, model: JointModel, v: FloatArray, y: FloatArray, dt: float, *,
+    def __init__(self, model: JointModel, v: FloatArray, y: FloatArray, dt: SamplePeriod, *,
                  start: int = 0, v_before: float = 0.0, exogenous: Exogenous | None = None,
                  from_start: bool = False) -> None:
         self.model, self.dt, self.start = model, dt, start
@@ -236,7 +235,7 @@ class OneStep:
 
 
 def _actuator_increments(model: JointModel, speed: FloatArray, previous: FloatArray,
-                         dt: float) -> FloatArray:
+                         dt: SamplePeriod) -> FloatArray:
     """Return ``dt`` times ``speed`` with the angle effects at the ``previous`` angles."""
     gravity, geometry = _angle_effects(model)
     if geometry is not None:
@@ -249,7 +248,7 @@ def _actuator_increments(model: JointModel, speed: FloatArray, previous: FloatAr
 
 
 def _ringing_increments(mode: LinkMode, increment: FloatArray, previous: FloatArray,
-                        dt: float, before: float, low: float, high: float) -> FloatArray:
+                        dt: SamplePeriod, before: float, low: float, high: float) -> FloatArray:
     """Return the link's increments for the actuator's; the mode starts settled at ``before``."""
     deviation, speed = mode.states(increment / dt, before)
     settled = mode.settled(before)
@@ -353,10 +352,10 @@ class JointSimulator:
     ``v_before``: command in force up to and including the first sample.
     """
 
-    def __init__(self, model: JointModel, dt: float, y0: float, *,
+    def __init__(self, model: JointModel, dt: SamplePeriod, y0: float, *,
                  v_before: float = 0.0) -> None:
         self.model = model
-        self.dt = check_sample_period(dt)
+        self.dt = dt
         self._low, self._high = _limits(model)
         split = model.effect(DirectionDependentDelay.name)
         if isinstance(split, DirectionDependentDelay):

@@ -1,5 +1,5 @@
 """
-Timing: which command is in force at each sample, and how delay is counted (methods 3.4).
+Timing: the checked sample period, the command in force at each sample, delays (methods 3.4).
 
 ``v_k`` is the command in force over ``(t_{k-1}, t_k]``: in a bag, the last one
 received before ``t_k``.
@@ -9,22 +9,45 @@ from __future__ import annotations
 
 from collections import deque
 import math
+import numbers
 
 from hydro_sdp.core.arrays import FloatArray, IntArray
 from hydro_sdp.core.errors import ConfigurationError
 import numpy as np
 
 
-def check_sample_period(dt: float) -> float:
-    """Return ``dt`` (s) if usable as a sample period, else raise :class:`ConfigurationError`."""
-    if not (isinstance(dt, (int, float)) and math.isfinite(dt) and dt > 0.0):
-        raise ConfigurationError(f'sample period must be a positive number of seconds, got {dt!r}')
-    return float(dt)
+class SamplePeriod(float):
+    """
+    A sample period, s: a finite number > 0, checked once, where it enters the core.
+
+    The period of a record's samples (``dt``) or of a controller's steps
+    (``control_period``). Functions of the core take it and do not check it again;
+    arithmetic on it gives a plain float, to be wrapped again where it is a period.
+
+    Raises
+    ------
+    ConfigurationError
+        When ``seconds`` is not a finite number > 0.
+
+    """
+
+    __slots__ = ()
+
+    def __new__(cls, seconds: float) -> SamplePeriod:
+        if type(seconds) is cls:
+            return seconds
+        if not (isinstance(seconds, numbers.Real) and not isinstance(seconds, bool)
+                and math.isfinite(seconds) and seconds > 0.0):
+            raise ConfigurationError(
+                f'sample period must be a positive number of seconds, got {seconds!r}')
+        return super().__new__(cls, seconds)
+
+    def __repr__(self) -> str:
+        return float.__repr__(self)
 
 
-def delay_samples(delay: float, dt: float) -> int:
+def delay_samples(delay: float, dt: SamplePeriod) -> int:
     """Convert a delay (s) to whole samples at period ``dt`` (nearest, ties up, at least one)."""
-    check_sample_period(dt)
     # The small tolerance keeps 0.15 / 0.05 = 2.9999999999999996 at 3.
     return max(1, int(math.floor(delay / dt + 0.5 + 1e-9)))
 

@@ -9,10 +9,11 @@ from hydro_sdp.core.model.effects import Backlash
 from hydro_sdp.core.model.exogenous_signals import Exogenous
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.simulation import integrate_speed, speed_profile
+from hydro_sdp.core.model.timing import SamplePeriod
 import numpy as np
 
 
-def simulate_windows(model: JointModel, v: FloatArray, y: FloatArray, dt: float,
+def simulate_windows(model: JointModel, v: FloatArray, y: FloatArray, dt: SamplePeriod,
                      starts: Sequence[int], *, v_before: float = 0.0,
                      exogenous: Exogenous | None = None) -> FloatArray:
     """

@@ -5,6 +5,7 @@ from __future__ import annotations
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.records import Record
 from hydro_sdp.core.model.simulation import simulate
+from hydro_sdp.core.model.timing import SamplePeriod
 from hydro_sdp.core.synthetic.programs import random_program, start_angle, step_program
 import numpy as np
 
@@ -20,6 +21,7 @@ def experiment_record(model: JointModel, program: str, *, dt: float = 0.01, seed
     ``noise``: standard deviation of the measurement noise, degrees.
     ``y0``: starting angle; default: the middle of the end stops.
     """
+    dt = SamplePeriod(dt)
     start = start_angle(model) if y0 is None else y0
     if program == 'steps':
         steps = 40 if duration is None else max(2, int(duration // 3.0))

@@ -12,7 +12,7 @@ from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import ConfigurationError
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.static_maps import PolyMap, PwlMap, SdpMap
-from hydro_sdp.core.model.timing import check_sample_period
+from hydro_sdp.core.model.timing import SamplePeriod
 import numpy as np
 
 # Fraction of the end-stop range a program may use around its centre.
@@ -87,7 +87,7 @@ def step_program(model: JointModel, dt: float, *, steps: int = 40, hold: float =
     ``y0``: angle at the start, degrees.
     Returns: command at each sample.
     """
-    dt = check_sample_period(dt)
+    dt = SamplePeriod(dt)
     if steps < 2:
         raise ConfigurationError(f'a step program needs at least 2 steps, got {steps}')
     if not (hold > 0.0 and rest > 0.0):
@@ -138,7 +138,7 @@ def random_program(model: JointModel, dt: float, duration: float, *, seed: int =
     ``hold_range``: shortest and longest hold time, s.
     Returns: command at each sample.
     """
-    dt = check_sample_period(dt)
+    dt = SamplePeriod(dt)
     if not duration > 0.0:
         raise ConfigurationError(f'duration must be > 0 s, got {duration}')
     rng = np.random.default_rng(seed)

@@ -6,6 +6,7 @@ from functools import partial
 from typing import Callable, cast, Iterable, Mapping, Union
 
 from hydro_sdp.core.errors import ConfigurationError, HydroSdpError
+from hydro_sdp.core.model.timing import SamplePeriod
 from hydro_sdp.ros.parameters.descriptors import as_double, descriptor, ROS_TYPES
 from hydro_sdp.ros.parameters.request import array_items, ParameterRequest
 from hydro_sdp.ros.parameters.spec import (
@@ -182,6 +183,10 @@ class NodeParameters:
         value = self._typed(name, 'double')
         assert isinstance(value, (int, float))
         return float(value)
+
+    def period(self, name: str) -> SamplePeriod:
+        """Return a double parameter that is a sample or control period, s."""
+        return SamplePeriod(self.double(name))
 
     def integer(self, name: str) -> int:
         """Return an integer parameter."""

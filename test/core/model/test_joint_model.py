@@ -65,11 +65,11 @@ def test_delay_is_at_least_one_sample():
     assert delay_samples(0.004, 0.01) == 1
 
 
-def test_delay_rejects_bad_period():
+def test_delay_rejects_bad_period(j2):
     with pytest.raises(ConfigurationError, match='sample period'):
-        delay_samples(0.15, 0.0)
+        j2.delay_samples(0.0)
     with pytest.raises(ConfigurationError, match='sample period'):
-        delay_samples(0.15, math.nan)
+        j2.longest_delay_samples(math.nan)
 
 
 def test_idz_slopes_at_the_control_period(j2):

@@ -11,19 +11,22 @@ from hydro_sdp.core.model.records import Record
 from hydro_sdp.core.model.simulation import JointSimulator, simulate
 from hydro_sdp.core.model.static_maps import SdpMap
 from hydro_sdp.core.model.timing import (
-    check_sample_period, command_in_force, command_stamps_for, delay_samples, delayed,
-    delayed_at, DelayLine)
+    command_in_force, command_stamps_for, delay_samples, delayed, delayed_at, DelayLine,
+    SamplePeriod)
 from hypothesis import given, HealthCheck, settings, strategies as st
 import numpy as np
 import pytest
 
 
-def test_check_sample_period():
-    assert check_sample_period(0.01) == 0.01
-    assert check_sample_period(1) == 1.0
-    for bad in (0.0, -0.01, math.nan, math.inf, '0.01', None):
-        with pytest.raises(ConfigurationError, match='sample period'):
-            check_sample_period(bad)
+def test_sample_period_is_a_checked_float():
+    assert SamplePeriod(0.01) == 0.01 and SamplePeriod(1) == 1.0
+    assert repr(SamplePeriod(0.01)) == '0.01' and f'{SamplePeriod(0.05):g}' == '0.05'
+    assert SamplePeriod(np.float64(0.02)) == 0.02 and SamplePeriod(np.int64(2)) == 2.0
+    for bad in (0.0, -0.01, math.nan, math.inf, '0.01', None, True):
+        with pytest.raises(ConfigurationError) as refused:
+            SamplePeriod(bad)
+        assert str(refused.value) == (f'sample period must be a positive number of seconds, '
+                                      f'got {bad!r}')
 
 
 @pytest.mark.parametrize('delay, dt, samples', [
@@ -37,11 +40,6 @@ def test_check_sample_period():
 ])
 def test_delay_samples(delay, dt, samples):
     assert delay_samples(delay, dt) == samples
-
-
-def test_delay_samples_refuses_a_bad_period():
-    with pytest.raises(ConfigurationError):
-        delay_samples(0.1, 0.0)
 
 
 def test_delayed():

@@ -11,7 +11,7 @@ from hydro_sdp.core.errors import DataError
 from hydro_sdp.core.identification.experiment import Experiment
 from hydro_sdp.core.model.first_order import first_order
 from hydro_sdp.core.model.static_maps import StaticMap
-from hydro_sdp.core.model.timing import delayed_at
+from hydro_sdp.core.model.timing import delayed_at, SamplePeriod
 import numpy as np
 import numpy.typing as npt
 
@@ -62,7 +62,7 @@ class FitData:
     at the measured angle before it); default: 1.
     """
 
-    def __init__(self, experiments: Sequence[Experiment], delay: int, dt: float,
+    def __init__(self, experiments: Sequence[Experiment], delay: int, dt: SamplePeriod,
                  lag: float = 0.0, gains: Sequence[FloatArray] | None = None) -> None:
         if not experiments:
             raise DataError('no experiments to fit')

@@ -14,6 +14,7 @@ from hydro_sdp.core.identification.routine.increment_fit import (
     fit_increments, fit_sdp_increments)
 from hydro_sdp.core.identification.routine.increments import increments_of
 from hydro_sdp.core.model.static_maps import StaticMap
+from hydro_sdp.core.model.timing import SamplePeriod
 import numpy as np
 
 #: Length of the held-out pieces, s, and the number of folds they are dealt to.
@@ -21,7 +22,7 @@ PIECE_SECONDS = 1.0
 FOLDS = 4
 
 
-def routine_pieces(experiments: Sequence[Experiment], dt: float,
+def routine_pieces(experiments: Sequence[Experiment], dt: SamplePeriod,
                    history: int) -> list[Experiment]:
     """Cut runs into pieces of :data:`PIECE_SECONDS`, each with ``history`` commands before."""
     return split_long(experiments, max(int(round(PIECE_SECONDS / dt)), 1), history)
@@ -32,7 +33,7 @@ def _within(piece: Experiment, delay: int, low: float, high: float) -> bool:
     return bool(np.min(command) >= low and np.max(command) <= high)
 
 
-def compare_routine_kinds(pieces: Sequence[Experiment], delay: int, dt: float, rest: float,
+def compare_routine_kinds(pieces: Sequence[Experiment], delay: int, dt: SamplePeriod, rest: float,
                           points: Sequence[LevelSpeed],
                           kinds: Sequence[FittedKind]) -> FoldErrors:
     """

@@ -15,6 +15,7 @@ from hydro_sdp.core.identification.map_fit.power_sat import (
     NAMES as POWER_SAT_NAMES, power_sat_from_vector, power_sat_rate_function, power_sat_start)
 from hydro_sdp.core.identification.routine.increments import Increments
 from hydro_sdp.core.model.static_maps import PolyMap, PwlMap, SdpMap, StaticMap
+from hydro_sdp.core.model.timing import SamplePeriod
 import numpy as np
 from scipy.optimize import least_squares
 
@@ -22,7 +23,7 @@ from scipy.optimize import least_squares
 class _Residuals:
     """``dy_k - dt rate(v_{k-tau})`` summed per distinct command."""
 
-    def __init__(self, data: Increments, dt: float) -> None:
+    def __init__(self, data: Increments, dt: SamplePeriod) -> None:
         self.levels, inverse, counts = np.unique(data.command, return_inverse=True,
                                                  return_counts=True)
         self.means = np.bincount(inverse, weights=data.increment) / counts
@@ -48,7 +49,7 @@ def _fit(residuals: _Residuals, rate_of: Callable[[FloatArray], RateFunction], x
     return np.asarray(result.x), cost, errors, int(result.nfev)
 
 
-def fit_sdp_increments(data: Increments, dt: float, points: Sequence[LevelSpeed],
+def fit_sdp_increments(data: Increments, dt: SamplePeriod, points: Sequence[LevelSpeed],
                        rest: float) -> MapFit[SdpMap]:
     """
     Fit eq. (5) of West et al. (the ``sdp`` map) to the increments.
@@ -66,8 +67,8 @@ def fit_sdp_increments(data: Increments, dt: float, points: Sequence[LevelSpeed]
                   dict(zip(SDP_NAMES, errors.tolist())), count)
 
 
-def fit_increments(kind: FittedKind, data: Increments, dt: float, points: Sequence[LevelSpeed],
-                   rest: float, start: SdpMap) -> MapFit[StaticMap]:
+def fit_increments(kind: FittedKind, data: Increments, dt: SamplePeriod,
+                   points: Sequence[LevelSpeed], rest: float, start: SdpMap) -> MapFit[StaticMap]:
     """
     Fit one map family to the increments.
 

@@ -15,7 +15,7 @@ from hydro_sdp.core.errors import DataError
 from hydro_sdp.core.identification.delay import DelayEstimate
 from hydro_sdp.core.identification.experiment import Experiment
 from hydro_sdp.core.model.sample_period import whole_samples_seconds
-from hydro_sdp.core.model.timing import delayed_at
+from hydro_sdp.core.model.timing import delayed_at, SamplePeriod
 import numpy as np
 from scipy.optimize import isotonic_regression
 
@@ -81,7 +81,7 @@ def _linear(increment: FloatArray, command: FloatArray) -> float:
     return float(np.dot(a, b)) / scale if scale > 0.0 else 0.0
 
 
-def increment_delay(experiments: Sequence[Experiment], dt: float, *, max_delay: int,
+def increment_delay(experiments: Sequence[Experiment], dt: SamplePeriod, *, max_delay: int,
                     rest: float) -> DelayEstimate:
     """
     Estimate the delay of routine operation from increments and delayed commands.

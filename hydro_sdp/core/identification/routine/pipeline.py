@@ -26,13 +26,14 @@ from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.records import Record
 from hydro_sdp.core.model.sample_period import whole_samples_seconds
 from hydro_sdp.core.model.static_maps import StaticMap
+from hydro_sdp.core.model.timing import SamplePeriod
 
 #: Sample budgets of the delay search and of the held-out comparison.
 DELAY_SAMPLES = 100_000
 COMPARE_SAMPLES = 60_000
 
 
-def identify_routine(records: Sequence[Record], segmentation: Segmentation, dt: float, *,
+def identify_routine(records: Sequence[Record], segmentation: Segmentation, dt: SamplePeriod, *,
                      max_delay: int, kind: KindChoice = 'auto',
                      angle_limits: tuple[float, float] | None = None,
                      input_limits: tuple[float, float] | None = None,

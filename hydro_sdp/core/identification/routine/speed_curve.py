@@ -13,6 +13,7 @@ from hydro_sdp.core.errors import DataError
 from hydro_sdp.core.identification.delay import LevelSpeed
 from hydro_sdp.core.identification.routine.increments import Increments
 from hydro_sdp.core.identification.state_dependence import backfit, Term
+from hydro_sdp.core.model.timing import SamplePeriod
 import numpy as np
 
 #: Fewest increments on one side of rest for its gain to be estimated.
@@ -23,7 +24,7 @@ MOVING_SIGMAS = 3.0
 MOVING_SHARE = 0.05
 
 
-def speed_points(data: Increments, dt: float, rest: float) -> tuple[LevelSpeed, ...]:
+def speed_points(data: Increments, dt: SamplePeriod, rest: float) -> tuple[LevelSpeed, ...]:
     """
     Speed at every distinct delayed command, by the SDP smoother of the gain.
 

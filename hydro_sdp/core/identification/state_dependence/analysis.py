@@ -26,6 +26,7 @@ from hydro_sdp.core.identification.state_dependence.states import (
     check_states, Rows, rows_of, STATES)
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.records import Record
+from hydro_sdp.core.model.timing import SamplePeriod
 import numpy as np
 
 #: Fewest samples a direction needs for its gain to be analysed.
@@ -55,7 +56,7 @@ def rest_of(records: Sequence[Record]) -> float:
     return estimate_rest_command(pieces or [(r.v, r.y) for r in records])
 
 
-def data_delay(records: Sequence[Record], dt: float, max_delay: float,
+def data_delay(records: Sequence[Record], dt: SamplePeriod, max_delay: float,
                rest: float) -> int:
     """Return the delay of model (2) found in the records, samples, as identify finds it."""
     # Imported here, as the routine pipeline imports this package's back-fit.

@@ -8,6 +8,7 @@ from typing import Literal
 
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.identification.state_dependence.backfit import Backfit, TermEstimate
+from hydro_sdp.core.model.timing import SamplePeriod
 import numpy as np
 
 #: What the gains describe: the SDP-ARX model's ``b``, or the measured increment over
@@ -111,7 +112,7 @@ class SdpAnalysis:
         ``arx`` (the SDP-ARX model) or ``ratio`` (what a model misses).
     delay : int
         Delay ``tau``, samples.
-    sample_period : float
+    sample_period : SamplePeriod
         Sample period, s.
     states : tuple[StateDependence, ...]
         The gains (``b`` or ``ratio``) per state and direction, largest share first.
@@ -135,7 +136,7 @@ class SdpAnalysis:
     target: Target
     samples: int
     delay: int
-    sample_period: float
+    sample_period: SamplePeriod
     rest: float
     states: tuple[StateDependence, ...]
     residual: tuple[StateDependence, ...]

@@ -20,6 +20,7 @@ from hydro_sdp.core.model.exogenous_signals import exogenous_of, smoothed_speeds
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.records import Record
 from hydro_sdp.core.model.simulation import one_step_increments
+from hydro_sdp.core.model.timing import SamplePeriod
 import numpy as np
 
 #: The candidate states, in the order they are analysed.
@@ -185,7 +186,7 @@ def travel_since_reversal(direction: FloatArray, travel: FloatArray) -> FloatArr
 
 
 def rows_of(records: Sequence[Record], delay: int, rest: float,
-            model: JointModel | None = None, dt: float | None = None, *,
+            model: JointModel | None = None, dt: SamplePeriod | None = None, *,
             holds: bool = False) -> Rows:
     """
     Build the rows of the SDP analysis from records of one joint.

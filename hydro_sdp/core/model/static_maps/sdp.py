@@ -15,6 +15,7 @@ from hydro_sdp.core.errors import ConfigurationError, ModelFileError
 from hydro_sdp.core.model.static_maps.protocol import (
     check_dead_zone, check_positive_pair, check_saturation_velocity, MapKind)
 from hydro_sdp.core.model.static_maps.sdp_dz import SdpDzMap
+from hydro_sdp.core.model.timing import SamplePeriod
 from hydro_sdp.core.validation import Document, require_ordered_pair, require_pair
 import numpy as np
 
@@ -97,13 +98,13 @@ class SdpMap:
             curvature=require_pair(data['curvature'], 'curvature'),
         )
 
-    def alpha(self, dt: float) -> tuple[float, float, float, float, float, float]:
+    def alpha(self, dt: SamplePeriod) -> tuple[float, float, float, float, float, float]:
         """Return the paper's ``(vn dt, cn, a3, vp dt, cp, a6)`` at sample period ``dt`` (s)."""
         return (self.saturation_velocity[0] * dt, self.curvature[0], self.dead_zone[0],
                 self.saturation_velocity[1] * dt, self.curvature[1], self.dead_zone[1])
 
     @classmethod
-    def from_alpha(cls, alpha: tuple[float, ...], dt: float, *,
+    def from_alpha(cls, alpha: tuple[float, ...], dt: SamplePeriod, *,
                    convention: Literal['signed', 'magnitude'] = 'signed') -> SdpMap:
         """
         Build the map from the paper's ``alpha_1..alpha_6`` at sample period ``dt``.

@@ -13,7 +13,7 @@ from typing import Sequence
 
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.errors import DataError
-from hydro_sdp.core.model.timing import check_sample_period
+from hydro_sdp.core.model.timing import SamplePeriod
 from hydro_sdp.core.synthetic.physics.hydraulics import Actuator
 from hydro_sdp.core.synthetic.physics.oil_column import OilColumn
 from hydro_sdp.core.synthetic.physics.plant import Machine
@@ -50,7 +50,8 @@ class PlantRun:
     pressures: FloatArray | None = None
 
 
-def _stop_filter(frequency: float, damping: float, dt: float) -> tuple[FloatArray, FloatArray]:
+def _stop_filter(frequency: float, damping: float,
+                 dt: SamplePeriod) -> tuple[FloatArray, FloatArray]:
     """Discrete ``w^2 / (s^2 + 2 d w s + w^2)`` (bilinear, prewarped at ``w``)."""
     w = 2.0 * math.pi * frequency
     fs = w / (2.0 * math.tan(w * dt / 2.0))
@@ -112,7 +113,7 @@ def _next_turn(areas: FloatArray) -> list[int]:
 
 
 def _advance(supply: Supply, areas: Sequence[float], extensions: list[float],
-             dt: float, columns: Columns) -> list[float]:
+             dt: SamplePeriod, columns: Columns) -> list[float]:
     """Move every cylinder over one sample; return the speeds the pump allows (m/s)."""
     moved = supply.speeds(areas, extensions)
     for i, (act, speed, column) in enumerate(zip(supply.actuators, moved, columns)):
@@ -137,7 +138,7 @@ def simulate_plant(machine: Machine, commands: FloatArray, dt: float, *,
     ``command_before``: command in force before sample 0 per joint (None: each valve's neutral).
     ``seed``: seed of the sensor noise.
     """
-    dt = check_sample_period(dt)
+    dt = SamplePeriod(dt)
     v = _check(machine, commands)
     n, count = v.shape
     actuators = [Actuator(joint, machine.pump) for joint in machine.joints]
@@ -215,7 +216,7 @@ class PlantSimulator:
                  command_before: Sequence[float] | None = None,
                  seed: int | None = 0, noise: bool = True) -> None:
         self.machine = machine
-        self.dt = check_sample_period(dt)
+        self.dt = SamplePeriod(dt)
         self._actuators = [Actuator(joint, machine.pump) for joint in machine.joints]
         self.extensions, before = _initial(machine, self._actuators, angles0, command_before)
         self._supply = Supply(self._actuators, machine.pump)

@@ -12,7 +12,7 @@ from typing import Sequence
 
 from hydro_sdp.core.errors import ConfigurationError
 from hydro_sdp.core.model.records import Record
-from hydro_sdp.core.model.timing import check_sample_period
+from hydro_sdp.core.model.timing import SamplePeriod
 from hydro_sdp.core.synthetic.physics.linkage import Geometry
 from hydro_sdp.core.synthetic.physics.machine import PlantSimulator, simulate_plant
 from hydro_sdp.core.synthetic.physics.plant import Joint, Machine
@@ -29,7 +29,7 @@ def duty_command(machine: Machine, joint: int, duty: float) -> float:
 
 
 def _record(machine: Machine, joint: int, commands: np.ndarray, angles: np.ndarray,
-            dt: float, source: str) -> Record:
+            dt: SamplePeriod, source: str) -> Record:
     t = dt * np.arange(1, commands.shape[0] + 1)
     return Record(t, commands[:, joint], angles[:, joint], machine.joints[joint].name, source)
 
@@ -55,7 +55,7 @@ def full_stroke_runs(machine: Machine, dt: float, duties: Sequence[float], *, jo
     ``seed``: seed of the first run's noise (the next runs use the following seeds).
     Returns: extending runs first (in the order of ``duties``), then retracting runs.
     """
-    dt = check_sample_period(dt)
+    dt = SamplePeriod(dt)
     low, high = Geometry(machine.joints[joint]).angle_limits
     records: list[Record] = []
     for sign, start in ((1.0, low), (-1.0, high)):
@@ -96,7 +96,7 @@ def step_and_return(machine: Machine, dt: float, duties: Sequence[float], *, joi
     ``hold``, ``rest``: step and rest durations, s.
     ``return_duty``: duty magnitude of every return move, percent.
     """
-    dt = check_sample_period(dt)
+    dt = SamplePeriod(dt)
     neutral = [j.valve.neutral for j in machine.joints]
     home = _mid(machine.joints[joint])
     sim = PlantSimulator(machine, dt, angles0=[_mid(j) for j in machine.joints],
@@ -135,7 +135,7 @@ def random_levels(machine: Machine, dt: float, duration: float, *, joint: int = 
     ``seed``: seed of the levels, the holds and the sensor noise.
     ``pressure``: whether the record's ``load`` is the joint's piston-side pressure, bar.
     """
-    dt = check_sample_period(dt)
+    dt = SamplePeriod(dt)
     rng = np.random.default_rng(seed)
     neutral = [j.valve.neutral for j in machine.joints]
     low, high = Geometry(machine.joints[joint]).angle_limits

@@ -6,7 +6,7 @@ from bisect import bisect_right
 import math
 
 from hydro_sdp.core.arrays import FloatArray
-from hydro_sdp.core.model.timing import check_sample_period, delay_samples, delayed, DelayLine
+from hydro_sdp.core.model.timing import delay_samples, delayed, DelayLine, SamplePeriod
 from hydro_sdp.core.synthetic.physics.parameters import Valve
 import numpy as np
 from scipy.signal import lfilter
@@ -24,13 +24,12 @@ def spool_command(valve: Valve, commands: FloatArray) -> FloatArray:
     return np.clip(np.where(v >= valve.neutral, above, below), -1.0, 1.0)
 
 
-def lag_pole(valve: Valve, dt: float) -> float:
+def lag_pole(valve: Valve, dt: SamplePeriod) -> float:
     """Pole of the spool's first-order lag at sample period ``dt`` (0 without lag)."""
-    dt = check_sample_period(dt)
     return math.exp(-dt / valve.time_constant) if valve.time_constant > 0.0 else 0.0
 
 
-def spool_travel(valve: Valve, commands: FloatArray, dt: float, *,
+def spool_travel(valve: Valve, commands: FloatArray, dt: SamplePeriod, *,
                  command_before: float) -> FloatArray:
     """
     Spool travel over each sample interval: dead time, then a first-order lag.
@@ -57,7 +56,7 @@ class Spool:
     ``dt``: sample period, s.
     """
 
-    def __init__(self, valve: Valve, dt: float, command_before: float) -> None:
+    def __init__(self, valve: Valve, dt: SamplePeriod, command_before: float) -> None:
         self.valve = valve
         self._tau = delay_samples(valve.dead_time, dt) if valve.dead_time > 0.0 else 0
         self.travel = float(spool_command(valve, np.array([command_before]))[0])
