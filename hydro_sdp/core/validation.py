@@ -11,7 +11,6 @@ from collections.abc import Collection, Mapping
 import math
 
 from hydro_sdp.core.errors import ConfigurationError, ModelFileError
-from hydro_sdp.core.model.timing import SamplePeriod
 
 #: A mapping read from a YAML or JSON file: string keys, values not yet checked.
 Document = Mapping[str, object]
@@ -26,14 +25,6 @@ def require_float(value: object, key: str) -> float:
     if not math.isfinite(number):
         raise ModelFileError(f'key {key!r}: must be finite, got {number}')
     return number
-
-
-def require_period(value: object, key: str) -> SamplePeriod:
-    """Return ``value`` as a :class:`SamplePeriod`, or raise naming the dotted ``key``."""
-    try:
-        return SamplePeriod(require_float(value, key))
-    except ConfigurationError as error:
-        raise ModelFileError(f'key {key!r}: {error}') from None
 
 
 def require_pair(value: object, key: str) -> tuple[float, float]:

@@ -18,10 +18,9 @@ from hydro_sdp.core.control.pip_design import (
     closed_loop_poles, DiscretePlant, lq_design, LqWeights, PipGains, pole_assignment)
 from hydro_sdp.core.errors import ConfigurationError, ModelFileError
 from hydro_sdp.core.model.joint_model import JointModel
-from hydro_sdp.core.model.timing import SamplePeriod
+from hydro_sdp.core.model.timing import require_period, SamplePeriod
 from hydro_sdp.core.validation import (
-    Document, read_document, require_float, require_float_list, require_ordered_pair,
-    require_period)
+    Document, read_document, require_float, require_float_list, require_ordered_pair)
 import numpy as np
 
 CONTROLLER_FORMAT = 'hydro_sdp/controller/v1'

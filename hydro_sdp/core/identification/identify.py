@@ -29,7 +29,8 @@ from hydro_sdp.core.identification.limits import model_limits
 from hydro_sdp.core.identification.map_fit import FIT_METHODS, fit_sdp, FitData, FitMethod, MapFit
 from hydro_sdp.core.identification.own_effects import (
     check_geometry, check_lag, shape_with_geometry)
-from hydro_sdp.core.identification.routine import identify_routine, routine_operation
+from hydro_sdp.core.identification.routine.detect import routine_operation
+from hydro_sdp.core.identification.routine.pipeline import identify_routine
 from hydro_sdp.core.identification.segmentation import (
     check_records, segment_records, Segmentation)
 from hydro_sdp.core.identification.stroke_fit import fit_stroke_geometry

@@ -12,7 +12,8 @@ import math
 import numbers
 
 from hydro_sdp.core.arrays import FloatArray, IntArray
-from hydro_sdp.core.errors import ConfigurationError
+from hydro_sdp.core.errors import ConfigurationError, ModelFileError
+from hydro_sdp.core.validation import require_float
 import numpy as np
 
 
@@ -44,6 +45,14 @@ class SamplePeriod(float):
 
     def __repr__(self) -> str:
         return float.__repr__(self)
+
+
+def require_period(value: object, key: str) -> SamplePeriod:
+    """Return ``value`` as a :class:`SamplePeriod`, or raise naming the dotted ``key``."""
+    try:
+        return SamplePeriod(require_float(value, key))
+    except ConfigurationError as error:
+        raise ModelFileError(f'key {key!r}: {error}') from None
 
 
 def delay_samples(delay: float, dt: SamplePeriod) -> int:

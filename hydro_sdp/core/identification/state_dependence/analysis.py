@@ -15,6 +15,8 @@ from hydro_sdp.core.errors import DataError, HydroSdpError
 from hydro_sdp.core.identification.delay import estimate_delay
 from hydro_sdp.core.identification.experiment import split_long, thin
 from hydro_sdp.core.identification.rest import estimate_rest_command
+from hydro_sdp.core.identification.routine.detect import routine_operation
+from hydro_sdp.core.identification.routine.increments import increment_delay
 from hydro_sdp.core.identification.segmentation import check_records, segment_records
 from hydro_sdp.core.identification.state_dependence.backfit import (
     Backfit, backfit, Term, with_tests)
@@ -59,9 +61,6 @@ def rest_of(records: Sequence[Record]) -> float:
 def data_delay(records: Sequence[Record], dt: SamplePeriod, max_delay: float,
                rest: float) -> int:
     """Return the delay of model (2) found in the records, samples, as identify finds it."""
-    # Imported here, as the routine pipeline imports this package's back-fit.
-    from hydro_sdp.core.identification.routine import routine_operation
-    from hydro_sdp.core.identification.routine.increments import increment_delay
     longest = max(2, int(round(max_delay / dt)))
     segmentation = segment_records(records, max_delay=longest, rest=rest)
     pieces = thin(split_long(segmentation.experiments, 3000, longest), 100_000)

@@ -14,7 +14,7 @@ import math
 from hydro_sdp.core.control.controller_spec import design_from_model
 from hydro_sdp.core.errors import DataError
 from hydro_sdp.core.identification.identify import identify
-from hydro_sdp.core.identification.routine import held_share, routine_operation
+from hydro_sdp.core.identification.routine.detect import held_share, routine_operation
 from hydro_sdp.core.identification.routine.increment_fit import fit_sdp_increments
 from hydro_sdp.core.identification.routine.increments import increment_delay, increments_of
 from hydro_sdp.core.identification.routine.speed_curve import speed_points
