@@ -266,10 +266,14 @@ def test_separate_processes_survive_a_faulty_link_and_restarts(monkeypatch):
 
     def settled_on(degrees, deadline):
         # Process start-up and discovery take a varying time: wait for 1.5 s within 0.5 deg.
+        # The set-point is said again every second: a restarted controller may subscribe
+        # after the first one, while discovery still counts its predecessor's subscription.
         start = time.monotonic()
         while time.monotonic() < start + deadline:
             spin(0.25)
             now = time.monotonic()
+            if int(now - start) != int(now - start - 0.25):
+                setpoint.publish(Float64(data=math.radians(degrees)))
             window = [a for t, a in angles if t >= max(start, now - 1.5)]
             if now - start > 1.5 and len(window) > 100 and \
                     max(abs(a - degrees) for a in window) < 0.5:
