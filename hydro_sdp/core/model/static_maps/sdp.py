@@ -35,6 +35,12 @@ def sdp_rate(v: FloatArray | float, vn: float, cn: float, a3: float, vp: float, 
     ``a3``, ``a6``: lower and upper dead-zone edges, input units.
     """
     v = np.asarray(v, dtype=np.float64)
+    if v.size == 1:
+        # A simulation's step asks for one command at a time, where numpy's overhead is
+        # most of the cost: the same operations on Python floats.
+        x = float(v.flat[0])
+        one = vn * -math.expm1(cn * min(x - a3, 0.0)) + vp * -math.expm1(-cp * max(x - a6, 0.0))
+        return np.full(v.shape, one)[()]
     # Clipping the exponent's argument at zero keeps the inactive branch finite.
     below = vn * -np.expm1(cn * np.minimum(v - a3, 0.0))
     above = vp * -np.expm1(-cp * np.maximum(v - a6, 0.0))
