@@ -119,7 +119,8 @@ def free_runs(runs: Sequence[Run], model: JointModel, max_delay: int, rest: floa
 
     Held at a stop or stalled (``state_dependence.states.holds_of``,
     as the SDP analysis leaves them out), and for :func:`stop_window` after arriving at a
-    stop under the same command, while the link rings on the stop's compliance.
+    stop under the same command, while the link rings on the stop's compliance; free again
+    for ``max_delay`` samples from a command away from the stop (methods 8.4).
     """
     if not runs:
         return []
@@ -140,6 +141,15 @@ def free_runs(runs: Sequence[Run], model: JointModel, max_delay: int, rest: floa
             last = min(first + window, held.size)
             same = np.flatnonzero(delayed[first:last] != delayed[first])
             held[first:first + (same[0] if same.size else last - first)] = True
+        # Leaving a stop: from a command away from the stop the joint is at, and for the
+        # longest delay considered, whether and when the joint leaves is the timing words'
+        # evidence (a model's shorter dead time would otherwise leave only the longer one's
+        # samples to judge).
+        middle = 0.5 * (extremes[0] + extremes[1])
+        changes = np.flatnonzero(record.v[1:] != record.v[:-1]) + 1
+        away = model.rate(record.v[changes]) * np.where(record.y[changes] > middle, -1.0, 1.0)
+        for change in changes[(away > 0.0) & np.isin(code[changes], (1, 3))]:
+            held[change:change + max_delay + 1] = False
         # Residual i is the increment ending at sample start + 1 + i.
         out.append(replace(run, free=~held[run.start + 1:]))
     return out

@@ -102,7 +102,9 @@ def test_the_gap_is_the_error_above_the_floor_of_a_model_with_the_word():
 #: report's test below), and correct models.
 CASES = [('backlash', 'random', 'volt'),
          ('flow_sharing', 'random', 'percent'), ('load_dependence', 'random', 'volt'),
-         ('none', 'stroke', 'signed_percent'), ('none', 'random', 'percent')]
+         ('none', 'stroke', 'signed_percent'), ('none', 'random', 'percent'),
+         # Full strokes leave each stop after a dead time of their direction's.
+         ('direction_dependent_delay', 'stroke', 'percent')]
 
 
 @pytest.mark.slow
