@@ -136,6 +136,10 @@ class Scored(Protocol):
     def exogenous(self) -> Exogenous:
         """Return its load and other joints' speeds."""
 
+    @property
+    def free_samples(self) -> np.ndarray | None:
+        """Return whether each sample is scored (None: all)."""
+
 
 class WindowErrors:
     """Simulation errors of models over held-out records, over windows, each simulation once."""
@@ -158,7 +162,7 @@ class WindowErrors:
                                          v_before=float(record.v[0]), exogenous=run.exogenous)
             error = np.abs(record.y[start:] - simulated[start:])
             # Samples a run marks as not free (held at a stop, stalled) are not scored.
-            free = getattr(run, 'free_samples', None)
+            free = run.free_samples
             kept = None if free is None else free[start:]
             self._cache[key] = float(np.mean(error if kept is None or not kept.any()
                                              else error[kept]))
