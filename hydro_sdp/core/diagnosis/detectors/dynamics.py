@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import replace
+from functools import cache
 import math
 from typing import Callable
 
@@ -103,6 +104,8 @@ class OscillationDetector(EffectDetector):
                 model, delay=whole_samples_seconds(delay, dt))
             return timed.with_effect(Oscillation(frequency, damping))
 
+        # Built once per dead time: the scan of the dead times and the polish there share it.
+        @cache
         def cost_at(delay: int) -> Callable[[FloatArray], float]:
             # The model's increments without the mode are the same for every mode tried.
             timed = with_mode(delay, np.array([0.0, 0.5])).without_effect(Oscillation.name)
