@@ -72,10 +72,10 @@ def _round(whole: Context, all_checks: Sequence[Run],
     free = Context(model, free_runs(whole.runs, model, whole.max_delay, whole.rest),
                    whole.max_delay, whole.naming)
     free_checks = free_runs(all_checks, model, whole.max_delay, whole.rest)
-    block = bootstrap_block(velocity_residuals(model, all_checks),
-                            max(2, int(round(BLOCK_SECONDS / all_checks[0].dt))))
+    residuals = velocity_residuals(model, all_checks)
+    block = bootstrap_block(residuals, max(2, int(round(BLOCK_SECONDS / all_checks[0].dt))))
     # Per side (all samples, free ones): context, held-out runs, residuals, errors.
-    sides = {False: (whole, all_checks, velocity_residuals(model, all_checks),
+    sides = {False: (whole, all_checks, residuals,
                      WindowErrors(all_checks), WindowErrors(whole.runs)),
              True: (free, free_checks, velocity_residuals(model, free_checks),
                     WindowErrors(free_checks), WindowErrors(free.runs))}
