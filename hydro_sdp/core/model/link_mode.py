@@ -61,22 +61,18 @@ class LinkMode:
 
     def states(self, speeds: FloatArray, before: float) -> tuple[FloatArray, FloatArray]:
         """Return ``e_k`` and the link's speed ``u_k`` after each interval (:meth:`deviation`)."""
-        return self.states_from(speeds, self.settled(before))
-
-    def states_from(self, speeds: FloatArray,
-                    state: tuple[float, float]) -> tuple[FloatArray, FloatArray]:
-        """Return ``e_k`` and ``u_k`` after each interval, from the state ``(e, u)``."""
         w = np.asarray(speeds, dtype=np.float64)
         if w.size == 0:
             return np.zeros(0), np.zeros(0)
         pole, column, row = self.modal
         # Modal coordinates: m_k = pole m_{k-1} + g w_k, and e = 2 Re(V[0, 0] m).
         gain = row[0] * self.input_gain[0] + row[1] * self.input_gain[1]
-        start = row[0] * state[0] + row[1] * state[1]
+        settled = self.settled(before)
+        state = row[0] * settled[0] + row[1] * settled[1]
         # The recursion as a first-order filter in C; imported here, as the light command
         # paths (identify) never need it.
         from scipy.signal import lfilter
-        out = lfilter([gain], [1.0, -pole], w.astype(np.complex128), zi=[pole * start])[0]
+        out = lfilter([gain], [1.0, -pole], w.astype(np.complex128), zi=[pole * state])[0]
         return 2.0 * (column[0] * out).real, 2.0 * (column[1] * out).real
 
     @cached_property
