@@ -1,23 +1,30 @@
 """
 Benchmark ``oscillation`` on the same runs with the link's mode and without it.
 
-Run with ``python bench/bench_oscillation.py [seeds] [programs] [sources]``
+Run with ``python bench/bench_oscillation.py [seeds] [programs] [sources] [spool_lag]``
 (``programs``: comma-separated, default ``random,stroke``, and ``short`` for the plant:
 20 s random levels; ``sources``: ``generator``, ``plant`` or both, comma-separated, the
-default). Each case is diagnosed twice on the same
+default; ``spool_lag``: the plant's valve with the preset's dead time and this spool lag, s,
+instead of the grid's draws of both). Each case is diagnosed twice on the same
 commands, draws and noise: once with the link ringing on its oil column, once with it
 settled. On the independent generator (``test/support/joint_generator.py``) the mode is
 the grid's (1.5-4 Hz, damping 0.05-0.2) in volts, percent and signed percent; on the
 physics plant it is the boom of ``config/physics_boom_compressible.yaml`` in signed
 percent and volts, its compressibility section removed for the settled runs, the model
-identified on settled runs. Prints what each was named, the MAE before and after, and
-the counts (targets: ``oscillation`` with the gap halved on the ringing runs, ``none``
-on the settled ones).
+identified on settled runs. Prints what each was named, the MAE before and after, the
+gap above the floor (the same model's MAE on the settled runs), what the mode's
+candidate found (frequency, damping, share of the held-out velocity residual and of the
+windowed angle error it removes), and how far the ringing runs' angles are from the
+settled ones, against the least that a mode and a dead time in series with the settled
+angles leave of it (``_series_bound``: what any ``oscillation`` could take at best).
+Counts at the end (targets: ``oscillation`` with the gap above the floor halved on the
+ringing runs, ``none`` on the settled ones).
 
 """
 
 from collections import Counter
 from dataclasses import replace
+import math
 from pathlib import Path
 import sys
 import time
@@ -25,8 +32,13 @@ import time
 # The cases are built with the test suite's helpers.
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / 'test'))
 from hydro_sdp.core.diagnosis.search import diagnose  # noqa: E402, I100
+from hydro_sdp.core.model.effects import Oscillation  # noqa: E402
 from hydro_sdp.core.model.joint_model import JointModel  # noqa: E402
+from hydro_sdp.core.model.link_mode import LinkMode  # noqa: E402
+from hydro_sdp.io.documents import shipped_config  # noqa: E402
+from hydro_sdp.io.plant_files import load_machine  # noqa: E402
 import numpy as np  # noqa: E402
+from scipy.optimize import minimize  # noqa: E402
 from support import diagnosis_grid, plant_grid  # noqa: E402
 from support.plant_programs import levels, variant  # noqa: E402
 
@@ -47,11 +59,21 @@ def generator_pair(program, units, seed):
     return JointModel.from_mapping(nominal), made
 
 
-def plant_pair(program, units, seed):
-    """Return the model identified settled and the ringing and settled runs, and the floor."""
+def plant_pair(program, units, seed, spool_lag=None):
+    """
+    Return the model identified settled and the ringing and settled runs.
+
+    ``spool_lag``: the valve's spool lag, s, with the preset's dead time, instead of the
+    grid's draws of both.
+    """
     seconds = 40.0
     rng = plant_grid._rng('boom', units, 'random' if program == 'short' else program, seed, 3)
     machine = variant('boom', units, rng, ringing=True)
+    if spool_lag is not None:
+        preset = load_machine(shipped_config('physics_boom_compressible.yaml')).joints[0]
+        valve = replace(machine.joints[0].valve, dead_time=preset.valve.dead_time,
+                        time_constant=spool_lag)
+        machine = replace(machine, joints=(replace(machine.joints[0], valve=valve),))
     settled = replace(machine, joints=(replace(machine.joints[0], compressibility=None),))
     if program == 'short':
         # Short random levels (20 s: two to identify, two to estimate, one to validate),
@@ -71,6 +93,78 @@ def plant_pair(program, units, seed):
     return model, made
 
 
+def _mode_found(result):
+    """Return what the mode's candidate of the first round found, in words."""
+    mode = next(c for c in result.rounds[0] if c.effect == 'oscillation')
+    if 'frequency' not in mode.parameters:
+        return f'mode refused: {mode.evidence}'
+    return (f'mode {mode.parameters["frequency"]:.3g} Hz, damping '
+            f'{mode.parameters["damping"]:.2g}, {"accepted" if mode.accepted else "refused"}, '
+            f'removes {100 * mode.gain:.0f} % of the velocity residual and '
+            f'{100 * mode.held_out:.0f} % of the windowed error')
+
+
+def _series_bound(made):
+    """
+    Return how far the ringing runs' angles are from the settled ones, and a mode's least.
+
+    The settled runs' own angles (same commands, draws and noise) are put through the best
+    mode and dead time in series, fitted to the ringing runs' angles (mean absolute error,
+    while the commands agree, ``_AWAY`` deg or more from the run's extremes: at a stop a
+    model's mode and a joint's link part ways). What is left, a mode added to a model as
+    good as the settled joint itself would not remove.
+    """
+    pairs = []
+    for part in (0, 1):
+        for ringing, settled in zip(made[True][part], made[False][part]):
+            # Strokes end at the stop and random levels turn back before it, the ringing
+            # link a few samples apart: compared while the commands agree.
+            n = min(ringing.y.size, settled.y.size)
+            n = int(np.argmax(np.r_[ringing.v[:n] != settled.v[:n], True]))
+            angles = settled.y[:n]
+            away = (angles > angles.min() + _AWAY) & (angles < angles.max() - _AWAY)
+            pairs.append((angles, ringing.y[:n], away, float(np.median(np.diff(settled.t)))))
+
+    def left(x, shift):
+        total = count = 0.0
+        frequency, damping = math.exp(x[0]), min(max(float(x[1]), 0.01), 0.95)
+        for angles, target, away, dt in pairs:
+            if frequency >= 0.5 / dt:
+                return math.inf
+            moved = np.r_[np.full(shift, angles[0]), angles[:angles.size - shift]]
+            if x[0] > math.log(_NO_MODE):
+                mode = LinkMode.of(Oscillation(frequency, damping), dt)
+                before = float(angles[10] - angles[0]) / (10.0 * dt)
+                # Moving at the start, the link trails its actuator by the mode's lead.
+                moved = mode.ring(moved + mode.lead * before, dt, before)
+            total += float(np.abs(moved - target)[away].sum())
+            count += int(away.sum())
+        return total / count
+
+    compared = sum(int(away.sum()) for _, _, away, _ in pairs)
+    whole = sum(min(r.y.size, s.y.size) for part in (0, 1)
+                for r, s in zip(made[True][part], made[False][part]))
+    raw = left(np.array([math.log(_NO_MODE) - 1.0, 0.5]), 0)
+    best = (raw, 0.0, 0.0, 0)
+    for shift in range(_LONGEST_SHIFT + 1):
+        for start in (1.0, 2.0, 4.0):
+            fit = minimize(left, [math.log(start), 0.15], args=(shift,), method='Nelder-Mead')
+            if fit.fun < best[0]:
+                best = (float(fit.fun), math.exp(fit.x[0]), float(fit.x[1]), shift)
+    return (f'over {100 * compared / whole:.0f} % of the samples the runs part by {raw:.3f} '
+            f'deg; a mode and a dead time in series with the settled angles leave '
+            f'{best[0]:.3f} ({100 * (1.0 - best[0] / raw):.0f} % less; {best[1]:.3g} Hz, '
+            f'damping {best[2]:.2g}, {best[3]} samples later)')
+
+
+#: How far from a run's extremes the bound compares its angles, deg.
+_AWAY = 2.0
+#: Longest extra dead time the bound tries, samples.
+_LONGEST_SHIFT = 8
+#: A "frequency" below which the bound puts no mode in series (the runs' raw difference).
+_NO_MODE = 1e-3
+
+
 def main():
     """Run both benches and print the counts."""
     seeds = int(sys.argv[1]) if len(sys.argv) > 1 else 2
@@ -80,6 +174,7 @@ def main():
     halved = Counter()
     started = time.perf_counter()
     sources = sys.argv[3].split(',') if len(sys.argv) > 3 else ['generator', 'plant']
+    spool_lag = float(sys.argv[4]) if len(sys.argv) > 4 else None
     jobs = [('generator', units, generator_pair) for units in diagnosis_grid.UNITS]
     jobs += [('plant', units, plant_pair) for units in ('signed_percent', 'volt')]
     jobs = [job for job in jobs if job[0] in sources]
@@ -88,24 +183,35 @@ def main():
             for program in programs:
                 if program == 'short' and source == 'generator':
                     continue
-                model, made = pair(program, units, seed)
-                for ringing in (True, False):
+                model, made = (pair(program, units, seed) if source == 'generator' else
+                               pair(program, units, seed, spool_lag))
+                results = {}
+                for ringing in (False, True):
                     estimation, validation = made[ringing]
                     # Each with its grid's options (plant_grid.run_case, diagnosis_grid.run_case).
                     options = {} if source == 'generator' else {
                         'max_iterations': 1, 'max_delay': plant_grid.MAX_DELAY}
-                    result = diagnose(estimation, model, validation=validation, **options)
+                    results[ringing] = diagnose(estimation, model, validation=validation,
+                                                **options)
+                floor = results[False].mae_before
+                for ringing in (True, False):
+                    result = results[ringing]
                     key = f'{source} {"ringing" if ringing else "settled"}'
                     counts[key][result.effect] += 1
-                    if ringing and result.effect == 'oscillation' and \
-                            result.mae_after <= 0.5 * result.mae_before:
-                        halved[source] += 1
-                    print(f'  {key}: {program}, {units}, seed {seed}: {result.effect}, MAE '
-                          f'{result.mae_before:.3g} -> {result.mae_after:.3g} deg', flush=True)
+                    line = (f'  {key}: {program}, {units}, seed {seed}: {result.effect}, MAE '
+                            f'{result.mae_before:.3g} -> {result.mae_after:.3g} deg')
+                    if ringing:
+                        if result.effect == 'oscillation' and result.mae_after - floor <= \
+                                0.5 * (result.mae_before - floor):
+                            halved[source] += 1
+                        line += (f' (floor {floor:.3g}); {_mode_found(result)}; '
+                                 + _series_bound(made))
+                    print(line, flush=True)
     for key, count in counts.items():
         print(f'{key}: ' + ', '.join(f'{word} {n}' for word, n in count.most_common()))
     for source in sources:
-        print(f'{source} ringing: oscillation with the gap halved in {halved[source]}/'
+        print(f'{source} ringing: oscillation with the gap above the floor halved in '
+              f'{halved[source]}/'
               f'{sum(counts[f"{source} ringing"].values())}')
     print(f'took {time.perf_counter() - started:.0f} s')
 
