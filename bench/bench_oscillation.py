@@ -15,9 +15,8 @@ identified on settled runs. Prints what each was named, the MAE before and after
 gap above the floor (the same model's MAE on the settled runs), what the mode's
 candidate found (frequency, damping, share of the held-out velocity residual and of the
 windowed angle error it removes), and how far the ringing runs' angles are from the
-settled ones, against the least that a mode and a dead time in series with the settled
-angles leave of it (``_series_bound``: what any ``oscillation`` could take at best), and
-with a set through the spring at reversals besides.
+settled ones, against what a dead time, a mode and a lost motion at reversals in series
+with the settled angles leave of it at best (``_series_bound``).
 Counts at the end (targets: ``oscillation`` with the gap above the floor halved on the
 ringing runs, ``none`` on the settled ones).
 
@@ -33,13 +32,13 @@ import time
 # The cases are built with the test suite's helpers.
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / 'test'))
 from hydro_sdp.core.diagnosis.search import diagnose  # noqa: E402, I100
+from hydro_sdp.core.model.bounded_sum import bounded_cumsum  # noqa: E402
 from hydro_sdp.core.model.effects import Oscillation  # noqa: E402
 from hydro_sdp.core.model.joint_model import JointModel  # noqa: E402
 from hydro_sdp.core.model.link_mode import LinkMode  # noqa: E402
 from hydro_sdp.io.documents import shipped_config  # noqa: E402
 from hydro_sdp.io.plant_files import load_machine  # noqa: E402
 import numpy as np  # noqa: E402
-from scipy.ndimage import uniform_filter1d  # noqa: E402
 from scipy.optimize import minimize  # noqa: E402
 from support import diagnosis_grid, plant_grid  # noqa: E402
 from support.plant_programs import levels, variant  # noqa: E402
@@ -108,16 +107,15 @@ def _mode_found(result):
 
 def _series_bound(made):
     """
-    Return how far the ringing runs' angles are from the settled ones, and a mode's least.
+    Return how far the ringing runs' angles are from the settled ones, and what forms take.
 
-    The settled runs' own angles (same commands, draws and noise) are put through the best
-    mode and dead time in series, fitted to the ringing runs' angles (mean absolute error,
-    while the commands agree, ``_AWAY`` deg or more from the run's extremes: at a stop a
-    model's mode and a joint's link part ways). What is left, a mode added to a model as
-    good as the settled joint itself would not remove. Then the same with a set through
-    the spring: the actuator's angle less ``set`` times the direction of its last motion
-    (the link lags its actuator by the column's deflection under the moving pressures,
-    which change sides at a reversal).
+    The settled runs' own angles (same commands, draws and noise) are put through a dead
+    time, a lost motion at reversals (a play on the actuator: the oil decompressed and
+    compressed again before the link turns) and a mode, in series, each fitted to the
+    ringing runs' angles (mean absolute error, while the commands agree, ``_AWAY`` deg or
+    more from the run's extremes: at a stop a model's mode and a joint's link part ways).
+    What the best fit leaves, those forms added to a model as good as the settled joint
+    itself would not remove.
     """
     pairs = []
     for part in (0, 1):
@@ -126,22 +124,21 @@ def _series_bound(made):
             # link a few samples apart: compared while the commands agree.
             n = min(ringing.y.size, settled.y.size)
             n = int(np.argmax(np.r_[ringing.v[:n] != settled.v[:n], True]))
-            angles, dt = settled.y[:n], float(np.median(np.diff(settled.t)))
+            angles = settled.y[:n]
             away = (angles > angles.min() + _AWAY) & (angles < angles.max() - _AWAY)
-            pairs.append((angles, ringing.y[:n], away, dt, _last_direction(angles, dt)))
+            pairs.append((angles, ringing.y[:n], away, float(np.median(np.diff(settled.t)))))
 
-    def left(x, shift):
+    def left(x, shift, ring, play):
         total = count = 0.0
         frequency, damping = math.exp(x[0]), min(max(float(x[1]), 0.01), 0.95)
-        column_set = float(x[2]) if len(x) > 2 else 0.0
-        for angles, target, away, dt, direction in pairs:
+        half = 0.5 * max(float(x[2]), 0.0) if play else 0.0
+        for angles, target, away, dt in pairs:
             if frequency >= 0.5 / dt:
                 return math.inf
             moved = np.r_[np.full(shift, angles[0]), angles[:angles.size - shift]]
-            if column_set:
-                moved = moved - column_set * np.r_[np.zeros(shift),
-                                                   direction[:direction.size - shift]]
-            if x[0] > math.log(_NO_MODE):
+            if half:
+                moved = moved + bounded_cumsum(0.0, -np.diff(moved), -half, half)
+            if ring:
                 mode = LinkMode.of(Oscillation(frequency, damping), dt)
                 before = float(angles[10] - angles[0]) / (10.0 * dt)
                 # Moving at the start, the link trails its actuator by the mode's lead.
@@ -150,46 +147,41 @@ def _series_bound(made):
             count += int(away.sum())
         return total / count
 
-    compared = sum(int(away.sum()) for _, _, away, _, _ in pairs)
+    compared = sum(int(away.sum()) for _, _, away, _ in pairs)
     whole = sum(min(r.y.size, s.y.size) for part in (0, 1)
                 for r, s in zip(made[True][part], made[False][part]))
-    raw = left(np.array([math.log(_NO_MODE) - 1.0, 0.5]), 0)
+    raw = left(np.zeros(3), 0, False, False)
     words = [f'over {100 * compared / whole:.0f} % of the samples the runs part by {raw:.3f} '
-             'deg']
-    series = 'a mode and a dead time in series with the settled angles leave'
-    for start, label in (([0.15], series), ([0.15, 0.2], 'with a set')):
-        best = (raw, np.zeros(3), 0)
+             'deg; in series with the settled angles']
+    for ring, play, label in ((False, False, 'a dead time leaves'),
+                              (True, False, 'with a mode'), (False, True, 'with a play'),
+                              (True, True, 'with both')):
+        best = (math.inf, np.zeros(3), 0)
         for shift in range(_LONGEST_SHIFT + 1):
-            for frequency in (1.0, 2.0, 4.0):
-                fit = minimize(left, [math.log(frequency), *start], args=(shift,),
-                               method='Nelder-Mead')
-                if fit.fun < best[0]:
-                    best = (float(fit.fun), fit.x, shift)
-        fitted, x, shift = best
-        words.append(f'{label} {fitted:.3f} '
-                     f'({100 * (1.0 - fitted / raw):.0f} % less; {math.exp(x[0]):.3g} Hz, '
-                     f'damping {x[1]:.2g}, {shift} samples later'
-                     + (f', set {x[2]:.3g} deg)' if len(x) > 2 else ')'))
-    return '; '.join(words)
-
-
-def _last_direction(angles, dt):
-    """Return the sign of each sample's last motion, 0 before the first (its 0.1 s mean)."""
-    speed = np.gradient(uniform_filter1d(angles, max(1, int(round(0.1 / dt))))) / dt
-    moving = np.where(np.abs(speed) > _MOVING, np.sign(speed), 0.0)
-    last = np.where(moving != 0.0, np.arange(moving.size), 0)
-    np.maximum.accumulate(last, out=last)
-    direction = moving[last]
-    direction[:int(np.argmax(moving != 0.0)) if moving.any() else moving.size] = 0.0
-    return direction
+            starts = [np.zeros(3)] if not (ring or play) else [
+                np.array([math.log(frequency), 0.15, 0.4]) for frequency in (
+                    (1.0, 2.0, 4.0) if ring else (1.0,))]
+            for start in starts:
+                fitted = (minimize(left, start, args=(shift, ring, play), method='Nelder-Mead')
+                          if ring or play else None)
+                cost = left(start, shift, ring, play) if fitted is None else float(fitted.fun)
+                if cost < best[0]:
+                    best = (cost, start if fitted is None else fitted.x, shift)
+        cost, x, shift = best
+        found = [f'{shift} samples later']
+        if ring:
+            found.append(f'{math.exp(x[0]):.3g} Hz, damping {x[1]:.2g}')
+        if play:
+            found.append(f'play {max(x[2], 0.0):.3g} deg')
+        words.append(f'{label} {cost:.3f} ({100 * (1.0 - cost / raw):.0f} % less; '
+                     + ', '.join(found) + ')')
+    return ', '.join(words[:2]) + '; ' + '; '.join(words[2:])
 
 
 #: How far from a run's extremes the bound compares its angles, deg.
 _AWAY = 2.0
 #: Longest extra dead time the bound tries, samples.
 _LONGEST_SHIFT = 8
-#: Speed above which the bound's settled angles move, deg/s.
-_MOVING = 0.3
 #: A "frequency" below which the bound puts no mode in series (the runs' raw difference).
 _NO_MODE = 1e-3
 
