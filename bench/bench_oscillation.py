@@ -133,7 +133,7 @@ def _series_bound(made):
         frequency, damping = math.exp(x[0]), min(max(float(x[1]), 0.01), 0.95)
         half = 0.5 * max(float(x[2]), 0.0) if play else 0.0
         for angles, target, away, dt in pairs:
-            if frequency >= 0.5 / dt:
+            if ring and frequency >= 0.5 / dt:
                 return math.inf
             moved = np.r_[np.full(shift, angles[0]), angles[:angles.size - shift]]
             if half:
@@ -156,21 +156,26 @@ def _series_bound(made):
     for ring, play, label in ((False, False, 'a dead time leaves'),
                               (True, False, 'with a mode'), (False, True, 'with a play'),
                               (True, True, 'with both')):
+        # The fit moves the mode's frequency and damping with a ring, the play with a play.
+        free = ([0, 1] if ring else []) + ([2] if play else [])
         best = (math.inf, np.zeros(3), 0)
         for shift in range(_LONGEST_SHIFT + 1):
-            starts = [np.zeros(3)] if not (ring or play) else [
-                np.array([math.log(frequency), 0.15, 0.4]) for frequency in (
-                    (1.0, 2.0, 4.0) if ring else (1.0,))]
-            for start in starts:
-                fitted = (minimize(left, start, args=(shift, ring, play), method='Nelder-Mead')
-                          if ring or play else None)
-                cost = left(start, shift, ring, play) if fitted is None else float(fitted.fun)
-                if cost < best[0]:
-                    best = (cost, start if fitted is None else fitted.x, shift)
+            for frequency in (1.0, 2.0, 4.0) if ring else (1.0,):
+                x = np.array([math.log(frequency), 0.15, 0.4 * play])
+
+                def cost(values, x=x, shift=shift):
+                    x[free] = values
+                    return left(x, shift, ring, play)
+                if free:
+                    fitted = minimize(cost, x[free], method='Nelder-Mead')
+                    x[free] = fitted.x
+                if cost(x[free]) < best[0]:
+                    best = (cost(x[free]), x.copy(), shift)
         cost, x, shift = best
         found = [f'{shift} samples later']
         if ring:
-            found.append(f'{math.exp(x[0]):.3g} Hz, damping {x[1]:.2g}')
+            found.append(f'{math.exp(x[0]):.3g} Hz, damping '
+                         f'{min(max(float(x[1]), 0.01), 0.95):.2g}')
         if play:
             found.append(f'play {max(x[2], 0.0):.3g} deg')
         words.append(f'{label} {cost:.3f} ({100 * (1.0 - cost / raw):.0f} % less; '
@@ -182,8 +187,6 @@ def _series_bound(made):
 _AWAY = 2.0
 #: Longest extra dead time the bound tries, samples.
 _LONGEST_SHIFT = 8
-#: A "frequency" below which the bound puts no mode in series (the runs' raw difference).
-_NO_MODE = 1e-3
 
 
 def main():
