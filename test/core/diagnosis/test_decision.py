@@ -3,8 +3,10 @@
 from dataclasses import replace
 import math
 
-from hydro_sdp.core.diagnosis.decision import carry_over, explained_away, on_common_samples
-from hydro_sdp.core.diagnosis.residuals import runs_of
+from hydro_sdp.core.diagnosis.decision import (
+    carry_over, explained_away, judge, on_common_samples, RISE)
+from hydro_sdp.core.diagnosis.naming import Naming
+from hydro_sdp.core.diagnosis.residuals import runs_of, velocity_residuals
 from hydro_sdp.core.diagnosis.results import Candidate
 from hydro_sdp.core.identification.held_out import WindowErrors
 from hydro_sdp.core.model.effects import ValveLag
@@ -41,6 +43,36 @@ def test_accepted_candidates_are_compared_over_the_same_samples():
     assert pairwise[0] != pytest.approx(before)
     # Candidates not accepted keep what their own judgement found.
     assert rejected is judged[2][0]
+
+
+class _Errors(WindowErrors):
+    """Held-out errors as given: windows mended, whole runs worse."""
+
+    def __init__(self, runs, windows, whole):
+        super().__init__(runs)
+        self.windows, self.whole = windows, whole
+
+    def compare(self, models, seconds=2.0):
+        return list(self.windows if seconds is not None else self.whole)
+
+
+def test_a_word_that_mends_windows_but_drifts_over_whole_runs_is_refused():
+    # The right delay, so that the residual test passes: what decides is the rise.
+    rng = np.random.default_rng(6)
+    truth, nominal = hide('time_delay', rng, 'volt')
+    model, right = JointModel.from_mapping(nominal), JointModel.from_mapping(truth.mapping)
+    runs = runs_of(records_of(truth, 'random', rng, seconds=20.0, count=1), 0.5)
+    base = velocity_residuals(model, runs)
+    naming = Naming(None, {'since_change': 1.0})
+    trial = (Candidate('time_delay', True, evidence='fitted'), right)
+    kept = judge(trial, model, runs, base, 50, naming, 'since_change',
+                 _Errors(runs, (1.0, 0.5), (1.0, 1.0 + 0.9 * RISE)))
+    assert kept.accepted and kept.held_out == pytest.approx(0.5)
+    refused = judge(trial, model, runs, base, 50, naming, 'since_change',
+                    _Errors(runs, (1.0, 0.5), (1.0, 1.0 + 1.1 * RISE)))
+    assert not refused.accepted and refused.significant
+    assert refused.evidence.startswith('it lowers the windowed error by 50 % but raises the '
+                                       'held-out error over whole runs from 1 to 1.27 deg')
 
 
 def test_a_candidate_worse_on_the_runs_the_model_came_from_is_refused():
