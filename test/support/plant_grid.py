@@ -167,7 +167,7 @@ QUICK_DUTIES = {'identify': (50.0, 75.0, 100.0), 'estimate': (55.0, 100.0),
                 'validate': (70.0,)}
 
 
-#: The parts of a case's runs, whose random levels are drawn apart.
+#: The parts of a case's runs, each drawn apart.
 PARTS = ('identify', 'estimate', 'validate')
 
 
@@ -180,8 +180,8 @@ def _runs(machine: Machine, program: str, seed: int, part: str, *, seconds: floa
     """
     if program == 'stroke':
         duties = (DUTIES if seconds >= 40.0 else QUICK_DUTIES)[part]
-        # The parts' strokes differ by their duties (their noise is drawn alike).
-        return strokes(machine, duties, 1000 * seed + 100 * len(part), pressure=pressure)
+        return strokes(machine, duties, 1000 * seed + 100 * PARTS.index(part),
+                       pressure=pressure)
     count = {'identify': 3, 'estimate': 2, 'validate': 1}[part]
     return [levels(machine, seconds, 1000 * seed + 100 * PARTS.index(part) + k,
                    pressure=pressure) for k in range(count)]

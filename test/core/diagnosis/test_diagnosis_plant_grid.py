@@ -11,22 +11,23 @@ def test_every_word_is_hidden_or_left_out_with_its_reason():
     assert all(len(why) > 40 for why in LEFT_OUT.values())
 
 
-#: A subset of the plant grid (bench/bench_diagnosis_plant_grid.py runs it whole): full
-#: strokes of the arm in signed percent, fewer than the bench's, one identification
-#: shared by the cases (identified() keeps it).
-CASES = ['dead_zone', 'none']
-
-
-@pytest.mark.parametrize('word', CASES)
-def test_a_plant_case_is_named_and_its_gap_halves(word):
-    case = make_case(word, 'stroke', 'arm', 'signed_percent', 0, seconds=20.0)
+def test_a_dead_zone_is_named_on_quick_strokes_and_its_gap_halves():
+    # A subset of the plant grid (bench/bench_diagnosis_plant_grid.py runs it whole): full
+    # strokes of the arm in signed percent, fewer than the bench's.
+    case = make_case('dead_zone', 'stroke', 'arm', 'signed_percent', 0, seconds=20.0)
     assert case is not None
     result = run_case(case)
-    assert result.named == word, result
-    if word == 'none':
-        assert result.mae_after == result.mae_before
-    else:
-        assert result.mae_after <= 0.5 * result.mae_before
+    assert result.named == 'dead_zone', result
+    assert result.mae_after <= 0.5 * result.mae_before
+
+
+def test_the_arms_correct_model_is_named_none():
+    # On the bench's strokes (identified from four duties, 45-100 %). From the quick three
+    # (50, 75 and 100 %) the model follows the noise: with one draw it was named none, with
+    # another dead_zone (2.88 -> 1.12 deg on the 70 % stroke).
+    case = make_case('none', 'stroke', 'arm', 'signed_percent', 0)
+    result = run_case(case)
+    assert result.named == 'none' and result.mae_after == result.mae_before, result
 
 
 #: Full-stroke cases the grid once got wrong, and why:
