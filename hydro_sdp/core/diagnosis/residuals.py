@@ -126,6 +126,8 @@ def free_runs(runs: Sequence[Run], model: JointModel, max_delay: int, rest: floa
         return []
     extremes = (min(float(np.min(r.record.y)) for r in runs),
                 max(float(np.max(r.record.y)) for r in runs))
+    # A command heads away from the stop on the far side of the middle of the angles seen.
+    middle = 0.5 * (extremes[0] + extremes[1])
     out = []
     for run in runs:
         record = run.record
@@ -145,7 +147,6 @@ def free_runs(runs: Sequence[Run], model: JointModel, max_delay: int, rest: floa
         # longest delay considered, whether and when the joint leaves is the timing words'
         # evidence (a model's shorter dead time would otherwise leave only the longer one's
         # samples to judge).
-        middle = 0.5 * (extremes[0] + extremes[1])
         changes = np.flatnonzero(record.v[1:] != record.v[:-1]) + 1
         away = model.rate(record.v[changes]) * np.where(record.y[changes] > middle, -1.0, 1.0)
         for change in changes[(away > 0.0) & np.isin(code[changes], (1, 3))]:
