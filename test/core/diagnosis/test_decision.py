@@ -8,7 +8,7 @@ from hydro_sdp.core.diagnosis.decision import (
 from hydro_sdp.core.diagnosis.naming import Naming
 from hydro_sdp.core.diagnosis.residuals import runs_of, velocity_residuals
 from hydro_sdp.core.diagnosis.results import Candidate
-from hydro_sdp.core.identification.held_out import WindowErrors
+from hydro_sdp.core.identification.held_out import WINDOW_SECONDS, WindowErrors
 from hydro_sdp.core.model.effects import ValveLag
 from hydro_sdp.core.model.joint_model import JointModel
 import numpy as np
@@ -52,7 +52,7 @@ class _Errors(WindowErrors):
         super().__init__(runs)
         self.windows, self.whole = windows, whole
 
-    def compare(self, models, seconds=2.0):
+    def compare(self, models, seconds=WINDOW_SECONDS):
         return list(self.windows if seconds is not None else self.whole)
 
 
