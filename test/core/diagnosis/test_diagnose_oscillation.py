@@ -5,6 +5,7 @@ from dataclasses import replace
 from hydro_sdp.core.diagnosis.context import Context
 from hydro_sdp.core.diagnosis.detectors import detector
 from hydro_sdp.core.diagnosis.residuals import runs_of
+from hydro_sdp.core.model.effects import DirectionDependentDelay
 from hydro_sdp.core.synthetic.physics.hydraulics import Actuator
 from hydro_sdp.core.synthetic.physics.oil_column import OilColumn
 from hydro_sdp.io.documents import shipped_config
@@ -24,6 +25,26 @@ def test_a_ringing_joint_of_the_generator_is_named_and_its_mode_found():
     result = run_case(case, max_iterations=2)
     assert result.named == 'oscillation' and result.mae_after <= 0.5 * result.mae_before, \
         result
+
+
+@pytest.mark.parametrize('kind, units', [('stroke', 'volt'), ('random', 'percent')])
+def test_split_dead_times_that_took_the_links_lag_are_shortened_together(kind, units):
+    # A direction-dependent delay identified on ringing data holds the link's lag in both
+    # directions: the mode is fitted with both shortened by the same whole samples (kept
+    # as they were, the fit moved 1-10 % off the frequency).
+    case = make_case('oscillation', kind, units, 0, seconds=30.0)
+    true_delay = case.model.delay
+    frequency, damping = case.truth.joint.mode
+    split = case.model.with_effect(DirectionDependentDelay(true_delay + 0.03, true_delay + 0.03))
+    candidate, augmented = detector('oscillation').fit(
+        Context(split, runs_of(list(case.estimation), 0.5), 50))
+    assert augmented is not None and candidate.significant
+    found = candidate.parameters
+    assert abs(found['frequency'] / frequency - 1.0) < 0.03
+    assert abs(found['damping'] - damping) < 0.01
+    assert found['positive'] == found['negative']
+    assert true_delay - 0.005 < found['positive'] < true_delay + 0.015
+    assert augmented.effect(DirectionDependentDelay.name).positive == found['positive']
 
 
 def test_on_the_physics_plant_the_fitted_mode_is_the_oil_columns():

@@ -17,6 +17,7 @@ from hydro_sdp.core.model.effects import (
 from hydro_sdp.core.model.joint_model import JointModel
 from hydro_sdp.core.model.sample_period import whole_samples_seconds
 from hydro_sdp.core.model.simulation import OneStep
+from hydro_sdp.core.model.timing import delay_samples, SamplePeriod
 import numpy as np
 from scipy.ndimage import median_filter
 from scipy.optimize import minimize
@@ -96,25 +97,42 @@ class OscillationDetector(EffectDetector):
             return Candidate(self.word, False, evidence='the sample period is too long to '
                              'show a mode'), None
         model, dt = context.model, context.dt
+        split = model.effect(DirectionDependentDelay.name)
+        delays = {'delay': model.delay}
+        if isinstance(split, DirectionDependentDelay):
+            delays = {'positive': split.positive, 'negative': split.negative}
+        period = SamplePeriod(dt)
+        samples = {key: delay_samples(value, period) for key, value in delays.items()}
 
-        def with_mode(delay: int, x: FloatArray) -> JointModel:
+        def shortened(by: int) -> JointModel:
+            """Return the model with every dead time it has ``by`` samples shorter."""
+            if not by:
+                return model
+            if isinstance(split, DirectionDependentDelay):
+                # The split dead times replace the model's own; kept in their place.
+                split_now = DirectionDependentDelay(
+                    whole_samples_seconds(samples['positive'] - by, dt),
+                    whole_samples_seconds(samples['negative'] - by, dt))
+                return replace(model, effects=tuple(
+                    split_now if effect is split else effect for effect in model.effects))
+            return replace(model, delay=whole_samples_seconds(samples['delay'] - by, dt))
+
+        def with_mode(by: int, x: FloatArray) -> JointModel:
             frequency = min(max(math.exp(float(x[0])), low), high)
             damping = min(max(float(x[1]), MODE_DAMPING[0]), MODE_DAMPING[1])
-            timed = model if delay == current else replace(
-                model, delay=whole_samples_seconds(delay, dt))
-            return timed.with_effect(Oscillation(frequency, damping))
+            return shortened(by).with_effect(Oscillation(frequency, damping))
 
         # Built once per dead time: the scan of the dead times and the polish there share it.
         @cache
-        def cost_at(delay: int) -> Callable[[FloatArray], float]:
+        def cost_at(by: int) -> Callable[[FloatArray], float]:
             # The model's increments without the mode are the same for every mode tried.
-            timed = with_mode(delay, np.array([0.0, 0.5])).without_effect(Oscillation.name)
+            timed = shortened(by).without_effect(Oscillation.name)
             steps = [(OneStep(timed, run.record.v, run.record.y, dt, start=run.start,
                               v_before=float(run.record.v[0]), exogenous=run.exogenous),
                       np.diff(run.record.y[run.start:]), run.free) for run in context.runs]
 
             def cost(x: FloatArray) -> float:
-                mode = with_mode(delay, x).effect(Oscillation.name)
+                mode = with_mode(by, x).effect(Oscillation.name)
                 assert isinstance(mode, Oscillation)
                 residuals = [measured - step.increments(mode) if free is None else
                              np.where(free, measured - step.increments(mode), 0.0)
@@ -122,8 +140,8 @@ class OscillationDetector(EffectDetector):
                 return float(block_sums(residuals, context.block).sum())
             return cost
 
-        def fit_at(delay: int, start: FloatArray | None = None) -> tuple[float, FloatArray]:
-            cost = cost_at(delay)
+        def fit_at(by: int, start: FloatArray | None = None) -> tuple[float, FloatArray]:
+            cost = cost_at(by)
             seeds = [start] if start is not None else _seeds(context, cost, low, high)
             best: tuple[float, FloatArray] = (math.inf, np.zeros(2))
             for x0 in seeds:
@@ -135,24 +153,25 @@ class OscillationDetector(EffectDetector):
                     best = (float(result.fun), np.asarray(result.x, dtype=np.float64))
             return best
 
-        current = model.delay_samples(dt)
-        fits = {current: fit_at(current)}
-        split = model.effect(DirectionDependentDelay.name) is not None
-        shortest = current if split else max(1, current - int(round(SHORTER / dt)))
-        delay = current
+        fits = {0: fit_at(0)}
+        # The dead times that are the model's own (the split ones when it has them) are
+        # shortened together: the mode's lag is the same in both directions.
+        longest = max(0, min(int(round(SHORTER / dt)), min(samples.values()) - 1))
+        by = 0
         # The dead time and the mode trade against each other (the mode lags the actuator):
         # in turns, the dead time that fits best at the mode found, then the mode polished
         # at that dead time, until the dead time stays.
-        for _ in range(_TURNS if shortest < current else 0):
-            mode_found = fits[delay][1]
-            best = min(range(shortest, current + 1),
+        for _ in range(_TURNS if longest else 0):
+            mode_found = fits[by][1]
+            # Of equal fits, the shortest dead time.
+            best = min(range(longest, -1, -1),
                        key=lambda tried: cost_at(tried)(mode_found))
             if best in fits:
                 break
             fits[best] = fit_at(best, mode_found)
-            delay = best
-        delay = min(fits, key=lambda k: fits[k][0])
-        augmented = with_mode(delay, fits[delay][1])
+            by = best
+        by = min(fits, key=lambda k: fits[k][0])
+        augmented = with_mode(by, fits[by][1])
         mode = augmented.effect(Oscillation.name)
         assert isinstance(mode, Oscillation)
         if mode.damping > RINGING:
@@ -162,10 +181,17 @@ class OscillationDetector(EffectDetector):
         parameters: dict[str, object] = {'frequency': mode.frequency, 'damping': mode.damping}
         evidence = (f'after each change of speed the angle rings at {mode.frequency:.3g} Hz '
                     f'with a damping ratio of {mode.damping:.2g}')
-        if delay != current:
-            parameters['delay'] = augmented.delay
-            evidence += (f', the dead time {augmented.delay:g} s, not {model.delay:g} s (the '
-                         "link's lag was taken for delay)")
+        if by:
+            now = augmented.effect(DirectionDependentDelay.name)
+            if isinstance(now, DirectionDependentDelay) and isinstance(
+                    split, DirectionDependentDelay):
+                parameters.update(positive=now.positive, negative=now.negative)
+                evidence += (f', the dead times {now.positive:g} and {now.negative:g} s, not '
+                             f'{split.positive:g} and {split.negative:g} s')
+            else:
+                parameters['delay'] = augmented.delay
+                evidence += f', the dead time {augmented.delay:g} s, not {model.delay:g} s'
+            evidence += " (the link's lag was taken for delay)"
         return context.score(self.word, augmented, parameters, evidence)
 
 
