@@ -5,7 +5,9 @@ Two kinds of truth, neither an SDP model: the measured-table joint of
 :mod:`support.table_valve_joint` (signed percent, or percent resting at 50) and
 the physics plant's arm presets (``config/physics_arm.yaml``, signed percent;
 ``config/physics_arm_pwm.yaml``, a PWM resting at 50 with a 0.28 s dead time
-and a 0.15 s spool lag). Each is logged as a machine's user would: one
+and a 0.15 s spool lag), and the boom presets (``config/physics_boom.yaml`` and
+the same boom ringing on its oil column, ``config/physics_boom_compressible.yaml``,
+signed percent). Each is logged as a machine's user would: one
 constant duty driven from stop to stop and back, identified on 40, 60, 80 and
 100 % and validated on 50, 70 and 90 %.
 
@@ -40,6 +42,8 @@ ESTIMATION = (40, 60, 80, 100)
 VALIDATION = (50, 70, 90)
 #: Set-points of the loop on the true joint, degrees: steps of 20-25 deg in the stroke.
 LEVELS = (-20.0, 5.0, 25.0, 0.0, -25.0, -5.0, 15.0)
+#: The same steps in the boom's stroke (-20 to 35 deg).
+BOOM_LEVELS = (-10.0, 10.0, 30.0, 5.0, -15.0, 0.0, 20.0)
 HOLD = 12.0
 #: Settling bound of the loop on the true joint, s.
 SETTLE = 8.0
@@ -68,6 +72,8 @@ class Case:
     plant: Callable[[float], object]
     #: The true valve's dead-zone edges, valve units.
     edges: tuple[float, float]
+    #: Set-points of the loop on the true joint, degrees.
+    levels: tuple[float, ...] = LEVELS
 
 
 def _table_case(name: str, joint: TableJoint) -> Case:
@@ -83,7 +89,7 @@ def _table_case(name: str, joint: TableJoint) -> Case:
                 lambda y0: TableJointSimulator(joint, DT, y0, seed=5), (edges[0], edges[1]))
 
 
-def _physics_case(name: str, preset: str) -> Case:
+def _physics_case(name: str, preset: str, levels: tuple[float, ...] = LEVELS) -> Case:
     from hydro_sdp.io.documents import shipped_config
     from hydro_sdp.io.plant_files import load_machine
     machine = load_machine(shipped_config(preset))
@@ -103,7 +109,7 @@ def _physics_case(name: str, preset: str) -> Case:
     edges = (valve.neutral - valve.overlap * (valve.neutral - valve.limits[0]),
              valve.neutral + valve.overlap * (valve.limits[1] - valve.neutral))
     return Case(name, (float(valve.limits[0]), float(valve.limits[1])), write,
-                lambda y0: PhysicsJoint(machine, y0), edges)
+                lambda y0: PhysicsJoint(machine, y0), edges, levels)
 
 
 def cases() -> dict[str, Case]:
@@ -115,13 +121,19 @@ def cases() -> dict[str, Case]:
         'physics_arm': _physics_case('physics arm, signed %', 'physics_arm.yaml'),
         'physics_pwm': _physics_case('physics arm, PWM resting at 50, 0.28 s + 0.15 s',
                                      'physics_arm_pwm.yaml'),
+        'physics_boom': _physics_case('physics boom, signed %', 'physics_boom.yaml',
+                                      BOOM_LEVELS),
+        # The boom ringing on its oil column at about 2 Hz, as the LUCIE boom did.
+        'physics_boom_ringing': _physics_case(
+            'physics boom on its oil column, signed %', 'physics_boom_compressible.yaml',
+            BOOM_LEVELS),
     }
 
 
 def truth_loop(case: Case, controller_file: str | Path) -> list[StepResult]:
-    """Run a controller file on the true joint over :data:`LEVELS`; judge every step."""
+    """Run a controller file on the true joint over the case's levels; judge every step."""
     controller = FileController.read(controller_file)
-    run = run_loop(controller, case.plant(LEVELS[0]), DT, LEVELS, HOLD)
+    run = run_loop(controller, case.plant(case.levels[0]), DT, case.levels, HOLD)
     return judge(run, rest=controller.rest, edges=case.edges)
 
 
