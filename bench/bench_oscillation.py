@@ -1,7 +1,10 @@
 """
 Benchmark ``oscillation`` on the same runs with the link's mode and without it.
 
-Run with ``python bench/bench_oscillation.py [seeds] [programs] [sources] [spool_lag]``
+Run with ``python bench/bench_oscillation.py [seeds] [programs] [sources] [spool_lag]``,
+or ``python bench/bench_oscillation.py figure PATH`` for the figure of the preset boom
+with its oil column and without, starts and stops without noise
+(``docs/figures/oil_column.png``)
 (``programs``: comma-separated, default ``random,stroke``, and ``short`` for the plant:
 20 s random levels; ``sources``: ``generator``, ``plant`` or both, comma-separated, the
 default; ``spool_lag``: the plant's valve with the preset's dead time and this spool lag, s,
@@ -15,8 +18,9 @@ identified on settled runs. Prints what each was named, the MAE before and after
 gap above the floor (the same model's MAE on the settled runs), what the mode's
 candidate found (frequency, damping, share of the held-out velocity residual and of the
 windowed angle error it removes), and how far the ringing runs' angles are from the
-settled ones, against what a dead time, a mode and a lost motion at reversals in series
-with the settled angles leave of it at best (``_series_bound``).
+settled ones, against what a dead time, a mode, a lost motion at reversals and a speed
+factor per direction in series with the settled angles leave of it at best
+(``_series_bound``).
 Counts at the end (targets: ``oscillation`` with the gap above the floor halved on the
 ringing runs, ``none`` on the settled ones).
 
@@ -111,9 +115,11 @@ def _series_bound(made):
 
     The settled runs' own angles (same commands, draws and noise) are put through a dead
     time, a lost motion at reversals (a play on the actuator: the oil decompressed and
-    compressed again before the link turns) and a mode, in series, each fitted to the
-    ringing runs' angles (mean absolute error, while the commands agree, ``_AWAY`` deg or
-    more from the run's extremes: at a stop a model's mode and a joint's link part ways).
+    compressed again before the link turns), a mode and a speed factor per direction (the
+    oil compressed or released as the load pressure changes along the stroke) in series,
+    each fitted to the ringing runs' angles (mean absolute error, while the commands agree,
+    ``_AWAY`` deg or more from the run's extremes: at a stop a model's mode and a joint's
+    link part ways).
     What the best fit leaves, those forms added to a model as good as the settled joint
     itself would not remove.
     """
@@ -128,7 +134,7 @@ def _series_bound(made):
             away = (angles > angles.min() + _AWAY) & (angles < angles.max() - _AWAY)
             pairs.append((angles, ringing.y[:n], away, float(np.median(np.diff(settled.t)))))
 
-    def left(x, shift, ring, play):
+    def left(x, shift, ring, play, scaled=False):
         total = count = 0.0
         frequency, damping = math.exp(x[0]), min(max(float(x[1]), 0.01), 0.95)
         half = 0.5 * max(float(x[2]), 0.0) if play else 0.0
@@ -136,6 +142,11 @@ def _series_bound(made):
             if ring and frequency >= 0.5 / dt:
                 return math.inf
             moved = np.r_[np.full(shift, angles[0]), angles[:angles.size - shift]]
+            if scaled:
+                # Each direction's speed scaled by its own factor (x[3], x[4]: percent).
+                steps = np.diff(moved)
+                steps = steps * (1.0 + 0.01 * np.where(steps > 0.0, x[3], x[4]))
+                moved = np.r_[moved[0], moved[0] + np.cumsum(steps)]
             if half:
                 moved = moved + bounded_cumsum(0.0, -np.diff(moved), -half, half)
             if ring:
@@ -150,22 +161,24 @@ def _series_bound(made):
     compared = sum(int(away.sum()) for _, _, away, _ in pairs)
     whole = sum(min(r.y.size, s.y.size) for part in (0, 1)
                 for r, s in zip(made[True][part], made[False][part]))
-    raw = left(np.zeros(3), 0, False, False)
+    raw = left(np.zeros(5), 0, False, False)
     words = [f'over {100 * compared / whole:.0f} % of the samples the runs part by {raw:.3f} '
              'deg; in series with the settled angles']
-    for ring, play, label in ((False, False, 'a dead time leaves'),
-                              (True, False, 'with a mode'), (False, True, 'with a play'),
-                              (True, True, 'with both')):
-        # The fit moves the mode's frequency and damping with a ring, the play with a play.
-        free = ([0, 1] if ring else []) + ([2] if play else [])
-        best = (math.inf, np.zeros(3), 0)
+    for ring, play, scaled, label in (
+            (False, False, False, 'a dead time leaves'), (True, False, False, 'with a mode'),
+            (False, True, False, 'with a play'), (True, True, False, 'with both'),
+            (False, True, True, 'with the play and a speed factor per direction')):
+        # The fit moves the mode's frequency and damping with a ring, the play with a play,
+        # the two factors with the speeds scaled.
+        free = ([0, 1] if ring else []) + ([2] if play else []) + ([3, 4] if scaled else [])
+        best = (math.inf, np.zeros(5), 0)
         for shift in range(_LONGEST_SHIFT + 1):
             for frequency in (1.0, 2.0, 4.0) if ring else (1.0,):
-                x = np.array([math.log(frequency), 0.15, 0.4 * play])
+                x = np.array([math.log(frequency), 0.15, 0.4 * play, 0.0, 0.0])
 
-                def cost(values, x=x, shift=shift):
+                def cost(values, x=x, shift=shift, ring=ring, play=play, scaled=scaled):
                     x[free] = values
-                    return left(x, shift, ring, play)
+                    return left(x, shift, ring, play, scaled)
                 if free:
                     fitted = minimize(cost, x[free], method='Nelder-Mead')
                     x[free] = fitted.x
@@ -178,6 +191,8 @@ def _series_bound(made):
                          f'{min(max(float(x[1]), 0.01), 0.95):.2g}')
         if play:
             found.append(f'play {max(x[2], 0.0):.3g} deg')
+        if scaled:
+            found.append(f'speeds {x[3]:+.2g} % and {x[4]:+.2g} % (positive, negative)')
         words.append(f'{label} {cost:.3f} ({100 * (1.0 - cost / raw):.0f} % less; '
                      + ', '.join(found) + ')')
     return ', '.join(words[:2]) + '; ' + '; '.join(words[2:])
@@ -189,8 +204,39 @@ _AWAY = 2.0
 _LONGEST_SHIFT = 8
 
 
+def figure(path):
+    """Draw the preset boom's speed and angle with its oil column and settled, and save it."""
+    from hydro_sdp.core.synthetic.physics.machine import simulate_plant
+    from hydro_sdp.plots.figures import MEASURED, MODEL, new_figure, save_figure
+    machine = load_machine(shipped_config('physics_boom_compressible.yaml'))
+    joint = replace(machine.joints[0], noise=0.0)
+    ringing = replace(machine, joints=(joint,))
+    settled = replace(machine, joints=(replace(joint, compressibility=None),))
+    dt = 0.005
+    plot, axes = new_figure(2, height=2.4, width=10.0)
+    commands = np.r_[np.zeros(200), np.full(600, 60.0), np.zeros(600), np.full(500, -100.0),
+                     np.zeros(500)][:, None]
+    angles = {ring: simulate_plant(m, commands, dt).angles[:, 0]
+              for ring, m in ((True, ringing), (False, settled))}
+    t = np.arange(commands.shape[0]) * dt
+    for ring, colour, label in ((False, MODEL, 'settled (no oil column)'),
+                                (True, MEASURED, 'on its oil column (2 Hz)')):
+        axes[0].plot(t, np.gradient(angles[ring], dt), color=colour, label=label)
+    axes[0].set_ylabel('speed, deg/s')
+    axes[0].legend(loc='lower left')
+    axes[0].set_title('The boom of physics_boom_compressible.yaml: 60 % from rest, held '
+                      'still, then -100 % into its lower stop')
+    axes[1].plot(t, angles[True] - angles[False], color=MEASURED)
+    axes[1].set_ylabel('angle apart, deg')
+    axes[1].set_xlabel('time, s')
+    print(f'wrote {save_figure(plot, path)}')
+
+
 def main():
     """Run both benches and print the counts."""
+    if len(sys.argv) > 1 and sys.argv[1] == 'figure':
+        figure(sys.argv[2] if len(sys.argv) > 2 else 'oil_column.png')
+        return
     seeds = int(sys.argv[1]) if len(sys.argv) > 1 else 2
     programs = sys.argv[2].split(',') if len(sys.argv) > 2 else ['random', 'stroke']
     counts = {key: Counter() for key in ('generator ringing', 'generator settled',
