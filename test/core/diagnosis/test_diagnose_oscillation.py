@@ -4,6 +4,7 @@ from dataclasses import replace
 
 from hydro_sdp.core.diagnosis.context import Context
 from hydro_sdp.core.diagnosis.detectors import detector
+from hydro_sdp.core.diagnosis.detectors.dynamics import LINE, spectral_line
 from hydro_sdp.core.diagnosis.residuals import runs_of
 from hydro_sdp.core.model.effects import DirectionDependentDelay
 from hydro_sdp.core.synthetic.physics.hydraulics import Actuator
@@ -64,3 +65,23 @@ def test_on_the_physics_plant_the_fitted_mode_is_the_oil_columns():
     assert 0.97 * min(formula) < candidate.parameters['frequency'] < 1.03 * max(formula)
     assert 0.09 < candidate.parameters['damping'] < 0.3
     assert candidate.significant and candidate.gain > 0.2 and augmented is not None
+
+
+def test_a_ring_in_the_residual_stands_as_a_line_and_noise_does_not():
+    # 40 s of white residual, and the same with a 2 Hz ring dying out after every
+    # change, 3 to 5 s apart (as a joint's starts and stops).
+    dt, rng = 0.01, np.random.default_rng(3)
+    noise = [rng.normal(0.0, 0.02, 4000) for _ in range(2)]
+    t = np.arange(300) * dt
+    burst = 0.1 * np.exp(-0.12 * 2 * np.pi * 2.0 * t) * np.sin(2 * np.pi * 2.0 * t)
+    ringing = []
+    for residual in noise:
+        residual = residual.copy()
+        for start in np.cumsum(rng.uniform(300, 500, 12)).astype(int):
+            if start + burst.size <= residual.size:
+                residual[start:start + burst.size] += burst * rng.choice([-1.0, 1.0])
+        ringing.append(residual)
+    frequency, times = spectral_line(ringing, dt, 15.0)
+    assert abs(frequency - 2.0) <= 0.125 and times >= LINE
+    assert spectral_line(noise, dt, 15.0)[1] < 0.6 * LINE
+    assert np.isnan(spectral_line([noise[0][:500]], dt, 15.0)[1])
