@@ -42,7 +42,7 @@ ESTIMATION = (40, 60, 80, 100)
 VALIDATION = (50, 70, 90)
 #: Set-points of the loop on the true joint, degrees: steps of 20-25 deg in the stroke.
 LEVELS = (-20.0, 5.0, 25.0, 0.0, -25.0, -5.0, 15.0)
-#: The same steps in the boom's stroke (-20 to 35 deg).
+#: Steps of 15-25 deg in the boom's stroke (-20 to 35 deg).
 BOOM_LEVELS = (-10.0, 10.0, 30.0, 5.0, -15.0, 0.0, 20.0)
 HOLD = 12.0
 #: Settling bound of the loop on the true joint, s.

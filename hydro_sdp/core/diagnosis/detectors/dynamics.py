@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import replace
 from functools import cache
 import math
-from typing import Callable
+from typing import Callable, Sequence
 
 from hydro_sdp.core.arrays import FloatArray
 from hydro_sdp.core.diagnosis.context import Context
@@ -79,7 +79,7 @@ SHORTER = 0.3
 _TURNS = 3
 #: A line of the residual's spectrum this many times over its running median, at
 #: :data:`LINE_LOWEST` Hz or more, is reported with the mode's candidate, fitted or not
-#: (methods 8.2: on 232 grid cases with no ring, at most 2.7 times above 1 Hz).
+#: (methods 8.2: on 216 grid cases with no ring, at most 2.7 times from 1 Hz).
 LINE = 4.0
 #: Lowest frequency a line is reported at, Hz: below, a model's slow misses stand as high.
 LINE_LOWEST = 1.0
@@ -223,7 +223,7 @@ def _seeds(context: Context, cost: Callable[[FloatArray], float], low: float,
     return [np.array([math.log(f), d]) for f, d in seeds]
 
 
-def _spectrum(residuals: list[FloatArray], dt: float
+def _spectrum(residuals: Sequence[FloatArray], dt: float
               ) -> tuple[FloatArray, FloatArray, FloatArray] | None:
     """
     Return the residuals' averaged periodogram: frequencies, power and its running median.
@@ -261,7 +261,7 @@ def _spectral_peaks(context: Context, low: float, high: float) -> list[float]:
     return list(dict.fromkeys(peaks))
 
 
-def spectral_line(residuals: list[FloatArray], dt: float, high: float) -> tuple[float, float]:
+def spectral_line(residuals: Sequence[FloatArray], dt: float, high: float) -> tuple[float, float]:
     """
     Return the residuals' strongest line over its neighbours: frequency (Hz) and how many times.
 
