@@ -48,6 +48,16 @@ def test_split_dead_times_that_took_the_links_lag_are_shortened_together(kind, u
     assert augmented.effect(DirectionDependentDelay.name).positive == found['positive']
 
 
+def test_a_lag_taken_for_a_damped_mode_is_shown_as_looked_for_and_not_found():
+    # A missing valve lag fits a mode damped at 0.6: no ring and no line, and the report
+    # lists the word with its evidence (it was tried on these runs).
+    case = make_case('valve_lag', 'random', 'volt', 0, seconds=30.0)
+    candidate, augmented = detector('oscillation').fit(
+        Context(case.model, runs_of(list(case.estimation), 0.5), 50))
+    assert augmented is None and candidate.applicable and not candidate.accepted
+    assert 'does not ring' in candidate.evidence and 'spectrum' not in candidate.evidence
+
+
 def test_on_the_physics_plant_the_fitted_mode_is_the_oil_columns():
     # The model of the boom identified with its pressures settled at every sample, held
     # against random levels of the same boom on its soft oil column (1.95-2.17 Hz over the

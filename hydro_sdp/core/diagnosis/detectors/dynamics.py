@@ -182,7 +182,8 @@ class OscillationDetector(EffectDetector):
         assert isinstance(mode, Oscillation)
         line = _line(context, high)
         if mode.damping > RINGING:
-            return Candidate(self.word, False, evidence=(
+            # Looked for and not found: a finding of the runs, shown with the others.
+            return Candidate(self.word, True, evidence=(
                 f'the best mode ({mode.frequency:.3g} Hz) is damped at {mode.damping:.2g}, '
                 f'above {RINGING:g}: it does not ring but stands in for a lag or a delay'
                 + ('' if line is None else f'; yet {line}: the joint may ring there in a '
