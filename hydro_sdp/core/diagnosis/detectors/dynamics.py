@@ -103,6 +103,8 @@ class OscillationDetector(EffectDetector):
             return Candidate(self.word, False, evidence='the sample period is too long to '
                              'show a mode'), None
         model, dt = context.model, context.dt
+        # The residual's spectrum seeds the fit and shows a line the fit may not follow.
+        spectrum = _spectrum(context.base, dt)
         split = model.effect(DirectionDependentDelay.name)
         delays = {'delay': model.delay}
         if isinstance(split, DirectionDependentDelay):
@@ -148,7 +150,7 @@ class OscillationDetector(EffectDetector):
 
         def fit_at(by: int, start: FloatArray | None = None) -> tuple[float, FloatArray]:
             cost = cost_at(by)
-            seeds = [start] if start is not None else _seeds(context, cost, low, high)
+            seeds = [start] if start is not None else _seeds(spectrum, dt, cost, low, high)
             best: tuple[float, FloatArray] = (math.inf, np.zeros(2))
             for x0 in seeds:
                 result = minimize(cost, x0, method='Nelder-Mead', options={
@@ -180,7 +182,7 @@ class OscillationDetector(EffectDetector):
         augmented = with_mode(by, fits[by][1])
         mode = augmented.effect(Oscillation.name)
         assert isinstance(mode, Oscillation)
-        line = _line(context, high)
+        line = _line(spectrum, high)
         if mode.damping > RINGING:
             # Looked for and not found: a finding of the runs, shown with the others.
             return Candidate(self.word, True, evidence=(
@@ -207,11 +209,11 @@ class OscillationDetector(EffectDetector):
         return context.score(self.word, augmented, parameters, evidence)
 
 
-def _seeds(context: Context, cost: Callable[[FloatArray], float], low: float,
-           high: float) -> list[FloatArray]:
+def _seeds(spectrum: Spectrum | None, dt: float, cost: Callable[[FloatArray], float],
+           low: float, high: float) -> list[FloatArray]:
     """Return the starts of the polish: the best grid points at frequencies apart."""
     starts = [(f, d) for f in np.geomspace(low, high, _GRID_FREQUENCIES) for d in _GRID_DAMPING]
-    starts += [(peak, d) for peak in _spectral_peaks(context, low, high)
+    starts += [(peak, d) for peak in _spectral_peaks(spectrum, dt, low, high)
                for d in _GRID_DAMPING]
     costs = [cost(np.array([math.log(f), d])) for f, d in starts]
     seeds: list[tuple[float, float]] = []
@@ -224,8 +226,11 @@ def _seeds(context: Context, cost: Callable[[FloatArray], float], low: float,
     return [np.array([math.log(f), d]) for f, d in seeds]
 
 
-def _spectrum(residuals: Sequence[FloatArray], dt: float
-              ) -> tuple[FloatArray, FloatArray, FloatArray] | None:
+#: An averaged periodogram: frequencies (Hz), power and its running median.
+Spectrum = tuple[FloatArray, FloatArray, FloatArray]
+
+
+def _spectrum(residuals: Sequence[FloatArray], dt: float) -> Spectrum | None:
     """
     Return the residuals' averaged periodogram: frequencies, power and its running median.
 
@@ -236,8 +241,8 @@ def _spectrum(residuals: Sequence[FloatArray], dt: float
     for residual in residuals:
         for first in range(0, residual.size - size + 1, size // 2):
             piece = residual[first:first + size]
-            spectrum = np.abs(np.fft.rfft((piece - piece.mean()) * np.hanning(size))) ** 2
-            power = spectrum if power is None else power + spectrum
+            periodogram = np.abs(np.fft.rfft((piece - piece.mean()) * np.hanning(size))) ** 2
+            power = periodogram if power is None else power + periodogram
     if power is None:
         return None
     # A model's slow misses raise the low frequencies, over which a lightly damped mode
@@ -247,16 +252,16 @@ def _spectrum(residuals: Sequence[FloatArray], dt: float
     return np.fft.rfftfreq(size, dt), power, background
 
 
-def _spectral_peaks(context: Context, low: float, high: float) -> list[float]:
+def _spectral_peaks(spectrum: Spectrum | None, dt: float, low: float,
+                    high: float) -> list[float]:
     """Return where the residual's spectrum stands highest over white noise's, and over its own."""
-    spectrum = _spectrum(context.base, context.dt)
     if spectrum is None:
         return []
     frequencies, power, background = spectrum
     band = np.flatnonzero((frequencies >= low) & (frequencies <= high))
     if not band.size:
         return []
-    white = np.abs(1.0 - np.exp(-2j * np.pi * frequencies * context.dt)) ** 2
+    white = np.abs(1.0 - np.exp(-2j * np.pi * frequencies * dt)) ** 2
     peaks = [float(frequencies[band[int(np.argmax(power[band] / floor[band]))]])
              for floor in (white, background)]
     return list(dict.fromkeys(peaks))
@@ -269,7 +274,11 @@ def spectral_line(residuals: Sequence[FloatArray], dt: float, high: float) -> tu
     Looked for from :data:`LINE_LOWEST` to ``high`` Hz; ``(nan, nan)`` when the runs are
     shorter than the periodogram's 8 s windows or the band is empty.
     """
-    spectrum = _spectrum(residuals, dt)
+    return _strongest_line(_spectrum(residuals, dt), high)
+
+
+def _strongest_line(spectrum: Spectrum | None, high: float) -> tuple[float, float]:
+    """Return :func:`spectral_line`'s answer from the spectrum."""
     if spectrum is None:
         return math.nan, math.nan
     frequencies, power, background = spectrum
@@ -281,9 +290,9 @@ def spectral_line(residuals: Sequence[FloatArray], dt: float, high: float) -> tu
     return float(frequencies[band[strongest]]), float(ratio[strongest])
 
 
-def _line(context: Context, high: float) -> str | None:
+def _line(spectrum: Spectrum | None, high: float) -> str | None:
     """Return the residual's line in words when it stands :data:`LINE` times over its own."""
-    frequency, times = spectral_line(context.base, context.dt, high)
+    frequency, times = _strongest_line(spectrum, high)
     if not times >= LINE:
         return None
     return (f"the residual's spectrum stands {times:.2g} times over its neighbours at "
