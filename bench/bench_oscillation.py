@@ -124,11 +124,13 @@ def _series_bound(made):
     itself would not remove.
     """
     pairs = []
+    whole = 0
     for part in (0, 1):
         for ringing, settled in zip(made[True][part], made[False][part]):
             # Strokes end at the stop and random levels turn back before it, the ringing
             # link a few samples apart: compared while the commands agree.
             n = min(ringing.y.size, settled.y.size)
+            whole += n
             n = int(np.argmax(np.r_[ringing.v[:n] != settled.v[:n], True]))
             angles = settled.y[:n]
             away = (angles > angles.min() + _AWAY) & (angles < angles.max() - _AWAY)
@@ -159,8 +161,6 @@ def _series_bound(made):
         return total / count
 
     compared = sum(int(away.sum()) for _, _, away, _ in pairs)
-    whole = sum(min(r.y.size, s.y.size) for part in (0, 1)
-                for r, s in zip(made[True][part], made[False][part]))
     raw = left(np.zeros(5), 0, False, False)
     words = [f'over {100 * compared / whole:.0f} % of the samples the runs part by {raw:.3f} '
              'deg; in series with the settled angles']
@@ -182,8 +182,9 @@ def _series_bound(made):
                 if free:
                     fitted = minimize(cost, x[free], method='Nelder-Mead')
                     x[free] = fitted.x
-                if cost(x[free]) < best[0]:
-                    best = (cost(x[free]), x.copy(), shift)
+                reached = cost(x[free])
+                if reached < best[0]:
+                    best = (reached, x.copy(), shift)
         cost, x, shift = best
         found = [f'{shift} samples later']
         if ring:
