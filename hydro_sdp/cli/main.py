@@ -83,6 +83,13 @@ def _fail(message: str, code: int) -> int:
     return code
 
 
+def _internal_failure(error: Exception) -> int:
+    if os.environ.get('HYDRO_SDP_DEBUG'):
+        traceback.print_exc()
+    return _fail(f'internal failure ({type(error).__name__}: {error}); '
+                 'set HYDRO_SDP_DEBUG=1 for a traceback', 1)
+
+
 class _Interrupts:
     """Note every Ctrl-C (SIGINT) while a command runs, and raise KeyboardInterrupt as usual."""
 
@@ -127,6 +134,11 @@ def _main(argv: list[str] | None, interrupts: _Interrupts) -> int:
         from hydro_sdp.core.errors import HydroSdpError
     except KeyboardInterrupt:
         return _fail('interrupted', 130)
+    except Exception as error:  # noqa: B902 - no traceback from loading the commands either
+        # A Ctrl-C inside an extension module's import (numpy's) surfaces as its ImportError.
+        if interrupts.seen:
+            return _fail('interrupted', 130)
+        return _internal_failure(error)
     try:
         outcome = args.run(args)
         text = json.dumps(to_json(outcome.payload)) + '\n' if args.json else \
@@ -138,10 +150,7 @@ def _main(argv: list[str] | None, interrupts: _Interrupts) -> int:
     except Exception as error:  # noqa: B902 - the last line of defence: no traceback
         if interrupts.seen:
             return _fail('interrupted; nothing partial was written', 130)
-        if os.environ.get('HYDRO_SDP_DEBUG'):
-            traceback.print_exc()
-        return _fail(f'internal failure ({type(error).__name__}: {error}); '
-                     'set HYDRO_SDP_DEBUG=1 for a traceback', 1)
+        return _internal_failure(error)
     try:
         sys.stdout.write(text)
     except KeyboardInterrupt:

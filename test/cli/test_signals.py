@@ -10,6 +10,7 @@ import time
 
 from conftest import REPO
 from hydro_sdp.bags import read_bag, write_bag
+from hydro_sdp.cli import main as main_module
 from hydro_sdp.core.model.records import Record
 from hydro_sdp.io.atomic import atomic_directory, atomic_write_bytes, interrupts_deferred
 import numpy as np
@@ -80,6 +81,22 @@ def test_sigint_inside_a_deferred_block_arrives_when_it_ends(ctrl_c_to_this_proc
             steps.append('after the signal')      # still runs: the signal waits
         steps.append('after the block')           # never runs: it arrived at the end
     assert steps == ['after the signal']
+
+
+def test_a_ctrl_c_an_extension_import_turned_into_an_import_error_ends_in_130(
+        ctrl_c_to_this_process, monkeypatch, capsys):
+    # What numpy's C import does with a Ctrl-C that lands in it: the KeyboardInterrupt
+    # becomes an ImportError ("PyCapsule_Import could not import module ...").
+    def loading_the_commands(only=None):
+        try:
+            signal.raise_signal(signal.SIGINT)
+            time.sleep(1.0)                      # the handler runs before this ends
+        except KeyboardInterrupt:
+            raise ImportError('PyCapsule_Import could not import module "datetime"') from None
+        raise AssertionError('the Ctrl-C never arrived')
+    monkeypatch.setattr(main_module, 'build_parser', loading_the_commands)
+    assert main_module.main(['simulate']) == 130
+    assert capsys.readouterr().err == 'error: interrupted\n'
 
 
 def test_an_interrupted_directory_leaves_the_old_one_and_nothing_else(tmp_path):

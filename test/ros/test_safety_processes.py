@@ -38,6 +38,8 @@ PLANT = '/hydro_plant'
 CONTROL_PERIOD = 0.05                           # s, the controller's default
 #: Time an answer may take to reach the client on a busy host, s (a step is 0.05 s).
 WITHIN = 0.3
+#: Lead of an injected sample over the plant's, ns: less than the control period.
+AHEAD_NS = 20_000_000
 #: Time the joint is watched after a set-point at a stop, s (it gets there in about 3).
 STOP_RUN = 5.0
 
@@ -291,7 +293,11 @@ def _answers_while_moving(rig, inject):
 
 
 def test_impossible_feedback_closes_the_valve(rig):
-    first, answers = _answers_while_moving(rig, lambda: rig.inject(1e10))
+    # Stamped a little ahead (within the gate's lead of one control period): on a busy host a
+    # plant sample stamped just after it could otherwise arrive first, and the overtaken
+    # sample is dropped unread, by design, instead of refused.
+    first, answers = _answers_while_moving(rig, lambda: rig.inject(
+        1e10, stamp_offset_ns=AHEAD_NS))
     refused = rig.said(first, CONTROLLER, 'refused feedback')
     print(f'\n[5] JointState of 1e10 rad, three times, 0.4 s apart: the commands within '
           f'{WITHIN} s {answers}; said {refused[:1]}')
