@@ -34,11 +34,16 @@ def test_a_node_in_its_own_context_warns_of_a_best_effort_joint_states():
         # The listener first, so that the controller's log finds it already there.
         driver = Node('sensor_driver', context=context)
         warnings = []
-        driver.create_subscription(
+        listener = driver.create_subscription(
             Log, '/rosout', lambda log: warnings.append(log.msg) if log.name == node.get_name()
             and 'incompatible QoS' in log.msg else None,
             QoSProfile(depth=100, durability=DurabilityPolicy.TRANSIENT_LOCAL))
         node = PipControllerNode(context=context)
+        # The listener matched to both nodes' /rosout before the warning is due: a log kept
+        # for late joiners lives 10 s, which discovery on a loaded host can outlast.
+        deadline = time.monotonic() + 30.0
+        while listener.get_publisher_count() < 2 and time.monotonic() < deadline:
+            time.sleep(0.05)
         driver.create_publisher(JointState, '/joint_states',
                                 QoSProfile(depth=10, reliability=ReliabilityPolicy.BEST_EFFORT))
         executor.add_node(node)
