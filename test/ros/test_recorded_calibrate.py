@@ -5,7 +5,8 @@
 in a fresh ROS domain; an outside client steps the valve open loop on its own 50 Hz
 timer, not in step with the plant. The bag is stamped since 1970 with the timers'
 jitter; calibrate must read the plant's period as 0.01 s, the delay as 15 samples
-(written 0.15), the plant's map, and pass its closed-loop check.
+(written 0.15; 16 where the host was too busy to pass a command on within a sample), the
+plant's map, and pass its closed-loop check.
 """
 
 from contextlib import redirect_stdout
@@ -63,7 +64,10 @@ def test_calibrate_reads_a_bag_recorded_over_dds(monkeypatch, tmp_path):
     assert code == 0
     result = json.loads(stdout.getvalue())
     model = load_model(result['model'])
-    assert model.delay == 0.15
+    # The plant's 15 samples, or one more: on a busy host the plant may take a command a
+    # sample after the recorder stamps it, and that time is the recording's delay too (one
+    # recording in a run beside two CPU hogs gave 0.16). Transport never makes it shorter.
+    assert model.delay in (0.15, 0.16), model.delay
     # The map is the plant's: at every level of the program the model's speed is within
     # 8 % of J2's (seven recordings on a busy machine: 0.6 to 5.2 %, the larger ones up at
     # 2 to 2.5 V). Which effects come with it is not asserted here: over DDS on a busy
