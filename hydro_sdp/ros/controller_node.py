@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 import time
-from typing import Sequence, Unpack
+from typing import Callable, Sequence, Unpack
 
 from hydro_sdp.core.control.health import HealthStatus, joint_health
 from hydro_sdp.core.control.safety import clamp_setpoint, setpoint_range
@@ -67,6 +67,9 @@ class PipControllerNode(LifecycleNode):
         self.trajectories: TrajectoryFollower | None = None
         self._configure_error: HydroSdpError | None = None
         self._clock_handle = self.get_clock().handle
+        #: The steady clock the watchdog also counts on, ns (a simulated clock that stops must
+        #: not stop it); an in-process harness that is the only clock sets its own.
+        self.steady_clock: Callable[[], int] = time.monotonic_ns
         self.parameters = NodeParameters(
             self, CONTROLLER_PARAMETERS, check=self._check_request,
             apply={'feedback_timeout': self._apply_feedback_timeout,
@@ -172,7 +175,7 @@ class PipControllerNode(LifecycleNode):
         names = message.name
         positions = message.position
         now = self._now_ns()
-        steady = time.monotonic_ns()
+        steady = self.steady_clock()
         for loop in self.loops:
             self._control(loop, stamp_ns, names, positions, now, steady)
 
@@ -275,7 +278,7 @@ class PipControllerNode(LifecycleNode):
         if not self.active:
             return
         now = self._now_ns()
-        steady = time.monotonic_ns()
+        steady = self.steady_clock()
         for loop in self.loops:
             state = loop.gate.watchdog(now, steady)
             if state == 'lost':

@@ -93,6 +93,10 @@ class RosHarness:
                         cli_args=cli_args, **kwargs)
         if sim_time:
             _set_clock(node, self.time_ns)
+            if hasattr(node, 'steady_clock'):
+                # The harness is the only clock: a pause of the test between steps, or of a
+                # busy host, is no silence of the feedback (a watchdog would close the valve).
+                node.steady_clock = lambda: self.time_ns
         self.executor.add_node(node)
         self.nodes.append(node)
         return node

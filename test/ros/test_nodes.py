@@ -165,6 +165,23 @@ def test_watchdog_closes_the_valve_and_control_resumes_without_a_bump(ros):
     assert abs(controller.controller.last_u) < 0.3    # restarted from rest, no jump
 
 
+def test_a_pause_of_the_test_between_steps_is_no_silence_in_the_harness(ros):
+    # The harness is the only clock: a test that computes between steps, or a busy host,
+    # longer than feedback_timeout must not close the valve there (the loop stays the one
+    # an offline run gives).
+    plant = ros.add(PlantNode)
+    controller = ros.add(PipControllerNode, parameters={'feedback_timeout': 0.2})
+    loop = Lockstep(ros, plant, controllers=[controller])
+    _setpoint_publisher(ros, controller)(30.0)
+    loop.run(30)
+    assert controller.last_command > 1.0
+    ros.executor.remove_node(plant)          # no sample comes in between
+    time.sleep(0.3)
+    ros.set_time(ros.time_ns + 10**8)        # the watchdog's instant, half the timeout on
+    ros.spin_for(0.05)
+    assert not controller.gate.blind and controller.last_command > 1.0
+
+
 def test_idz_parameters_change_at_run_time_and_are_validated(ros):
     controller = ros.add(PipControllerNode)
     result = controller.set_parameters([Parameter('idz.dead_zone', value=[-1.2, 1.1])])
