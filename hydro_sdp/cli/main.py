@@ -14,6 +14,7 @@ from types import FrameType
 from typing import Any, Callable
 
 from hydro_sdp import __version__
+from hydro_sdp.io.atomic import interrupts_deferred
 
 #: BLAS threads of a command unless OPENBLAS_NUM_THREADS says otherwise. Its products are
 #: tall and thin (a row per sample, a column per parameter), where OpenBLAS's threads wait
@@ -129,15 +130,15 @@ def _main(argv: list[str] | None, interrupts: _Interrupts) -> int:
         os.environ.setdefault('OPENBLAS_NUM_THREADS', BLAS_THREADS)
     try:
         words = sys.argv[1:] if argv is None else argv
-        args = build_parser(_asked(words)).parse_args(words)
-        from hydro_sdp.cli.common import to_json
-        from hydro_sdp.core.errors import HydroSdpError
+        # The commands' modules load with Ctrl-C held back to the end: one landing inside an
+        # extension module's import (numpy's) would come out as that module's ImportError.
+        with interrupts_deferred():
+            args = build_parser(_asked(words)).parse_args(words)
+            from hydro_sdp.cli.common import to_json
+            from hydro_sdp.core.errors import HydroSdpError
     except KeyboardInterrupt:
         return _fail('interrupted', 130)
     except Exception as error:  # noqa: B902 - no traceback from loading the commands either
-        # A Ctrl-C inside an extension module's import (numpy's) surfaces as its ImportError.
-        if interrupts.seen:
-            return _fail('interrupted', 130)
         return _internal_failure(error)
     try:
         outcome = args.run(args)

@@ -26,6 +26,7 @@ import numpy as np
 import pytest
 import rclpy
 from support.domains import fresh_domain
+from support.startup import loading_extensions
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
 
@@ -129,19 +130,6 @@ def test_a_signal_stops_every_node_cleanly(graph, moment, delay, signum):
         assert 'wrote' in errors['bag_recorder']
 
 
-def _loading_extensions(pid, limit=30.0):
-    """Wait until process ``pid`` maps a compiled module of site-packages (its imports run)."""
-    end = time.monotonic() + limit
-    while time.monotonic() < end:
-        try:
-            if '/site-packages/' in Path(f'/proc/{pid}/maps').read_text():
-                return True
-        except OSError:
-            return False
-        time.sleep(0.005)
-    return False
-
-
 @pytest.mark.parametrize('delay', [0.0, 0.1, 0.3])
 def test_sigint_while_a_node_loads_prints_no_traceback(delay):
     # A Ctrl-C while the node's modules still load ends it quietly (130), as the command line.
@@ -152,7 +140,7 @@ def test_sigint_while_a_node_loads_prints_no_traceback(delay):
         [_script('plant_node')], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
         env=dict(os.environ, ROS_DOMAIN_ID=str(fresh_domain())),
         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
-    assert _loading_extensions(process.pid), 'plant_node never started importing'
+    assert loading_extensions(process.pid), 'plant_node never started importing'
     time.sleep(delay)
     process.send_signal(signal.SIGINT)
     try:
