@@ -14,7 +14,6 @@ from types import FrameType
 from typing import Any, Callable
 
 from hydro_sdp import __version__
-from hydro_sdp.io.atomic import interrupts_deferred
 
 #: BLAS threads of a command unless OPENBLAS_NUM_THREADS says otherwise. Its products are
 #: tall and thin (a row per sample, a column per parameter), where OpenBLAS's threads wait
@@ -130,6 +129,8 @@ def _main(argv: list[str] | None, interrupts: _Interrupts) -> int:
         os.environ.setdefault('OPENBLAS_NUM_THREADS', BLAS_THREADS)
     try:
         words = sys.argv[1:] if argv is None else argv
+        # Imported here, where a Ctrl-C already ends in 130, not before main runs.
+        from hydro_sdp.io.atomic import interrupts_deferred
         # The commands' modules load with Ctrl-C held back to the end: one landing inside an
         # extension module's import (numpy's) would come out as that module's ImportError.
         with interrupts_deferred():
