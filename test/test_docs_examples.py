@@ -10,7 +10,8 @@ a second of imports per line) and must exit 0; the
 ``ros2`` lines are done by ``support.ros_cli`` (``ros2 run`` starts the console script
 as a node process, ``ros2 topic pub --once``, ``ros2 param``, ``ros2 lifecycle set`` by
 a client node), and a blank line in a block ends a scene: its nodes must still run, and
-Ctrl-C ends each with exit code 0. Python blocks run with this environment's Python.
+Ctrl-C ends each with exit code 0 (or as docs/interfaces.md 3.11 bounds a middleware that
+holds the node: ``support.node_exit``). Python blocks run with this environment's Python.
 Blocks that cannot run here carry ``<!-- not run: REASON -->``; the recordings and logs of
 "your machine" that the examples name are made first (``support.your_machine``).
 """

@@ -17,6 +17,11 @@ from rclpy.signals import install_signal_handlers, SignalHandlerOptions, uninsta
 
 #: Longest wait of the executor before it checks for a stop, s (bounds the exit time).
 WAKE_PERIOD = 0.1
+#: Longest the middleware may take to let go of the node once its own work is done, s. Past
+#: it the process ends anyway (exit 1, where every thread was). Fast DDS 2.14 deadlocks now
+#: and then when it deletes the participant while a peer's endpoints vanish (nodes stopped
+#: together): set_listener waits for a discovery callback that waits for its lock.
+CLEANUP_LIMIT = 4.0
 #: What ``signal.signal`` installs and returns: a handler, SIG_DFL or SIG_IGN, or None.
 SignalHandler = Union[Callable[[int, FrameType | None], object], int, None]
 
@@ -47,6 +52,13 @@ def _destroy(node: Node | None, executor: SingleThreadedExecutor | None, stop: _
         if executor is not None:
             executor.shutdown(timeout_sec=WAKE_PERIOD)
         if node is not None:
+            # The node's own last work (the recorder's bag) takes what it needs; the
+            # middleware's part is bounded. faulthandler's watchdog is a thread of C that
+            # needs no GIL, so it ends the process even when the hang holds it.
+            close = getattr(node, 'close', None)
+            if callable(close):
+                close()
+            faulthandler.dump_traceback_later(CLEANUP_LIMIT, exit=True)
             node.destroy_node()
     except Exception:
         if not stop:
@@ -105,6 +117,8 @@ def run_node(node_cls: Callable[[], Node], args: list[str] | None = None) -> Non
             _destroy(node, executor, stop)
         except KeyboardInterrupt:
             pass
+        finally:
+            faulthandler.cancel_dump_traceback_later()
         for signum, handler in previous.items():
             signal.signal(signum, handler)
     if code:

