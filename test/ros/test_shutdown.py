@@ -167,6 +167,12 @@ from rclpy.node import Node
 class Stuck(Node):
     def __init__(self):
         super().__init__('stuck_probe')
+        self.timer = self.create_timer(0.05, self.spinning)
+
+    def spinning(self):
+        # Its callbacks run: the node is built and the runner's handlers are in place.
+        self.timer.cancel()
+        print('spinning', flush=True)
 
     def destroy_node(self):
         ctypes.PyDLL(None).sleep(60)    # PyDLL: the call keeps the GIL
@@ -179,9 +185,11 @@ def test_a_middleware_that_never_lets_go_of_the_node_ends_within_the_limit(graph
     # No Python thread can run then, not even a watchdog's: the runner's is faulthandler's.
     environment, watcher, _ = graph
     process = subprocess.Popen([sys.executable, '-c', STUCK_NODE], env=environment,
-                               stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
+        # In the graph is not yet spinning: a Ctrl-C while the node is built ends it at once.
         _wait_in_graph(watcher, {'stuck_probe'}, {'stuck_probe': process})
+        assert process.stdout.readline() == 'spinning\n', process.stderr.read()
         signalled = time.monotonic()
         process.send_signal(signal.SIGINT)
         # Room for a loaded host: the claim is the end and its report, not a timing.
