@@ -20,9 +20,10 @@ def stuck_in_the_middleware(returncode, stderr):
     process after ``CLEANUP_LIMIT`` s, as documented; a test of the node's own exit accepts
     that one outcome and says so in a warning. A hang in a frame of ours is not excused.
     """
-    if returncode != 1 or not TIMEOUT_LINE.search(stderr):
+    timeout = TIMEOUT_LINE.search(stderr)
+    if returncode != 1 or timeout is None:
         return False
-    stack = stderr[TIMEOUT_LINE.search(stderr).end():]
+    stack = stderr[timeout.end():]
     frames = re.findall(r'File "([^"]+)", line \d+ in (\w+)', stack)
     inside = bool(frames) and '/rclpy/' in frames[0][0] and \
         any(name == '_destroy' for _, name in frames)
